@@ -1,0 +1,113 @@
+//! The `flexstage` command-line tool: a thin layer over the stage crates.
+//!
+//! Errors are printed as one message (with its causes) and a non-zero exit status; never a
+//! backtrace.
+
+mod scenario_args;
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+use scenario_args::ScenarioArgs;
+
+/// flexstage: design, reduce, identify and control a piezo-driven compliant positioning stage.
+#[derive(Debug, Parser)]
+#[command(name = "flexstage", version, about, long_about = None)]
+#[command(
+    after_help = "Start with `flexstage init` to get the paper's scenario as an annotated \
+                        TOML file.\nEach subcommand's --help shows an example."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Write a built-in scenario as a commented TOML file.
+    #[command(after_help = "Examples:
+  flexstage init                          # scenario.toml, paper preset
+  flexstage init my.toml --preset quick   # the coarse, fast preset
+  flexstage init -                        # print to standard output")]
+    Init {
+        /// Where to write ("-" for standard output).
+        #[arg(default_value = "scenario.toml")]
+        path: PathBuf,
+        /// Built-in scenario: "paper" (Tables 1, 3, 4, A1) or "quick" (coarse and fast).
+        #[arg(long, default_value = "paper", value_parser = ["paper", "quick"])]
+        preset: String,
+        /// Overwrite an existing file.
+        #[arg(long)]
+        force: bool,
+    },
+    /// Parse and validate a scenario, and print a summary.
+    #[command(after_help = "Examples:
+  flexstage check scenario.toml
+  flexstage check --preset quick")]
+    Check {
+        #[command(flatten)]
+        scenario: ScenarioArgs,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Init {
+            path,
+            preset,
+            force,
+        } => init(&path, &preset, force),
+        Command::Check { scenario } => {
+            let s = scenario.load()?;
+            println!("{}: valid", scenario.describe());
+            println!(
+                "  mesh {} x {} elements over {} x {} mm, p_m = {} samples, up to {} iterations",
+                s.mesh.nl,
+                s.mesh.nw,
+                s.mesh.length * 1e3,
+                s.mesh.width * 1e3,
+                s.optimization.samples,
+                s.optimization.max_iterations
+            );
+            println!(
+                "  {} supports, {} passive regions, {} trajectories",
+                s.supports.len(),
+                s.regions.len(),
+                s.trajectories.len()
+            );
+            Ok(())
+        }
+    }
+}
+
+fn init(path: &std::path::Path, preset: &str, force: bool) -> anyhow::Result<()> {
+    let preset = flexstage_scenario::Preset::from_name(preset)
+        .ok_or_else(|| anyhow::anyhow!("unknown preset {preset:?}: expected paper or quick"))?;
+    let text = flexstage_scenario::Scenario::preset(preset).to_commented_toml();
+    if path.as_os_str() == "-" {
+        print!("{text}");
+        return Ok(());
+    }
+    if path.exists() && !force {
+        return Err(flexstage_report::ReportError::Exists {
+            path: path.to_path_buf(),
+        }
+        .into());
+    }
+    flexstage_report::write_atomic(path, text.as_bytes())?;
+    eprintln!("wrote {}", path.display());
+    Ok(())
+}

@@ -1,0 +1,376 @@
+//! Parameter groups of the design stage: domain, material, actuators, supports, output port,
+//! passive regions and the optimization settings (paper Section 2, Tables 1–3, NOTES.md).
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::{Result, ScenarioError, check, count, non_negative, positive, within};
+
+/// The rectangular design domain and its Q4 discretization (Table 3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Mesh {
+    /// Length l along x [m]. Table 3: 0.12.
+    pub length: f64,
+    /// Width w along y [m]. Table 3: 0.06.
+    pub width: f64,
+    /// Out-of-plane thickness t [m]. Table 3: 0.01.
+    pub thickness: f64,
+    /// Elements along x, n_l ≥ 1. Table 3: 120.
+    pub nl: usize,
+    /// Elements along y, n_w ≥ 1. Table 3: 60.
+    pub nw: usize,
+}
+
+impl Mesh {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        positive("mesh.length", self.length)?;
+        positive("mesh.width", self.width)?;
+        positive("mesh.thickness", self.thickness)?;
+        count("mesh.nl", self.nl, 1, 4000)?;
+        count("mesh.nw", self.nw, 1, 4000)?;
+        Ok(())
+    }
+
+    /// Element side lengths (dx, dy) [m].
+    pub fn element_size(&self) -> (f64, f64) {
+        (self.length / self.nl as f64, self.width / self.nw as f64)
+    }
+
+    /// Is the point inside the domain (with a tolerance of half an element)?
+    pub fn contains(&self, p: [f64; 2]) -> bool {
+        let (dx, dy) = self.element_size();
+        p[0] >= -0.5 * dx
+            && p[0] <= self.length + 0.5 * dx
+            && p[1] >= -0.5 * dy
+            && p[1] <= self.width + 0.5 * dy
+    }
+}
+
+/// Linear-elastic solid material with SIMP interpolation (Table 3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Material {
+    /// Young's modulus E0 of the solid [Pa]. Table 3: 73e9 (aluminium 6061).
+    pub youngs_modulus: f64,
+    /// Young's modulus E_min given to void [Pa], 0 < E_min < E0. Table 3: 1e3.
+    pub min_modulus: f64,
+    /// Poisson ratio ν, in (−1, 0.5). Table 3: 0.33.
+    pub poisson_ratio: f64,
+    /// Mass density ρ0 [kg/m³]. Table 3: 2710.
+    pub density: f64,
+}
+
+impl Material {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        positive("material.youngs_modulus", self.youngs_modulus)?;
+        positive("material.min_modulus", self.min_modulus)?;
+        if self.min_modulus >= self.youngs_modulus {
+            return Err(ScenarioError::Inconsistent {
+                fields: "material.min_modulus, material.youngs_modulus".into(),
+                reason: format!(
+                    "min_modulus ({:e}) must be smaller than youngs_modulus ({:e})",
+                    self.min_modulus, self.youngs_modulus
+                ),
+            });
+        }
+        check(
+            "material.poisson_ratio",
+            self.poisson_ratio,
+            self.poisson_ratio > -1.0 && self.poisson_ratio < 0.5,
+            "a number in (-1, 0.5)",
+        )?;
+        positive("material.density", self.density)
+    }
+}
+
+/// Picks nodes or elements of the mesh by geometry.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Selector {
+    /// The node nearest to a point [m].
+    Nearest {
+        /// (x, y) [m].
+        point: [f64; 2],
+    },
+    /// Every node on one edge of the domain.
+    Edge {
+        /// Which edge.
+        edge: Edge,
+    },
+    /// Every node (or element centroid) inside an axis-aligned box [m].
+    Box {
+        /// Lower-left corner (x, y) [m].
+        min: [f64; 2],
+        /// Upper-right corner (x, y) [m].
+        max: [f64; 2],
+    },
+}
+
+/// An edge of the rectangular domain.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Edge {
+    /// x = 0.
+    Left,
+    /// x = l.
+    Right,
+    /// y = 0.
+    Bottom,
+    /// y = w.
+    Top,
+}
+
+impl Selector {
+    fn validate(&self, field: &str, mesh: &Mesh) -> Result<()> {
+        let inside = |p: [f64; 2], what: &str| {
+            if mesh.contains(p) {
+                Ok(())
+            } else {
+                Err(ScenarioError::OutOfRange {
+                    field: format!("{field}.{what}"),
+                    value: format!("[{:e}, {:e}]", p[0], p[1]),
+                    expected: format!(
+                        "a point inside the domain [0, {}] x [0, {}] m",
+                        mesh.length, mesh.width
+                    ),
+                })
+            }
+        };
+        match self {
+            Selector::Nearest { point } => inside(*point, "point"),
+            Selector::Edge { .. } => Ok(()),
+            Selector::Box { min, max } => {
+                if min[0] > max[0] || min[1] > max[1] {
+                    return Err(ScenarioError::Inconsistent {
+                        fields: format!("{field}.min, {field}.max"),
+                        reason: "min must not exceed max in x or y".into(),
+                    });
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// Which displacement components a support fixes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Fix {
+    /// u_x = 0 (a roller that slides along y).
+    X,
+    /// u_y = 0 (a roller that slides along x).
+    Y,
+    /// u_x = u_y = 0 (clamped).
+    Xy,
+}
+
+/// A support: the selected nodes have the given components fixed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Support {
+    /// Components fixed.
+    pub fix: Fix,
+    /// Nodes supported.
+    pub at: Selector,
+}
+
+/// Table 2: the sign convention that relates PEA strokes to the output.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Configuration {
+    /// Compressive inputs (PEA1 →, PEA2 ←) give maximum y_out.
+    Regular,
+    /// Compressive inputs give minimum y_out (output along −y), for narrow domains.
+    Reversed,
+}
+
+/// The two piezo actuators (Table 1, Eq. 2–3, NOTES.md).
+///
+/// Each PEA acts on its input node as a grounded spring `stiffness` along x plus the force
+/// `stiffness · x_nom`, with global signs (positive x_nom pushes the tip along +x).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Actuators {
+    /// PEA stiffness K_pea [N/m]. Table 1: 250 N/µm = 2.5e8.
+    pub stiffness: f64,
+    /// Maximum nominal stroke max x_nom [m]. Table 1: 60e-6.
+    pub max_stroke: f64,
+    /// Blocking force f_block [N]. Table 1: 1.5e4.
+    pub blocking_force: f64,
+    /// Half range of the preloaded nominal stroke [m]: x_nom ∈ [−a, a]. Section 4.1: 30e-6.
+    pub stroke_amplitude: f64,
+    /// Table 2 configuration.
+    pub configuration: Configuration,
+    /// Input node of PEA1.
+    pub pea1: Selector,
+    /// Input node of PEA2.
+    pub pea2: Selector,
+}
+
+impl Actuators {
+    /// Checks every field.
+    pub fn validate(&self, mesh: &Mesh) -> Result<()> {
+        positive("actuators.stiffness", self.stiffness)?;
+        positive("actuators.max_stroke", self.max_stroke)?;
+        positive("actuators.blocking_force", self.blocking_force)?;
+        check(
+            "actuators.stroke_amplitude",
+            self.stroke_amplitude,
+            self.stroke_amplitude > 0.0 && 2.0 * self.stroke_amplitude <= self.max_stroke,
+            &format!(
+                "a number in (0, max_stroke/2 = {:e}] m",
+                0.5 * self.max_stroke
+            ),
+        )?;
+        self.pea1.validate("actuators.pea1", mesh)?;
+        self.pea2.validate("actuators.pea2", mesh)
+    }
+}
+
+/// The output port (Figure 2b, Eq. 7).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    /// The output node.
+    pub at: Selector,
+    /// Tilt θ of the target output frame [deg] (Figure 4b, Eq. 22); 0 is the normal setup.
+    pub tilt_deg: f64,
+}
+
+impl Output {
+    /// Checks every field.
+    pub fn validate(&self, mesh: &Mesh) -> Result<()> {
+        self.at.validate("output.at", mesh)?;
+        within("output.tilt_deg", self.tilt_deg, -89.0, 89.0)
+    }
+}
+
+/// A passive element region whose density is not designed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Region {
+    /// Solid (ρ = 1) or void (ρ = ρ_min).
+    pub kind: RegionKind,
+    /// The elements whose centroid is selected.
+    pub at: Selector,
+}
+
+/// Kind of a passive region.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RegionKind {
+    /// Always full material.
+    Solid,
+    /// Always void.
+    Void,
+}
+
+/// Topology-optimization settings (Table 3, Eq. 5, NOTES.md).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Optimization {
+    /// SIMP penalty p, in [1, 6]. Table 3: 3.
+    pub penalty: f64,
+    /// Pseudo-density lower bound ρ_min, in (0, 0.1]. Table 3: 1e-6.
+    pub rho_min: f64,
+    /// Maximum number of design iterations. Table 3: 1000.
+    pub max_iterations: usize,
+    /// Input samples p_m on the perimeter of the stroke square (multiple of 4). Table 3: 40.
+    pub samples: usize,
+    /// Initial uniform density, in (ρ_min, 1]. The paper is silent; 0.5.
+    pub initial_density: f64,
+    /// Density-filter radius in element sizes (0 = off). NOTES.md: a filter by default.
+    pub filter_radius: f64,
+    /// Upper bound on the volume fraction, in (0, 1]; 1 disables the constraint (the paper has
+    /// none).
+    pub volume_fraction: f64,
+    /// Stop when the largest density change falls below this, in (0, 1).
+    pub change_tolerance: f64,
+    /// Additive Yeoh hyperelasticity in low-density elements (Appendix A, Eq. A2–A4).
+    pub additive: Additive,
+}
+
+/// The additive hyperelastic material of Appendix A (Eq. A2–A4, Table 3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Additive {
+    /// Use it during optimization (never in the final analysis).
+    pub enabled: bool,
+    /// Initial hyper-elastic coefficient as a fraction of E0. Table 3: 1e-5.
+    pub initial_coefficient: f64,
+    /// Von Mises strain threshold ε* of the c2 update (Eq. A3). Table 3: 0.5.
+    pub strain_threshold: f64,
+}
+
+impl Optimization {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        within("optimization.penalty", self.penalty, 1.0, 6.0)?;
+        check(
+            "optimization.rho_min",
+            self.rho_min,
+            self.rho_min > 0.0 && self.rho_min <= 0.1,
+            "a number in (0, 0.1]",
+        )?;
+        count(
+            "optimization.max_iterations",
+            self.max_iterations,
+            0,
+            100_000,
+        )?;
+        count("optimization.samples", self.samples, 4, 4000)?;
+        if self.samples % 4 != 0 {
+            return Err(ScenarioError::OutOfRange {
+                field: "optimization.samples".into(),
+                value: self.samples.to_string(),
+                expected: "a multiple of 4 (the samples walk the four sides of the stroke square)"
+                    .into(),
+            });
+        }
+        check(
+            "optimization.initial_density",
+            self.initial_density,
+            self.initial_density > self.rho_min && self.initial_density <= 1.0,
+            "a number in (rho_min, 1]",
+        )?;
+        within("optimization.filter_radius", self.filter_radius, 0.0, 20.0)?;
+        check(
+            "optimization.volume_fraction",
+            self.volume_fraction,
+            self.volume_fraction > 0.0 && self.volume_fraction <= 1.0,
+            "a number in (0, 1]",
+        )?;
+        check(
+            "optimization.change_tolerance",
+            self.change_tolerance,
+            self.change_tolerance > 0.0 && self.change_tolerance < 1.0,
+            "a number in (0, 1)",
+        )?;
+        non_negative(
+            "optimization.additive.initial_coefficient",
+            self.additive.initial_coefficient,
+        )?;
+        positive(
+            "optimization.additive.strain_threshold",
+            self.additive.strain_threshold,
+        )
+    }
+}
+
+/// Validates a list of supports against the mesh.
+pub(crate) fn validate_supports(supports: &[Support], mesh: &Mesh) -> Result<()> {
+    for (i, s) in supports.iter().enumerate() {
+        s.at.validate(&format!("supports[{i}].at"), mesh)?;
+    }
+    Ok(())
+}
+
+/// Validates a list of passive regions against the mesh.
+pub(crate) fn validate_regions(regions: &[Region], mesh: &Mesh) -> Result<()> {
+    for (i, r) in regions.iter().enumerate() {
+        r.at.validate(&format!("regions[{i}].at"), mesh)?;
+    }
+    Ok(())
+}

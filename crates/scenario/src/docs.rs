@@ -1,0 +1,483 @@
+//! One comment per scenario field: meaning, unit and source. `flexstage init` writes them
+//! above each key, and a test checks that no key lacks one.
+
+/// (TOML path without array indices, comment).
+pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
+    ("name", "Name of the scenario, used in run-folder names."),
+    ("mesh", "Design domain and Q4 mesh (paper Table 3)."),
+    ("mesh.length", "Domain length l along x [m]. Table 3: 0.12."),
+    ("mesh.width", "Domain width w along y [m]. Table 3: 0.06."),
+    (
+        "mesh.thickness",
+        "Out-of-plane thickness t [m]. Table 3: 0.01.",
+    ),
+    ("mesh.nl", "Elements along x, n_l ≥ 1. Table 3: 120."),
+    ("mesh.nw", "Elements along y, n_w ≥ 1. Table 3: 60."),
+    ("material", "Solid material, aluminium 6061 (Table 3)."),
+    (
+        "material.youngs_modulus",
+        "Young's modulus E0 [Pa], > 0. Table 3: 73e9.",
+    ),
+    (
+        "material.min_modulus",
+        "Modulus E_min given to void [Pa], 0 < E_min < E0. Table 3: 1e3.",
+    ),
+    (
+        "material.poisson_ratio",
+        "Poisson ratio ν, in (-1, 0.5). Table 3: 0.33.",
+    ),
+    (
+        "material.density",
+        "Mass density ρ0 [kg/m³], > 0. Table 3: 2710.",
+    ),
+    (
+        "actuators",
+        "The two piezo actuators: grounded spring K_pea plus force K_pea·x_nom on the input node (Eq. 2-3, Table 1).",
+    ),
+    (
+        "actuators.stiffness",
+        "PEA stiffness K_pea [N/m], > 0. Table 1: 250 N/µm.",
+    ),
+    (
+        "actuators.max_stroke",
+        "Maximum nominal stroke max x_nom [m], > 0. Table 1: 60 µm.",
+    ),
+    (
+        "actuators.blocking_force",
+        "Blocking force f_block [N], > 0. Table 1: 1.5e4.",
+    ),
+    (
+        "actuators.stroke_amplitude",
+        "Preloaded stroke half-range a: x_nom in [-a, a] [m], 0 < a ≤ max_stroke/2. Section 4.1: 30 µm.",
+    ),
+    (
+        "actuators.configuration",
+        "Table 2 working conditions: \"regular\" or \"reversed\".",
+    ),
+    (
+        "actuators.pea1",
+        "Input node of PEA1 (left edge, mid-height; NOTES.md).",
+    ),
+    (
+        "actuators.pea1.kind",
+        "Selector kind: \"nearest\" (point), \"edge\" (edge) or \"box\" (min, max).",
+    ),
+    (
+        "actuators.pea1.point",
+        "Point (x, y) [m]; the nearest node is selected.",
+    ),
+    (
+        "actuators.pea2",
+        "Input node of PEA2 (right edge, mid-height; NOTES.md).",
+    ),
+    (
+        "actuators.pea2.kind",
+        "Selector kind: \"nearest\" (point), \"edge\" (edge) or \"box\" (min, max).",
+    ),
+    (
+        "actuators.pea2.point",
+        "Point (x, y) [m]; the nearest node is selected.",
+    ),
+    (
+        "supports",
+        "A support: the selected nodes have components `fix` (\"x\", \"y\" or \"xy\") held at zero. Default: rollers (u_y = 0) at both input ports; the PEA springs hold x (NOTES.md).",
+    ),
+    ("supports.fix", "Fixed components: \"x\", \"y\" or \"xy\"."),
+    ("supports.at", "Selected nodes."),
+    (
+        "supports.at.kind",
+        "Selector kind: \"nearest\" (point), \"edge\" (edge) or \"box\" (min, max).",
+    ),
+    (
+        "supports.at.point",
+        "Point (x, y) [m]; the nearest node is selected.",
+    ),
+    (
+        "supports.at.edge",
+        "Edge: \"left\", \"right\", \"bottom\" or \"top\".",
+    ),
+    (
+        "supports.at.min",
+        "Lower-left corner (x, y) of the box [m].",
+    ),
+    (
+        "supports.at.max",
+        "Upper-right corner (x, y) of the box [m].",
+    ),
+    (
+        "output",
+        "Output port (Figure 2b, Eq. 7): centre of the top edge.",
+    ),
+    (
+        "output.tilt_deg",
+        "Tilt θ of the target output frame [deg], in [-89, 89] (Figure 4b, Eq. 22). 0: normal setup.",
+    ),
+    ("output.at", "The output node."),
+    (
+        "output.at.kind",
+        "Selector kind: \"nearest\" (point), \"edge\" (edge) or \"box\" (min, max).",
+    ),
+    (
+        "output.at.point",
+        "Point (x, y) [m]; the nearest node is selected.",
+    ),
+    (
+        "regions",
+        "A passive region: elements whose centroid is selected stay solid or void. Default: small solid patches at the three ports spread the point loads (NOTES.md).",
+    ),
+    ("regions.kind", "\"solid\" (ρ = 1) or \"void\" (ρ = ρ_min)."),
+    ("regions.at", "Selected elements (by centroid)."),
+    (
+        "regions.at.kind",
+        "Selector kind: \"box\" (min, max), \"edge\" or \"nearest\".",
+    ),
+    ("regions.at.point", "Point (x, y) [m]."),
+    (
+        "regions.at.edge",
+        "Edge: \"left\", \"right\", \"bottom\" or \"top\".",
+    ),
+    ("regions.at.min", "Lower-left corner (x, y) of the box [m]."),
+    (
+        "regions.at.max",
+        "Upper-right corner (x, y) of the box [m].",
+    ),
+    (
+        "optimization",
+        "Topology optimization (Section 2.2, Eq. 5, Table 3).",
+    ),
+    (
+        "optimization.penalty",
+        "SIMP penalty p, in [1, 6]. Table 3: 3.",
+    ),
+    (
+        "optimization.rho_min",
+        "Pseudo-density lower bound ρ_min, in (0, 0.1]. Table 3: 1e-6.",
+    ),
+    (
+        "optimization.max_iterations",
+        "Maximum design iterations. Table 3: 1000.",
+    ),
+    (
+        "optimization.samples",
+        "Input samples p_m on the perimeter of the stroke square, a multiple of 4. Table 3: 40.",
+    ),
+    (
+        "optimization.initial_density",
+        "Initial uniform density, in (ρ_min, 1]. Paper silent: 0.5.",
+    ),
+    (
+        "optimization.filter_radius",
+        "Density-filter radius in element sizes, in [0, 20]; 0 = off. Paper silent; NOTES.md asks for a filter.",
+    ),
+    (
+        "optimization.volume_fraction",
+        "Volume-fraction upper bound, in (0, 1]; 1 = no volume constraint (the paper has none).",
+    ),
+    (
+        "optimization.change_tolerance",
+        "Stop when the largest density change is below this, in (0, 1).",
+    ),
+    (
+        "optimization.additive",
+        "Additive Yeoh hyperelastic material in low-density elements, optimization only (Eq. A2-A4).",
+    ),
+    (
+        "optimization.additive.enabled",
+        "Use the additive material during optimization.",
+    ),
+    (
+        "optimization.additive.initial_coefficient",
+        "Initial hyper-elastic coefficient as a fraction of E0, ≥ 0. Table 3: 1e-5.",
+    ),
+    (
+        "optimization.additive.strain_threshold",
+        "Von Mises strain threshold ε* of the c2 update (Eq. A3), > 0. Table 3: 0.5.",
+    ),
+    (
+        "hysteresis",
+        "Piezo hysteresis, Bouc-Wen Eq. (18) with n = 1, in the paper's units: x in µm, U in V, t in s (Table A1).",
+    ),
+    (
+        "hysteresis.voltage_min",
+        "Lowest amplifier voltage [V]. NOTES.md: 0.",
+    ),
+    (
+        "hysteresis.voltage_max",
+        "Highest amplifier voltage [V], > voltage_min. NOTES.md: 1000.",
+    ),
+    ("hysteresis.pea1", "PEA1, Table A1 estimates."),
+    ("hysteresis.pea2", "PEA2, Table A1 estimates."),
+    (
+        "hysteresis.pea1.d_p",
+        "Piezoelectric coefficient d_p [µm/V], > 0. Table A1: 6.2e-2.",
+    ),
+    ("hysteresis.pea1.a_bw", "A_bw [µm/V]. Table A1: 1.2e-2."),
+    ("hysteresis.pea1.b_bw", "B_bw [1/V], ≥ 0. Table A1: 1.9e-3."),
+    (
+        "hysteresis.pea1.gamma_bw",
+        "Γ_bw [1/V], B_bw + Γ_bw > 0. Table A1: 1.6e-3.",
+    ),
+    (
+        "hysteresis.pea1.delta_bw",
+        "Asymmetry factor δ_bw [µm/(V·s)]. Table A1: 5.015e-4.",
+    ),
+    (
+        "hysteresis.pea2.d_p",
+        "Piezoelectric coefficient d_p [µm/V], > 0. Table A1: 6.5e-2.",
+    ),
+    ("hysteresis.pea2.a_bw", "A_bw [µm/V]. Table A1: 2.5e-2."),
+    ("hysteresis.pea2.b_bw", "B_bw [1/V], ≥ 0. Table A1: 1.8e-3."),
+    (
+        "hysteresis.pea2.gamma_bw",
+        "Γ_bw [1/V], B_bw + Γ_bw > 0. Table A1: 5.3e-3.",
+    ),
+    (
+        "hysteresis.pea2.delta_bw",
+        "Asymmetry factor δ_bw [µm/(V·s)]. Table A1: 1.973e-4.",
+    ),
+    (
+        "stage",
+        "Reduced 8-state stage model (Eq. 31-35, Appendix C, Table 4), SI units.",
+    ),
+    (
+        "stage.damping_ratio",
+        "Modal damping ratio used for the default damping coefficients, in [0, 1). Paper silent; NOTES.md: 1-3 %.",
+    ),
+    (
+        "stage.guess",
+        "Table 4 \"Guess\": the controller's starting model.",
+    ),
+    (
+        "stage.truth",
+        "Table 4 \"Estimate\": the simulated plant (entries marked \"—\" keep the guess).",
+    ),
+    (
+        "stage.guess.k_qo1",
+        "Horizontal output stiffness K_qo1 [N/m], > 0. Table 4 guess: 5e6.",
+    ),
+    (
+        "stage.guess.k_qo2",
+        "Vertical output stiffness K_qo2 [N/m], > 0. Table 4 guess: 5e6.",
+    ),
+    (
+        "stage.guess.mass",
+        "Mechanism mass M [kg], > 0. Table 4: 0.046.",
+    ),
+    (
+        "stage.guess.alpha",
+        "Amplification ratio α (Eq. 27), non-zero. Table 4: 1.012.",
+    ),
+    (
+        "stage.guess.k_pea1",
+        "PEA1 stiffness K_pea1 [N/m], > 0. Table 4: 2.5e8.",
+    ),
+    (
+        "stage.guess.k_pea2",
+        "PEA2 stiffness K_pea2 [N/m], > 0. Table 4: 2.5e8.",
+    ),
+    (
+        "stage.guess.k_in1",
+        "Input plate 1 stiffness K_in1 [N/m], > 0. Table 4 guess: 1e5.",
+    ),
+    (
+        "stage.guess.k_in2",
+        "Input plate 2 stiffness K_in2 [N/m], > 0. Table 4 guess: 1e5.",
+    ),
+    (
+        "stage.guess.m_in1",
+        "Input plate 1 mass m_in1 [kg], > 0. Table 4: 0.042.",
+    ),
+    (
+        "stage.guess.m_in2",
+        "Input plate 2 mass m_in2 [kg], > 0. Table 4: 0.042.",
+    ),
+    (
+        "stage.guess.c_qo1",
+        "Horizontal output damping C_qo1 [N·s/m], ≥ 0. Paper silent: from damping_ratio.",
+    ),
+    (
+        "stage.guess.c_qo2",
+        "Vertical output damping C_qo2 [N·s/m], ≥ 0. Paper silent: from damping_ratio.",
+    ),
+    (
+        "stage.guess.c_in1",
+        "Input plate 1 damping C_in1 [N·s/m], ≥ 0. Paper silent: from damping_ratio.",
+    ),
+    (
+        "stage.guess.c_in2",
+        "Input plate 2 damping C_in2 [N·s/m], ≥ 0. Paper silent: from damping_ratio.",
+    ),
+    (
+        "stage.truth.k_qo1",
+        "Horizontal output stiffness K_qo1 [N/m], > 0. Table 4 estimate: 3.78e6.",
+    ),
+    (
+        "stage.truth.k_qo2",
+        "Vertical output stiffness K_qo2 [N/m], > 0. Table 4 estimate: 4.03e6.",
+    ),
+    (
+        "stage.truth.mass",
+        "Mechanism mass M [kg], > 0. Table 4: 0.046 (weighed).",
+    ),
+    (
+        "stage.truth.alpha",
+        "Amplification ratio α (Eq. 27), non-zero. Table 4: 1.012.",
+    ),
+    (
+        "stage.truth.k_pea1",
+        "PEA1 stiffness K_pea1 [N/m], > 0. Table 4: 2.5e8.",
+    ),
+    (
+        "stage.truth.k_pea2",
+        "PEA2 stiffness K_pea2 [N/m], > 0. Table 4: 2.5e8.",
+    ),
+    (
+        "stage.truth.k_in1",
+        "Input plate 1 stiffness K_in1 [N/m], > 0. Table 4 estimate: 0.92e5.",
+    ),
+    (
+        "stage.truth.k_in2",
+        "Input plate 2 stiffness K_in2 [N/m], > 0. Table 4 estimate: 0.89e5.",
+    ),
+    (
+        "stage.truth.m_in1",
+        "Input plate 1 mass m_in1 [kg], > 0. Table 4: 0.042 (weighed).",
+    ),
+    (
+        "stage.truth.m_in2",
+        "Input plate 2 mass m_in2 [kg], > 0. Table 4: 0.042 (weighed).",
+    ),
+    (
+        "stage.truth.c_qo1",
+        "Horizontal output damping C_qo1 [N·s/m], ≥ 0. Paper silent: from damping_ratio.",
+    ),
+    (
+        "stage.truth.c_qo2",
+        "Vertical output damping C_qo2 [N·s/m], ≥ 0. Paper silent: from damping_ratio.",
+    ),
+    (
+        "stage.truth.c_in1",
+        "Input plate 1 damping C_in1 [N·s/m], ≥ 0. Paper silent: from damping_ratio.",
+    ),
+    (
+        "stage.truth.c_in2",
+        "Input plate 2 damping C_in2 [N·s/m], ≥ 0. Paper silent: from damping_ratio.",
+    ),
+    (
+        "controller",
+        "K-filter observer and robust backstepping controller gains (Table 4, Appendix D).",
+    ),
+    (
+        "controller.observer_gain",
+        "Observer gains (k_e1, k_e2) of Eq. (37-38), > 0. Table 4: 1e5.",
+    ),
+    (
+        "controller.error_gain",
+        "Error gains (k_ε1, k_ε2) of s = dε/dt + k_ε ε, > 0. Table 4: 2e4, 1.5e4.",
+    ),
+    (
+        "controller.feedback_gain",
+        "Feedback gains (k1, k2) of Eq. (A34), > 0. Table 4: 1.2e4, 1.2e3.",
+    ),
+    (
+        "sensors",
+        "Capacitive position sensors of q1 and q2 (Section 4.1).",
+    ),
+    (
+        "sensors.resolution",
+        "Quantization steps [m], ≥ 0. Section 4.1: 7.5 nm and 10 nm.",
+    ),
+    (
+        "sensors.noise_std",
+        "White-noise standard deviations [m], ≥ 0. Paper silent: equal to the resolution, as capacitive-sensor resolution is usually quoted as RMS noise.",
+    ),
+    (
+        "simulation",
+        "Timing of the simulated experiment (Section 4.1, NOTES.md).",
+    ),
+    (
+        "simulation.sample_time",
+        "Controller sample time T_s [s], in (0, 0.1]. Section 4.1: 1e-4.",
+    ),
+    (
+        "simulation.substeps",
+        "Plant integration substeps per controller sample, ≥ 1 (NOTES.md: the PEA mode is ≈ 12 kHz).",
+    ),
+    (
+        "simulation.seed",
+        "Seed of the noise generator, for reproducible runs.",
+    ),
+    (
+        "trajectories",
+        "A reference trajectory of the output q, centred on the rest position (Section 4.2). kind = \"lissajous\" (ratio, amplitude, frequency) or \"circle\" (radius, frequency).",
+    ),
+    ("trajectories.kind", "\"lissajous\" or \"circle\"."),
+    (
+        "trajectories.name",
+        "Name used for output files: letters, digits, '-' and '_'.",
+    ),
+    (
+        "trajectories.ratio",
+        "Frequency ratio r of q1 to q2, > 0: q1 = A1 sin(r·2πft), q2 = A2 sin(2πft). Paper: 3 and 2.",
+    ),
+    (
+        "trajectories.amplitude",
+        "Amplitudes (A1, A2) [m], ≥ 0. Paper silent; inside the designed workspace.",
+    ),
+    (
+        "trajectories.radius",
+        "Circle radius [m], > 0. Paper silent; inside the designed workspace.",
+    ),
+    (
+        "trajectories.frequency",
+        "Base frequency f [Hz], > 0. Paper silent.",
+    ),
+    ("trajectories.duration", "Duration [s], > 0."),
+];
+
+/// The comment of a TOML path (array indices removed), if any.
+pub(crate) fn doc_of(path: &str) -> Option<&'static str> {
+    FIELD_DOCS.iter().find(|(p, _)| *p == path).map(|(_, d)| *d)
+}
+
+/// Inserts a `# comment` line above every table header and key of `toml_text`, looking the
+/// comments up by TOML path.
+pub(crate) fn annotate(toml_text: &str) -> String {
+    let mut out = String::with_capacity(toml_text.len() * 3);
+    let mut table = String::new();
+    for line in toml_text.lines() {
+        let trimmed = line.trim();
+        let header = trimmed
+            .strip_prefix("[[")
+            .and_then(|s| s.strip_suffix("]]"))
+            .or_else(|| trimmed.strip_prefix('[').and_then(|s| s.strip_suffix(']')));
+        if let Some(h) = header {
+            table = h.trim().to_string();
+            if !out.is_empty() && !out.ends_with("\n\n") {
+                out.push('\n');
+            }
+            if let Some(doc) = doc_of(&table) {
+                push_comment(&mut out, doc);
+            }
+        } else if let Some((key, _)) = trimmed.split_once('=') {
+            let key = key.trim().trim_matches('"');
+            let path = if table.is_empty() {
+                key.to_string()
+            } else {
+                format!("{table}.{key}")
+            };
+            if let Some(doc) = doc_of(&path) {
+                push_comment(&mut out, doc);
+            }
+        }
+        out.push_str(line);
+        out.push('\n');
+    }
+    out
+}
+
+fn push_comment(out: &mut String, doc: &str) {
+    out.push_str("# ");
+    out.push_str(doc);
+    out.push('\n');
+}

@@ -1,0 +1,370 @@
+//! The flexstage input deck.
+//!
+//! A run is described by one TOML *scenario*: the design domain and mesh, the material, the
+//! actuators, supports, output port and passive regions (paper Section 2), the optimization
+//! settings (Table 3), the piezo hysteresis (Table A1), the reduced stage model and the
+//! controller (Table 4), the sensors and the reference trajectories (Section 4).
+//!
+//! [`Scenario::paper`] is the built-in default and reproduces the paper, with the defaults of
+//! `NOTES.md` where the paper is silent. Every group has a `validate()` that names the field,
+//! the value and the accepted range; unknown keys are rejected when parsing.
+//!
+//! ```
+//! use flexstage_scenario::{Preset, Scenario};
+//! let text = Scenario::preset(Preset::Paper).to_commented_toml();
+//! let back = Scenario::from_toml_str(&text, "example").unwrap();
+//! assert_eq!(back, Scenario::paper());
+//! ```
+
+mod design;
+mod docs;
+mod error;
+mod stage;
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+pub use design::{
+    Actuators, Additive, Configuration, Edge, Fix, Material, Mesh, Optimization, Output, Region,
+    RegionKind, Selector, Support,
+};
+pub use error::{Result, ScenarioError};
+pub use stage::{
+    BoucWen, Controller, Hysteresis, Sensors, Simulation, Stage, StageParams, Trajectory,
+};
+
+/// A complete flexstage scenario. See the crate documentation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Name of the scenario, used in run-folder names.
+    pub name: String,
+    /// Design domain and mesh.
+    pub mesh: Mesh,
+    /// Solid material.
+    pub material: Material,
+    /// The two PEAs.
+    pub actuators: Actuators,
+    /// The output port.
+    pub output: Output,
+    /// Optimization settings.
+    pub optimization: Optimization,
+    /// Piezo hysteresis and amplifier.
+    pub hysteresis: Hysteresis,
+    /// Reduced stage model: guess and truth.
+    pub stage: Stage,
+    /// Observer and controller gains.
+    pub controller: Controller,
+    /// Position sensors.
+    pub sensors: Sensors,
+    /// Timing of the simulated experiment.
+    pub simulation: Simulation,
+    /// Supports.
+    pub supports: Vec<Support>,
+    /// Passive regions.
+    pub regions: Vec<Region>,
+    /// Reference trajectories.
+    pub trajectories: Vec<Trajectory>,
+}
+
+/// Built-in scenarios.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Preset {
+    /// The paper's settings (Tables 1, 3, 4, A1): 120 × 60 mesh, p_m = 40, up to 1000
+    /// iterations.
+    Paper,
+    /// A coarse, fast variant for first contact and tests: 60 × 30 mesh, p_m = 16, up to 60
+    /// iterations.
+    Quick,
+}
+
+impl Preset {
+    /// Parses a preset name ("paper" or "quick").
+    pub fn from_name(name: &str) -> Option<Preset> {
+        match name {
+            "paper" => Some(Preset::Paper),
+            "quick" => Some(Preset::Quick),
+            _ => None,
+        }
+    }
+}
+
+impl Scenario {
+    /// The paper's scenario (the built-in default).
+    pub fn paper() -> Scenario {
+        let mesh = Mesh {
+            length: 0.12,
+            width: 0.06,
+            thickness: 0.01,
+            nl: 120,
+            nw: 60,
+        };
+        let (l, w) = (mesh.length, mesh.width);
+        let pea1 = [0.0, 0.5 * w];
+        let pea2 = [l, 0.5 * w];
+        let out = [0.5 * l, w];
+        let guess = StageParams {
+            k_qo1: 5e6,
+            k_qo2: 5e6,
+            mass: 0.046,
+            alpha: 1.012,
+            k_pea1: 2.5e8,
+            k_pea2: 2.5e8,
+            k_in1: 1e5,
+            k_in2: 1e5,
+            m_in1: 0.042,
+            m_in2: 0.042,
+            c_qo1: 0.0,
+            c_qo2: 0.0,
+            c_in1: 0.0,
+            c_in2: 0.0,
+        };
+        let truth = StageParams {
+            k_qo1: 3.78e6,
+            k_qo2: 4.03e6,
+            k_in1: 0.92e5,
+            k_in2: 0.89e5,
+            ..guess.clone()
+        };
+        let damping_ratio = 0.02;
+        let mut scenario = Scenario {
+            name: "paper".into(),
+            regions: Vec::new(),
+            mesh,
+            material: Material {
+                youngs_modulus: 73e9,
+                min_modulus: 1e3,
+                poisson_ratio: 0.33,
+                density: 2710.0,
+            },
+            actuators: Actuators {
+                stiffness: 2.5e8,
+                max_stroke: 60e-6,
+                blocking_force: 1.5e4,
+                stroke_amplitude: 30e-6,
+                configuration: Configuration::Regular,
+                pea1: Selector::Nearest { point: pea1 },
+                pea2: Selector::Nearest { point: pea2 },
+            },
+            output: Output {
+                at: Selector::Nearest { point: out },
+                tilt_deg: 0.0,
+            },
+            optimization: Optimization {
+                penalty: 3.0,
+                rho_min: 1e-6,
+                max_iterations: 1000,
+                samples: 40,
+                initial_density: 0.5,
+                filter_radius: 1.5,
+                volume_fraction: 1.0,
+                change_tolerance: 1e-3,
+                additive: Additive {
+                    enabled: true,
+                    initial_coefficient: 1e-5,
+                    strain_threshold: 0.5,
+                },
+            },
+            hysteresis: Hysteresis {
+                voltage_min: 0.0,
+                voltage_max: 1000.0,
+                pea1: BoucWen {
+                    d_p: 6.2e-2,
+                    a_bw: 1.2e-2,
+                    b_bw: 1.9e-3,
+                    gamma_bw: 1.6e-3,
+                    delta_bw: 5.015e-4,
+                },
+                pea2: BoucWen {
+                    d_p: 6.5e-2,
+                    a_bw: 2.5e-2,
+                    b_bw: 1.8e-3,
+                    gamma_bw: 5.3e-3,
+                    delta_bw: 1.973e-4,
+                },
+            },
+            stage: Stage {
+                damping_ratio,
+                guess: guess.with_damping_ratio(damping_ratio),
+                truth: truth.with_damping_ratio(damping_ratio),
+            },
+            controller: Controller {
+                observer_gain: [1e5, 1e5],
+                error_gain: [2e4, 1.5e4],
+                feedback_gain: [1.2e4, 1.2e3],
+            },
+            sensors: Sensors {
+                resolution: [7.5e-9, 10e-9],
+                noise_std: [7.5e-9, 10e-9],
+            },
+            simulation: Simulation {
+                sample_time: 1e-4,
+                substeps: 20,
+                seed: 1,
+            },
+            supports: vec![
+                Support {
+                    fix: Fix::Y,
+                    at: Selector::Nearest { point: pea1 },
+                },
+                Support {
+                    fix: Fix::Y,
+                    at: Selector::Nearest { point: pea2 },
+                },
+            ],
+            trajectories: vec![
+                Trajectory::Lissajous {
+                    name: "lissajous-3".into(),
+                    ratio: 3.0,
+                    amplitude: [10e-6, 20e-6],
+                    frequency: 2.0,
+                    duration: 1.0,
+                },
+                Trajectory::Lissajous {
+                    name: "lissajous-2".into(),
+                    ratio: 2.0,
+                    amplitude: [10e-6, 20e-6],
+                    frequency: 2.0,
+                    duration: 1.0,
+                },
+                Trajectory::Circle {
+                    name: "circle".into(),
+                    radius: 10e-6,
+                    frequency: 2.0,
+                    duration: 1.0,
+                },
+            ],
+        };
+        scenario.regions = port_patches(&scenario, 3);
+        scenario
+    }
+
+    /// A built-in scenario.
+    pub fn preset(preset: Preset) -> Scenario {
+        match preset {
+            Preset::Paper => Scenario::paper(),
+            Preset::Quick => {
+                let mut s = Scenario::paper();
+                s.name = "quick".into();
+                s.mesh.nl = 60;
+                s.mesh.nw = 30;
+                s.optimization.samples = 16;
+                s.optimization.max_iterations = 60;
+                s.regions = port_patches(&s, 2);
+                s
+            }
+        }
+    }
+
+    /// Checks every group and the relations between them.
+    pub fn validate(&self) -> Result<()> {
+        if self.name.is_empty()
+            || !self
+                .name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
+        {
+            return Err(ScenarioError::OutOfRange {
+                field: "name".into(),
+                value: format!("{:?}", self.name),
+                expected: "a non-empty name of letters, digits, '-' and '_'".into(),
+            });
+        }
+        self.mesh.validate()?;
+        self.material.validate()?;
+        self.actuators.validate(&self.mesh)?;
+        self.output.validate(&self.mesh)?;
+        design::validate_supports(&self.supports, &self.mesh)?;
+        design::validate_regions(&self.regions, &self.mesh)?;
+        self.optimization.validate()?;
+        self.hysteresis.validate()?;
+        self.stage.validate()?;
+        self.controller.validate()?;
+        self.sensors.validate()?;
+        self.simulation.validate()?;
+        for (i, t) in self.trajectories.iter().enumerate() {
+            t.validate(&format!("trajectories[{i}]"))?;
+        }
+        Ok(())
+    }
+
+    /// Parses and validates a scenario. `origin` names the source in error messages.
+    pub fn from_toml_str(text: &str, origin: &str) -> Result<Scenario> {
+        let scenario: Scenario = toml::from_str(text).map_err(|e| ScenarioError::Parse {
+            path: origin.to_string(),
+            source: Box::new(e),
+        })?;
+        scenario.validate()?;
+        Ok(scenario)
+    }
+
+    /// Reads, parses and validates a scenario file.
+    pub fn load(path: &Path) -> Result<Scenario> {
+        let text = std::fs::read_to_string(path).map_err(|source| ScenarioError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Scenario::from_toml_str(&text, &path.display().to_string())
+    }
+
+    /// The scenario as TOML, without comments.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a scenario always serializes to TOML")
+    }
+
+    /// The scenario as TOML with one comment per field (meaning, unit, source), as written by
+    /// `flexstage init`.
+    pub fn to_commented_toml(&self) -> String {
+        let mut out = String::from(
+            "# flexstage scenario. Units are SI unless a comment says otherwise.\n\
+             # Sources: tables and equations of the paper (shared/paper/paper.md) and NOTES.md.\n\
+             # Check it with `flexstage check FILE`.\n\n",
+        );
+        out.push_str(&docs::annotate(&self.to_toml()));
+        out
+    }
+}
+
+/// Solid patches of `n × n` elements at the two input ports and the output port (NOTES.md).
+fn port_patches(s: &Scenario, n: usize) -> Vec<Region> {
+    let (dx, dy) = s.mesh.element_size();
+    let (l, w) = (s.mesh.length, s.mesh.width);
+    let (hx, hy) = (n as f64 * dx, 0.5 * n as f64 * dy);
+    let solid = |min: [f64; 2], max: [f64; 2]| Region {
+        kind: RegionKind::Solid,
+        at: Selector::Box { min, max },
+    };
+    vec![
+        solid([0.0, 0.5 * w - hy], [hx, 0.5 * w + hy]),
+        solid([l - hx, 0.5 * w - hy], [l, 0.5 * w + hy]),
+        solid(
+            [0.5 * l - 0.5 * n as f64 * dx, w - n as f64 * dy],
+            [0.5 * l + 0.5 * n as f64 * dx, w],
+        ),
+    ]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_key_has_a_comment() {
+        for preset in [Preset::Paper, Preset::Quick] {
+            let text = Scenario::preset(preset).to_commented_toml();
+            let lines: Vec<&str> = text.lines().collect();
+            for (i, line) in lines.iter().enumerate() {
+                let t = line.trim();
+                if t.is_empty() || t.starts_with('#') {
+                    continue;
+                }
+                assert!(
+                    i > 0 && lines[i - 1].trim_start().starts_with('#'),
+                    "line {} has no comment above it: {t}",
+                    i + 1
+                );
+            }
+        }
+    }
+}
