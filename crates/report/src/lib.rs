@@ -12,6 +12,8 @@
 //!   <stage>/...        one sub-folder per pipeline stage (design, reduce, identify, track)
 //! ```
 
+pub mod plot;
+
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -103,6 +105,28 @@ impl RunDir {
     }
 }
 
+/// Formats numeric columns as CSV text: one header row, then one row per sample. Columns of
+/// unequal length are padded with empty cells. Numbers use Rust's shortest round-trip format,
+/// so a spreadsheet or `numpy.loadtxt` reads back the exact values.
+pub fn csv_columns(header: &[&str], columns: &[&[f64]]) -> String {
+    assert_eq!(header.len(), columns.len(), "one header per column");
+    let rows = columns.iter().map(|c| c.len()).max().unwrap_or(0);
+    let mut out = header.join(",");
+    out.push('\n');
+    for r in 0..rows {
+        for (j, c) in columns.iter().enumerate() {
+            if j > 0 {
+                out.push(',');
+            }
+            if let Some(v) = c.get(r) {
+                out.push_str(&v.to_string());
+            }
+        }
+        out.push('\n');
+    }
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -121,5 +145,23 @@ mod tests {
             .collect();
         assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
         fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn csv_round_trips_exact_values() {
+        let a = [0.1, 1e-9, -3.0];
+        let b = [2.5];
+        let text = csv_columns(&["a", "b"], &[&a, &b]);
+        assert_eq!(text, "a,b\n0.1,2.5\n0.000000001,\n-3,\n");
+        let parsed: f64 = text
+            .lines()
+            .nth(2)
+            .unwrap()
+            .split(',')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert_eq!(parsed, 1e-9);
     }
 }
