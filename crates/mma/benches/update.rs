@@ -1,0 +1,93 @@
+//! One MMA update for n = 10⁴, 10⁵, 10⁶ variables and m = 3 constraints.
+//!
+//! Run with `cargo bench -p flexstage-mma`. The optimizer is first advanced three
+//! iterations on a synthetic problem (so the asymptote-update branch is used), then each
+//! sample times one `Mma::update` from that same state.
+
+use flexstage_mma::{Mma, MmaParams};
+
+fn main() {
+    divan::main();
+}
+
+const M: usize = 3;
+
+/// Synthetic smooth problem: objective `Σ wⱼ/xⱼ` (compliance-like) and three linear
+/// "volume" constraints over interleaved subsets, gradients filled deterministically.
+struct Synthetic {
+    n: usize,
+    w: Vec<f64>,
+    a: Vec<f64>,
+}
+
+impl Synthetic {
+    fn new(n: usize) -> Self {
+        let w = (0..n)
+            .map(|j| 1.0 + ((j * 7919) % 1000) as f64 / 1000.0)
+            .collect();
+        let a = (0..M * n)
+            .map(|k| 1.0 + ((k * 104_729) % 997) as f64 / 997.0)
+            .collect();
+        Self { n, w, a }
+    }
+
+    fn eval(&self, x: &[f64], df0dx: &mut [f64], f: &mut [f64], dfdx: &mut [f64]) -> f64 {
+        let n = self.n;
+        let mut f0 = 0.0;
+        for j in 0..n {
+            f0 += self.w[j] / x[j];
+            df0dx[j] = -self.w[j] / (x[j] * x[j]);
+        }
+        for i in 0..M {
+            let row = &self.a[i * n..(i + 1) * n];
+            f[i] = row.iter().zip(x).map(|(a, x)| a * x).sum::<f64>() / n as f64
+                - 0.4
+                - 0.1 * i as f64;
+            for j in 0..n {
+                dfdx[i * n + j] = row[j] / n as f64;
+            }
+        }
+        f0
+    }
+}
+
+struct Setup {
+    mma: Mma,
+    x: Vec<f64>,
+    f0: f64,
+    df0dx: Vec<f64>,
+    f: Vec<f64>,
+    dfdx: Vec<f64>,
+}
+
+fn setup(n: usize) -> Setup {
+    let p = Synthetic::new(n);
+    let mut mma = Mma::new(n, M, vec![1e-3; n], vec![1.0; n], MmaParams::default()).unwrap();
+    let mut x = vec![0.5; n];
+    let (mut df0dx, mut f, mut dfdx) = (vec![0.0; n], vec![0.0; M], vec![0.0; M * n]);
+    let mut f0 = p.eval(&x, &mut df0dx, &mut f, &mut dfdx);
+    for _ in 0..3 {
+        mma.update(&mut x, f0, &df0dx, &f, &dfdx).unwrap();
+        f0 = p.eval(&x, &mut df0dx, &mut f, &mut dfdx);
+    }
+    Setup {
+        mma,
+        x,
+        f0,
+        df0dx,
+        f,
+        dfdx,
+    }
+}
+
+#[divan::bench(args = [10_000, 100_000, 1_000_000], sample_count = 10, sample_size = 1)]
+fn mma_update(bencher: divan::Bencher, n: usize) {
+    let s = setup(n);
+    bencher
+        .counter(divan::counter::ItemsCount::new(n))
+        .with_inputs(|| (s.mma.clone(), s.x.clone()))
+        .bench_local_refs(|(mma, x)| {
+            let rep = mma.update(x, s.f0, &s.df0dx, &s.f, &s.dfdx).unwrap();
+            divan::black_box(rep)
+        });
+}

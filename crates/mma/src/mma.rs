@@ -1,0 +1,451 @@
+//! The stateful MMA optimizer (`mmasub`).
+
+use rayon::prelude::*;
+
+use crate::error::MmaError;
+use crate::kkt::{KktProblem, KktResidual, Multipliers, kkt_residual};
+use crate::params::MmaParams;
+use crate::subsolv::{ALFA, BETA, CHUNK, LOW, P0, PQ, Q0, SubConsts, SubSolver, UPP, XState};
+
+/// What one [`Mma::update`] did.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct UpdateReport {
+    /// Outer iteration number, starting at 1.
+    pub iteration: usize,
+    /// `max_j |x_new[j] - x_old[j]|`.
+    pub max_change: f64,
+    /// Newton steps taken by the interior-point subproblem solver.
+    pub subproblem_iterations: usize,
+    /// Norm of the relaxed KKT residual of the subproblem at its last barrier level.
+    pub subproblem_residual: f64,
+}
+
+/// Svanberg's MMA for `min f₀(x)` s.t. `fᵢ(x) ≤ 0`, `xmin ≤ x ≤ xmax`.
+///
+/// Build it once for given dimensions, bounds and parameters; then, at each outer iteration,
+/// evaluate the functions and gradients at `x` and call [`Mma::update`], which replaces `x`
+/// by the solution of the MMA subproblem. The optimizer keeps the two previous iterates and
+/// the asymptotes. All vectors are allocated in [`Mma::new`]; an update allocates nothing.
+///
+/// ```
+/// use flexstage_mma::{Mma, MmaParams};
+/// // min (x-1)² + (y-2)²  s.t.  x + y - 2 <= 0,  0 <= x, y <= 3
+/// let (xmin, xmax) = (vec![0.0; 2], vec![3.0; 2]);
+/// let mut mma = Mma::new(2, 1, xmin, xmax, MmaParams::default()).unwrap();
+/// let mut x = vec![0.5, 0.5];
+/// for _ in 0..50 {
+///     let f0 = (x[0] - 1.0).powi(2) + (x[1] - 2.0).powi(2);
+///     let df0 = [2.0 * (x[0] - 1.0), 2.0 * (x[1] - 2.0)];
+///     let f = [x[0] + x[1] - 2.0];
+///     let dfdx = [1.0, 1.0]; // m × n, row-major
+///     let report = mma.update(&mut x, f0, &df0, &f, &dfdx).unwrap();
+///     if report.max_change < 1e-9 { break; }
+/// }
+/// assert!((x[0] - 0.5).abs() < 1e-5 && (x[1] - 1.5).abs() < 1e-5);
+/// ```
+#[derive(Debug, Clone)]
+pub struct Mma {
+    n: usize,
+    m: usize,
+    params: MmaParams,
+    xmin: Vec<f64>,
+    xmax: Vec<f64>,
+    iter: usize,
+    xold1: Vec<f64>,
+    xold2: Vec<f64>,
+    sub: SubSolver,
+    xsi: Vec<f64>,
+    eta: Vec<f64>,
+}
+
+fn check_len(name: &'static str, s: &[f64], expected: usize) -> Result<(), MmaError> {
+    if s.len() == expected {
+        Ok(())
+    } else {
+        Err(MmaError::DimensionMismatch {
+            name,
+            expected,
+            got: s.len(),
+        })
+    }
+}
+
+pub(crate) fn check_finite(name: &'static str, s: &[f64], parallel: bool) -> Result<(), MmaError> {
+    let bad = if parallel {
+        s.par_iter().position_first(|v| !v.is_finite())
+    } else {
+        s.iter().position(|v| !v.is_finite())
+    };
+    match bad {
+        None => Ok(()),
+        Some(index) => Err(MmaError::NonFinite {
+            name,
+            index,
+            value: s[index],
+        }),
+    }
+}
+
+impl Mma {
+    /// Creates an optimizer for `n` variables and `m` constraints (`m = 0` is allowed).
+    ///
+    /// # Errors
+    /// [`MmaError::NoVariables`] if `n == 0`, [`MmaError::DimensionMismatch`] if a bound has
+    /// the wrong length, [`MmaError::NonFinite`] / [`MmaError::InvalidBounds`] for bad
+    /// bounds, [`MmaError::InvalidParams`] if `params.validate()` fails.
+    pub fn new(
+        n: usize,
+        m: usize,
+        xmin: Vec<f64>,
+        xmax: Vec<f64>,
+        params: MmaParams,
+    ) -> Result<Self, MmaError> {
+        if n == 0 {
+            return Err(MmaError::NoVariables);
+        }
+        params.validate()?;
+        check_len("xmin", &xmin, n)?;
+        check_len("xmax", &xmax, n)?;
+        check_finite("xmin", &xmin, false)?;
+        check_finite("xmax", &xmax, false)?;
+        if let Some(index) = (0..n).find(|&j| xmin[j] >= xmax[j]) {
+            return Err(MmaError::InvalidBounds {
+                index,
+                lower: xmin[index],
+                upper: xmax[index],
+            });
+        }
+        let parallel = n >= params.parallel_threshold;
+        Ok(Self {
+            n,
+            m,
+            params,
+            xmin,
+            xmax,
+            iter: 0,
+            xold1: vec![0.0; n],
+            xold2: vec![0.0; n],
+            sub: SubSolver::new(n, m, parallel),
+            xsi: vec![0.0; n],
+            eta: vec![0.0; n],
+        })
+    }
+
+    /// Number of design variables.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+
+    /// Number of constraints.
+    pub fn m(&self) -> usize {
+        self.m
+    }
+
+    /// Parameters in use.
+    pub fn params(&self) -> &MmaParams {
+        &self.params
+    }
+
+    /// Lower bounds.
+    pub fn xmin(&self) -> &[f64] {
+        &self.xmin
+    }
+
+    /// Upper bounds.
+    pub fn xmax(&self) -> &[f64] {
+        &self.xmax
+    }
+
+    /// Number of updates done since construction or the last [`Mma::reset`].
+    pub fn iteration(&self) -> usize {
+        self.iter
+    }
+
+    /// Forgets the history: the next update re-initialises the asymptotes.
+    pub fn reset(&mut self) {
+        self.iter = 0;
+    }
+
+    /// Lower asymptotes used by the last update (an empty-history optimizer returns zeros).
+    pub fn low(&self) -> impl ExactSizeIterator<Item = f64> + '_ {
+        self.sub.nodes.chunks_exact(self.sub.stride).map(|r| r[LOW])
+    }
+
+    /// Upper asymptotes used by the last update.
+    pub fn upp(&self) -> impl ExactSizeIterator<Item = f64> + '_ {
+        self.sub.nodes.chunks_exact(self.sub.stride).map(|r| r[UPP])
+    }
+
+    /// Lagrange multipliers λ of the constraints from the last subproblem.
+    pub fn lambda(&self) -> &[f64] {
+        &self.sub.lam
+    }
+
+    /// All multipliers of the last subproblem (λ, y, z, μ, ζ, s, ξ, η), as needed by
+    /// [`kkt_residual`].
+    pub fn multipliers(&self) -> Multipliers<'_> {
+        Multipliers {
+            lam: &self.sub.lam,
+            y: &self.sub.y,
+            z: self.sub.z,
+            mu: &self.sub.mu,
+            zet: self.sub.zet,
+            s: &self.sub.s,
+            xsi: &self.xsi,
+            eta: &self.eta,
+        }
+    }
+
+    /// KKT residual of the original problem at `x` (typically just after an update and a new
+    /// evaluation), using this optimizer's bounds, parameters and [`Mma::multipliers`].
+    ///
+    /// # Errors
+    /// As [`kkt_residual`].
+    pub fn kkt_residual(
+        &self,
+        x: &[f64],
+        df0dx: &[f64],
+        f: &[f64],
+        dfdx: &[f64],
+    ) -> Result<KktResidual, MmaError> {
+        kkt_residual(
+            &KktProblem {
+                x,
+                xmin: &self.xmin,
+                xmax: &self.xmax,
+                df0dx,
+                f,
+                dfdx,
+            },
+            &self.multipliers(),
+            &self.params,
+        )
+    }
+
+    /// One MMA iteration: builds the subproblem at `x` from the function values and
+    /// gradients, solves it, and overwrites `x` with its solution.
+    ///
+    /// * `x`: current iterate (length n, within the bounds); replaced by the new iterate.
+    /// * `f0`: objective value (checked for finiteness; MMA itself only uses gradients).
+    /// * `df0dx`: objective gradient (length n).
+    /// * `f`: constraint values `fᵢ(x)` (length m), feasible when `≤ 0`.
+    /// * `dfdx`: constraint gradients, `m × n` row-major: `dfdx[i * n + j] = ∂fᵢ/∂xⱼ`.
+    ///
+    /// # Errors
+    /// [`MmaError::DimensionMismatch`], [`MmaError::NonFinite`] or [`MmaError::OutOfBounds`];
+    /// `x` and the internal state are left unchanged then.
+    pub fn update(
+        &mut self,
+        x: &mut [f64],
+        f0: f64,
+        df0dx: &[f64],
+        f: &[f64],
+        dfdx: &[f64],
+    ) -> Result<UpdateReport, MmaError> {
+        let (n, m) = (self.n, self.m);
+        let par = self.sub.parallel;
+        check_len("x", x, n)?;
+        check_len("df0dx", df0dx, n)?;
+        check_len("f", f, m)?;
+        check_len("dfdx", dfdx, m * n)?;
+        check_finite("f0", &[f0], false)?;
+        check_finite("x", x, par)?;
+        check_finite("df0dx", df0dx, par)?;
+        check_finite("f", f, false)?;
+        check_finite("dfdx", dfdx, par)?;
+        if let Some(index) = (0..n).find(|&j| !(self.xmin[j] <= x[j] && x[j] <= self.xmax[j])) {
+            return Err(MmaError::OutOfBounds {
+                index,
+                value: x[index],
+                lower: self.xmin[index],
+                upper: self.xmax[index],
+            });
+        }
+
+        self.iter += 1;
+        self.build_subproblem(x, df0dx, f, dfdx);
+        let p = &self.params;
+        let rep = self.sub.solve(&SubConsts {
+            a0: p.a0,
+            a: p.a,
+            c: p.c,
+            d: p.d,
+            epsimin: p.subproblem_tolerance,
+        });
+
+        // xold2 <- xold1, xold1 <- x, x <- xmma; expose ξ, η.
+        std::mem::swap(&mut self.xold1, &mut self.xold2);
+        let max_change = self.write_back(x);
+        Ok(UpdateReport {
+            iteration: self.iter,
+            max_change,
+            subproblem_iterations: rep.iterations,
+            subproblem_residual: rep.residual_norm,
+        })
+    }
+
+    /// Copies x into xold1 and the subproblem solution into x, ξ, η; returns the max change.
+    fn write_back(&mut self, x: &mut [f64]) -> f64 {
+        let sub = &self.sub;
+        if sub.parallel {
+            x.par_chunks_mut(CHUNK)
+                .zip(self.xold1.par_chunks_mut(CHUNK))
+                .zip(
+                    self.xsi
+                        .par_chunks_mut(CHUNK)
+                        .zip(self.eta.par_chunks_mut(CHUNK)),
+                )
+                .zip(sub.state.par_chunks(CHUNK))
+                .map(|(((xs, xo), (xsi, eta)), st)| write_chunk(xs, xo, xsi, eta, st))
+                .reduce(|| 0.0, f64::max)
+        } else {
+            x.chunks_mut(CHUNK)
+                .zip(self.xold1.chunks_mut(CHUNK))
+                .zip(self.xsi.chunks_mut(CHUNK).zip(self.eta.chunks_mut(CHUNK)))
+                .zip(sub.state.chunks(CHUNK))
+                .map(|(((xs, xo), (xsi, eta)), st)| write_chunk(xs, xo, xsi, eta, st))
+                .fold(0.0, f64::max)
+        }
+    }
+
+    /// Asymptotes, move limits α, β, and the p/q approximations (`mmasub`).
+    fn build_subproblem(&mut self, x: &[f64], df0dx: &[f64], f: &[f64], dfdx: &[f64]) {
+        let (n, m) = (self.n, self.m);
+        let ctx = BuildCtx {
+            n,
+            m,
+            p: self.params,
+            init: self.iter <= 2,
+            x,
+            xold1: &self.xold1,
+            xold2: &self.xold2,
+            xmin: &self.xmin,
+            xmax: &self.xmax,
+            df0dx,
+            dfdx,
+        };
+        let stride = self.sub.stride;
+        let slot = self.sub.slot;
+        let f_chunk = |(c, (nodes, acc)): (usize, (&mut [f64], &mut [f64]))| {
+            build_chunk(&ctx, c, nodes, &mut acc[..m]);
+        };
+        if self.sub.parallel {
+            self.sub
+                .nodes
+                .par_chunks_mut(CHUNK * stride)
+                .zip(self.sub.acc.par_chunks_mut(slot))
+                .enumerate()
+                .for_each(f_chunk);
+        } else {
+            self.sub
+                .nodes
+                .chunks_mut(CHUNK * stride)
+                .zip(self.sub.acc.chunks_mut(slot))
+                .enumerate()
+                .for_each(f_chunk);
+        }
+        for (b, fi) in self.sub.b.iter_mut().zip(f) {
+            *b = -fi;
+        }
+        for acc in self.sub.acc.chunks_exact(slot) {
+            for (b, a) in self.sub.b.iter_mut().zip(acc) {
+                *b += a;
+            }
+        }
+    }
+}
+
+/// Copies x into xold1, the new iterate into x and ξ, η out; returns the max change.
+fn write_chunk(
+    xs: &mut [f64],
+    xo: &mut [f64],
+    xsi: &mut [f64],
+    eta: &mut [f64],
+    st: &[XState],
+) -> f64 {
+    let mut ch = 0.0f64;
+    for k in 0..xs.len() {
+        let s = &st[k];
+        xo[k] = xs[k];
+        ch = ch.max((s.x - xs[k]).abs());
+        xs[k] = s.x;
+        xsi[k] = s.xsi;
+        eta[k] = s.eta;
+    }
+    ch
+}
+
+struct BuildCtx<'a> {
+    n: usize,
+    m: usize,
+    p: MmaParams,
+    init: bool,
+    x: &'a [f64],
+    xold1: &'a [f64],
+    xold2: &'a [f64],
+    xmin: &'a [f64],
+    xmax: &'a [f64],
+    df0dx: &'a [f64],
+    dfdx: &'a [f64],
+}
+
+fn build_chunk(ctx: &BuildCtx<'_>, c: usize, nodes: &mut [f64], b: &mut [f64]) {
+    let (n, m, p) = (ctx.n, ctx.m, &ctx.p);
+    let stride = PQ + 2 * m;
+    let start = c * CHUNK;
+    b.fill(0.0);
+    for (k, nd) in nodes.chunks_exact_mut(stride).enumerate() {
+        let j = start + k;
+        let xv = ctx.x[j];
+        let (xmin, xmax) = (ctx.xmin[j], ctx.xmax[j]);
+        let range = xmax - xmin;
+        let (low, upp) = if ctx.init {
+            (xv - p.asyinit * range, xv + p.asyinit * range)
+        } else {
+            let (xo1, xo2) = (ctx.xold1[j], ctx.xold2[j]);
+            let zzz = (xv - xo1) * (xo1 - xo2);
+            let factor = if zzz > 0.0 {
+                p.asyincr
+            } else if zzz < 0.0 {
+                p.asydecr
+            } else {
+                1.0
+            };
+            let low = xv - factor * (xo1 - nd[LOW]);
+            let upp = xv + factor * (nd[UPP] - xo1);
+            let low = low.max(xv - p.asymax * range).min(xv - p.asymin * range);
+            let upp = upp.min(xv + p.asymax * range).max(xv + p.asymin * range);
+            (low, upp)
+        };
+        let alfa = (low + p.albefa * (xv - low))
+            .max(xv - p.move_limit * range)
+            .max(xmin);
+        let beta = (upp - p.albefa * (upp - xv))
+            .min(xv + p.move_limit * range)
+            .min(xmax);
+        let xmamiinv = 1.0 / range.max(1e-5);
+        let ux1 = upp - xv;
+        let xl1 = xv - low;
+        let (ux2, xl2) = (ux1 * ux1, xl1 * xl1);
+        let (uxinv, xlinv) = (1.0 / ux1, 1.0 / xl1);
+        let g = ctx.df0dx[j];
+        let (pp, qq) = (g.max(0.0), (-g).max(0.0));
+        let pq0 = 0.001 * (pp + qq) + p.raa0 * xmamiinv;
+        nd[LOW] = low;
+        nd[UPP] = upp;
+        nd[ALFA] = alfa;
+        nd[BETA] = beta;
+        nd[P0] = (pp + pq0) * ux2;
+        nd[Q0] = (qq + pq0) * xl2;
+        for i in 0..m {
+            let g = ctx.dfdx[i * n + j];
+            let (pp, qq) = (g.max(0.0), (-g).max(0.0));
+            let pq = 0.001 * (pp + qq) + p.raa0 * xmamiinv;
+            let pij = (pp + pq) * ux2;
+            let qij = (qq + pq) * xl2;
+            nd[PQ + i] = pij;
+            nd[PQ + m + i] = qij;
+            b[i] += pij * uxinv + qij * xlinv;
+        }
+    }
+}

@@ -1,0 +1,194 @@
+//! Tunable constants of MMA, with Svanberg's defaults.
+
+use crate::error::ParamError;
+
+/// Parameters of MMA.
+///
+/// The defaults are those of Svanberg's `mmasub.m` and of the 2007 note
+/// "MMA and GCMMA – two methods for nonlinear optimization":
+///
+/// | field | default | accepted range | meaning |
+/// |---|---|---|---|
+/// | `asyinit` | 0.5 | (0, 10] | initial asymptote distance, as a fraction of `xmax - xmin` |
+/// | `asyincr` | 1.2 | [1, 10] | asymptote widening factor when two steps agree in sign |
+/// | `asydecr` | 0.7 | (0, 1] | asymptote narrowing factor when two steps oscillate |
+/// | `asymin` | 0.01 | (0, `asymax`) | least distance of an asymptote from `x`, fraction of `xmax - xmin` |
+/// | `asymax` | 10 | (`asymin`, 1e6] | largest distance of an asymptote from `x`, fraction of `xmax - xmin` |
+/// | `albefa` | 0.1 | (0, 1) | the subproblem bounds α, β stay this fraction of `x - low` (`upp - x`) away from the asymptotes |
+/// | `move_limit` | 0.5 | (0, 1] | move limit, fraction of `xmax - xmin` |
+/// | `raa0` | 1e-5 | (0, 1] | regularisation of the p/q coefficients (`raa0 / (xmax - xmin)`) |
+/// | `a0` | 1 | (0, 1e12] | coefficient a₀ of the artificial variable z |
+/// | `a` | 0 | [0, 1e12] | coefficients aᵢ of z in the constraints (same for all i) |
+/// | `c` | 1000 | [0, 1e12] | linear cost cᵢ of the artificial variables yᵢ (same for all i) |
+/// | `d` | 1 | [0, 1e12] | quadratic cost dᵢ of the artificial variables yᵢ (same for all i) |
+/// | `subproblem_tolerance` | 1e-7 | [1e-15, 1e-2] | `epsimin`: the interior-point barrier parameter ε is reduced by 10 until below it |
+/// | `parallel_threshold` | 50 000 | any | use rayon for the O(n) loops when `n >= parallel_threshold` |
+///
+/// With `a = 0` and large `c` the artificial variables yᵢ vanish at the solution whenever the
+/// original problem is feasible, and the MMA iterates then solve the original problem.
+///
+/// The norm of the KKT residual of the interior-point subproblem is of order
+/// `subproblem_tolerance * sqrt(n)`; when the KKT residual of the original problem is used as
+/// stopping criterion on large problems, reduce `subproblem_tolerance` accordingly.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MmaParams {
+    /// Initial asymptote distance factor (`asyinit`).
+    pub asyinit: f64,
+    /// Asymptote increase factor (`asyincr`).
+    pub asyincr: f64,
+    /// Asymptote decrease factor (`asydecr`).
+    pub asydecr: f64,
+    /// Least asymptote distance factor (0.01 in `mmasub.m`).
+    pub asymin: f64,
+    /// Largest asymptote distance factor (10 in `mmasub.m`).
+    pub asymax: f64,
+    /// Distance of α, β from the asymptotes (`albefa`).
+    pub albefa: f64,
+    /// Move limit (`move`).
+    pub move_limit: f64,
+    /// Regularisation term of p and q (`raa0`).
+    pub raa0: f64,
+    /// a₀.
+    pub a0: f64,
+    /// aᵢ (all constraints).
+    pub a: f64,
+    /// cᵢ (all constraints).
+    pub c: f64,
+    /// dᵢ (all constraints).
+    pub d: f64,
+    /// `epsimin` of `subsolv`.
+    pub subproblem_tolerance: f64,
+    /// Problem size from which rayon is used.
+    pub parallel_threshold: usize,
+}
+
+impl Default for MmaParams {
+    fn default() -> Self {
+        Self {
+            asyinit: 0.5,
+            asyincr: 1.2,
+            asydecr: 0.7,
+            asymin: 0.01,
+            asymax: 10.0,
+            albefa: 0.1,
+            move_limit: 0.5,
+            raa0: 1e-5,
+            a0: 1.0,
+            a: 0.0,
+            c: 1000.0,
+            d: 1.0,
+            subproblem_tolerance: 1e-7,
+            parallel_threshold: 50_000,
+        }
+    }
+}
+
+/// Which end of an interval is open.
+#[derive(Clone, Copy)]
+enum End {
+    Open,
+    Closed,
+}
+
+fn check(
+    field: &'static str,
+    value: f64,
+    lo: (f64, End),
+    hi: (f64, End),
+    range: &'static str,
+) -> Result<(), ParamError> {
+    let above = match lo.1 {
+        End::Open => value > lo.0,
+        End::Closed => value >= lo.0,
+    };
+    let below = match hi.1 {
+        End::Open => value < hi.0,
+        End::Closed => value <= hi.0,
+    };
+    // NaN fails both comparisons.
+    if above && below {
+        Ok(())
+    } else {
+        Err(ParamError::OutOfRange {
+            field,
+            value,
+            range,
+        })
+    }
+}
+
+impl MmaParams {
+    /// Checks every field against its documented range.
+    ///
+    /// # Errors
+    /// [`ParamError::OutOfRange`] naming the first offending field and its accepted range, or
+    /// [`ParamError::Inconsistent`] when `asymin >= asymax`.
+    pub fn validate(&self) -> Result<(), ParamError> {
+        use End::{Closed, Open};
+        check(
+            "asyinit",
+            self.asyinit,
+            (0.0, Open),
+            (10.0, Closed),
+            "(0, 10]",
+        )?;
+        check(
+            "asyincr",
+            self.asyincr,
+            (1.0, Closed),
+            (10.0, Closed),
+            "[1, 10]",
+        )?;
+        check(
+            "asydecr",
+            self.asydecr,
+            (0.0, Open),
+            (1.0, Closed),
+            "(0, 1]",
+        )?;
+        check(
+            "asymin",
+            self.asymin,
+            (0.0, Open),
+            (1e6, Closed),
+            "(0, asymax)",
+        )?;
+        check(
+            "asymax",
+            self.asymax,
+            (0.0, Open),
+            (1e6, Closed),
+            "(asymin, 1e6]",
+        )?;
+        if self.asymin >= self.asymax {
+            return Err(ParamError::Inconsistent {
+                field: "asymin",
+                value: self.asymin,
+                other: "asymax",
+                other_value: self.asymax,
+                reason: "asymin must be smaller than asymax",
+            });
+        }
+        check("albefa", self.albefa, (0.0, Open), (1.0, Open), "(0, 1)")?;
+        check(
+            "move_limit",
+            self.move_limit,
+            (0.0, Open),
+            (1.0, Closed),
+            "(0, 1]",
+        )?;
+        check("raa0", self.raa0, (0.0, Open), (1.0, Closed), "(0, 1]")?;
+        check("a0", self.a0, (0.0, Open), (1e12, Closed), "(0, 1e12]")?;
+        check("a", self.a, (0.0, Closed), (1e12, Closed), "[0, 1e12]")?;
+        check("c", self.c, (0.0, Closed), (1e12, Closed), "[0, 1e12]")?;
+        check("d", self.d, (0.0, Closed), (1e12, Closed), "[0, 1e12]")?;
+        check(
+            "subproblem_tolerance",
+            self.subproblem_tolerance,
+            (1e-15, Closed),
+            (1e-2, Closed),
+            "[1e-15, 1e-2]",
+        )?;
+        Ok(())
+    }
+}
