@@ -3,6 +3,7 @@
 //! Errors are printed as one message (with its causes) and a non-zero exit status; never a
 //! backtrace.
 
+mod run_dir;
 mod scenario_args;
 
 use std::path::PathBuf;
