@@ -12,7 +12,9 @@
 //!   <stage>/...        one sub-folder per pipeline stage (design, reduce, identify, track)
 //! ```
 
+pub mod image;
 pub mod plot;
+pub mod vtk;
 
 use std::fs;
 use std::io::Write;
