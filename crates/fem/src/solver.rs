@@ -1,0 +1,403 @@
+//! Sparse direct and iterative solvers on the reduced (free-DOF) system.
+//!
+//! * [`SymbolicFactor`]: AMD ordering + symbolic Cholesky (faer low-level API), computed once per
+//!   sparsity pattern and shared between threads via `Arc`.
+//! * [`Factor`]: a numeric factorization with buffers it keeps; `factorize` refills them without
+//!   allocating. It first tries LLᵀ; if the tangent is not positive definite (e.g. past a limit
+//!   point) it falls back to faer's intranodal Bunch–Kaufman LBLᵀ and records
+//!   [`FactorKind::Lblt`]. Solving takes `&self` plus a per-thread [`SolveWorkspace`], so one
+//!   factor can serve many threads — as the adjoint solver of its own state or as a
+//!   preconditioner for other load cases ([`pcg`]).
+//! * All factorizations and solves use `Par::Seq` (RUST-NOTES.md: faer's threading is slower
+//!   at these sizes; parallelize across load cases instead).
+
+use std::sync::Arc;
+
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::cholesky::{
+    CholeskySymbolicParams, IntranodeLbltRef, LltRef, SymbolicCholesky, SymmetricOrdering,
+    factorize_symbolic_cholesky,
+};
+use faer::{ColMut, Conj, Par, Side};
+
+use crate::error::SolverError;
+use crate::model::{SparseMatrix, SparsityPattern};
+
+/// Symbolic factorization (fill-reducing ordering + structure), shareable via `Arc`.
+#[derive(Debug)]
+pub struct SymbolicFactor {
+    inner: SymbolicCholesky<usize>,
+    pattern: Arc<SparsityPattern>,
+}
+
+impl SymbolicFactor {
+    /// AMD ordering and symbolic analysis of the pattern (≈7 ms at 120×60).
+    pub fn new(pattern: Arc<SparsityPattern>) -> Result<Arc<Self>, SolverError> {
+        let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(
+            pattern.n(),
+            pattern.n(),
+            pattern.col_ptr(),
+            None,
+            pattern.row_idx(),
+        );
+        let inner = factorize_symbolic_cholesky(
+            sym,
+            Side::Lower,
+            SymmetricOrdering::Amd,
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| SolverError::Symbolic(format!("{e:?}")))?;
+        Ok(Arc::new(Self { inner, pattern }))
+    }
+    /// Order of the system.
+    pub fn n(&self) -> usize {
+        self.inner.nrows()
+    }
+    /// Number of stored values of the factor `L`.
+    pub fn factor_nnz(&self) -> usize {
+        self.inner.len_val()
+    }
+    /// The pattern this analysis was made for.
+    pub fn pattern(&self) -> &Arc<SparsityPattern> {
+        &self.pattern
+    }
+    /// The underlying faer symbolic factorization.
+    pub fn faer(&self) -> &SymbolicCholesky<usize> {
+        &self.inner
+    }
+}
+
+/// Which numeric factorization is stored.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum FactorKind {
+    /// Cholesky `LLᵀ`: the matrix was positive definite.
+    Llt,
+    /// Intranodal Bunch–Kaufman `LBLᵀ`: LLᵀ failed (indefinite tangent); the fallback was used.
+    Lblt {
+        /// Permuted pivot at which LLᵀ failed.
+        llt_failed_at: usize,
+    },
+}
+
+/// Per-thread scratch memory for [`Factor::solve_in_place`].
+pub struct SolveWorkspace {
+    mem: MemBuffer,
+}
+
+impl std::fmt::Debug for SolveWorkspace {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SolveWorkspace").finish_non_exhaustive()
+    }
+}
+
+impl SolveWorkspace {
+    /// Scratch for one right-hand side.
+    pub fn new(symbolic: &SymbolicFactor) -> Self {
+        let req = symbolic.inner.solve_in_place_scratch::<f64>(1, Par::Seq);
+        Self {
+            mem: MemBuffer::new(req),
+        }
+    }
+}
+
+/// Numeric factorization with reusable buffers.
+pub struct Factor {
+    symbolic: Arc<SymbolicFactor>,
+    values: Vec<f64>,
+    subdiag: Vec<f64>,
+    perm_fwd: Vec<usize>,
+    perm_inv: Vec<usize>,
+    mem: MemBuffer,
+    kind: Option<FactorKind>,
+    /// Allow the LBLᵀ fallback when LLᵀ fails (default `true`).
+    pub allow_indefinite: bool,
+}
+
+impl std::fmt::Debug for Factor {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Factor")
+            .field("n", &self.symbolic.n())
+            .field("factor_nnz", &self.values.len())
+            .field("kind", &self.kind)
+            .field("allow_indefinite", &self.allow_indefinite)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Factor {
+    /// Allocate buffers for numeric factorizations with this symbolic structure.
+    pub fn new(symbolic: Arc<SymbolicFactor>) -> Self {
+        let s = &symbolic.inner;
+        let n = s.nrows();
+        let req = StackReq::any_of(&[
+            s.factorize_numeric_llt_scratch::<f64>(Par::Seq, Default::default()),
+            s.factorize_numeric_intranode_lblt_scratch::<f64>(Par::Seq, Default::default()),
+        ]);
+        Self {
+            values: vec![0.0; s.len_val()],
+            subdiag: vec![0.0; n],
+            perm_fwd: vec![0; n],
+            perm_inv: vec![0; n],
+            mem: MemBuffer::new(req),
+            kind: None,
+            allow_indefinite: true,
+            symbolic,
+        }
+    }
+    /// The shared symbolic factorization.
+    pub fn symbolic(&self) -> &Arc<SymbolicFactor> {
+        &self.symbolic
+    }
+    /// Kind of the stored factorization (`None` before the first success).
+    pub fn kind(&self) -> Option<FactorKind> {
+        self.kind
+    }
+    /// A workspace suitable for solving with this factor.
+    pub fn new_solve_workspace(&self) -> SolveWorkspace {
+        SolveWorkspace::new(&self.symbolic)
+    }
+
+    /// Numeric factorization of `a` (same pattern as the symbolic factor), in place.
+    /// Tries LLᵀ; on a non-positive pivot falls back to LBLᵀ (if allowed). A failed call leaves
+    /// the factor unusable (`kind() == None`).
+    pub fn factorize(&mut self, a: &SparseMatrix) -> Result<FactorKind, SolverError> {
+        if !Arc::ptr_eq(a.pattern(), &self.symbolic.pattern)
+            && **a.pattern() != *self.symbolic.pattern
+        {
+            return Err(SolverError::PatternMismatch {
+                what: "matrix pattern differs from the symbolic factorization's",
+            });
+        }
+        self.kind = None;
+        let s = &self.symbolic.inner;
+        let stack = MemStack::new(&mut self.mem);
+        let llt = s.factorize_numeric_llt::<f64>(
+            &mut self.values,
+            a.as_faer(),
+            Side::Lower,
+            Default::default(),
+            Par::Seq,
+            stack,
+            Default::default(),
+        );
+        let pivot = match llt {
+            Ok(_) => {
+                self.kind = Some(FactorKind::Llt);
+                return Ok(FactorKind::Llt);
+            }
+            Err(faer::linalg::cholesky::llt::factor::LltError::NonPositivePivot { index }) => index,
+        };
+        if !self.allow_indefinite {
+            return Err(SolverError::NotPositiveDefinite { pivot });
+        }
+        let stack = MemStack::new(&mut self.mem);
+        s.factorize_numeric_intranode_lblt::<f64>(
+            &mut self.values,
+            &mut self.subdiag,
+            &mut self.perm_fwd,
+            &mut self.perm_inv,
+            a.as_faer(),
+            Side::Lower,
+            Par::Seq,
+            stack,
+            Default::default(),
+        );
+        if self
+            .values
+            .iter()
+            .chain(&self.subdiag)
+            .any(|v| !v.is_finite())
+        {
+            return Err(SolverError::Singular { llt_pivot: pivot });
+        }
+        let kind = FactorKind::Lblt {
+            llt_failed_at: pivot,
+        };
+        self.kind = Some(kind);
+        Ok(kind)
+    }
+
+    /// Solve `A x = b` in place (`rhs` holds `b` on entry, `x` on exit), reduced numbering.
+    pub fn solve_in_place(
+        &self,
+        rhs: &mut [f64],
+        ws: &mut SolveWorkspace,
+    ) -> Result<(), SolverError> {
+        let kind = self.kind.ok_or(SolverError::NotFactorized)?;
+        assert_eq!(rhs.len(), self.symbolic.n(), "rhs length");
+        let stack = MemStack::new(&mut ws.mem);
+        let col = ColMut::from_slice_mut(rhs);
+        let s = &self.symbolic.inner;
+        match kind {
+            FactorKind::Llt => {
+                LltRef::new(s, &self.values).solve_in_place_with_conj(
+                    Conj::No,
+                    col.as_mat_mut(),
+                    Par::Seq,
+                    stack,
+                );
+            }
+            FactorKind::Lblt { .. } => {
+                let perm =
+                    faer::perm::PermRef::new_checked(&self.perm_fwd, &self.perm_inv, s.nrows());
+                IntranodeLbltRef::new(s, &self.values, &self.subdiag, perm)
+                    .solve_in_place_with_conj(Conj::No, col.as_mat_mut(), Par::Seq, stack);
+            }
+        }
+        if rhs.iter().any(|v| !v.is_finite()) {
+            return Err(SolverError::NonFinite { what: "solution" });
+        }
+        Ok(())
+    }
+
+    /// Solve with full-length vectors: `b` and `x` have length `dofs.n_full()`; fixed entries of
+    /// `b` are ignored and those of `x` set to 0. `tmp` must have length `n_free`.
+    pub fn solve_full(
+        &self,
+        dofs: &crate::DofMap,
+        b: &[f64],
+        x: &mut [f64],
+        tmp: &mut [f64],
+        ws: &mut SolveWorkspace,
+    ) -> Result<(), SolverError> {
+        dofs.gather(b, tmp);
+        self.solve_in_place(tmp, ws)?;
+        dofs.scatter(tmp, x);
+        Ok(())
+    }
+}
+
+/// PCG parameters.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PcgParams {
+    /// Stop when `‖b − A x‖ ≤ rel_tol·‖b‖`, in (0, 1).
+    pub rel_tol: f64,
+    /// Maximum iterations, ≥ 1.
+    pub max_iter: usize,
+}
+
+impl Default for PcgParams {
+    fn default() -> Self {
+        Self {
+            rel_tol: 1e-10,
+            max_iter: 200,
+        }
+    }
+}
+
+/// Result of a successful PCG solve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PcgReport {
+    /// Iterations performed (0 if the initial guess already satisfied the tolerance).
+    pub iterations: usize,
+    /// Final `‖r‖/‖b‖`.
+    pub relative_residual: f64,
+}
+
+/// Vectors for [`pcg`] (reduced length), reusable across calls.
+#[derive(Debug, Clone)]
+pub struct PcgWorkspace {
+    r: Vec<f64>,
+    z: Vec<f64>,
+    p: Vec<f64>,
+    q: Vec<f64>,
+}
+
+impl PcgWorkspace {
+    /// Buffers for systems of order `n`.
+    pub fn new(n: usize) -> Self {
+        Self {
+            r: vec![0.0; n],
+            z: vec![0.0; n],
+            p: vec![0.0; n],
+            q: vec![0.0; n],
+        }
+    }
+}
+
+#[inline]
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Preconditioned conjugate gradients for `A x = b` (reduced numbering), with a numeric
+/// factorization `m ≈ A` (e.g. of the tangent of another load case or an earlier state) as the
+/// preconditioner. `x` holds the initial guess on entry. If `m` is an exact factor of `A` this
+/// converges in one iteration.
+pub fn pcg(
+    a: &SparseMatrix,
+    m: &Factor,
+    b: &[f64],
+    x: &mut [f64],
+    params: PcgParams,
+    ws: &mut PcgWorkspace,
+    sws: &mut SolveWorkspace,
+) -> Result<PcgReport, SolverError> {
+    let n = a.n();
+    assert!(
+        b.len() == n && x.len() == n && ws.r.len() == n,
+        "pcg vector lengths"
+    );
+    let bn = dot(b, b).sqrt();
+    if !bn.is_finite() {
+        return Err(SolverError::NonFinite { what: "pcg rhs" });
+    }
+    if bn == 0.0 {
+        x.fill(0.0);
+        return Ok(PcgReport {
+            iterations: 0,
+            relative_residual: 0.0,
+        });
+    }
+    let PcgWorkspace { r, z, p, q } = ws;
+    a.matvec(x, q);
+    for i in 0..n {
+        r[i] = b[i] - q[i];
+    }
+    let mut rn = dot(r, r).sqrt();
+    if rn <= params.rel_tol * bn {
+        return Ok(PcgReport {
+            iterations: 0,
+            relative_residual: rn / bn,
+        });
+    }
+    z.copy_from_slice(r);
+    m.solve_in_place(z, sws)?;
+    p.copy_from_slice(z);
+    let mut rz = dot(r, z);
+    for it in 1..=params.max_iter {
+        a.matvec(p, q);
+        let pq = dot(p, q);
+        if pq <= 0.0 || !pq.is_finite() {
+            return Err(SolverError::PcgIndefinite {
+                iteration: it,
+                curvature: pq,
+            });
+        }
+        let alpha = rz / pq;
+        for i in 0..n {
+            x[i] += alpha * p[i];
+            r[i] -= alpha * q[i];
+        }
+        rn = dot(r, r).sqrt();
+        if rn <= params.rel_tol * bn {
+            return Ok(PcgReport {
+                iterations: it,
+                relative_residual: rn / bn,
+            });
+        }
+        z.copy_from_slice(r);
+        m.solve_in_place(z, sws)?;
+        let rz_new = dot(r, z);
+        let beta = rz_new / rz;
+        rz = rz_new;
+        for i in 0..n {
+            p[i] = z[i] + beta * p[i];
+        }
+    }
+    Err(SolverError::PcgNotConverged {
+        iterations: params.max_iter,
+        relative_residual: rn / bn,
+        tolerance: params.rel_tol,
+    })
+}
