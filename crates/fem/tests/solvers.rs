@@ -1,0 +1,344 @@
+//! Reference: faer sparse Cholesky (LLᵀ / intranodal Bunch–Kaufman LBLᵀ) and preconditioned
+//! conjugate gradients (Saad, "Iterative Methods for Sparse Linear Systems", 2003, Alg. 9.1).
+//! Goal: the direct solve satisfies K x = b; an indefinite matrix triggers the LBLᵀ fallback
+//! (or a typed error when disabled); one factor and one symbolic analysis are shared by threads;
+//! PCG with a factor of another design converges; Newton with PCG equals Newton with direct
+//! solves; invalid parameters and non-convergence give typed errors with history.
+
+use flexstage_fem::*;
+use rayon::prelude::*;
+
+fn stage_matrix(rho_seed: u64) -> (samples::Stage, SparseMatrix, Vec<f64>) {
+    let stage = samples::Stage::paper(30, 15, Kinematics::TotalLagrangian).unwrap();
+    let rho = stage.random_density(0.01, 1.0, rho_seed, 1e-3);
+    let model = &stage.model;
+    let mut k = model.new_matrix();
+    let mut ws = model.new_workspace();
+    model.assemble(
+        &Design::new(&rho),
+        &model.zero_vector(),
+        None,
+        Some(&mut k),
+        &mut ws,
+    );
+    (stage, k, rho)
+}
+
+fn residual(k: &SparseMatrix, x: &[f64], b: &[f64]) -> f64 {
+    let mut y = vec![0.0; b.len()];
+    k.matvec(x, &mut y);
+    let n: f64 = y
+        .iter()
+        .zip(b)
+        .map(|(a, c)| (a - c).powi(2))
+        .sum::<f64>()
+        .sqrt();
+    n / b.iter().map(|c| c * c).sum::<f64>().sqrt()
+}
+
+#[test]
+fn direct_solve_and_indefinite_fallback() {
+    let (stage, mut k, _) = stage_matrix(1);
+    let sym = SymbolicFactor::new(stage.model.pattern().clone()).unwrap();
+    let mut f = Factor::new(sym.clone());
+    assert_eq!(f.factorize(&k).unwrap(), FactorKind::Llt);
+    let b = samples::random_vector(k.n(), -1.0, 1.0, 2);
+    let mut x = b.clone();
+    let mut sws = f.new_solve_workspace();
+    f.solve_in_place(&mut x, &mut sws).unwrap();
+    assert!(residual(&k, &x, &b) < 1e-9);
+
+    // Shift the diagonal to make the matrix indefinite.
+    let diag: Vec<f64> = (0..k.n()).map(|i| k.diag(i)).collect();
+    let shift = 0.3 * diag.iter().sum::<f64>() / diag.len() as f64;
+    for (i, &s) in k.pattern().clone().diag_slots().iter().enumerate() {
+        let _ = i;
+        k.values_mut()[s] -= shift;
+    }
+    f.allow_indefinite = false;
+    assert!(matches!(
+        f.factorize(&k),
+        Err(SolverError::NotPositiveDefinite { .. })
+    ));
+    assert!(matches!(
+        f.solve_in_place(&mut x.clone(), &mut sws),
+        Err(SolverError::NotFactorized)
+    ));
+    f.allow_indefinite = true;
+    let kind = f.factorize(&k).unwrap();
+    assert!(matches!(kind, FactorKind::Lblt { .. }), "{kind:?}");
+    let mut x = b.clone();
+    f.solve_in_place(&mut x, &mut sws).unwrap();
+    assert!(
+        residual(&k, &x, &b) < 1e-8,
+        "LBLT residual {}",
+        residual(&k, &x, &b)
+    );
+}
+
+#[test]
+fn shared_factor_across_threads_and_pcg() {
+    let (stage, k1, rho) = stage_matrix(3);
+    let model = &stage.model;
+    let sym = SymbolicFactor::new(model.pattern().clone()).unwrap();
+    let mut f1 = Factor::new(sym.clone());
+    f1.factorize(&k1).unwrap();
+    // A perturbed design: its tangent solved by PCG with f1 as preconditioner, in parallel.
+    let rho2: Vec<f64> = rho.iter().map(|r| (r * 1.1).min(1.0)).collect();
+    let mut k2 = model.new_matrix();
+    model.assemble(
+        &Design::new(&rho2),
+        &model.zero_vector(),
+        None,
+        Some(&mut k2),
+        &mut model.new_workspace(),
+    );
+    let mut f2 = Factor::new(sym.clone());
+    f2.factorize(&k2).unwrap();
+    let rhs: Vec<Vec<f64>> = (0..8)
+        .map(|s| samples::random_vector(k2.n(), -1.0, 1.0, 100 + s))
+        .collect();
+    let results: Vec<(Vec<f64>, usize)> = rhs
+        .par_iter()
+        .map(|b| {
+            let mut sws = SolveWorkspace::new(&sym);
+            let mut pws = PcgWorkspace::new(b.len());
+            let mut x = vec![0.0; b.len()];
+            let rep = pcg(
+                &k2,
+                &f1,
+                b,
+                &mut x,
+                PcgParams {
+                    rel_tol: 1e-11,
+                    max_iter: 200,
+                },
+                &mut pws,
+                &mut sws,
+            )
+            .unwrap();
+            (x, rep.iterations)
+        })
+        .collect();
+    let mut sws = SolveWorkspace::new(&sym);
+    for (b, (x, its)) in rhs.iter().zip(&results) {
+        assert!(*its > 1 && *its < 100, "PCG iterations {its}");
+        let mut xd = b.clone();
+        f2.solve_in_place(&mut xd, &mut sws).unwrap();
+        let err = x
+            .iter()
+            .zip(&xd)
+            .map(|(a, c)| (a - c).abs())
+            .fold(0.0, f64::max);
+        let sc = xd.iter().fold(0.0f64, |a, c| a.max(c.abs()));
+        assert!(err < 1e-8 * sc);
+    }
+    // Exact preconditioner: one iteration.
+    let mut pws = PcgWorkspace::new(k2.n());
+    let mut x = vec![0.0; k2.n()];
+    let rep = pcg(
+        &k2,
+        &f2,
+        &rhs[0],
+        &mut x,
+        PcgParams::default(),
+        &mut pws,
+        &mut sws,
+    )
+    .unwrap();
+    assert_eq!(rep.iterations, 1);
+}
+
+#[test]
+fn newton_pcg_matches_direct_and_parallel_load_cases() {
+    let stage = samples::Stage::paper(30, 15, Kinematics::TotalLagrangian).unwrap();
+    let model = &stage.model;
+    let rho = stage.random_density(0.05, 1.0, 9, 1e-3);
+    let yeoh = AdditiveYeoh::paper(model.mesh().n_elements(), 73e9, 1e-6, 3.0);
+    let design = Design::with_yeoh(&rho, &yeoh);
+    let sym = SymbolicFactor::new(model.pattern().clone()).unwrap();
+    // Shared preconditioner: the tangent at u = 0.
+    let mut k0 = model.new_matrix();
+    model.assemble(
+        &design,
+        &model.zero_vector(),
+        None,
+        Some(&mut k0),
+        &mut model.new_workspace(),
+    );
+    let mut f0 = Factor::new(sym.clone());
+    f0.factorize(&k0).unwrap();
+    let cases: Vec<(f64, f64)> = (0..8)
+        .map(|i| {
+            let t = i as f64 / 8.0 * std::f64::consts::TAU;
+            (30e-6 * t.cos(), 30e-6 * t.sin())
+        })
+        .collect();
+    let pcg_params = NewtonParams {
+        linear: LinearStrategy::Pcg(PcgParams {
+            rel_tol: 1e-10,
+            max_iter: 100,
+        }),
+        ..Default::default()
+    };
+    let sols: Vec<Vec<f64>> = cases
+        .par_iter()
+        .map_init(
+            || NewtonWorkspace::new(model, sym.clone()),
+            |ws, &(a, b)| {
+                let mut u = model.zero_vector();
+                let rep = newton::solve(
+                    model,
+                    &design,
+                    &stage.pea_load(a, b),
+                    &mut u,
+                    &pcg_params,
+                    ws,
+                    Some(&f0),
+                )
+                .unwrap();
+                assert_eq!(rep.factorizations, 0);
+                u
+            },
+        )
+        .collect();
+    let mut ws = NewtonWorkspace::new(model, sym.clone());
+    for (&(a, b), up) in cases.iter().zip(&sols) {
+        let mut u = model.zero_vector();
+        newton::solve(
+            model,
+            &design,
+            &stage.pea_load(a, b),
+            &mut u,
+            &NewtonParams::default(),
+            &mut ws,
+            None,
+        )
+        .unwrap();
+        let err = u
+            .iter()
+            .zip(up)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        let sc = u.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        assert!(err < 1e-7 * sc, "PCG-Newton differs: {err:e} / {sc:e}");
+    }
+}
+
+#[test]
+fn typed_errors() {
+    let p = NewtonParams {
+        residual_tol: 2.0,
+        ..Default::default()
+    };
+    match p.validate() {
+        Err(ParamError::OutOfRange { field, range, .. }) => {
+            assert_eq!(field, "NewtonParams::residual_tol");
+            assert_eq!(range, "(0, 1)");
+        }
+        other => panic!("{other:?}"),
+    }
+    let msg = NewtonParams {
+        increments: 0,
+        ..Default::default()
+    }
+    .validate()
+    .unwrap_err()
+    .to_string();
+    assert!(
+        msg.contains("increments") && msg.contains("[1, 10000]"),
+        "{msg}"
+    );
+
+    // Non-convergence: a strongly nonlinear load with one iteration and no cutbacks.
+    let c = samples::Cantilever::new(
+        Material {
+            e0: 1e7,
+            e_min: 1e-6,
+            nu: 0.0,
+            penalty: 3.0,
+        },
+        Kinematics::TotalLagrangian,
+        1.0,
+        0.05,
+        0.05,
+        40,
+        2,
+    )
+    .unwrap();
+    let rho = vec![1.0; c.model.mesh().n_elements()];
+    let sym = SymbolicFactor::new(c.model.pattern().clone()).unwrap();
+    let mut ws = NewtonWorkspace::new(&c.model, sym);
+    let mut u = c.model.zero_vector();
+    let ei = 1e7 * c.inertia();
+    let params = NewtonParams {
+        max_iterations: 2,
+        max_cutbacks: 0,
+        ..Default::default()
+    };
+    let err = newton::solve(
+        &c.model,
+        &Design::new(&rho),
+        &c.tip_load(0.0, -5.0 * ei),
+        &mut u,
+        &params,
+        &mut ws,
+        None,
+    )
+    .unwrap_err();
+    assert!(matches!(err, NewtonError::NotConverged { .. }), "{err}");
+    assert_eq!(err.history().len(), 2);
+    // The same load converges with increments and cutbacks allowed.
+    let mut u = c.model.zero_vector();
+    let params = NewtonParams {
+        increments: 2,
+        max_iterations: 12,
+        max_cutbacks: 10,
+        ..Default::default()
+    };
+    let rep = newton::solve(
+        &c.model,
+        &Design::new(&rho),
+        &c.tip_load(0.0, -5.0 * ei),
+        &mut u,
+        &params,
+        &mut ws,
+        None,
+    )
+    .unwrap();
+    assert!(rep.relative_residual < 1e-9);
+    // Non-finite input.
+    let mut u = c.model.zero_vector();
+    u[5] = f64::NAN;
+    let err = newton::solve(
+        &c.model,
+        &Design::new(&rho),
+        &c.tip_load(0.0, -1.0),
+        &mut u,
+        &NewtonParams::default(),
+        &mut ws,
+        None,
+    )
+    .unwrap_err();
+    assert!(
+        matches!(
+            err,
+            NewtonError::Params(ParamError::NonFinite { what: "u", .. })
+        ),
+        "{err}"
+    );
+    // Density out of range.
+    let bad = vec![1.5; c.model.mesh().n_elements()];
+    let mut u = c.model.zero_vector();
+    let err = newton::solve(
+        &c.model,
+        &Design::new(&bad),
+        &c.tip_load(0.0, -1.0),
+        &mut u,
+        &NewtonParams::default(),
+        &mut ws,
+        None,
+    )
+    .unwrap_err();
+    assert!(err.to_string().contains("Design::rho"), "{err}");
+}
