@@ -12,8 +12,9 @@ fn main() {
 
 const M: usize = 3;
 
-/// Synthetic smooth problem: objective `Σ wⱼ/xⱼ` (compliance-like) and three linear
-/// "volume" constraints over interleaved subsets, gradients filled deterministically.
+/// Synthetic smooth problem scaled like a topology optimization: objective
+/// `(1/n) Σ wⱼ/xⱼ` (compliance-like) and three linear "volume fraction" constraints
+/// `(1/n) Σ aᵢⱼ xⱼ ≤ Vᵢ`, with coefficients filled deterministically.
 struct Synthetic {
     n: usize,
     w: Vec<f64>,
@@ -35,8 +36,8 @@ impl Synthetic {
         let n = self.n;
         let mut f0 = 0.0;
         for j in 0..n {
-            f0 += self.w[j] / x[j];
-            df0dx[j] = -self.w[j] / (x[j] * x[j]);
+            f0 += self.w[j] / x[j] / n as f64;
+            df0dx[j] = -self.w[j] / (x[j] * x[j]) / n as f64;
         }
         for i in 0..M {
             let row = &self.a[i * n..(i + 1) * n];

@@ -32,7 +32,7 @@ pub struct UpdateReport {
 /// // min (x-1)² + (y-2)²  s.t.  x + y - 2 <= 0,  0 <= x, y <= 3
 /// let (xmin, xmax) = (vec![0.0; 2], vec![3.0; 2]);
 /// let mut mma = Mma::new(2, 1, xmin, xmax, MmaParams::default()).unwrap();
-/// let mut x = vec![0.5, 0.5];
+/// let mut x: Vec<f64> = vec![0.5, 0.5];
 /// for _ in 0..50 {
 ///     let f0 = (x[0] - 1.0).powi(2) + (x[1] - 2.0).powi(2);
 ///     let df0 = [2.0 * (x[0] - 1.0), 2.0 * (x[1] - 2.0)];
