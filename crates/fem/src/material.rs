@@ -4,6 +4,9 @@
 //! Voigt convention throughout: strain `[E11, E22, 2·E12]`, stress `[S11, S22, S12]`, so that
 //! the energy increment is `Sᵀ·δE`.
 
+// Index loops over small fixed-size tensors mirror the formulas; iterator rewrites obscure them.
+#![allow(clippy::needless_range_loop)]
+
 use crate::error::{ParamError, check_len, check_open, check_range};
 
 /// Kinematic description (same element interface for both).
