@@ -39,7 +39,7 @@ fn adjoint_output_gradient_matches_finite_differences() {
         u
     };
     let u = solve(&rho, &mut ws);
-    // Nonlinearity check: the linear response differs noticeably.
+    // Factor of the converged tangent for the exact adjoint.
     ws.factorize_tangent().unwrap();
     let mut l_o = model.zero_vector();
     l_o[out] = 1.0;
