@@ -7,8 +7,23 @@
 use flexstage_mma::{Mma, MmaParams};
 
 fn main() {
+    // Newton steps of the benchmarked update, so the time per step and variable can be read.
+    for n in SIZES {
+        let s = setup(n);
+        let rep = s
+            .mma
+            .clone()
+            .update(&mut s.x.clone(), s.f0, &s.df0dx, &s.f, &s.dfdx)
+            .unwrap();
+        println!(
+            "n = {n}: {} interior-point Newton steps per update",
+            rep.subproblem_iterations
+        );
+    }
     divan::main();
 }
+
+const SIZES: [usize; 3] = [10_000, 100_000, 1_000_000];
 
 const M: usize = 3;
 
@@ -81,7 +96,7 @@ fn setup(n: usize) -> Setup {
     }
 }
 
-#[divan::bench(args = [10_000, 100_000, 1_000_000], sample_count = 10, sample_size = 1)]
+#[divan::bench(args = SIZES, sample_count = 10, sample_size = 1)]
 fn mma_update(bencher: divan::Bencher, n: usize) {
     let s = setup(n);
     bencher

@@ -27,6 +27,13 @@ use crate::error::ParamError;
 /// With `a = 0` and large `c` the artificial variables yᵢ vanish at the solution whenever the
 /// original problem is feasible, and the MMA iterates then solve the original problem.
 ///
+/// The curvature of the MMA approximation of fᵢ at xᵏ is about `2·|∂fᵢ/∂xⱼ|/δ + 4·raa0/δ`
+/// (δ the asymptote distance). At an optimum where the Lagrangian gradient of a free
+/// variable vanishes without help from a constraint (e.g. an unconstrained interior
+/// minimum), the default `raa0 = 1e-5` leaves the approximation too flat and plain MMA
+/// oscillates with an amplitude near `asymin·(xmax − xmin)`; a larger `raa0` (e.g. 0.1 for
+/// unit-scaled problems) restores convergence.
+///
 /// The norm of the KKT residual of the interior-point subproblem is of order
 /// `subproblem_tolerance * sqrt(n)`; when the KKT residual of the original problem is used as
 /// stopping criterion on large problems, reduce `subproblem_tolerance` accordingly.
