@@ -288,8 +288,66 @@ pub struct Optimization {
     pub volume_fraction: f64,
     /// Stop when the largest density change falls below this, in (0, 1).
     pub change_tolerance: f64,
+    /// Finite-element kinematics during optimization: geometrically nonlinear (Appendix A)
+    /// or linear (small strain, the classic mechanism codes).
+    pub kinematics: KinematicsKind,
+    /// What is maximized: the workspace area (Eq. 4–5) or a single output displacement (the
+    /// displacement inverter of the classic codes).
+    pub objective: ObjectiveKind,
+    /// Output spring stiffness [N/m], ≥ 0, along the output direction (displacement
+    /// objective); 0 = none. The workspace objective has no output spring (Figure 2b).
+    pub output_spring: f64,
+    /// Strain-energy bound Σ0 [J], ≥ 0 (Eq. 5); 0 = relative to the initial design, see
+    /// `strain_energy_factor`.
+    pub strain_energy_limit: f64,
+    /// Σ0 = factor · Σ(initial design) when `strain_energy_limit` is 0; > 0. Default 2: a
+    /// "coarse upper bound" (Section 2.2).
+    pub strain_energy_factor: f64,
+    /// Largest angle [deg] between the differential output and the tilted target axis θ
+    /// (`output.tilt_deg`), in (0, 45]; only used when θ ≠ 0.
+    pub tilt_tolerance_deg: f64,
+    /// Stop when additionally the KKT residual of the MMA problem is below this, > 0.
+    pub kkt_tolerance: f64,
+    /// Heaviside projection with β continuation (NOTES.md filtering).
+    pub projection: Projection,
     /// Additive Yeoh hyperelasticity in low-density elements (Appendix A, Eq. A2–A4).
     pub additive: Additive,
+}
+
+/// Finite-element kinematics used by the optimizer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum KinematicsKind {
+    /// Total Lagrangian, Green–Lagrange strain (Eq. A1).
+    Nonlinear,
+    /// Small strain, linear elasticity.
+    Linear,
+}
+
+/// The optimization objective.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ObjectiveKind {
+    /// Maximize the shoelace area of the output polygon (Eq. 4).
+    Workspace,
+    /// Maximize the output displacement along the target direction under the compressive
+    /// input (PEA1 +a, PEA2 −a), with the output spring.
+    Displacement,
+}
+
+/// Smoothed Heaviside projection `ρ̄ = (tanh βη + tanh β(ρ̃−η)) / (tanh βη + tanh β(1−η))`
+/// of the filtered densities, with β doubled every `interval` iterations from 1 to `beta_max`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Projection {
+    /// Use the projection.
+    pub enabled: bool,
+    /// Final β, in [1, 1024].
+    pub beta_max: f64,
+    /// Iterations between doublings of β, ≥ 1.
+    pub interval: usize,
+    /// Threshold η, in (0, 1).
+    pub eta: f64,
 }
 
 /// The additive hyperelastic material of Appendix A (Eq. A2–A4, Table 3).
@@ -346,6 +404,37 @@ impl Optimization {
             "optimization.change_tolerance",
             self.change_tolerance,
             self.change_tolerance > 0.0 && self.change_tolerance < 1.0,
+            "a number in (0, 1)",
+        )?;
+        non_negative("optimization.output_spring", self.output_spring)?;
+        non_negative("optimization.strain_energy_limit", self.strain_energy_limit)?;
+        positive(
+            "optimization.strain_energy_factor",
+            self.strain_energy_factor,
+        )?;
+        check(
+            "optimization.tilt_tolerance_deg",
+            self.tilt_tolerance_deg,
+            self.tilt_tolerance_deg > 0.0 && self.tilt_tolerance_deg <= 45.0,
+            "a number in (0, 45]",
+        )?;
+        positive("optimization.kkt_tolerance", self.kkt_tolerance)?;
+        within(
+            "optimization.projection.beta_max",
+            self.projection.beta_max,
+            1.0,
+            1024.0,
+        )?;
+        count(
+            "optimization.projection.interval",
+            self.projection.interval,
+            1,
+            100_000,
+        )?;
+        check(
+            "optimization.projection.eta",
+            self.projection.eta,
+            self.projection.eta > 0.0 && self.projection.eta < 1.0,
             "a number in (0, 1)",
         )?;
         non_negative(

@@ -178,6 +178,54 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
         "Stop when the largest density change is below this, in (0, 1).",
     ),
     (
+        "optimization.kinematics",
+        "FE kinematics while optimizing: \"nonlinear\" (total Lagrangian, Eq. A1) or \"linear\" (small strain).",
+    ),
+    (
+        "optimization.objective",
+        "\"workspace\": maximize the output polygon area (Eq. 4-5); \"displacement\": maximize one output displacement (inverter).",
+    ),
+    (
+        "optimization.output_spring",
+        "Output spring [N/m], ≥ 0, along the output direction (displacement objective); 0 = none.",
+    ),
+    (
+        "optimization.strain_energy_limit",
+        "Strain-energy bound Σ0 [J], ≥ 0 (Eq. 5); 0 = strain_energy_factor × Σ(initial design).",
+    ),
+    (
+        "optimization.strain_energy_factor",
+        "Σ0 relative to the initial design's largest per-sample strain energy, > 0. Default 2 (a coarse upper bound).",
+    ),
+    (
+        "optimization.tilt_tolerance_deg",
+        "Max angle [deg] between the differential output and the tilted axis θ, in (0, 45]; used when tilt_deg ≠ 0.",
+    ),
+    (
+        "optimization.kkt_tolerance",
+        "Stop when the density change and the MMA KKT residual are both small; KKT bound, > 0.",
+    ),
+    (
+        "optimization.projection",
+        "Heaviside projection of the filtered densities with β continuation (NOTES.md filtering).",
+    ),
+    (
+        "optimization.projection.enabled",
+        "Use the projection.",
+    ),
+    (
+        "optimization.projection.beta_max",
+        "Final sharpness β, in [1, 1024]; β starts at 1 and doubles every `interval` iterations.",
+    ),
+    (
+        "optimization.projection.interval",
+        "Design iterations between doublings of β, ≥ 1.",
+    ),
+    (
+        "optimization.projection.eta",
+        "Projection threshold η, in (0, 1). Default 0.5.",
+    ),
+    (
         "optimization.additive",
         "Additive Yeoh hyperelastic material in low-density elements, optimization only (Eq. A2-A4).",
     ),

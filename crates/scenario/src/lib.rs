@@ -26,8 +26,8 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 pub use design::{
-    Actuators, Additive, Configuration, Edge, Fix, Material, Mesh, Optimization, Output, Region,
-    RegionKind, Selector, Support,
+    Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Material, Mesh, ObjectiveKind,
+    Optimization, Output, Projection, Region, RegionKind, Selector, Support,
 };
 pub use error::{Result, ScenarioError};
 pub use stage::{
@@ -160,6 +160,19 @@ impl Scenario {
                 filter_radius: 1.5,
                 volume_fraction: 1.0,
                 change_tolerance: 1e-3,
+                kinematics: KinematicsKind::Nonlinear,
+                objective: ObjectiveKind::Workspace,
+                output_spring: 0.0,
+                strain_energy_limit: 0.0,
+                strain_energy_factor: 2.0,
+                tilt_tolerance_deg: 2.0,
+                kkt_tolerance: 1e-3,
+                projection: Projection {
+                    enabled: true,
+                    beta_max: 16.0,
+                    interval: 40,
+                    eta: 0.5,
+                },
                 additive: Additive {
                     enabled: true,
                     initial_coefficient: 1e-5,
