@@ -95,6 +95,6 @@ mod subsolv;
 
 pub use error::{MmaError, ParamError};
 pub use kkt::{KktProblem, KktResidual, Multipliers, kkt_residual};
-pub use mma::{Mma, UpdateReport};
+pub use mma::{Mma, MmaState, UpdateReport};
 pub use params::MmaParams;
 pub use solve::{Problem, Solution, StopCriteria, minimize};

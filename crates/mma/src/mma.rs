@@ -20,6 +20,39 @@ pub struct UpdateReport {
     pub subproblem_residual: f64,
 }
 
+/// The history an [`Mma`] carries between updates, for checkpoints: restoring it into an
+/// optimizer built with the same `n`, `m`, bounds and parameters makes the next
+/// [`Mma::update`] (and [`Mma::kkt_residual`]) bitwise identical to the uninterrupted run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MmaState {
+    /// Number of updates done ([`Mma::iteration`]).
+    pub iteration: usize,
+    /// Previous iterate `xᵏ⁻¹` (length n).
+    pub xold1: Vec<f64>,
+    /// Iterate before that, `xᵏ⁻²` (length n).
+    pub xold2: Vec<f64>,
+    /// Lower asymptotes of the last update (length n).
+    pub low: Vec<f64>,
+    /// Upper asymptotes of the last update (length n).
+    pub upp: Vec<f64>,
+    /// Multipliers λ of the last subproblem (length m).
+    pub lam: Vec<f64>,
+    /// Artificial variables y (length m).
+    pub y: Vec<f64>,
+    /// Artificial variable z.
+    pub z: f64,
+    /// Multipliers μ of y ≥ 0 (length m).
+    pub mu: Vec<f64>,
+    /// Multiplier ζ of z ≥ 0.
+    pub zet: f64,
+    /// Slacks s (length m).
+    pub s: Vec<f64>,
+    /// Multipliers ξ of the lower bounds (length n).
+    pub xsi: Vec<f64>,
+    /// Multipliers η of the upper bounds (length n).
+    pub eta: Vec<f64>,
+}
+
 /// Svanberg's MMA for `min f₀(x)` s.t. `fᵢ(x) ≤ 0`, `xmin ≤ x ≤ xmax`.
 ///
 /// Build it once for given dimensions, bounds and parameters; then, at each outer iteration,
@@ -164,6 +197,67 @@ impl Mma {
     /// Forgets the history: the next update re-initialises the asymptotes.
     pub fn reset(&mut self) {
         self.iter = 0;
+    }
+
+    /// A copy of the history (see [`MmaState`]), e.g. for a checkpoint.
+    pub fn state(&self) -> MmaState {
+        MmaState {
+            iteration: self.iter,
+            xold1: self.xold1.clone(),
+            xold2: self.xold2.clone(),
+            low: self.low().collect(),
+            upp: self.upp().collect(),
+            lam: self.sub.lam.clone(),
+            y: self.sub.y.clone(),
+            z: self.sub.z,
+            mu: self.sub.mu.clone(),
+            zet: self.sub.zet,
+            s: self.sub.s.clone(),
+            xsi: self.xsi.clone(),
+            eta: self.eta.clone(),
+        }
+    }
+
+    /// Restores a history saved by [`Mma::state`] from an optimizer with the same `n` and `m`.
+    ///
+    /// # Errors
+    /// [`MmaError::DimensionMismatch`] if a vector has the wrong length, [`MmaError::NonFinite`]
+    /// for NaN/∞; the optimizer is left unchanged then.
+    pub fn restore(&mut self, state: &MmaState) -> Result<(), MmaError> {
+        let (n, m) = (self.n, self.m);
+        for (name, v, len) in [
+            ("state.xold1", &state.xold1, n),
+            ("state.xold2", &state.xold2, n),
+            ("state.low", &state.low, n),
+            ("state.upp", &state.upp, n),
+            ("state.xsi", &state.xsi, n),
+            ("state.eta", &state.eta, n),
+            ("state.lam", &state.lam, m),
+            ("state.y", &state.y, m),
+            ("state.mu", &state.mu, m),
+            ("state.s", &state.s, m),
+        ] {
+            check_len(name, v, len)?;
+            check_finite(name, v, false)?;
+        }
+        check_finite("state.z", &[state.z, state.zet], false)?;
+        self.iter = state.iteration;
+        self.xold1.copy_from_slice(&state.xold1);
+        self.xold2.copy_from_slice(&state.xold2);
+        let stride = self.sub.stride;
+        for (j, r) in self.sub.nodes.chunks_exact_mut(stride).enumerate() {
+            r[LOW] = state.low[j];
+            r[UPP] = state.upp[j];
+        }
+        self.sub.lam.copy_from_slice(&state.lam);
+        self.sub.y.copy_from_slice(&state.y);
+        self.sub.mu.copy_from_slice(&state.mu);
+        self.sub.s.copy_from_slice(&state.s);
+        self.sub.z = state.z;
+        self.sub.zet = state.zet;
+        self.xsi.copy_from_slice(&state.xsi);
+        self.eta.copy_from_slice(&state.eta);
+        Ok(())
     }
 
     /// Lower asymptotes used by the last update (an empty-history optimizer returns zeros).
