@@ -1,3 +1,20 @@
 //! # flexstage-topopt
 //!
-//! Workspace topology optimization (paper Section 2.2, Eq. 4–5, Algorithm 1).
+//! Workspace topology optimization of the piezo-driven compliant stage (paper Section 2.2,
+//! Eq. 4–5, Algorithm 1, Appendix A).
+//!
+//! * [`problem`]: the scenario → FE model mapping shared by `analyze`, `design` and `reduce`,
+//!   the load cases (stroke-square walk) and the shoelace area (Eq. 4).
+//! * [`filter`]: density filter and Heaviside projection.
+//! * [`analysis`]: all load cases in parallel, exact adjoint gradients.
+
+pub mod analysis;
+pub mod check;
+pub mod error;
+pub mod filter;
+pub mod problem;
+
+pub use analysis::{AnalysisParams, Densities, Evaluation, Evaluator, Response};
+pub use error::{Result, TopoptError};
+pub use filter::{DensityFilter, Projection};
+pub use problem::{EnergyLimit, Objective, Port, Problem, Tilt, perimeter_walk, shoelace};

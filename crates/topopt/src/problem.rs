@@ -1,0 +1,440 @@
+//! The optimization problem of paper Eq. (5): the FE model with supports, PEA springs, passive
+//! regions and ports, the load cases, the objective and the constraints.
+//!
+//! This is the **one place** where a [`Scenario`] becomes a finite-element model
+//! ([`Problem::from_scenario`]); `flexstage analyze`, `flexstage design` and the reduced model
+//! all build their model here. (topopt depends on `flexstage-scenario` directly, so a library
+//! user gets the same mapping as the CLI.)
+//!
+//! # Scenario → model
+//! * mesh, material (`E0`, `E_min`, ν) and SIMP penalty `p` → [`flexstage_fem::Model`];
+//! * `supports` → fixed DOFs (selectors pick nodes);
+//! * `regions` → passive solid / void elements (selectors pick element centroids);
+//! * `actuators.pea1/pea2` → input ports: a grounded spring `K_pea` on the x DOF and the force
+//!   `K_pea·x_nom` (Eq. 2–3), global signs;
+//! * `output.at` → the output node `L_o` (Eq. 7); with the displacement objective and
+//!   `optimization.output_spring > 0`, grounded springs of that stiffness on both output DOFs.
+//!
+//! # Load cases (NOTES.md)
+//! The `p_m` samples walk the perimeter of the stroke square `[−a, a]²` in `(x_nom1, x_nom2)`,
+//! `p_m/4` per side, starting at the corner `(+a, +a)`:
+//! `(+a,+a) → (+a,−a) → (−a,−a) → (−a,+a) → (+a,+a)`. Corner `(+a,−a)` (sample `p_m/4`) is the
+//! compressive "maximum y_out" case of Table 2, `(+a,+a)` translates the stage along +x (the
+//! moving frame, Eq. 22). With `x_out ≈ ½(x1+x2)`, `y_out ≈ α(x1−x2)` this walk traces a
+//! counter-clockwise output polygon (positive shoelace area, Eq. 4) when `α > 0`, the regular
+//! configuration; the reversed configuration maximizes the negated area, so its optimum has
+//! `α < 0`.
+
+use flexstage_fem::{
+    BoundaryConditions, Component, Kinematics, Material as FemMaterial, Mesh, Model, Passive,
+};
+use flexstage_scenario::{
+    Configuration, Edge as ScEdge, Fix, KinematicsKind, ObjectiveKind, RegionKind, Scenario,
+    Selector,
+};
+
+use crate::error::{Result, TopoptError};
+
+/// An input port: a grounded spring on one DOF, loaded by `stiffness · x_nom` (Eq. 2–3).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Port {
+    /// Node id.
+    pub node: usize,
+    /// Full DOF index (the x DOF for the PEAs).
+    pub dof: usize,
+    /// Spring stiffness `K_pea` [N/m].
+    pub stiffness: f64,
+}
+
+/// What is maximized.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Objective {
+    /// Signed shoelace area `sign · J` of the output polygon (Eq. 4); `sign = +1` regular,
+    /// `−1` reversed (Table 2).
+    Workspace {
+        /// +1 (regular) or −1 (reversed).
+        sign: f64,
+    },
+    /// `d · u_out` for the single load case (displacement inverter).
+    Displacement {
+        /// Unit target direction `d`.
+        direction: [f64; 2],
+    },
+}
+
+/// The strain-energy bound Σ0 of Eq. (5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum EnergyLimit {
+    /// Σ0 in joules.
+    Absolute(f64),
+    /// Σ0 = factor × (largest per-case strain energy of the initial design).
+    Relative(f64),
+}
+
+/// Orientation requirement of the tilted output (Figure 4b): the differential output
+/// `D = u_out(+a,−a) − u_out(−a,+a)` must lie within `tolerance` of the axis
+/// `d = (sin θ, cos θ)`: `(D·n)² ≤ tan²(tolerance)·(D·d)²`, `n = (cos θ, −sin θ)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Tilt {
+    /// θ [rad].
+    pub theta: f64,
+    /// Tolerance angle [rad].
+    pub tolerance: f64,
+}
+
+/// A complete optimization problem.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    /// FE model used while optimizing (kinematics of `optimization.kinematics`).
+    pub model: Model,
+    /// Input ports (one or two).
+    pub inputs: Vec<Port>,
+    /// Output node.
+    pub output: usize,
+    /// Load cases: nominal strokes `x_nom` per input [m].
+    pub cases: Vec<Vec<f64>>,
+    /// Objective.
+    pub objective: Objective,
+    /// Strain-energy bound (None = no constraint).
+    pub energy_limit: Option<EnergyLimit>,
+    /// Largest allowed |input displacement| [m] (None = no constraint).
+    pub max_stroke: Option<f64>,
+    /// Volume-fraction bound (None = no constraint).
+    pub volume_fraction: Option<f64>,
+    /// Tilted-output requirement (workspace objective only).
+    pub tilt: Option<Tilt>,
+    /// Lower density bound ρ_min.
+    pub rho_min: f64,
+    /// Initial uniform design density.
+    pub initial_density: f64,
+}
+
+/// Nodes picked by a selector.
+pub fn select_nodes(mesh: &Mesh, sel: &Selector) -> Vec<usize> {
+    match sel {
+        Selector::Nearest { point } => vec![mesh.nearest_node(*point)],
+        Selector::Edge { edge } => mesh.nodes_on_edge(fem_edge(*edge)),
+        Selector::Box { min, max } => mesh.nodes_in_box(*min, *max),
+    }
+}
+
+/// Elements picked by a selector (by centroid; `Nearest` picks the element containing or
+/// nearest to the point, `Edge` the elements along that edge).
+pub fn select_elements(mesh: &Mesh, sel: &Selector) -> Vec<usize> {
+    match sel {
+        Selector::Nearest { point } => {
+            let i = ((point[0] / mesh.dx()).floor() as isize).clamp(0, mesh.nl as isize - 1);
+            let j = ((point[1] / mesh.dy()).floor() as isize).clamp(0, mesh.nw as isize - 1);
+            vec![mesh.element(i as usize, j as usize)]
+        }
+        Selector::Edge { edge } => match edge {
+            ScEdge::Left => (0..mesh.nw).map(|j| mesh.element(0, j)).collect(),
+            ScEdge::Right => (0..mesh.nw).map(|j| mesh.element(mesh.nl - 1, j)).collect(),
+            ScEdge::Bottom => (0..mesh.nl).map(|i| mesh.element(i, 0)).collect(),
+            ScEdge::Top => (0..mesh.nl).map(|i| mesh.element(i, mesh.nw - 1)).collect(),
+        },
+        Selector::Box { min, max } => mesh.elements_in_box(*min, *max),
+    }
+}
+
+fn fem_edge(e: ScEdge) -> flexstage_fem::Edge {
+    match e {
+        ScEdge::Left => flexstage_fem::Edge::Left,
+        ScEdge::Right => flexstage_fem::Edge::Right,
+        ScEdge::Bottom => flexstage_fem::Edge::Bottom,
+        ScEdge::Top => flexstage_fem::Edge::Top,
+    }
+}
+
+fn single_node(mesh: &Mesh, sel: &Selector, field: &str) -> Result<usize> {
+    let nodes = select_nodes(mesh, sel);
+    match nodes.as_slice() {
+        [n] => Ok(*n),
+        _ => Err(TopoptError::Problem(format!(
+            "{field} must select exactly one node, it selects {}",
+            nodes.len()
+        ))),
+    }
+}
+
+/// The `p_m` samples of the stroke-square perimeter (see the module docs for the walk).
+pub fn perimeter_walk(samples: usize, a: f64) -> Vec<Vec<f64>> {
+    let q = (samples / 4).max(1);
+    let mut out = Vec::with_capacity(4 * q);
+    for side in 0..4 {
+        for t in 0..q {
+            let s = -a + 2.0 * a * t as f64 / q as f64; // −a .. a
+            let (x1, x2) = match side {
+                0 => (a, -s),
+                1 => (-s, -a),
+                2 => (-a, s),
+                _ => (s, a),
+            };
+            out.push(vec![x1, x2]);
+        }
+    }
+    out
+}
+
+/// Mesh with the scenario's passive regions (later regions override earlier ones).
+pub fn scenario_mesh(s: &Scenario) -> Result<Mesh> {
+    let m = &s.mesh;
+    let mut mesh = Mesh::new(m.length, m.width, m.thickness, m.nl, m.nw)?;
+    for r in &s.regions {
+        let els = select_elements(&mesh, &r.at);
+        let flag = match r.kind {
+            RegionKind::Solid => Passive::Solid,
+            RegionKind::Void => Passive::Void,
+        };
+        mesh.set_passive(&els, flag);
+    }
+    Ok(mesh)
+}
+
+/// FE kinematics of a scenario's optimization.
+pub fn scenario_kinematics(s: &Scenario) -> Kinematics {
+    match s.optimization.kinematics {
+        KinematicsKind::Nonlinear => Kinematics::TotalLagrangian,
+        KinematicsKind::Linear => Kinematics::Linear,
+    }
+}
+
+impl Problem {
+    /// Builds the problem of a scenario. `kinematics` overrides `optimization.kinematics`
+    /// (e.g. the final nonlinear analysis of a linearly optimized design).
+    pub fn from_scenario(s: &Scenario, kinematics: Option<Kinematics>) -> Result<Problem> {
+        let mesh = scenario_mesh(s)?;
+        let o = &s.optimization;
+        let material = FemMaterial {
+            e0: s.material.youngs_modulus,
+            e_min: s.material.min_modulus,
+            nu: s.material.poisson_ratio,
+            penalty: o.penalty,
+        };
+        let a = &s.actuators;
+        let n1 = single_node(&mesh, &a.pea1, "actuators.pea1")?;
+        let n2 = single_node(&mesh, &a.pea2, "actuators.pea2")?;
+        let out = single_node(&mesh, &s.output.at, "output.at")?;
+        if n1 == n2 {
+            return Err(TopoptError::Problem(
+                "actuators.pea1 and actuators.pea2 select the same node".into(),
+            ));
+        }
+        let mut bcs = BoundaryConditions::new();
+        for (i, sup) in s.supports.iter().enumerate() {
+            let nodes = select_nodes(&mesh, &sup.at);
+            if nodes.is_empty() {
+                return Err(TopoptError::Problem(format!(
+                    "supports[{i}].at selects no node"
+                )));
+            }
+            let c = match sup.fix {
+                Fix::X => Component::X,
+                Fix::Y => Component::Y,
+                Fix::Xy => Component::Both,
+            };
+            bcs.fix_nodes(&nodes, c);
+        }
+        bcs.add_spring(2 * n1, a.stiffness)
+            .add_spring(2 * n2, a.stiffness);
+        let theta = s.output.tilt_deg.to_radians();
+        let sign = match a.configuration {
+            Configuration::Regular => 1.0,
+            Configuration::Reversed => -1.0,
+        };
+        let direction = [sign * theta.sin(), sign * theta.cos()];
+        let (objective, cases) = match o.objective {
+            ObjectiveKind::Workspace => (
+                Objective::Workspace { sign },
+                perimeter_walk(o.samples, a.stroke_amplitude),
+            ),
+            ObjectiveKind::Displacement => {
+                if o.output_spring > 0.0 {
+                    bcs.add_spring(2 * out, o.output_spring)
+                        .add_spring(2 * out + 1, o.output_spring);
+                }
+                (
+                    Objective::Displacement { direction },
+                    vec![vec![a.stroke_amplitude, -a.stroke_amplitude]],
+                )
+            }
+        };
+        for &d in &bcs.fixed {
+            if d == 2 * n1 || d == 2 * n2 {
+                return Err(TopoptError::Problem(
+                    "a support fixes the x DOF of a PEA input node".into(),
+                ));
+            }
+        }
+        let kin = kinematics.unwrap_or_else(|| scenario_kinematics(s));
+        let model = Model::new(mesh, material, kin, bcs)?;
+        let energy_limit = Some(if o.strain_energy_limit > 0.0 {
+            EnergyLimit::Absolute(o.strain_energy_limit)
+        } else {
+            EnergyLimit::Relative(o.strain_energy_factor)
+        });
+        let tilt =
+            (matches!(objective, Objective::Workspace { .. }) && theta != 0.0).then_some(Tilt {
+                theta,
+                tolerance: o.tilt_tolerance_deg.to_radians(),
+            });
+        let p = Problem {
+            model,
+            inputs: vec![
+                Port {
+                    node: n1,
+                    dof: 2 * n1,
+                    stiffness: a.stiffness,
+                },
+                Port {
+                    node: n2,
+                    dof: 2 * n2,
+                    stiffness: a.stiffness,
+                },
+            ],
+            output: out,
+            cases,
+            objective,
+            energy_limit,
+            max_stroke: Some(a.max_stroke),
+            volume_fraction: (o.volume_fraction < 1.0).then_some(o.volume_fraction),
+            tilt,
+            rho_min: o.rho_min,
+            initial_density: o.initial_density,
+        };
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// Consistency checks.
+    pub fn validate(&self) -> Result<()> {
+        let nd = self.model.n_dofs();
+        if self.inputs.is_empty() || self.inputs.len() > 2 {
+            return Err(TopoptError::Problem(
+                "one or two input ports are needed".into(),
+            ));
+        }
+        for p in &self.inputs {
+            if p.dof >= nd || self.model.dofs().is_fixed(p.dof) {
+                return Err(TopoptError::Problem(format!(
+                    "input DOF {} is fixed or out of range",
+                    p.dof
+                )));
+            }
+        }
+        if self.cases.is_empty() || self.cases.iter().any(|c| c.len() != self.inputs.len()) {
+            return Err(TopoptError::Problem(
+                "every load case needs one stroke per input".into(),
+            ));
+        }
+        if self.design_elements().is_empty() {
+            return Err(TopoptError::Problem(
+                "no design elements (all passive)".into(),
+            ));
+        }
+        crate::error::check_range(
+            "Problem::rho_min",
+            self.rho_min,
+            self.rho_min > 0.0 && self.rho_min <= 0.1,
+            "(0, 0.1]",
+        )?;
+        Ok(())
+    }
+
+    /// The mesh.
+    pub fn mesh(&self) -> &Mesh {
+        self.model.mesh()
+    }
+
+    /// Non-passive elements (the design variables, in this order).
+    pub fn design_elements(&self) -> Vec<usize> {
+        (0..self.mesh().n_elements())
+            .filter(|&e| self.mesh().passive[e] == Passive::Design)
+            .collect()
+    }
+
+    /// External load vector of case `k`: `K_pea·x_nom` on each input DOF (Eq. 2–3).
+    pub fn load(&self, k: usize) -> Vec<f64> {
+        let mut p = self.model.zero_vector();
+        for (port, &x) in self.inputs.iter().zip(&self.cases[k]) {
+            p[port.dof] += flexstage_fem::pea_force(port.stiffness, x);
+        }
+        p
+    }
+
+    /// Index of the compressive corner `(+a, −a)` and of the tensile corner `(−a, +a)` of the
+    /// perimeter walk.
+    pub fn differential_corners(&self) -> (usize, usize) {
+        let q = self.cases.len() / 4;
+        (q, 3 * q)
+    }
+
+    /// The same problem with other kinematics (e.g. the final nonlinear analysis).
+    pub fn with_kinematics(&self, kin: Kinematics) -> Result<Problem> {
+        let model = Model::new(
+            self.mesh().clone(),
+            *self.model.material(),
+            kin,
+            self.model.bcs().clone(),
+        )?;
+        Ok(Problem {
+            model,
+            ..self.clone()
+        })
+    }
+}
+
+/// Shoelace area of a closed polygon (Eq. 4), positive when counter-clockwise.
+pub fn shoelace(points: &[[f64; 2]]) -> f64 {
+    let n = points.len();
+    0.5 * (0..n)
+        .map(|j| {
+            let (p, q) = (points[j], points[(j + 1) % n]);
+            p[0] * q[1] - q[0] * p[1]
+        })
+        .sum::<f64>()
+}
+
+/// Gradient of [`shoelace`]: `∂J/∂x_j = ½(y_{j+1} − y_{j−1})`, `∂J/∂y_j = ½(x_{j−1} − x_{j+1})`.
+pub fn shoelace_gradient(points: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let n = points.len();
+    (0..n)
+        .map(|j| {
+            let (next, prev) = (points[(j + 1) % n], points[(j + n - 1) % n]);
+            [0.5 * (next[1] - prev[1]), 0.5 * (prev[0] - next[0])]
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn walk_and_shoelace() {
+        let w = perimeter_walk(8, 1.0);
+        assert_eq!(w[0], vec![1.0, 1.0]);
+        assert_eq!(w[2], vec![1.0, -1.0]);
+        assert_eq!(w[4], vec![-1.0, -1.0]);
+        assert_eq!(w[6], vec![-1.0, 1.0]);
+        // x = ½(x1+x2), y = α(x1−x2) with α > 0 gives a counter-clockwise polygon.
+        let pts: Vec<[f64; 2]> = w
+            .iter()
+            .map(|c| [0.5 * (c[0] + c[1]), 0.3 * (c[0] - c[1])])
+            .collect();
+        let a = shoelace(&pts);
+        assert!((a - 1.2).abs() < 1e-12, "{a}"); // |det| · 4 = 0.3 · 4
+        let g = shoelace_gradient(&pts);
+        let h = 1e-6;
+        for j in 0..pts.len() {
+            for c in 0..2 {
+                let mut p = pts.clone();
+                p[j][c] += h;
+                let mut m = pts.clone();
+                m[j][c] -= h;
+                let fd = (shoelace(&p) - shoelace(&m)) / (2.0 * h);
+                assert!((fd - g[j][c]).abs() < 1e-9);
+            }
+        }
+    }
+}
