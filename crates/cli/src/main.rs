@@ -3,6 +3,8 @@
 //! Errors are printed as one message (with its causes) and a non-zero exit status; never a
 //! backtrace.
 
+mod identify;
+mod pea;
 mod run_dir;
 mod scenario_args;
 
@@ -51,6 +53,20 @@ enum Command {
         #[command(flatten)]
         scenario: ScenarioArgs,
     },
+    /// Identify model parameters from measured or simulated records.
+    #[command(after_help = "Examples:
+  flexstage identify pea --data pea1.csv")]
+    Identify {
+        #[command(subcommand)]
+        what: identify::IdentifyCommand,
+    },
+    /// The piezo actuator model (Bouc–Wen hysteresis) on its own.
+    #[command(after_help = "Examples:
+  flexstage pea simulate --noise-nm 10 --output pea1.csv")]
+    Pea {
+        #[command(subcommand)]
+        what: pea::PeaCommand,
+    },
 }
 
 fn main() -> ExitCode {
@@ -91,6 +107,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             );
             Ok(())
         }
+        Command::Identify { what } => identify::run(what),
+        Command::Pea { what } => pea::run(what),
     }
 }
 
