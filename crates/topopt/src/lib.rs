@@ -10,11 +10,18 @@
 
 pub mod analysis;
 pub mod check;
+pub mod design_file;
 pub mod error;
 pub mod filter;
+pub mod optimize;
 pub mod problem;
 
 pub use analysis::{AnalysisParams, Densities, Evaluation, Evaluator, Response};
+pub use design_file::{DesignFile, density_csv, read_density_csv};
 pub use error::{Result, TopoptError};
 pub use filter::{DensityFilter, Projection};
+pub use optimize::{
+    AdditiveParams, IterationRecord, Optimizer, OptimizerParams, ProjectionSchedule, Scales,
+    StopReason,
+};
 pub use problem::{EnergyLimit, Objective, Port, Problem, Tilt, perimeter_walk, shoelace};
