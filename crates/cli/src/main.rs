@@ -3,6 +3,9 @@
 //! Errors are printed as one message (with its causes) and a non-zero exit status; never a
 //! backtrace.
 
+mod analyze;
+mod build;
+mod design;
 mod identify;
 mod pea;
 mod run_dir;
@@ -53,6 +56,19 @@ enum Command {
         #[command(flatten)]
         scenario: ScenarioArgs,
     },
+    /// Nonlinear statics of a design: output displacements, workspace polygon and area, VTK.
+    #[command(after_help = "Examples:
+  flexstage analyze --preset quick                          # uniform design, p_m workspace samples
+  flexstage analyze --design runs/paper --inputs 30,-30     # a finished design, one input pair (µm)
+  flexstage analyze my.toml --design density.png --out runs/check")]
+    Analyze(analyze::AnalyzeArgs),
+    /// Workspace topology optimization (Section 2.2, Algorithm 1): density, polygons, history.
+    #[command(after_help = "Examples:
+  flexstage design --preset quick                 # about 10 s; results in runs/quick/design
+  flexstage design                                # the paper's 120 x 60, p_m = 40 problem
+  flexstage design --resume runs/paper            # continue after an interruption
+  flexstage design --check-gradients              # adjoint vs central differences")]
+    Design(design::DesignArgs),
     /// Identify model parameters from measured or simulated records.
     #[command(after_help = "Examples:
   flexstage identify pea --data pea1.csv")]
@@ -107,6 +123,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
             );
             Ok(())
         }
+        Command::Analyze(args) => analyze::run(args),
+        Command::Design(args) => design::run(args),
         Command::Identify { what } => identify::run(what),
         Command::Pea { what } => pea::run(what),
     }
