@@ -74,8 +74,8 @@ pub enum Preset {
     /// The paper's settings (Tables 1, 3, 4, A1): 120 × 60 mesh, p_m = 40, up to 1000
     /// iterations.
     Paper,
-    /// A coarse, fast variant for first contact and tests: 60 × 30 mesh, p_m = 16, up to 60
-    /// iterations.
+    /// A coarse, fast variant for first contact and tests: 48 × 24 mesh, p_m = 16, up to 80
+    /// iterations, β doubled every 15 iterations.
     Quick,
 }
 
@@ -260,10 +260,11 @@ impl Scenario {
             Preset::Quick => {
                 let mut s = Scenario::paper();
                 s.name = "quick".into();
-                s.mesh.nl = 60;
-                s.mesh.nw = 30;
+                s.mesh.nl = 48;
+                s.mesh.nw = 24;
                 s.optimization.samples = 16;
-                s.optimization.max_iterations = 60;
+                s.optimization.max_iterations = 80;
+                s.optimization.projection.interval = 15;
                 s.regions = port_patches(&s, 2);
                 s
             }

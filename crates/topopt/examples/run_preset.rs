@@ -19,7 +19,7 @@ fn main() {
     let stop = opt
         .run(|_, r| {
             println!(
-                "{:4} J={:.4e} g={:?} V={:.3} grey={:.3} ch={:.3e} kkt={:.2e} β={} newton={}/{} t={:.3}s",
+                "{:4} J={:.4e} g={:?} V={:.3} grey={:.3} ch={:.3e} kkt={:?} β={} newton={}/{} t={:.3}s",
                 r.iteration, r.area, r.constraints.iter().map(|v| (v * 1e3).round() / 1e3).collect::<Vec<_>>(),
                 r.volume, r.grey, r.change, r.kkt, r.beta, r.newton_total, r.newton_max, r.time
             );

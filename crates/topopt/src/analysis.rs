@@ -57,7 +57,7 @@ impl Default for AnalysisParams {
         Self {
             newton: NewtonParams {
                 residual_tol: 1e-9,
-                displacement_tol: 1e-7,
+                displacement_tol: 1e-5,
                 linear: LinearStrategy::Pcg(PcgParams {
                     rel_tol: 1e-6,
                     max_iter: 60,
@@ -609,6 +609,7 @@ fn case_gradients(
     let ne = mesh.n_elements();
     let mut g = vec![vec![0.0; ne]; active.len()];
     let mut dr = [0.0; 8];
+    #[allow(clippy::needless_range_loop)]
     for e in 0..ne {
         let c = model.coefficients(design, e);
         let ue = model.element_displacement(e, u);

@@ -75,6 +75,7 @@ impl DensityFilter {
     /// Adjoint: `out = Hᵀ (g / Hs)` (the weights are symmetric).
     pub fn apply_adjoint(&self, g: &[f64], out: &mut [f64]) {
         out.fill(0.0);
+        #[allow(clippy::needless_range_loop)]
         for e in 0..self.sums.len() {
             let ge = g[e] / self.sums[e];
             for k in self.ptr[e]..self.ptr[e + 1] {

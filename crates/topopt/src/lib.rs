@@ -15,6 +15,7 @@ pub mod error;
 pub mod filter;
 pub mod optimize;
 pub mod problem;
+pub mod samples;
 
 pub use analysis::{AnalysisParams, Densities, Evaluation, Evaluator, Response};
 pub use design_file::{DesignFile, density_csv, read_density_csv};

@@ -214,8 +214,8 @@ pub struct IterationRecord {
     /// max |Δx| of the MMA update that produced this design (0 at k = 0).
     pub change: f64,
     /// KKT residual (max norm, relative to max |∂f0/∂x|) at this design with the multipliers
-    /// of that update (NaN at 0).
-    pub kkt: f64,
+    /// of that update (None at k = 0).
+    pub kkt: Option<f64>,
     /// Projection sharpness β used.
     pub beta: f64,
     /// Newton iterations summed over the cases.
@@ -294,13 +294,7 @@ impl<'p> Optimizer<'p> {
         let evaluator = Evaluator::new(problem, params.filter_radius, params.analysis)?;
         let n = evaluator.n();
         let m = Self::count_constraints(problem);
-        let mma = Mma::new(
-            n,
-            m,
-            vec![problem.rho_min; n],
-            vec![1.0; n],
-            params.mma,
-        )?;
+        let mma = Mma::new(n, m, vec![problem.rho_min; n], vec![1.0; n], params.mma)?;
         let ne = problem.mesh().n_elements();
         let (yeoh, yeoh_rule) = match params.additive {
             Some(a) => {
@@ -320,7 +314,11 @@ impl<'p> Optimizer<'p> {
             evaluator,
             mma,
             x: vec![problem.initial_density; n],
-            beta: if params.projection.is_some() { 1.0 } else { 0.0 },
+            beta: if params.projection.is_some() {
+                1.0
+            } else {
+                0.0
+            },
             params,
             iteration: 0,
             yeoh,
@@ -410,7 +408,9 @@ impl<'p> Optimizer<'p> {
             .evaluator
             .evaluate(&self.x, proj, self.yeoh.as_ref())
             .map_err(|e| match e {
-                TopoptError::NonFinite { what, .. } => TopoptError::NonFinite { what, iteration: k },
+                TopoptError::NonFinite { what, .. } => {
+                    TopoptError::NonFinite { what, iteration: k }
+                }
                 e => e,
             })?;
         let scales = *self.scales.get_or_insert_with(|| {
@@ -461,10 +461,13 @@ impl<'p> Optimizer<'p> {
             });
         }
         let kkt = if k > 0 {
-            let scale = df0.iter().fold(0.0f64, |a, b| a.max(b.abs())).max(f64::MIN_POSITIVE);
-            self.mma.kkt_residual(&self.x, &df0, &g, &dg)?.max / scale
+            let scale = df0
+                .iter()
+                .fold(0.0f64, |a, b| a.max(b.abs()))
+                .max(f64::MIN_POSITIVE);
+            Some(self.mma.kkt_residual(&self.x, &df0, &g, &dg)?.max / scale)
         } else {
-            f64::NAN
+            None
         };
         let design_rho: Vec<f64> = self
             .evaluator
@@ -501,7 +504,7 @@ impl<'p> Optimizer<'p> {
         let converged = k > 0
             && beta_done
             && self.last_change < self.params.change_tolerance
-            && kkt < self.params.kkt_tolerance;
+            && kkt.is_some_and(|v| v < self.params.kkt_tolerance);
         if converged {
             self.stopped = Some(StopReason::Converged);
         } else if k >= self.params.max_iterations {
@@ -599,7 +602,9 @@ impl<'p> Optimizer<'p> {
             return Err(bad("not a flexstage checkpoint (bad magic)"));
         }
         let hl = u64::from_le_bytes(bytes[8..16].try_into().unwrap()) as usize;
-        let json = bytes.get(16..16 + hl).ok_or_else(|| bad("truncated header"))?;
+        let json = bytes
+            .get(16..16 + hl)
+            .ok_or_else(|| bad("truncated header"))?;
         let h: CheckpointHeader =
             serde_json::from_slice(json).map_err(|e| bad(&format!("header: {e}")))?;
         let mut pos = 16 + hl;
