@@ -100,6 +100,9 @@ fn gradient_check(s: &Scenario) -> anyhow::Result<()> {
     Ok(())
 }
 
+/// A named history column.
+type Column<'a> = (&'a str, &'a dyn Fn(&IterationRecord) -> f64);
+
 fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
     let col = |f: &dyn Fn(&IterationRecord) -> f64| h.iter().map(f).collect::<Vec<f64>>();
     let mut header = vec!["iteration", "area_m2", "objective", "f0"];
@@ -113,13 +116,13 @@ fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
         header.push(n);
         cols.push(col(&|r| r.constraints[i]));
     }
-    let rest: [(&str, &dyn Fn(&IterationRecord) -> f64); 12] = [
+    let rest: [Column; 12] = [
         ("energy_J", &|r| r.energy),
         ("stroke_ratio", &|r| r.stroke),
         ("volume", &|r| r.volume),
         ("grey", &|r| r.grey),
         ("change", &|r| r.change),
-        ("kkt", &|r| r.kkt),
+        ("kkt", &|r| r.kkt.unwrap_or(f64::NAN)),
         ("beta", &|r| r.beta),
         ("newton_total", &|r| r.newton_total as f64),
         ("newton_max", &|r| r.newton_max as f64),
@@ -253,9 +256,13 @@ pub fn run(args: DesignArgs) -> anyhow::Result<()> {
     let mut ev = Evaluator::new(&fin, 0.0, AnalysisParams::default())?;
     let mut rho0 = vec![s.optimization.initial_density; rho.len()];
     mesh.apply_passive(&mut rho0, problem.rho_min);
-    let r0 = ev.solve_cases(&rho0, None).context("final analysis of the initial design")?;
+    let r0 = ev
+        .solve_cases(&rho0, None)
+        .context("final analysis of the initial design")?;
     let mut ev = Evaluator::new(&fin, 0.0, AnalysisParams::default())?;
-    let r = ev.solve_cases(&rho, None).context("final analysis of the design")?;
+    let r = ev
+        .solve_cases(&rho, None)
+        .context("final analysis of the design")?;
     let (a0, a1) = (shoelace(&r0.outputs), shoelace(&r.outputs));
     let design_els = problem.design_elements();
     let grey = design_els
@@ -291,8 +298,14 @@ pub fn run(args: DesignArgs) -> anyhow::Result<()> {
         &ev.cases[fin.differential_corners().0].u,
     )?;
     run.write("design/cases.csv", cases_csv(&fin, &r).as_bytes())?;
-    run.write("design/workspace_final.csv", polygon_csv(&r.outputs).as_bytes())?;
-    run.write("design/workspace_initial.csv", polygon_csv(&r0.outputs).as_bytes())?;
+    run.write(
+        "design/workspace_final.csv",
+        polygon_csv(&r.outputs).as_bytes(),
+    )?;
+    run.write(
+        "design/workspace_initial.csv",
+        polygon_csv(&r0.outputs).as_bytes(),
+    )?;
     run.write("design/history.csv", history_csv(&names, h).as_bytes())?;
     run.write(
         "design/history.json",
