@@ -7,9 +7,22 @@ use flexstage_mma::{Mma, MmaError, MmaParams};
 
 fn eval(x: &[f64]) -> (f64, Vec<f64>, Vec<f64>, Vec<f64>) {
     // min Σ (x_j − 0.3 j)²  s.t.  Σ x_j − 2 ≤ 0
-    let f0 = x.iter().enumerate().map(|(j, v)| (v - 0.3 * j as f64).powi(2)).sum();
-    let df0 = x.iter().enumerate().map(|(j, v)| 2.0 * (v - 0.3 * j as f64)).collect();
-    (f0, df0, vec![x.iter().sum::<f64>() - 2.0], vec![1.0; x.len()])
+    let f0 = x
+        .iter()
+        .enumerate()
+        .map(|(j, v)| (v - 0.3 * j as f64).powi(2))
+        .sum();
+    let df0 = x
+        .iter()
+        .enumerate()
+        .map(|(j, v)| 2.0 * (v - 0.3 * j as f64))
+        .collect();
+    (
+        f0,
+        df0,
+        vec![x.iter().sum::<f64>() - 2.0],
+        vec![1.0; x.len()],
+    )
 }
 
 fn step(mma: &mut Mma, x: &mut [f64]) {
