@@ -119,7 +119,10 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
                     .map(|x| x.trim().parse::<f64>().map(|v| v * 1e-6))
                     .collect::<Result<_, _>>()
                     .with_context(|| format!("--inputs {t:?}: expected two numbers X1,X2 in µm"))?;
-                anyhow::ensure!(v.len() == 2, "--inputs {t:?}: expected two numbers X1,X2 in µm");
+                anyhow::ensure!(
+                    v.len() == 2,
+                    "--inputs {t:?}: expected two numbers X1,X2 in µm"
+                );
                 Ok(v)
             })
             .collect::<anyhow::Result<_>>()?;
@@ -128,7 +131,9 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
     let run = crate::run_dir::open_run(args.out, &s)?;
     let t = std::time::Instant::now();
     let mut ev = Evaluator::new(&problem, 0.0, AnalysisParams::default())?;
-    let r = ev.solve_cases(&rho, None).context("nonlinear analysis failed")?;
+    let r = ev
+        .solve_cases(&rho, None)
+        .context("nonlinear analysis failed")?;
     let secs = t.elapsed().as_secs_f64();
     run.write("analyze/cases.csv", cases_csv(&problem, &r).as_bytes())?;
     // VTK at the compressive corner (workspace) or the first given case.
@@ -137,7 +142,13 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
     } else {
         0
     };
-    write_vtu(&run, "analyze/deformed.vtu", &problem, &rho, &ev.cases[k_vtk].u)?;
+    write_vtu(
+        &run,
+        "analyze/deformed.vtu",
+        &problem,
+        &rho,
+        &ev.cases[k_vtk].u,
+    )?;
     println!(
         "analyzed {} load case(s) of design {:?} in {:.2} s ({} Newton iterations)",
         r.outputs.len(),
@@ -145,7 +156,12 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
         secs,
         r.newton_iterations.iter().sum::<usize>()
     );
-    for (k, o) in r.outputs.iter().enumerate().take(if workspace { 0 } else { usize::MAX }) {
+    for (k, o) in r
+        .outputs
+        .iter()
+        .enumerate()
+        .take(if workspace { 0 } else { usize::MAX })
+    {
         println!(
             "  x_nom = ({:.2}, {:.2}) µm  ->  u_out = ({:.4}, {:.4}) µm",
             problem.cases[k][0] * 1e6,
@@ -170,7 +186,11 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
         );
         for (name, k) in [("(+a,+a)", 0), ("(+a,-a)", problem.cases.len() / 4)] {
             let o = r.outputs[k];
-            println!("  corner {name}: u_out = ({:.4}, {:.4}) µm", o[0] * 1e6, o[1] * 1e6);
+            println!(
+                "  corner {name}: u_out = ({:.4}, {:.4}) µm",
+                o[0] * 1e6,
+                o[1] * 1e6
+            );
         }
         summary["area_m2"] = serde_json::json!(area);
         run.write(

@@ -209,10 +209,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
         "optimization.projection",
         "Heaviside projection of the filtered densities with β continuation (NOTES.md filtering).",
     ),
-    (
-        "optimization.projection.enabled",
-        "Use the projection.",
-    ),
+    ("optimization.projection.enabled", "Use the projection."),
     (
         "optimization.projection.beta_max",
         "Final sharpness β, in [1, 1024]; β starts at 1 and doubles every `interval` iterations.",
