@@ -7,9 +7,10 @@
 //!   metrics ([`hysteresis`]);
 //! * [`compensate`]: the inverse multiplicative compensation of Eq. (19)–(21), Figure 5;
 //! * [`rls`]: recursive least squares with forgetting, Eq. (A9)–(A11), generic over the number
-//!   of parameters, and the batch least squares it reproduces;
-//! * [`identify`]: the parallel RLS of Algorithm A1 (A8, A12) and a batch fit of the same
-//!   model;
+//!   of parameters (square-root form), its information form ([`WeightedMoments`]), and the
+//!   batch least squares they reproduce;
+//! * [`identify`]: the parallel RLS of Algorithm A1 (A8, A12) on the summed regression, and a
+//!   batch fit of the same model;
 //! * [`data`], [`synth`]: records (t, U, x) from CSV or simulation;
 //! * [`samples`]: problems with known answers.
 //!
@@ -54,5 +55,5 @@ pub use identify::{
     rms_model_error,
 };
 pub use model::{BoucWen, BoucWenParams, MICROMETRE, advance, simulate};
-pub use rls::{Rls, RlsParams, batch_least_squares};
+pub use rls::{Rls, RlsParams, SpdFactor, WeightedMoments, batch_least_squares, solve_spd};
 pub use synth::{GaussianNoise, synthesize};

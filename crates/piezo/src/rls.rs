@@ -17,10 +17,25 @@
 //! ```
 //!
 //! (The paper writes "φ(t)[…]⁻¹φ(t)ᵀ" with φ a row; with φ a column, as here, the bracket is
-//! the scalar W₀⁻¹ + φᵀΓφ.) With one output, W₀ is a positive scalar. Each update is
-//! O(P²) on stack arrays: no allocation. The covariance is re-symmetrized after each update,
-//! and an optional trace limit guards against covariance wind-up when λ_f < 1 and the data
-//! stop exciting some direction (e.g. a voltage held constant).
+//! the scalar W₀⁻¹ + φᵀΓφ.) With one output, W₀ is a positive scalar. An optional trace limit
+//! guards against covariance wind-up when λ_f < 1 and the data stop exciting some direction
+//! (e.g. a voltage held constant).
+//!
+//! # Square-root form (departure from the literal recursion)
+//! (A11) is implemented in Potter's square-root form: the estimator keeps a factor S with
+//! Cov = S Sᵀ, and one step is, with f = Sᵀφ/√λ_f, a = W₀⁻¹ + fᵀf, γ = 1/(a + √(a W₀⁻¹)),
+//!
+//! ```text
+//! S ← (S/√λ_f)(I − γ f fᵀ),    θ̂ ← θ̂ + (S_old f/√λ_f) ε⁰ / a
+//! ```
+//!
+//! which is algebraically identical to (A11) (S Sᵀ after the step equals Cov(t), and the gain
+//! equals Cov(t)φW₀), but keeps Cov positive semi-definite by construction and needs half
+//! the precision: the conventional update Γ − ggᵀ/(W₀⁻¹ + φᵀg) cancels catastrophically
+//! once the covariance spans more than ~10⁸ (the summed PEA regression of [`crate::identify`],
+//! whose regressors grow with time, reaches 10¹⁵ and more, and the conventional form then
+//! loses positive definiteness and diverges). Each update is O(P²) on stack arrays (one
+//! square root): no allocation.
 //!
 //! The stage identification uses the same type: build φ and y per sample and call
 //! [`Rls::update`].
@@ -87,11 +102,12 @@ impl RlsParams {
     }
 }
 
-/// A recursive least-squares estimator of `P` parameters, Eq. (A11).
+/// A recursive least-squares estimator of `P` parameters, Eq. (A11), in square-root form.
 #[derive(Debug, Clone)]
 pub struct Rls<const P: usize> {
     theta: [f64; P],
-    cov: [[f64; P]; P],
+    /// Square-root factor S of the covariance, Cov = S Sᵀ (module docs).
+    sqrt_cov: [[f64; P]; P],
     params: RlsParams,
     updates: u64,
 }
@@ -100,16 +116,14 @@ impl<const P: usize> Rls<P> {
     /// An estimator starting at `theta0` with Cov(0) = `initial_covariance`·I.
     pub fn new(params: RlsParams, theta0: [f64; P]) -> Result<Self> {
         params.validate()?;
-        let mut cov = [[0.0; P]; P];
-        for (i, row) in cov.iter_mut().enumerate() {
-            row[i] = params.initial_covariance;
-        }
-        Ok(Rls {
+        let mut rls = Rls {
             theta: theta0,
-            cov,
+            sqrt_cov: [[0.0; P]; P],
             params,
             updates: 0,
-        })
+        };
+        rls.reset_covariance();
+        Ok(rls)
     }
 
     /// An estimator initialized *exactly* from a first block of data: θ̂ is the weighted batch
@@ -121,18 +135,24 @@ impl<const P: usize> Rls<P> {
         let (normal, rhs) = normal_equations(phis, ys, params.forgetting, params.weight)?;
         let chol = cholesky(&normal)?;
         let theta = chol_solve(&chol, &rhs);
-        let mut cov = [[0.0; P]; P];
+        // normal = L Lᵀ, so Cov = L⁻ᵀ L⁻¹ = S Sᵀ with S = L⁻ᵀ: column j of S solves Lᵀ s = e_j.
+        let mut sqrt_cov = [[0.0; P]; P];
         for j in 0..P {
-            let mut e = [0.0; P];
-            e[j] = 1.0;
-            let col = chol_solve(&chol, &e);
+            let mut x = [0.0; P];
+            for i in (0..P).rev() {
+                let mut v = if i == j { 1.0 } else { 0.0 };
+                for k in i + 1..P {
+                    v -= chol[k][i] * x[k];
+                }
+                x[i] = v / chol[i][i];
+            }
             for i in 0..P {
-                cov[i][j] = col[i];
+                sqrt_cov[i][j] = x[i];
             }
         }
         Ok(Rls {
             theta,
-            cov,
+            sqrt_cov,
             params,
             updates: phis.len() as u64,
         })
@@ -150,15 +170,64 @@ impl<const P: usize> Rls<P> {
 
     /// Resets the covariance to Cov(0) = `initial_covariance`·I (keeps θ̂).
     pub fn reset_covariance(&mut self) {
-        self.cov = [[0.0; P]; P];
-        for (i, row) in self.cov.iter_mut().enumerate() {
-            row[i] = self.params.initial_covariance;
+        let s = self.params.initial_covariance.sqrt();
+        self.sqrt_cov = [[0.0; P]; P];
+        for (i, row) in self.sqrt_cov.iter_mut().enumerate() {
+            row[i] = s;
         }
     }
 
-    /// Current covariance Cov(t).
-    pub fn covariance(&self) -> &[[f64; P]; P] {
-        &self.cov
+    /// Makes parameter `i` a fresh unknown: θ̂_i = `value`, and row and column i of Cov are
+    /// replaced by the prior (Cov_ii = `initial_covariance`, cross terms 0). The other
+    /// parameters keep their estimates and their covariance block: for the Gaussian posterior
+    /// that RLS propagates, this is exact marginalization of the old θ_i followed by an
+    /// independent prior on the new one (used when a nuisance offset changes, e.g. a new
+    /// record). O(P³) (the square-root factor is recomputed). Panics if `i ≥ P`.
+    pub fn reset_parameter(&mut self, i: usize, value: f64) {
+        assert!(i < P, "parameter index {i} out of range 0..{P}");
+        self.theta[i] = value;
+        let mut cov = self.covariance();
+        for j in 0..P {
+            cov[i][j] = 0.0;
+            cov[j][i] = 0.0;
+        }
+        cov[i][i] = self.params.initial_covariance;
+        // Lower Cholesky factor with pivots clipped at 0 (a semi-definite Cov is legitimate
+        // after long forgetting-free runs); L Lᵀ = Cov, so S = L.
+        let mut l = [[0.0; P]; P];
+        for c in 0..P {
+            let mut d = cov[c][c];
+            for k in 0..c {
+                d -= l[c][k] * l[c][k];
+            }
+            let d = d.max(0.0).sqrt();
+            l[c][c] = d;
+            for r in c + 1..P {
+                let mut v = cov[r][c];
+                for k in 0..c {
+                    v -= l[r][k] * l[c][k];
+                }
+                l[r][c] = if d > 0.0 { v / d } else { 0.0 };
+            }
+        }
+        self.sqrt_cov = l;
+    }
+
+    /// Current covariance Cov(t) = S Sᵀ (computed, O(P³)).
+    pub fn covariance(&self) -> [[f64; P]; P] {
+        let s = &self.sqrt_cov;
+        let mut cov = [[0.0; P]; P];
+        for i in 0..P {
+            for j in i..P {
+                let mut v = 0.0;
+                for k in 0..P {
+                    v += s[i][k] * s[j][k];
+                }
+                cov[i][j] = v;
+                cov[j][i] = v;
+            }
+        }
+        cov
     }
 
     /// The settings.
@@ -178,39 +247,55 @@ impl<const P: usize> Rls<P> {
     }
 
     /// One step of (A11) with a time-varying forgetting factor `lambda` = λ_f(t) ∈ (0, 1].
-    /// Returns the a priori error ε⁰.
+    /// Returns the a priori error ε⁰. Square-root form (module docs).
     #[inline]
     pub fn update_with_forgetting(&mut self, phi: &[f64; P], y: f64, lambda: f64) -> f64 {
-        let inv_lambda = 1.0 / lambda;
-        // g = Γφ = Cov φ / λ
+        let r = 1.0 / self.params.weight;
+        if lambda != 1.0 {
+            // Γ(t) = Cov(t−1)/λ_f: S ← S/√λ_f.
+            let scale = lambda.sqrt().recip();
+            for row in self.sqrt_cov.iter_mut() {
+                for v in row.iter_mut() {
+                    *v *= scale;
+                }
+            }
+        }
+        let s = &mut self.sqrt_cov;
+        // f = Sᵀφ, a = W₀⁻¹ + fᵀf = W₀⁻¹ + φᵀΓφ.
+        let mut f = [0.0; P];
+        for i in 0..P {
+            let p = phi[i];
+            for j in 0..P {
+                f[j] += s[i][j] * p;
+            }
+        }
+        let mut a = r;
+        for v in f {
+            a += v * v;
+        }
+        // g = S f = Γφ; the gain of (A11) is Cov(t)φW₀ = g/a.
         let mut g = [0.0; P];
         for i in 0..P {
             let mut acc = 0.0;
             for j in 0..P {
-                acc += self.cov[i][j] * phi[j];
+                acc += s[i][j] * f[j];
             }
-            g[i] = acc * inv_lambda;
+            g[i] = acc;
         }
-        let mut phi_g = 0.0;
-        for i in 0..P {
-            phi_g += phi[i] * g[i];
-        }
-        let denom = 1.0 / self.params.weight + phi_g;
-        let inv_denom = 1.0 / denom;
-        // Cov = Γ − g gᵀ / denom, symmetrized.
+        // S ← S (I − γ f fᵀ) = S − γ g fᵀ.
+        let gamma = 1.0 / (a + (a * r).sqrt());
         let mut trace = 0.0;
         for i in 0..P {
-            for j in i..P {
-                let v =
-                    0.5 * (self.cov[i][j] + self.cov[j][i]) * inv_lambda - g[i] * g[j] * inv_denom;
-                self.cov[i][j] = v;
-                self.cov[j][i] = v;
+            let gi = gamma * g[i];
+            for j in 0..P {
+                let v = s[i][j] - gi * f[j];
+                s[i][j] = v;
+                trace += v * v;
             }
-            trace += self.cov[i][i];
         }
         if trace > self.params.max_trace {
-            let scale = self.params.max_trace / trace;
-            for row in self.cov.iter_mut() {
+            let scale = (self.params.max_trace / trace).sqrt();
+            for row in s.iter_mut() {
                 for v in row.iter_mut() {
                     *v *= scale;
                 }
@@ -221,10 +306,9 @@ impl<const P: usize> Rls<P> {
             pred += phi[i] * self.theta[i];
         }
         let eps = y - pred;
-        // Cov(t) φ W₀ = g (1 − φᵀg/denom) W₀ = g/denom: the gain of (A11) in closed form
-        // (identical to multiplying by the updated Cov, before any trace limiting).
+        let k = eps / a;
         for i in 0..P {
-            self.theta[i] += g[i] * inv_denom * eps;
+            self.theta[i] += g[i] * k;
         }
         self.updates += 1;
         eps
@@ -335,4 +419,174 @@ fn chol_solve<const P: usize>(l: &[[f64; P]; P], b: &[f64; P]) -> [f64; P] {
         x[i] = v / l[i][i];
     }
     x
+}
+
+/// Exponentially weighted second moments M(t) = Σ_{i ≤ t} W(t, i) v(i) v(i)ᵀ of a data vector
+/// v (regressor entries and measurement together), with W(t, i) of (A10) at constant λ_f.
+///
+/// This is the information form of (A9): for any regressor φ = A v and measurement y = bᵀv
+/// that are *linear maps of v*, the weighted normal equations are A M Aᵀ θ = A M b, and the
+/// weighted residual sum of squares is (b − Aᵀθ)ᵀ M (b − Aᵀθ). Unlike the covariance
+/// recursion (A11), the maps A and b may change from one sample to the next and still apply
+/// to every past sample: the recursive least-squares estimate is re-evaluated exactly for the
+/// *current* map. [`crate::identify`] uses this for the Bouc–Wen regressor, which depends on
+/// the current d_p estimate. One update is O(N²) on stack arrays, no allocation.
+#[derive(Debug, Clone)]
+pub struct WeightedMoments<const N: usize> {
+    m: [[f64; N]; N],
+    forgetting: f64,
+    weight: f64,
+    /// Π λ_f over the updates so far (the decay of a prior term).
+    decay: f64,
+}
+
+impl<const N: usize> WeightedMoments<N> {
+    /// Empty moments with forgetting factor λ_f ∈ (0, 1] and weight W₀ > 0.
+    pub fn new(forgetting: f64, weight: f64) -> Result<Self> {
+        check(
+            "forgetting",
+            forgetting,
+            forgetting > 0.0 && forgetting <= 1.0,
+            "a number in (0, 1]",
+        )?;
+        check("weight", weight, weight > 0.0, "a finite number > 0")?;
+        Ok(WeightedMoments {
+            m: [[0.0; N]; N],
+            forgetting,
+            weight,
+            decay: 1.0,
+        })
+    }
+
+    /// M ← λ_f M + W₀ v vᵀ.
+    #[inline]
+    pub fn add(&mut self, v: &[f64; N]) {
+        let (l, w) = (self.forgetting, self.weight);
+        for i in 0..N {
+            let wi = w * v[i];
+            for j in i..N {
+                let x = l * self.m[i][j] + wi * v[j];
+                self.m[i][j] = x;
+                self.m[j][i] = x;
+            }
+        }
+        self.decay *= l;
+    }
+
+    /// The moment matrix M.
+    #[inline]
+    pub fn matrix(&self) -> &[[f64; N]; N] {
+        &self.m
+    }
+
+    /// Π λ_f over the updates so far: the weight a prior term has left (as in (A11), where
+    /// Cov(0) is divided by λ_f at every step).
+    #[inline]
+    pub fn decay(&self) -> f64 {
+        self.decay
+    }
+
+    /// M times a vector.
+    #[inline]
+    pub fn times(&self, a: &[f64; N]) -> [f64; N] {
+        let mut out = [0.0; N];
+        for i in 0..N {
+            let mut acc = 0.0;
+            for j in 0..N {
+                acc += self.m[i][j] * a[j];
+            }
+            out[i] = acc;
+        }
+        out
+    }
+
+    /// Profiles out the coefficient of entry `i` when v_i is a regressor entry: M ← M −
+    /// M e_i e_iᵀ M / M_ii, so that row and column i become 0. Every quadratic form of M is
+    /// then minimized over that coefficient; a later block of data can bring a fresh,
+    /// unrelated coefficient for the same entry (e.g. the offset of a new record). No effect
+    /// when M_ii = 0.
+    pub fn eliminate(&mut self, i: usize) {
+        let p = self.m[i][i];
+        if p <= 0.0 {
+            return;
+        }
+        let col = self.m[i];
+        for r in 0..N {
+            for c in 0..N {
+                self.m[r][c] -= col[r] * col[c] / p;
+            }
+        }
+        for k in 0..N {
+            self.m[i][k] = 0.0;
+            self.m[k][i] = 0.0;
+        }
+    }
+}
+
+/// Solves the symmetric positive definite system A x = b by Cholesky after symmetric diagonal
+/// equilibration (so that the columns' very different scales do not matter). `None` when A
+/// is not numerically positive definite (a pivot below 1e-13 of its diagonal). No allocation.
+pub fn solve_spd<const P: usize>(a: &[[f64; P]; P], b: &[f64; P]) -> Option<[f64; P]> {
+    SpdFactor::new(a).map(|f| f.solve(b))
+}
+
+/// The equilibrated Cholesky factor of a symmetric positive definite matrix, for solving
+/// with several right-hand sides ([`solve_spd`]). No allocation.
+#[derive(Debug, Clone, Copy)]
+pub struct SpdFactor<const P: usize> {
+    /// Lower Cholesky factor of D A D.
+    l: [[f64; P]; P],
+    /// D = diag(A)^{-1/2}.
+    s: [f64; P],
+}
+
+impl<const P: usize> SpdFactor<P> {
+    /// Factors A; `None` when A is not numerically positive definite (a pivot below 1e-13
+    /// of its diagonal, or a non-positive or non-finite diagonal).
+    #[inline]
+    pub fn new(a: &[[f64; P]; P]) -> Option<Self> {
+        let mut s = [0.0; P];
+        for i in 0..P {
+            if a[i][i].is_nan() || a[i][i] <= 0.0 || !a[i][i].is_finite() {
+                return None;
+            }
+            s[i] = a[i][i].sqrt().recip();
+        }
+        let mut l = [[0.0; P]; P];
+        for j in 0..P {
+            let mut d: f64 = 1.0;
+            for k in 0..j {
+                d -= l[j][k] * l[j][k];
+            }
+            if d.is_nan() || d <= 1e-13 {
+                return None;
+            }
+            let d = d.sqrt();
+            l[j][j] = d;
+            let inv = d.recip();
+            for i in j + 1..P {
+                let mut v = a[i][j] * s[i] * s[j];
+                for k in 0..j {
+                    v -= l[i][k] * l[j][k];
+                }
+                l[i][j] = v * inv;
+            }
+        }
+        Some(SpdFactor { l, s })
+    }
+
+    /// Solves A x = b.
+    #[inline]
+    pub fn solve(&self, b: &[f64; P]) -> [f64; P] {
+        let mut sb = [0.0; P];
+        for i in 0..P {
+            sb[i] = b[i] * self.s[i];
+        }
+        let z = chol_solve(&self.l, &sb);
+        let mut x = [0.0; P];
+        for i in 0..P {
+            x[i] = z[i] * self.s[i];
+        }
+        x
+    }
 }
