@@ -5,8 +5,8 @@ use std::path::PathBuf;
 use anyhow::Context;
 use clap::{Args, Subcommand};
 use flexstage_piezo::{
-    BatchFit, BoucWenParams, Identification, IdentifyParams, PeaData, RlsParams, fit_batch,
-    identify, loop_metrics, simulate,
+    BatchFit, BoucWenParams, Identification, IdentifyParams, PeaData, fit_batch, identify,
+    loop_metrics, simulate,
 };
 use flexstage_report::csv_columns;
 use flexstage_report::plot::{Figure, Series};
@@ -28,7 +28,7 @@ against model), convergence.csv and loop.csv.
 Examples:
   flexstage pea simulate --noise-nm 10 --output pea1.csv
   flexstage identify pea --data pea1.csv
-  flexstage identify pea --data lab.csv --pea 2 --forgetting 0.9995 --out runs/lab"
+  flexstage identify pea --data lab.csv --pea 2 --forgetting 0.99998 --out runs/lab"
     )]
     Pea(PeaArgs),
 }
@@ -44,8 +44,10 @@ pub struct PeaArgs {
     /// Which PEA of the scenario to compare the estimates with (1 or 2).
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u8).range(1..=2))]
     pub pea: u8,
-    /// Forgetting factor λ_f of both RLS estimators, in (0, 1].
-    #[arg(long, default_value_t = 0.999)]
+    /// Forgetting factor λ_f of both RLS estimators, in (0, 1]. 1 (default) converges to the
+    /// batch least-squares fit; below 1 the memory is about 1/(1 − λ_f) samples (keep it at
+    /// several drive periods, e.g. 0.99998 at 10 kHz and 1 Hz).
+    #[arg(long, default_value_t = 1.0)]
     pub forgetting: f64,
     /// Passes of the parallel RLS over the record (≥ 1).
     #[arg(long, default_value_t = 1)]
@@ -127,13 +129,10 @@ fn pea(args: PeaArgs) -> anyhow::Result<()> {
         &scenario.hysteresis.pea2
     });
 
-    let mut params = IdentifyParams::default();
-    let rls = RlsParams {
+    let mut params = IdentifyParams {
         forgetting: args.forgetting,
-        ..params.theta_rls
+        ..IdentifyParams::default()
     };
-    params.theta_rls = rls;
-    params.dp_rls = rls;
     params.passes = args.passes;
     params.record_every = (data.len() / 2000).max(1);
     let online = identify(&data, &params).context("parallel RLS identification failed")?;
@@ -283,7 +282,7 @@ mod tests {
                 preset: "paper".into(),
             },
             pea: 1,
-            forgetting: 0.999,
+            forgetting: 1.0,
             passes: 1,
             out: Some(out),
         }

@@ -16,43 +16,78 @@
 //! Δx_k = α ΔU_k + B_bw |ΔU_k| h̄_k + Γ_bw ΔU_k |h̄_k| − δ_bw Δt_k Ū_k s_k
 //! ```
 //!
-//! with Ū, h̄ the interval means (exact for the U and δ terms, midpoint rule for h). The same
-//! θ, no derivative of data, and the δ regressor carries Δt, so δ_bw comes out in µm/(V·s)
-//! as in Table A1.
+//! with Ū, h̄ the interval means (exact for the U and δ terms, midpoint rule for h), and h
+//! from the measurement, h̄ = d_p Ū − x̄ ("measured x gives h once d_p is known"). The δ
+//! regressor carries Δt, so δ_bw comes out in µm/(V·s) as in Table A1.
 //!
-//! # Where h comes from, and the d_p estimator
-//! h is not measured. Given d_p it follows from the measurement, h = d_p U − x ("measured x
-//! gives h once d_p is known"), and the increment regression becomes *bilinear* in d_p and θ:
-//! B_bw |ΔU| h̄ = B_bw |ΔU| (d_p Ū − x̄), and the same for Γ_bw. Algorithm A1 runs two RLS
-//! estimators in parallel, alternating between the two factors:
+//! # Summed from the start (departure 1 from the paper)
+//! Regressing the increments Δx_k makes the noise differenced (n_k − n_{k−1}: strongly
+//! correlated, and 10 nm of noise is large against the per-sample increments), and least
+//! squares on it is inefficient: with 10 nm noise the increment form wandered 10–900 % off.
+//! Both the online and the batch estimators therefore regress the *level*, summed from the
+//! first sample k = 0 of the record, where the noise is white again:
 //!
-//! * θ estimator, (A11) with regressor (A8): h̄ = d̂_p Ū − x̄ with the current d̂_p;
-//! * d_p estimator, (A11) with a scalar regressor: the paper's (A12), x = d_p U − h, is
-//!   differentiated and h̄ expanded as above, so that d_p is the coefficient of
-//!   ψ = (B̂|ΔU| + Γ̂ ΔU sgn h̄)·Ū in the residual Δx − α̂ΔU + (B̂|ΔU| + Γ̂ ΔU sgn h̄)·x̄ +
-//!   δ̂ Δt Ū s. "Update state variable h" is h = d̂_p U − x.
+//! ```text
+//! x_k = x_0 + α s_u + B_bw (d_p s_bu − s_bx) + Γ_bw (d_p s_gu − s_gx) + δ_bw s_d
+//! s_u  = Σ ΔU_j = U_k − U_0,     s_bu = Σ |ΔU_j| Ū_j,    s_bx = Σ |ΔU_j| x̄_j,
+//! s_gu = Σ σ_j ΔU_j Ū_j,         s_gx = Σ σ_j ΔU_j x̄_j,  s_d  = −Σ Δt_j Ū_j s_j     (j ≤ k)
+//! ```
 //!
-//! Why not (A12) literally, x + h = d_p U with h integrated by forward Euler from the current
-//! estimates: that h depends on d̂_p through A_bw = d̂_p − α̂, and in tests the loop fed back
-//! positively (d̂_p drifted to zero and below from Table A1's zero initial guess). The form
-//! used here makes both estimators minimize the same squared error, so the alternation
-//! descends. Both estimates are also projected onto the admissible set after each update
-//! (B_bw ≥ 0, B_bw + Γ_bw > 0, d_p between the slope s of the line x(U) and 3s).
+//! (σ_j = sgn h̄_j, evaluated once with the d̂_p of that sample.) The offset x_0 is a fifth
+//! unknown of the θ estimator. The regressor is *affine in d_p*, and the sums do not depend on
+//! d_p (except through σ, which only matters where h̄ ≈ 0).
 //!
-//! Measured behaviour (tests, Table A1 parameters, 10 kHz, decaying 1 Hz sine): on noise-free
-//! data the parallel RLS with λ_f = 0.999 recovers all five parameters to better than 0.01 %
-//! in one pass. With 10 nm sensor noise the coupled online scheme is not reliable (the
-//! bilinear alternation with short memory can wander far off); use [`fit_batch`] for noisy
-//! offline records: on the same drive it recovers every parameter within 2 % (δ_bw, whose
-//! effect is only ~0.1 µm per loop at 1 Hz, is the hardest; a slower drive helps, since the
-//! δ effect grows with the time spent per loop: within 0.4 % at 0.25 Hz).
+//! # The two estimators (Algorithm A1), in the information form (A9) (departure 2)
+//! Per sample, as in Algorithm A1: the θ estimator, then "update h" (h = d̂_p U − x), then the
+//! d_p estimator. Both minimize the same criterion, the exponentially weighted sum (A10) of
+//! squared level residuals e_k = x_k − c_k(d_p)ᵀ[x_0, θ]:
+//!
+//! * **θ estimator**, (A9) for the summed (A8) at the current d̂_p: the weighted normal
+//!   equations Σ W c_k(d̂_p) c_k(d̂_p)ᵀ θ = Σ W c_k(d̂_p) x_k, plus the prior Cov(0)⁻¹ = I/c
+//!   (decaying with λ_f as in (A11)).
+//! * **d_p estimator**, the scalar regression of the residual on d_p (the paper's (A12),
+//!   x = d_p U − h, with h expressed through the regressors above). Its regressor is ψ_k =
+//!   ∂(c_kᵀθ̂)/∂d_p = B̂ s_bu + Γ̂ s_gu, made orthogonal to the θ regressors (ψ⊥ = ψ −
+//!   C N⁻¹Cᵀψ, N = CᵀWC), so that the d_p step accounts for θ re-adjusting:
+//!   Δd̂_p = ψᵀW e / ψ⊥ᵀW ψ⊥ (a Gauss–Newton step of the separable least-squares problem),
+//!   limited to 0.1 % of d̂_p per sample (trust region; the first samples excite little) and
+//!   projected onto `dp_bounds`.
+//!
+//! Why not the covariance recursion (A11) for each estimator: the regressor of each depends on
+//! the other's current estimate. (A11) freezes every past regressor row with the estimates of
+//! its time, and in the summed form the rows grow with time, so stale rows dominate: with
+//! (A11) on the summed regressors (and the d_p estimator of the paper, ψ at fixed θ̂) the
+//! estimates stalled 2–5000 % off even without noise (also with λ_f = 0.9999–0.99995). The
+//! plain alternation (d_p regressed at fixed θ̂, without the orthogonalization) converged far
+//! too slowly for the same reason: d_p and θ are strongly coupled (a d_p error of 0.005 %
+//! moved B_bw, Γ_bw, δ_bw by up to 200 %).
+//! Here every quantity is a linear map of the data vector v_k = [1, s_u, s_bu, s_bx, s_gu,
+//! s_gx, s_d, x_k], so the single 8×8 moment matrix M = Σ W v vᵀ ([`WeightedMoments`], the
+//! information form of (A9)–(A10), updated recursively with λ_f) gives the normal equations of
+//! both estimators for the *current* estimates over all past samples, exactly. Per sample this
+//! is O(1): a rank-one update of M and two 5×5 Cholesky solves, no allocation. With λ_f = 1
+//! the estimates converge to the batch least-squares solution ([`fit_batch`]) of the record.
+//!
+//! # Constraints
+//! The estimators stay unconstrained (exact least squares); [`ParallelRls::estimate`] and the
+//! h/σ evaluation use the estimates projected onto the admissible set (B_bw ≥ 0,
+//! B_bw + Γ_bw > 0, d_p within `dp_bounds`, by default between the slope s of the line x(U)
+//! and 3s). Projecting inside a recursive estimator fed back into it and diverged.
+//!
+//! # Measured behaviour
+//! Tests (`tests/identify.rs`), Table A1 parameters, 10 kHz, the decaying 1 Hz drive of
+//! 10 s, from Table A1's zero initial guess, λ_f = 1: noise-free, every parameter within
+//! 0.001 %; with 10 nm sensor noise, seeds 1–10, worst parameter error 1.1 % (PEA1)
+//! and 2.7 % (PEA2), δ_bw being the hardest (its effect is only ~0.1 µm per loop at 1 Hz;
+//! a slower drive helps, since the δ effect grows with the time spent per loop). With
+//! forgetting the memory shortens and the noise shows: λ_f = 0.99998 (5 s memory) 1.2 % and
+//! 2.9 %, λ_f = 0.9999 (1 s) 2.1 % and 6.1 %.
 //!
 //! # Batch fit
-//! [`fit_batch`] fits the same integrated regression offline, summed from the first sample
-//! (so the noise is white), by *variable projection*: for a given d_p, h̄ = d_p Ū − x̄ makes
-//! the problem linear in θ (and x_0), solved by least squares; the
-//! residual sum of squares is then minimized over the scalar d_p by a grid search and golden
-//! section. It needs no initial guess and is the cross-check of the recursive estimates.
+//! [`fit_batch`] fits the same summed regression offline by *variable projection*: for a given
+//! d_p the problem is linear in [x_0, θ], solved by least squares; the residual sum of squares
+//! is then minimized over the scalar d_p by a grid search and golden section. It needs no
+//! initial guess and is the cross-check of the recursive estimates.
 
 use serde::{Deserialize, Serialize};
 
@@ -60,20 +95,21 @@ use crate::data::PeaData;
 use crate::error::{Result, check, data_error};
 use crate::hysteresis::line_fit;
 use crate::model::{BoucWenParams, sgn};
-use crate::rls::{Rls, RlsParams, batch_least_squares};
+use crate::rls::{SpdFactor, WeightedMoments, batch_least_squares};
 
 /// Settings of the parallel RLS identification (Algorithm A1).
-///
-/// λ_f sets the memory, about 1/(1 − λ_f) samples. B_bw and Γ_bw are separable only across
-/// segments where sgn(U̇)·sgn(h) differs, so on slow drives a longer memory (λ_f closer to 1)
-/// is needed; 0.999 suits the 1 Hz drive at 10 kHz.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IdentifyParams {
-    /// RLS settings of the θ = [α, B, Γ, δ] estimator. Default λ_f = 0.999, W₀ = 1,
-    /// Cov(0) = 1e4·I, trace(Cov) ≤ 1e8.
-    pub theta_rls: RlsParams,
-    /// RLS settings of the d_p estimator (A12). Default as `theta_rls`.
-    pub dp_rls: RlsParams,
+    /// Forgetting factor λ_f of (A10) in (0, 1], shared by both estimators (they minimize one
+    /// weighted criterion, module docs). Default 1: the estimates then converge to the batch
+    /// least-squares solution of the whole record. Below 1 the memory is about 1/(1 − λ_f)
+    /// samples; keep it at several drive periods (B_bw and Γ_bw are separable only across
+    /// segments where sgn(U̇)·sgn(h) differs, and δ_bw only over whole loops): at 10 kHz and
+    /// 1 Hz, λ_f = 0.99998 (5 s) still meets 5 % with 10 nm noise, 0.9999 (1 s) does not.
+    pub forgetting: f64,
+    /// Cov(0) = c·I of (A11): the prior on θ and d_p around `initial` has weight 1/c (decaying
+    /// with λ_f like Cov(0) in (A11)). Default 1e4 (no practical influence).
+    pub initial_covariance: f64,
     /// Initial guess. Table A1 starts from zeros; d_p = 0 is then replaced by the slope of
     /// the least-squares line x(U) of the record (a zero d_p makes h = −x, far from the truth).
     pub initial: BoucWenParams,
@@ -81,8 +117,9 @@ pub struct IdentifyParams {
     /// narrows a default (0, ∞) to [s, 3s] with s the slope of the least-squares line x(U):
     /// for A_bw > 0 the hysteresis lowers the apparent slope, so d_p > s.
     pub dp_bounds: (f64, f64),
-    /// Runs over the record, ≥ 1, carrying estimates and covariances over (the model state
-    /// restarts virgin). Default 1 (online use).
+    /// Runs over the record, ≥ 1, carrying the estimates and the accumulated information over
+    /// (each pass is a new record: the sums restart, and its offset x_0 is a new unknown).
+    /// Default 1 (online use).
     pub passes: u32,
     /// Record the estimates every this many samples for the convergence history, ≥ 1.
     pub record_every: usize,
@@ -90,15 +127,9 @@ pub struct IdentifyParams {
 
 impl Default for IdentifyParams {
     fn default() -> Self {
-        let rls = RlsParams {
-            forgetting: 0.999,
-            weight: 1.0,
-            initial_covariance: 1e4,
-            max_trace: 1e8,
-        };
         IdentifyParams {
-            theta_rls: rls,
-            dp_rls: rls,
+            forgetting: 1.0,
+            initial_covariance: 1e4,
             initial: BoucWenParams {
                 d_p: 0.0,
                 a_bw: 0.0,
@@ -116,8 +147,18 @@ impl Default for IdentifyParams {
 impl IdentifyParams {
     /// Checks the fields.
     pub fn validate(&self) -> Result<()> {
-        self.theta_rls.validate()?;
-        self.dp_rls.validate()?;
+        check(
+            "forgetting",
+            self.forgetting,
+            self.forgetting > 0.0 && self.forgetting <= 1.0,
+            "a number in (0, 1]",
+        )?;
+        check(
+            "initial_covariance",
+            self.initial_covariance,
+            self.initial_covariance > 0.0,
+            "a finite number > 0",
+        )?;
         for (name, v) in [
             ("initial.d_p", self.initial.d_p),
             ("initial.a_bw", self.initial.a_bw),
@@ -156,7 +197,7 @@ pub struct HistoryPoint {
     pub t: f64,
     /// The estimates at that time.
     pub estimate: BoucWenParams,
-    /// A priori error of the θ estimator ε⁰ (on Δx) [µm].
+    /// A priori error of the θ estimator ε⁰ on the level x (before this sample's update) [µm].
     pub error: f64,
 }
 
@@ -171,14 +212,41 @@ pub struct Identification {
     pub rms_error: f64,
 }
 
-/// The parallel recursive least-squares identifier of Algorithm A1, one sample at a time.
+/// Index of the entries of the data vector v = [1, s_u, s_bu, s_bx, s_gu, s_gx, s_d, x] (module
+/// docs).
+const V_ONE: usize = 0;
+const V_SU: usize = 1;
+const V_SBU: usize = 2;
+const V_SBX: usize = 3;
+const V_SGU: usize = 4;
+const V_SGX: usize = 5;
+const V_SD: usize = 6;
+const V_X: usize = 7;
+
+/// Largest change of d̂_p per sample, relative (a trust region on the Gauss–Newton step of the
+/// d_p estimator: while the record is still short the step can be wild, module docs).
+const MAX_DP_STEP: f64 = 1e-3;
+
+/// The parallel recursive least-squares identifier of Algorithm A1, one sample at a time, on
+/// the summed (integrated-from-start) form of (A8), in the information form (A9) (module
+/// docs).
 ///
 /// Usable online: feed each new sample with [`ParallelRls::update`]; no allocation per step.
 #[derive(Debug, Clone)]
 pub struct ParallelRls {
-    theta: Rls<4>,
-    dp: Rls<1>,
-    /// Previous sample (t, U, x) and the model's h there.
+    /// Weighted moments of v (shared by both estimators).
+    moments: WeightedMoments<8>,
+    /// The running sums of the current record, v without the measurement.
+    sums: [f64; 8],
+    /// θ estimator, [x_0, α, B_bw, Γ_bw, δ_bw] (x_0: the record's offset), unconstrained.
+    theta: [f64; 5],
+    /// d_p estimator, unconstrained.
+    d_p: f64,
+    /// The initial guess (prior mean) and the prior weight 1/Cov(0).
+    theta_prior: [f64; 5],
+    dp_prior: f64,
+    prior_weight: f64,
+    /// Previous sample (t, U, x).
     prev: Option<(f64, f64, f64)>,
     h: f64,
     dp_bounds: (f64, f64),
@@ -186,7 +254,7 @@ pub struct ParallelRls {
 
 impl ParallelRls {
     /// A new identifier from the settings' initial guess (`initial.d_p` must be > 0 here:
-    /// [`identify`] replaces a zero by the record's slope).
+    /// [`identify`] replaces a zero by the record's slope). The offset x_0 starts at 0.
     pub fn new(params: &IdentifyParams) -> Result<Self> {
         params.validate()?;
         let p = params.initial;
@@ -196,38 +264,39 @@ impl ParallelRls {
             p.d_p > 0.0,
             "a finite number > 0 [µm/V]",
         )?;
+        let theta = [0.0, p.d_p - p.a_bw, p.b_bw, p.gamma_bw, p.delta_bw];
         Ok(ParallelRls {
-            theta: Rls::new(
-                params.theta_rls,
-                [p.d_p - p.a_bw, p.b_bw, p.gamma_bw, p.delta_bw],
-            )?,
-            dp: Rls::new(params.dp_rls, [p.d_p])?,
+            moments: WeightedMoments::new(params.forgetting, 1.0)?,
+            sums: [0.0; 8],
+            theta,
+            d_p: p.d_p,
+            theta_prior: theta,
+            dp_prior: p.d_p,
+            prior_weight: 1.0 / params.initial_covariance,
             prev: None,
             h: 0.0,
             dp_bounds: params.dp_bounds,
         })
     }
 
-    /// Parameter projection onto the admissible set: d_p within `dp_bounds`, B_bw ≥ 0 and
-    /// B_bw + Γ_bw ≥ 1e-6/V (bounded hysteresis, as `BoucWenParams::validate` requires).
-    fn project(&mut self) {
-        let [alpha, mut b, mut g, delta] = *self.theta.theta();
+    /// The estimates projected onto the admissible set, [x_0, α, B_bw, Γ_bw, δ_bw] and d_p:
+    /// d_p within `dp_bounds`, B_bw ≥ 0 and B_bw + Γ_bw ≥ 1e-6/V (bounded hysteresis, as
+    /// `BoucWenParams::validate` requires). The estimators themselves stay unconstrained
+    /// (exact least squares).
+    #[inline]
+    fn projected(&self) -> ([f64; 5], f64) {
+        let [x0, alpha, mut b, mut g, delta] = self.theta;
         if b < 0.0 || b + g < 1e-6 {
             b = b.max(0.0);
             g = g.max(1e-6 - b);
-            self.theta.set_theta([alpha, b, g, delta]);
         }
-        let d = self.dp.theta()[0];
-        let clamped = d.clamp(self.dp_bounds.0, self.dp_bounds.1);
-        if clamped != d {
-            self.dp.set_theta([clamped]);
-        }
+        let d = self.d_p.clamp(self.dp_bounds.0, self.dp_bounds.1);
+        ([x0, alpha, b, g, delta], d)
     }
 
-    /// The current estimates.
+    /// The current estimates (projected onto the admissible set).
     pub fn estimate(&self) -> BoucWenParams {
-        let [alpha, b, g, d] = *self.theta.theta();
-        let d_p = self.dp.theta()[0];
+        let ([_, alpha, b, g, d], d_p) = self.projected();
         BoucWenParams {
             d_p,
             a_bw: d_p - alpha,
@@ -237,55 +306,130 @@ impl ParallelRls {
         }
     }
 
+    /// The estimated offset x_0 of the current record [µm] (x at its first sample, without
+    /// the sensor noise).
+    pub fn offset(&self) -> f64 {
+        self.theta[0]
+    }
+
     /// The hysteretic state h = d̂_p U − x [µm] at the last sample.
     pub fn h(&self) -> f64 {
         self.h
     }
 
-    /// Forgets the previous sample, so the next update starts a new record.
+    /// Starts a new record with the next sample: the sums restart from zero and the offset
+    /// x_0 of the records seen so far is profiled out of the moments
+    /// ([`WeightedMoments::eliminate`]), so the new record brings its own offset. The
+    /// information on θ and d_p carries over.
     pub fn restart(&mut self) {
-        self.prev = None;
+        if self.prev.take().is_some() {
+            self.sums = [0.0; 8];
+            self.moments.eliminate(V_ONE);
+        }
     }
 
-    /// One sample (t [s], U [V], x [µm]) of Algorithm A1. Returns the a priori error of the θ
-    /// estimator [µm] (0 for the first sample of a record).
+    /// The rows r_i of the θ regressor c = R v at d_p: c = [1, s_u, d_p s_bu − s_bx,
+    /// d_p s_gu − s_gx, s_d], as (index, coefficient) pairs.
+    #[inline]
+    fn theta_rows(d_p: f64) -> [[(usize, f64); 2]; 5] {
+        [
+            [(V_ONE, 1.0), (V_ONE, 0.0)],
+            [(V_SU, 1.0), (V_SU, 0.0)],
+            [(V_SBU, d_p), (V_SBX, -1.0)],
+            [(V_SGU, d_p), (V_SGX, -1.0)],
+            [(V_SD, 1.0), (V_SD, 0.0)],
+        ]
+    }
+
+    /// One sample (t [s], U [V], x [µm]) of Algorithm A1. Returns the a priori error ε⁰ of
+    /// the θ estimator on the level x [µm].
     #[inline]
     pub fn update(&mut self, t: f64, u: f64, x: f64) -> f64 {
-        let Some((t0, u0, x0)) = self.prev.replace((t, u, x)) else {
-            return 0.0;
-        };
-        let (du, dx, dt) = (u - u0, x - x0, t - t0);
-        let (u_mean, x_mean) = (0.5 * (u + u0), 0.5 * (x + x0));
-        let d_p = self.dp.theta()[0];
-        // (A11) for regressor (A8), integrated over the sample, with h from the measurement.
-        let h_mean = d_p * u_mean - x_mean;
-        let phi = [
-            du,
-            du.abs() * h_mean,
-            du * h_mean.abs(),
-            -dt * u_mean * sgn(du),
-        ];
-        let err = if du != 0.0 {
-            self.theta.update(&phi, dx)
-        } else {
-            // No excitation (sgn(0) = 0 makes φ = 0): an update would only inflate the
-            // covariance by 1/λ_f.
-            0.0
-        };
-        // Update the state h (from the measurement, with the current d̂_p) and run (A11) for
-        // the d_p regression: the part of the increment of (A12) that d_p multiplies.
-        self.project();
-        let [alpha, b, g, delta] = *self.theta.theta();
-        let sigma = sgn(d_p * u_mean - x_mean);
-        self.h = d_p * u - x;
-        let psi = (b * du.abs() + g * sigma * du) * u_mean;
-        let r = dx - alpha * du
-            + (b * du.abs() + g * sigma * du) * x_mean
-            + delta * dt * u_mean * sgn(du);
-        if psi != 0.0 {
-            self.dp.update(&[psi], r);
+        let (_, d_p) = self.projected();
+        if let Some((t0, u0, x0)) = self.prev.replace((t, u, x)) {
+            // The integrated (A8) of this sample interval, h̄ from the measurement.
+            let (du, dt) = (u - u0, t - t0);
+            let (u_mean, x_mean) = (0.5 * (u + u0), 0.5 * (x + x0));
+            let sigma_du = sgn(d_p * u_mean - x_mean) * du;
+            let s = &mut self.sums;
+            s[V_SU] += du;
+            s[V_SBU] += du.abs() * u_mean;
+            s[V_SBX] += du.abs() * x_mean;
+            s[V_SGU] += sigma_du * u_mean;
+            s[V_SGX] += sigma_du * x_mean;
+            s[V_SD] -= dt * u_mean * sgn(du);
         }
-        self.project();
+        let mut v = self.sums;
+        v[V_ONE] = 1.0;
+        v[V_X] = x;
+        let rows = Self::theta_rows(d_p);
+        let err = x - rows
+            .iter()
+            .zip(&self.theta)
+            .map(|(r, th)| th * (r[0].1 * v[r[0].0] + r[1].1 * v[r[1].0]))
+            .sum::<f64>();
+        self.moments.add(&v);
+        let prior = self.prior_weight * self.moments.decay();
+
+        // θ estimator, (A9) for the summed regressor (A8) at the current d̂_p: the weighted
+        // normal equations R M Rᵀ θ = R M e_x (+ the prior of Cov(0)).
+        let m = self.moments.matrix();
+        let mut mr = [[0.0; 8]; 5]; // M r_j
+        for (j, r) in rows.iter().enumerate() {
+            for i in 0..8 {
+                mr[j][i] = m[i][r[0].0] * r[0].1 + m[i][r[1].0] * r[1].1;
+            }
+        }
+        let mut normal = [[0.0; 5]; 5];
+        let mut rhs = [0.0; 5];
+        for i in 0..5 {
+            let ri = &rows[i];
+            for j in i..5 {
+                let n = ri[0].1 * mr[j][ri[0].0] + ri[1].1 * mr[j][ri[1].0];
+                normal[i][j] = n;
+                normal[j][i] = n;
+            }
+            normal[i][i] += prior;
+            rhs[i] = mr[i][V_X] + prior * self.theta_prior[i];
+        }
+        let factor = SpdFactor::new(&normal);
+        if let Some(f) = &factor {
+            self.theta = f.solve(&rhs);
+        }
+
+        // Update the state h, then the d_p estimator: the regression of the residual e on
+        // d_p with the regressor ψ = ∂(cᵀθ̂)/∂d_p = B̂ s_bu + Γ̂ s_gu made orthogonal to the θ
+        // regressors (the θ-profiled regressor ψ⊥ = ψ − C N⁻¹Cᵀψ), (A9) at the current θ̂:
+        // Δd_p = ψᵀe / ψ⊥ᵀψ⊥ (Cᵀe = 0 at the θ̂ just solved).
+        self.h = d_p * u - x;
+        let [_, _, b, g, _] = self.theta;
+        let mut m_psi = [0.0; 8];
+        for (mp, row) in m_psi.iter_mut().zip(m) {
+            *mp = b * row[V_SBU] + g * row[V_SGU];
+        }
+        let mut a_e = [0.0; 8];
+        a_e[V_X] = 1.0;
+        for (r, th) in rows.iter().zip(&self.theta) {
+            a_e[r[0].0] -= th * r[0].1;
+            a_e[r[1].0] -= th * r[1].1;
+        }
+        let psi_e: f64 = m_psi.iter().zip(&a_e).map(|(p, e)| p * e).sum();
+        let psi_psi: f64 = b * m_psi[V_SBU] + g * m_psi[V_SGU];
+        let mut c_psi = [0.0; 5];
+        for (c, r) in c_psi.iter_mut().zip(&rows) {
+            *c = r[0].1 * m_psi[r[0].0] + r[1].1 * m_psi[r[1].0];
+        }
+        let profiled = match &factor {
+            Some(f) => {
+                let z = f.solve(&c_psi);
+                psi_psi - z.iter().zip(&c_psi).map(|(a, b)| a * b).sum::<f64>()
+            }
+            None => psi_psi,
+        };
+        let denom = profiled.max(0.0) + prior;
+        let step = ((psi_e + prior * (self.dp_prior - d_p)) / denom)
+            .clamp(-MAX_DP_STEP * d_p, MAX_DP_STEP * d_p);
+        self.d_p = (d_p + step).clamp(self.dp_bounds.0, self.dp_bounds.1);
         err
     }
 }
@@ -317,12 +461,18 @@ pub fn identify(data: &PeaData, params: &IdentifyParams) -> Result<Identificatio
     let span = t[t.len() - 1] - t[0];
     let mut history =
         Vec::with_capacity(params.passes as usize * (data.len() / params.record_every + 2));
+    // Figure A2 starts at the initial guess (before the first sample is seen).
+    history.push(HistoryPoint {
+        t: 0.0,
+        estimate: params.initial,
+        error: 0.0,
+    });
     for pass in 0..params.passes {
         id.restart();
         let offset = pass as f64 * span;
         for k in 0..data.len() {
             let err = id.update(t[k], u[k], x[k]);
-            if k % params.record_every == 0 || k + 1 == data.len() {
+            if (k > 0 && k % params.record_every == 0) || k + 1 == data.len() {
                 history.push(HistoryPoint {
                     t: offset + t[k] - t[0],
                     estimate: id.estimate(),
