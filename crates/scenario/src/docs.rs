@@ -409,6 +409,10 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
         "Input plate 2 damping C_in2 [N·s/m], ≥ 0. Paper silent: from damping_ratio.",
     ),
     (
+        "stage.coupling",
+        "Cross terms of Eq. (30) in the simulated plant: coupling spring between the output directions as a fraction of sqrt(2 K_qo1 K_qo2) of the truth, |c| < 1. Paper silent: 0.05.",
+    ),
+    (
         "controller",
         "K-filter observer and robust backstepping controller gains (Table 4, Appendix D).",
     ),
@@ -418,11 +422,43 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "controller.error_gain",
-        "Error gains (k_ε1, k_ε2) of s = dε/dt + k_ε ε, > 0. Table 4: 2e4, 1.5e4.",
+        "Error gains (k_ε1, k_ε2) of s = dε/dt + k_ε ε, > 0. Table 4: 2e4, 1.5e4; retuned to 3e3 (unstable at 10 kHz, see flexstage-control docs).",
     ),
     (
         "controller.feedback_gain",
-        "Feedback gains (k1, k2) of Eq. (A34), > 0. Table 4: 1.2e4, 1.2e3.",
+        "Feedback gains (k1, k2) of Eq. (A34), > 0. Table 4: 1.2e4, 1.2e3; retuned to 3e3.",
+    ),
+    (
+        "controller.disturbance_gain",
+        "Bandwidth κ_d of the K-filter's estimate of the model error Δ_η (Eq. 36) [1/s], > 0: gives the loop its integral action (flexstage-control docs).",
+    ),
+    (
+        "controller.eta_gain",
+        "Linear feedback gains (k_η1, k_η2) of Eq. (A21) [1/s], > 1. Not in Table 4; chosen for the 10 kHz loop (flexstage-control docs).",
+    ),
+    (
+        "controller.eta_bound",
+        "Disturbance bounds max|Δ_η| of Eq. (A22, A25) [m/s²], ≥ 0.",
+    ),
+    (
+        "controller.a_bound",
+        "Disturbance bounds max|Δ_ε| of Eq. (A36-A37) [m/s], ≥ 0.",
+    ),
+    (
+        "controller.boundary_layer",
+        "Boundary layers (φ_s [m/s], φ_a [m]) of the robust terms, ≥ 0; 0 selects sgn() (chattering).",
+    ),
+    (
+        "controller.observer_velocity",
+        "Take dq/dt from the observer (true) or from finite differences of the positions (false, Section 4.1).",
+    ),
+    (
+        "controller.stroke",
+        "Largest nominal displacement |x_nom| the controller commands [m], > 0. Section 4.1: 30 µm.",
+    ),
+    (
+        "controller.pid",
+        "PID baseline gains [kp, ki 1/s, kd s] on the output error, ≥ 0, with inverse-hysteresis feedforward.",
     ),
     (
         "sensors",
@@ -451,6 +487,10 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     (
         "simulation.seed",
         "Seed of the noise generator, for reproducible runs.",
+    ),
+    (
+        "simulation.amplifier_bandwidth",
+        "Amplifier bandwidth [Hz], ≥ 0: first-order lag of the voltage; 0 = ideal zero-order hold.",
     ),
     (
         "trajectories",

@@ -169,6 +169,14 @@ pub struct Stage {
     pub guess: StageParams,
     /// Table 4 "Estimate" (entries marked "—" keep the guess).
     pub truth: StageParams,
+    /// Cross terms of Eq. (30) in the simulated plant: a coupling spring between the two
+    /// output directions, as a fraction of √(2K_qo1·K_qo2) of the truth. 0 switches it off.
+    #[serde(default = "default_coupling")]
+    pub coupling: f64,
+}
+
+fn default_coupling() -> f64 {
+    0.05
 }
 
 impl Stage {
@@ -181,7 +189,13 @@ impl Stage {
             "a number in [0, 1)",
         )?;
         self.guess.validate("stage.guess")?;
-        self.truth.validate("stage.truth")
+        self.truth.validate("stage.truth")?;
+        check(
+            "stage.coupling",
+            self.coupling,
+            self.coupling.abs() < 1.0,
+            "a number in (-1, 1)",
+        )
     }
 }
 
@@ -191,10 +205,64 @@ impl Stage {
 pub struct Controller {
     /// K-filter observer gains k_e1, k_e2 (Eq. 37–38). Table 4: 1e5.
     pub observer_gain: [f64; 2],
-    /// Error gains k_ε1, k_ε2 of s = ε̇ + k_ε ε. Table 4: 2e4, 1.5e4.
+    /// Error gains k_ε1, k_ε2 of s = ε̇ + k_ε ε. Table 4: 2e4, 1.5e4 (retuned to 3e3 for the
+    /// sampled loop).
     pub error_gain: [f64; 2],
-    /// Feedback gains k1, k2 of Eq. (A34). Table 4: 1.2e4, 1.2e3.
+    /// Feedback gains k1, k2 of Eq. (A34). Table 4: 1.2e4, 1.2e3 (retuned to 3e3).
     pub feedback_gain: [f64; 2],
+    /// Bandwidth κ_d of the observer's estimate of the model error Δ_η [1/s] (flexstage-control
+    /// docs).
+    #[serde(default = "default_disturbance_gain")]
+    pub disturbance_gain: f64,
+    /// Linear feedback gains k_η1, k_η2 > 1 of Eq. (A21) [1/s] (not in Table 4).
+    #[serde(default = "default_eta_gain")]
+    pub eta_gain: [f64; 2],
+    /// Disturbance bounds max|Δ_η| of Eq. (A22, A25) [m/s²].
+    #[serde(default = "default_eta_bound")]
+    pub eta_bound: [f64; 2],
+    /// Disturbance bounds max|Δ_ε| of Eq. (A36–A37) [m/s].
+    #[serde(default = "default_a_bound")]
+    pub a_bound: [f64; 2],
+    /// Boundary layers (φ_s [m/s], φ_a [m]) of the robust terms; 0 selects sgn().
+    #[serde(default = "default_boundary_layer")]
+    pub boundary_layer: [f64; 2],
+    /// Take q̇ from the observer instead of finite differences of the positions.
+    #[serde(default)]
+    pub observer_velocity: bool,
+    /// Largest nominal displacement |x_nom| the controller may command [m].
+    #[serde(default = "default_stroke")]
+    pub stroke: f64,
+    /// PID baseline gains [kp, ki [1/s], kd [s]] on the output error.
+    #[serde(default = "default_pid")]
+    pub pid: [f64; 3],
+}
+
+fn default_disturbance_gain() -> f64 {
+    3e4
+}
+
+fn default_eta_gain() -> [f64; 2] {
+    [3e3, 3e3]
+}
+
+fn default_eta_bound() -> [f64; 2] {
+    [0.1, 0.1]
+}
+
+fn default_a_bound() -> [f64; 2] {
+    [1e-6, 1e-6]
+}
+
+fn default_boundary_layer() -> [f64; 2] {
+    [1e-4, 1e-8]
+}
+
+fn default_stroke() -> f64 {
+    30e-6
+}
+
+fn default_pid() -> [f64; 3] {
+    [0.0, 300.0, 0.0]
 }
 
 impl Controller {
@@ -210,6 +278,23 @@ impl Controller {
                 &format!("controller.feedback_gain[{i}]"),
                 self.feedback_gain[i],
             )?;
+            check(
+                &format!("controller.eta_gain[{i}]"),
+                self.eta_gain[i],
+                self.eta_gain[i] > 1.0,
+                "a finite number > 1 (A21)",
+            )?;
+            non_negative(&format!("controller.eta_bound[{i}]"), self.eta_bound[i])?;
+            non_negative(&format!("controller.a_bound[{i}]"), self.a_bound[i])?;
+            non_negative(
+                &format!("controller.boundary_layer[{i}]"),
+                self.boundary_layer[i],
+            )?;
+        }
+        positive("controller.stroke", self.stroke)?;
+        positive("controller.disturbance_gain", self.disturbance_gain)?;
+        for (i, g) in self.pid.iter().enumerate() {
+            non_negative(&format!("controller.pid[{i}]"), *g)?;
         }
         Ok(())
     }
@@ -246,6 +331,9 @@ pub struct Simulation {
     pub substeps: usize,
     /// Seed of the noise generator, for reproducible runs.
     pub seed: u64,
+    /// Amplifier bandwidth [Hz] (first-order lag of the voltage); 0 = ideal zero-order hold.
+    #[serde(default)]
+    pub amplifier_bandwidth: f64,
 }
 
 impl Simulation {
@@ -257,6 +345,7 @@ impl Simulation {
             self.sample_time > 0.0 && self.sample_time <= 0.1,
             "a number in (0, 0.1] s",
         )?;
+        non_negative("simulation.amplifier_bandwidth", self.amplifier_bandwidth)?;
         count("simulation.substeps", self.substeps, 1, 10_000)
     }
 }

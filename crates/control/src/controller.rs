@@ -1,0 +1,440 @@
+//! The real-time controllers: the backstepping robust controller (observer + law + input
+//! transformation + hysteresis compensation, Figure 7) and the PID + inverse-hysteresis
+//! feedforward baseline. Both implement [`StageControl`]: `step(measurement) -> command`,
+//! once per sample, with no allocation, no I/O and no randomness.
+//!
+//! # Input transformation, Eq. (44) corrected
+//! Eq. (44), u = D⁻¹[−(B̂_ξη η̂ + B̂_ξξ ξ̂̇) + v̇], is meant to turn the second line of Eq. (43)
+//! into ξ̇ = v (Eq. 45). As printed it leaves ξ̈ = v̇, i.e. ξ̇ − v constant and ξ − ∫v
+//! drifting (no restoring term). Completing the backstepping with the desired inner state
+//! ξ_d = ∫v dt, the input that makes ξ̇ = v an attracting condition is
+//!
+//! ```text
+//! u = D⁻¹ [ v̇ − B_ξq q − B_ξq̇ q̇ − B_ξx ξ_d − B_ξξ v ]                          (44*)
+//! ```
+//!
+//! (Eq. 44 with ξ and ξ̇ evaluated at their desired values ξ_d and v). The error e = ξ − ξ_d
+//! then obeys ë = B_ξx e + B_ξξ ė: the PEA/input-plate mode itself (≈ 12 kHz, stable), so the
+//! step-3 feedback gains are the actuator's own stiffness and damping. This matters at
+//! T = 0.1 ms: a sampled feedback on the estimated 12 kHz states cannot be stable, while
+//! (44*) only needs q, q̇ and the controller's own ξ_d and v. Discretely, ξ_d is integrated
+//! once per sample, u uses its mid-sample value ξ_d + (T/2) v (the ZOH holds u over the
+//! sample) and v̇ is the backward difference of v.
+//!
+//! # Robustness of the step
+//! A non-finite measurement (sensor dropout) is replaced by the last valid one and flagged.
+//! x_nom is clamped to the stroke, voltages to the amplifier range, and ξ_d is not integrated
+//! while the command saturates (conditional anti-windup). If anything non-finite still
+//! appears, the previous command is repeated and ξ_d restarts from the estimate.
+
+use flexstage_scenario::StageParams;
+use nalgebra::Vector2;
+
+use crate::actuator::{Actuator, ActuatorParams};
+use crate::backstepping::{Law, LawOutput, LawParams};
+use crate::error::{Result, check};
+use crate::model::StageModel;
+use crate::observer::{FILTER_LEN, KFilter, ObserverDesign, ObserverParams, Vector10};
+use crate::trajectory::{RefSample, Reference};
+
+/// One sample of controller output.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Command {
+    /// Amplifier voltages [V], always finite and inside the range.
+    pub voltage: [f64; 2],
+    /// The x_nom [m] the actuator model expects from the voltages (Eq. 36 input).
+    pub x_nom: [f64; 2],
+    /// The reference q_d at this sample [m].
+    pub reference: [f64; 2],
+    /// True when the stroke or the amplifier range clipped the command.
+    pub saturated: bool,
+    /// True when the measurement was not finite and the last valid one was used.
+    pub dropout: bool,
+}
+
+/// A sampled position controller: one call per sample.
+pub trait StageControl {
+    /// Takes the measured output y_k = [q_o1, q_o2] [m] and returns the command held until
+    /// the next sample.
+    fn step(&mut self, y: [f64; 2]) -> Command;
+    /// The state estimate [ẑ, d̂] [SI] (zeros for controllers without an observer).
+    fn estimate(&self) -> [f64; 10];
+}
+
+/// Where the controller takes the output velocity q̇ from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Velocity {
+    /// Backward difference of consecutive position samples (Section 4.1).
+    FiniteDifference,
+    /// The K-filter estimate ẑ5, ẑ6.
+    Observer,
+}
+
+/// What the law takes as the inner state ξ (and ξ̇) of step 2.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Inner {
+    /// The K-filter estimates ẑ3, ẑ4 (ξ̂) and ẑ7, ẑ8 (ξ̂̇), as printed in Section 3.2.2.
+    Estimate,
+    /// The desired inner state ξ_d and its rate v_{k−1} that the input transformation (44*)
+    /// imposes on the actuators (see the module docs).
+    Command,
+}
+
+/// Settings of the backstepping controller.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControllerParams {
+    /// The controller's model parameters (Table 4 guess, or a reduced/identified set).
+    pub model: StageParams,
+    /// Observer settings.
+    pub observer: ObserverParams,
+    /// Backstepping law settings.
+    pub law: LawParams,
+    /// Velocity source.
+    pub velocity: Velocity,
+    /// Inner-state source of step 2.
+    pub inner: Inner,
+    /// Actuator stage (compensation, amplifier).
+    pub actuator: ActuatorParams,
+}
+
+impl ControllerParams {
+    /// Checks the fields.
+    pub fn validate(&self) -> Result<()> {
+        crate::model::validate(&self.model)?;
+        self.observer.validate()?;
+        self.law.validate()?;
+        self.actuator.validate()
+    }
+}
+
+/// Number of numbers in [`BacksteppingController::state`].
+pub const STATE_LEN: usize = FILTER_LEN + 6;
+
+/// The backstepping robust controller of Section 3.2.2 with its K-filter and compensation.
+#[derive(Debug, Clone)]
+pub struct BacksteppingController {
+    model: StageModel,
+    design: ObserverDesign,
+    law: Law,
+    filter: KFilter,
+    actuator: Actuator,
+    velocity: Velocity,
+    inner: Inner,
+    reference: Reference,
+    d_inv: nalgebra::Matrix2<f64>,
+    t: f64,
+    k: u64,
+    xi_d: [f64; 2],
+    y_prev: [f64; 2],
+    v_prev: [f64; 2],
+    have_prev: bool,
+    last: Command,
+    last_law: LawOutput,
+}
+
+impl BacksteppingController {
+    /// Builds the controller (observer design checked: B0 Hurwitz, Eq. 39; F Schur).
+    pub fn new(params: &ControllerParams, reference: Reference) -> Result<Self> {
+        params.validate()?;
+        reference.validate()?;
+        let model = StageModel::new(&params.model)?;
+        let design = ObserverDesign::new(&model, &params.observer)?;
+        let law = Law::new(&model, params.law)?;
+        let d_inv = model
+            .d
+            .try_inverse()
+            .ok_or_else(|| crate::error::ControlError::Singular { what: "D".into() })?;
+        Ok(BacksteppingController {
+            filter: KFilter::new(&design),
+            actuator: Actuator::new(params.actuator)?,
+            velocity: params.velocity,
+            inner: params.inner,
+            reference,
+            d_inv,
+            t: params.observer.sample_time,
+            k: 0,
+            xi_d: [0.0; 2],
+            y_prev: [0.0; 2],
+            v_prev: [0.0; 2],
+            have_prev: false,
+            last: Command::default(),
+            last_law: LawOutput::default(),
+            model,
+            design,
+            law,
+        })
+    }
+
+    /// The controller's model.
+    pub fn model(&self) -> &StageModel {
+        &self.model
+    }
+
+    /// The observer design (B0, P, Φ, L, F).
+    pub fn observer(&self) -> &ObserverDesign {
+        &self.design
+    }
+
+    /// The law's intermediate values at the last sample (s, a, ε_a, v, …).
+    pub fn last_law(&self) -> &LawOutput {
+        &self.last_law
+    }
+
+    /// The actuator stage.
+    pub fn actuator(&self) -> &Actuator {
+        &self.actuator
+    }
+
+    /// The linear part of the controller state: [ζ, Ω₁, Ω₂ ([`FILTER_LEN`]), ξ_d (2),
+    /// y_{k−1} (2), v_{k−1} (2)], for the closed-loop pole computation.
+    pub fn state(&self) -> [f64; STATE_LEN] {
+        let mut s = [0.0; STATE_LEN];
+        s[..FILTER_LEN].copy_from_slice(&self.filter.state());
+        s[FILTER_LEN..FILTER_LEN + 2].copy_from_slice(&self.xi_d);
+        s[FILTER_LEN + 2..FILTER_LEN + 4].copy_from_slice(&self.y_prev);
+        s[FILTER_LEN + 4..].copy_from_slice(&self.v_prev);
+        s
+    }
+
+    /// Sets the state from [`BacksteppingController::state`]'s layout (the previous
+    /// measurement is then taken as available).
+    pub fn set_state(&mut self, s: &[f64; STATE_LEN]) {
+        let mut f = [0.0; FILTER_LEN];
+        f.copy_from_slice(&s[..FILTER_LEN]);
+        self.filter.set_state(&f);
+        let r = &s[FILTER_LEN..];
+        self.xi_d = [r[0], r[1]];
+        self.y_prev = [r[2], r[3]];
+        self.v_prev = [r[4], r[5]];
+        self.have_prev = true;
+    }
+
+    /// Starts the estimate at `z` and ξ_d at its input displacements (e.g. the rest state).
+    pub fn reset_estimate(&mut self, z: [f64; 8]) {
+        let mut x = Vector10::zeros();
+        x.fixed_rows_mut::<8>(0).copy_from_slice(&z);
+        self.filter.reset(x);
+        self.xi_d = [z[2], z[3]];
+        self.y_prev = [z[0], z[1]];
+        self.have_prev = true;
+    }
+
+    /// The reference sample at step k.
+    #[inline]
+    fn reference_at(&self, k: u64) -> RefSample {
+        self.reference.sample(k as f64 * self.t)
+    }
+}
+
+impl StageControl for BacksteppingController {
+    #[inline]
+    fn step(&mut self, y_in: [f64; 2]) -> Command {
+        let t = self.t;
+        let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
+        let y = if dropout { self.y_prev } else { y_in };
+        let r = self.reference_at(self.k);
+        let zh = self.filter.estimate();
+        let q_dot = match self.velocity {
+            Velocity::FiniteDifference if self.have_prev => {
+                [(y[0] - self.y_prev[0]) / t, (y[1] - self.y_prev[1]) / t]
+            }
+            _ => [zh[4], zh[5]],
+        };
+        // η̂ = [z1, z2, ẑ3, ẑ4, q̇1, q̇2] and ξ̂̇ = [ẑ7, ẑ8] (Section 3.2.2, after Eq. 44).
+        let (xi, xi_dot) = match self.inner {
+            Inner::Estimate => ([zh[2], zh[3]], [zh[6], zh[7]]),
+            Inner::Command => (self.xi_d, self.v_prev),
+        };
+        let eta = [y[0], y[1], xi[0], xi[1], q_dot[0], q_dot[1]];
+        let law = self.law.evaluate(&eta, &xi_dot, &[zh[8], zh[9]], &r);
+        let v = law.v;
+        let v_dot = if self.have_prev {
+            [(v[0] - self.v_prev[0]) / t, (v[1] - self.v_prev[1]) / t]
+        } else {
+            [0.0; 2]
+        };
+        // Input transformation (44*), with ξ_d at mid-sample.
+        let b = &self.model.b;
+        let mut rhs = Vector2::zeros();
+        for i in 0..2 {
+            let row = 6 + i;
+            let xi_mid = [self.xi_d[0] + 0.5 * t * v[0], self.xi_d[1] + 0.5 * t * v[1]];
+            rhs[i] = v_dot[i]
+                - (b[(row, 0)] * y[0]
+                    + b[(row, 1)] * y[1]
+                    + b[(row, 4)] * q_dot[0]
+                    + b[(row, 5)] * q_dot[1]
+                    + b[(row, 2)] * xi_mid[0]
+                    + b[(row, 3)] * xi_mid[1]
+                    + b[(row, 6)] * v[0]
+                    + b[(row, 7)] * v[1]);
+        }
+        let u = self.d_inv * rhs;
+        let mut u = [u[0], u[1]];
+        let finite = u[0].is_finite() && u[1].is_finite();
+        if !finite {
+            u = self.last.x_nom;
+        }
+        let act = self.actuator.command(u, t);
+        let mut cmd = Command {
+            voltage: act.voltage,
+            x_nom: act.x_nom,
+            reference: r.q,
+            saturated: act.saturated,
+            dropout,
+        };
+        if !(cmd.voltage[0].is_finite() && cmd.voltage[1].is_finite()) {
+            cmd.voltage = self.last.voltage;
+            cmd.x_nom = self.last.x_nom;
+        }
+        self.filter.step(y, cmd.x_nom);
+        if !finite {
+            let z = self.filter.estimate();
+            self.xi_d = [z[2], z[3]];
+            self.v_prev = [0.0; 2];
+        } else {
+            if !cmd.saturated {
+                self.xi_d[0] += t * v[0];
+                self.xi_d[1] += t * v[1];
+            }
+            self.v_prev = v;
+        }
+        self.y_prev = y;
+        self.have_prev = true;
+        self.k += 1;
+        self.last = cmd;
+        self.last_law = law;
+        cmd
+    }
+
+    fn estimate(&self) -> [f64; 10] {
+        let z = self.filter.estimate();
+        let mut out = [0.0; 10];
+        out.copy_from_slice(z.as_slice());
+        out
+    }
+}
+
+/// Gains of the PID baseline (per axis, on the output error e = q_d − y).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PidParams {
+    /// Proportional gain (dimensionless).
+    pub kp: f64,
+    /// Integral gain [1/s].
+    pub ki: f64,
+    /// Derivative gain [s] (on the finite-difference derivative of e).
+    pub kd: f64,
+}
+
+impl PidParams {
+    /// Checks the fields.
+    pub fn validate(&self) -> Result<()> {
+        check("controller.pid[0]", self.kp, self.kp >= 0.0, "kp ≥ 0")?;
+        check("controller.pid[1]", self.ki, self.ki >= 0.0, "ki ≥ 0 [1/s]")?;
+        check("controller.pid[2]", self.kd, self.kd >= 0.0, "kd ≥ 0 [s]")
+    }
+}
+
+/// The industry-default baseline: feedforward of the reference through the static inverse of
+/// the model (x_nom = G_dc⁻¹ q_d), a PID on each output error mapped through the same
+/// inverse, and the same inverse hysteresis compensation and amplifier stage.
+#[derive(Debug, Clone)]
+pub struct PidController {
+    pid: PidParams,
+    g_inv: nalgebra::Matrix2<f64>,
+    actuator: Actuator,
+    reference: Reference,
+    t: f64,
+    k: u64,
+    integral: [f64; 2],
+    e_prev: [f64; 2],
+    y_prev: [f64; 2],
+    have_prev: bool,
+    last: Command,
+}
+
+impl PidController {
+    /// Builds the baseline for the controller's model `model` and sample time `t` [s].
+    pub fn new(
+        model: &StageParams,
+        pid: PidParams,
+        actuator: ActuatorParams,
+        t: f64,
+        reference: Reference,
+    ) -> Result<Self> {
+        pid.validate()?;
+        crate::error::positive("simulation.sample_time", t)?;
+        reference.validate()?;
+        let m = StageModel::new(model)?;
+        let g_inv =
+            m.dc_gain()?
+                .try_inverse()
+                .ok_or_else(|| crate::error::ControlError::Singular {
+                    what: "static gain G_dc".into(),
+                })?;
+        Ok(PidController {
+            pid,
+            g_inv,
+            actuator: Actuator::new(actuator)?,
+            reference,
+            t,
+            k: 0,
+            integral: [0.0; 2],
+            e_prev: [0.0; 2],
+            y_prev: [0.0; 2],
+            have_prev: false,
+            last: Command::default(),
+        })
+    }
+}
+
+impl StageControl for PidController {
+    #[inline]
+    fn step(&mut self, y_in: [f64; 2]) -> Command {
+        let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
+        let y = if dropout { self.y_prev } else { y_in };
+        let r = self.reference.sample(self.k as f64 * self.t);
+        let mut w = Vector2::zeros();
+        let mut e = [0.0; 2];
+        for i in 0..2 {
+            e[i] = r.q[i] - y[i];
+            let de = if self.have_prev {
+                (e[i] - self.e_prev[i]) / self.t
+            } else {
+                0.0
+            };
+            w[i] = r.q[i]
+                + self.pid.kp * e[i]
+                + self.pid.ki * (self.integral[i] + 0.5 * self.t * e[i])
+                + self.pid.kd * de;
+        }
+        let u = self.g_inv * w;
+        let mut u = [u[0], u[1]];
+        if !(u[0].is_finite() && u[1].is_finite()) {
+            u = self.last.x_nom;
+        }
+        let act = self.actuator.command(u, self.t);
+        let cmd = Command {
+            voltage: act.voltage,
+            x_nom: act.x_nom,
+            reference: r.q,
+            saturated: act.saturated,
+            dropout,
+        };
+        if !act.saturated {
+            for (i, ei) in e.iter().enumerate() {
+                self.integral[i] += self.t * ei;
+            }
+        }
+        self.e_prev = e;
+        self.y_prev = y;
+        self.have_prev = true;
+        self.k += 1;
+        self.last = cmd;
+        cmd
+    }
+
+    fn estimate(&self) -> [f64; 10] {
+        [0.0; 10]
+    }
+}

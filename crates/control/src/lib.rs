@@ -1,0 +1,97 @@
+//! # flexstage-control — model, observer, controller and simulated experiment
+//!
+//! Section 3.2, Section 4 and Appendices C–D of the paper, with the defaults of NOTES.md:
+//!
+//! * [`model`]: the linear 8-state model of Eq. (36) with B and D of (A13–A14), from a
+//!   [`flexstage_scenario::StageParams`] (Table 4 or the file of `flexstage reduce`);
+//! * [`observer`]: the K-filter of Eq. (37–42), B0 checked with the Lyapunov equation (39),
+//!   discretized exactly for the sample time;
+//! * [`backstepping`]: the robust backstepping law of Section 3.2.2 / Appendix D;
+//! * [`controller`]: the real-time controllers ([`controller::StageControl`]:
+//!   `step(measurement) -> command`, no allocation, no I/O, deterministic): the backstepping
+//!   controller (robust or not) and the PID + inverse-hysteresis feedforward baseline;
+//! * [`actuator`]: preload, inverse hysteresis compensation (inside the loop, Figure 7),
+//!   amplifier range;
+//! * [`plant`]: the simulated stage (digital twin): truth parameters, cross terms of
+//!   Eq. (30), Bouc–Wen PEAs, sensor noise and quantization, continuous time with substeps;
+//! * [`trajectory`]: Lissajous curves of any ratio, circle, steps and ramps with a smooth
+//!   start; the designed workspace;
+//! * [`experiment`]: one run of a variant on the plant, its time series and metrics;
+//! * [`analysis`]: closed-loop poles of the sampled loop on the nominal linear model;
+//! * [`linalg`]: `expm`, `c2d` (ZOH), `lyap`, `dlyap`, `poles` in python-control style;
+//! * [`samples`]: problems with known answers.
+//!
+//! ```
+//! use flexstage_control::experiment::{Setup, Variant, experiment};
+//! use flexstage_control::actuator::Compensation;
+//! use flexstage_control::trajectory::Reference;
+//! let scenario = flexstage_scenario::Scenario::paper();
+//! let setup = Setup::from_scenario(&scenario);
+//! let (reference, _) = Reference::from_scenario(&scenario.trajectories[0]);
+//! let rec = experiment(&setup, Variant::Robust, Compensation::Inverse, reference, 0.05)?;
+//! let m = rec.metrics(reference.half_range(0.05, 1e-4));
+//! assert!(m.rms[0] < 1e-6 && m.peak_voltage <= 1000.0);
+//! # Ok::<(), flexstage_control::ControlError>(())
+//! ```
+//!
+//! # Units
+//! SI throughout (m, s, N, kg, V), except the Bouc–Wen parameters, which stay in the µm/V/s
+//! units of Table A1 as in flexstage-piezo.
+//!
+//! # Design decisions and corrections of the paper
+//! Each is documented where it is implemented, with the equation number:
+//!
+//! * **Eq. (33)**: the second input plate's damper is C_qo1 (not C_qo2), as in Eq. (35)
+//!   and (A14) ([`model`]).
+//! * **Eq. (38)**: Table 4's scalar observer gains are read as injection vectors
+//!   k_ei = g_i e_i ([`observer`]).
+//! * **Eq. (40)–(41)**: Ωᵀ already carries D, so ẑ = ζ + Σ Ω_i (not ζ + Ωᵀb) ([`observer`]).
+//! * **Observer disturbance state.** The K-filter is augmented with the model error Δ_η of
+//!   Eq. (36)/(43) acting on the output accelerations (constant model, injection κ_d S⁻¹
+//!   with S the static gain from Δ_η to q). The law uses the estimate Δ̂_η in Z and keeps the
+//!   robust terms for the residual. Without it the loop has no integral action: the DC error
+//!   under a disturbance Δ is Δ/(k_ε k_η), which needs k_ε k_η ≳ 1e9 s⁻² for nm accuracy
+//!   (a 30 kHz bandwidth, impossible at 10 kHz sampling).
+//! * **Discretization.** Forward Euler of the observer is unstable at 0.1 ms (pole −9 for
+//!   g = 1e5). The observer is discretized exactly for sampled measurements
+//!   (ε_{k+1} = F ε_k, F = Φ − L C matching e^{B0 T} in the injectable columns), the plant
+//!   with the exact matrix exponential per substep ([`plant`]).
+//! * **A16, A23**: the output damping (β55, β66) is part of Z.
+//! * **A23, stiffness kept.** Z uses N at the *reference* (q_d, q̇_d) instead of the
+//!   measured output, so the mechanism's own spring and damper act on the error rather than
+//!   being cancelled. Cancelling them (as A23 does) makes the 10 kHz loop depend on an exact,
+//!   delay-free cancellation of 2K_qo1/M ≈ 2·10⁸ s⁻² by terms of size k_ε k_η ≈ 10⁷ s⁻²; the
+//!   sampled loop then has a slow, barely damped pole and 0.4 µm errors on the nominal model.
+//!   With the stiffness kept, A27's first line becomes ṡ = −k_η s − Λ(ε, ε̇) with Λ the
+//!   (passive) spring-damper of the mechanism: the CLF argument still holds.
+//! * **A22, A25**: robust term −ρ_η sgn(s) (or boundary layer), not −max|Δ_η|.
+//! * **A34–A35, A36–A37**: v_m = ȧ − k ε_a and v_s = −ε_a − ρ_ε σ(ε_a/φ_a): the paper's
+//!   division by (ξ̂ + Π) = ε_a is an error (singular at ε_a = 0); A37 writes ζ̂ for ξ̂.
+//! * **Eq. (44)**: with v̇ alone, ξ̇ − v is not restored; the input transformation is
+//!   evaluated at the desired inner state ξ_d = ∫v, so the PEA's own stiffness is the
+//!   step-3 feedback ([`controller`]). Step 2 uses ξ_d (and ξ̇_d = v) as the inner state
+//!   ([`controller::Inner::Command`], default); the estimate ξ̂ as printed is an option.
+//!
+//! # Gains (retuned for the sampled loop)
+//! Table 4's k_ε = (2e4, 1.5e4) and k = (1.2e4, 1.2e3) put the sampled closed loop's poles
+//! outside the unit circle (largest |z| ≈ 2.6–2.7 on the nominal model with
+//! `analysis::closed_loop_poles`): k_ε T = 2 is beyond what 10 kHz sampling with a
+//! finite-difference velocity supports. The defaults k_ε = k_η = k = 3e3 s⁻¹ and κ_d = 3e4 s⁻¹
+//! give a largest closed-loop |z| ≈ 0.86. The observer gains 1e5 of Table 4 are kept. The
+//! PID baseline's integral gain 300 s⁻¹ is near its stability limit (the 1.5–2.3 kHz output
+//! modes have ≈ 2 % damping; 1000 s⁻¹ is unstable).
+
+pub mod actuator;
+pub mod analysis;
+pub mod backstepping;
+pub mod controller;
+mod error;
+pub mod experiment;
+pub mod linalg;
+pub mod model;
+pub mod observer;
+pub mod plant;
+pub mod samples;
+pub mod trajectory;
+
+pub use error::{ControlError, Result};
