@@ -6,7 +6,6 @@
 
 use divan::{Bencher, black_box};
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::StageControl;
 use flexstage_control::experiment::{Setup, Variant, experiment};
 use flexstage_control::trajectory::Reference;
 use flexstage_scenario::Scenario;
