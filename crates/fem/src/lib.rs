@@ -85,5 +85,6 @@ pub use model::{
 };
 pub use newton::{LinearStrategy, NewtonParams, NewtonReport, NewtonWorkspace};
 pub use solver::{
-    Factor, FactorKind, PcgParams, PcgReport, PcgWorkspace, SolveWorkspace, SymbolicFactor, pcg,
+    BlockPcgWorkspace, ColumnOutcome, Factor, FactorKind, PcgParams, PcgReport, PcgWorkspace,
+    SolveWorkspace, SymbolicFactor, pcg, pcg_block,
 };

@@ -357,6 +357,21 @@ impl SparseMatrix {
     }
 }
 
+impl SparseMatrix {
+    /// `Y = A X` for `k` column-major vectors (`x`, `y` of length `n·k`).
+    pub fn matvec_columns(&self, x: &[f64], y: &mut [f64], k: usize) {
+        let n = self.pattern.n;
+        assert!(
+            x.len() == n * k && y.len() == n * k,
+            "matvec_columns lengths"
+        );
+        // Column by column: the symmetric CSC sweep is cheap and cache-friendly per column.
+        for (xc, yc) in x.chunks_exact(n).zip(y.chunks_exact_mut(n)) {
+            self.matvec(xc, yc);
+        }
+    }
+}
+
 /// Densities and optional additive-material coefficients for one evaluation.
 #[derive(Debug, Clone, Copy)]
 pub struct Design<'a> {

@@ -204,6 +204,13 @@ impl NewtonWorkspace {
         }
     }
 
+    /// The full residual `R(u)` (internal + spring forces; reactions at fixed DOFs) assembled
+    /// together with [`NewtonWorkspace::tangent`]: after a successful [`solve`], at the
+    /// converged state. Lets adjoint code reuse it instead of assembling again.
+    pub fn residual(&self) -> &[f64] {
+        &self.r_full
+    }
+
     /// Forget the workspace's factor (so that `Pcg` mode refactorizes at the next iteration).
     pub fn invalidate_factor(&mut self) {
         self.factor_current = false;
