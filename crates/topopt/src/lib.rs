@@ -17,7 +17,7 @@ pub mod optimize;
 pub mod problem;
 pub mod samples;
 
-pub use analysis::{AnalysisParams, Densities, Evaluation, Evaluator, Response};
+pub use analysis::{AnalysisParams, Densities, Evaluation, Evaluator, Response, Timing};
 pub use design_file::{DesignFile, density_csv, read_density_csv};
 pub use error::{Result, TopoptError};
 pub use filter::{DensityFilter, Projection};
