@@ -46,6 +46,11 @@ use crate::error::{Result, TopoptError};
 use crate::filter::{DensityFilter, Projection};
 use crate::problem::{Objective, Problem, shoelace, shoelace_gradient};
 
+/// The tilt constraint bounds the angle error by `TILT_MARGIN · τ`: MMA leaves an active
+/// constraint slightly violated while β continuation perturbs the design, and the margin keeps
+/// the delivered design within the documented tolerance τ.
+pub const TILT_MARGIN: f64 = 0.75;
+
 /// Exponent of the p-norm that aggregates per-case strain energies (Σ ≈ max_k W_k) and input
 /// strokes; the p-norm over-estimates the maximum by at most `N^{1/p}` (conservative).
 pub const AGGREGATION_P: f64 = 8.0;
@@ -184,7 +189,9 @@ pub struct Evaluation {
     pub energy: f64,
     /// p-norm aggregate of |u_in|/max_stroke (1 = at the stroke limit).
     pub stroke: f64,
-    /// Tilt measure `(D·n)² − tan²τ (D·d)²` [m²] (0 without tilt).
+    /// Tilt measure `((D·n)² − t (D·d)²) / (t |D|²)`, `t = tan²(TILT_MARGIN·τ)` (≤ 0 iff the
+    /// differential output `D` is within `TILT_MARGIN·τ` of the target axis; 0 without tilt). Dimensionless and
+    /// independent of |D|, so it stays O(1) while the workspace grows.
     pub tilt: f64,
     /// Volume fraction of the design elements.
     pub volume: f64,
@@ -655,16 +662,23 @@ impl<'p> Evaluator<'p> {
                 dvec[0] * n[0] + dvec[1] * n[1],
                 dvec[0] * d[0] + dvec[1] * d[1],
             );
-            let tau2 = t.tolerance.tan().powi(2);
+            // g = ((D·n)² − t (D·d)²) / (t |D|²), t = tan²τ: scale-invariant and O(1)
+            // (= (tan²φ − t) cos²φ / t for an angle error φ), ≤ 0 iff |φ| ≤ τ with D·d > 0
+            // allowed either sign; the objective's orientation fixes the sign of D·d.
+            let t2 = (TILT_MARGIN * t.tolerance).tan().powi(2);
+            let (a, b) = (dn * dn, dd * dd);
+            let s2 = (a + b).max(f64::MIN_POSITIVE);
+            let ga = b * (1.0 + t2) / (t2 * s2 * s2);
+            let gb = -a * (1.0 + t2) / (t2 * s2 * s2);
             let g = [
-                2.0 * dn * n[0] - 2.0 * tau2 * dd * d[0],
-                2.0 * dn * n[1] - 2.0 * tau2 * dd * d[1],
+                ga * 2.0 * dn * n[0] + gb * 2.0 * dd * d[0],
+                ga * 2.0 * dn * n[1] + gb * 2.0 * dd * d[1],
             ];
             for c in 0..2 {
                 coef[3][kc * width + c] += g[c];
                 coef[3][kt * width + c] -= g[c];
             }
-            dn * dn - tau2 * dd * dd
+            (a - t2 * b) / (t2 * s2)
         } else {
             0.0
         };

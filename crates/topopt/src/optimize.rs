@@ -15,8 +15,10 @@
 //! ```
 //!
 //! Normalization for MMA: `f0 = −s_obj·Φ/|Φ⁰|` (Φ the maximized objective at the initial design
-//! x⁰), every constraint scaled to O(1) as above; the tilt constraint is
-//! `((D·n)² − tan²τ (D·d)²) / |D⁰|²`.
+//! x⁰), every constraint scaled to O(1) as above; the tilt constraint is the scale-invariant
+//! `((D·n)² − tan²τ (D·d)²) / (tan²τ |D|²)` with the *current* |D| (an earlier version divided
+//! by the initial |D⁰|², which grows by the workspace growth factor squared and left θ = 20°
+//! at 15° after 25 iterations).
 //!
 //! [`Optimizer::checkpoint`] captures everything the future of the run depends on (design,
 //! MMA history, β, c2, the warm starts of every case, scales and history), so that
@@ -244,7 +246,8 @@ pub struct Scales {
     pub objective: f64,
     /// Σ0 [J].
     pub energy_limit: f64,
-    /// |D⁰|² [m²] (tilt).
+    /// |D⁰|² [m²] at the initial design (diagnostic; the tilt constraint is normalized by the
+    /// current |D|², see [`crate::Evaluation::tilt`]).
     pub tilt: f64,
 }
 
@@ -447,8 +450,9 @@ impl<'p> Optimizer<'p> {
             dg.extend_from_slice(&ev.gradients[2]);
         }
         if problem.tilt.is_some() {
-            g.push(ev.tilt / scales.tilt);
-            dg.extend(ev.gradients[3].iter().map(|v| v / scales.tilt));
+            // Already normalized (scale-invariant angle measure, see `Evaluation::tilt`).
+            g.push(ev.tilt);
+            dg.extend_from_slice(&ev.gradients[3]);
         }
         if let Some(vf) = problem.volume_fraction {
             g.push(ev.volume / vf - 1.0);
