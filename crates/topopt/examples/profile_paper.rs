@@ -1,5 +1,5 @@
 //! Per-iteration timing of a preset (default: paper): `cargo run --release -p flexstage-topopt
-//! --example profile_paper -- [paper|quick] [iterations]`. Prints the wall time of each design
+//! --example profile_paper -- [paper|quick] [iterations] [checkpoint]`. Prints the wall time of each design
 //! iteration split into preconditioner, Newton solves and adjoints, with Newton/PCG counts.
 
 use std::time::Instant;
@@ -16,7 +16,15 @@ fn main() {
     let iters: usize = args.get(2).and_then(|v| v.parse().ok()).unwrap_or(8);
     let s = Scenario::preset(preset);
     let problem = Problem::from_scenario(&s, None).unwrap();
-    let mut opt = Optimizer::new(&problem, OptimizerParams::from_scenario(&s)).unwrap();
+    // Optional third argument: a checkpoint (design/checkpoint.bin of a run of this preset).
+    let params = OptimizerParams::from_scenario(&s);
+    let mut opt = match args.get(3) {
+        Some(path) => {
+            let bytes = std::fs::read(path).unwrap();
+            Optimizer::resume(&problem, params, &bytes).unwrap()
+        }
+        None => Optimizer::new(&problem, params).unwrap(),
+    };
     let mut total = 0.0;
     for k in 0..iters {
         let t = Instant::now();
@@ -40,6 +48,21 @@ fn main() {
             rec.area
         );
     }
+    let eps = opt.evaluator.max_element_strains();
+    let (dens, _) = opt.last().unwrap();
+    let mut hist = [0usize; 5];
+    for (e, v) in eps.iter().enumerate() {
+        let b = [1e-4, 1e-3, 1e-2, 1e-1].iter().filter(|t| *v > **t).count();
+        if dens.physical[e] > 0.5 {
+            continue;
+        }
+        hist[b] += 1;
+    }
+    let mx = eps.iter().cloned().fold(0.0, f64::max);
+    println!(
+        "void-ish element strains: <1e-4 {}, <1e-3 {}, <1e-2 {}, <1e-1 {}, more {}; max strain {mx:.3e}",
+        hist[0], hist[1], hist[2], hist[3], hist[4]
+    );
     if iters > 1 {
         println!(
             "mean over iterations 1..{iters}: {:.3} s",
