@@ -1,0 +1,71 @@
+//! Typed errors: each names the field or port and, where it applies, the accepted range.
+
+use flexstage_fem::{NewtonError, ParamError as FemParamError, SolverError};
+use thiserror::Error;
+
+/// Errors of the model reduction.
+#[derive(Debug, Error)]
+pub enum ReduceError {
+    /// A parameter is outside its accepted range.
+    #[error("parameter `{field}` = {value} is outside the accepted range {range}")]
+    OutOfRange {
+        /// Field name.
+        field: &'static str,
+        /// Rejected value.
+        value: f64,
+        /// Accepted range.
+        range: &'static str,
+    },
+    /// The model and the ports or the densities do not fit together.
+    #[error("invalid reduction input: {0}")]
+    Input(String),
+    /// The finite-element model rejected the input.
+    #[error("finite-element model: {0}")]
+    Fem(#[from] FemParamError),
+    /// A linear solve failed (e.g. `K_Tff` is singular: a mechanism).
+    #[error("linear solver: {0}")]
+    Solver(#[from] SolverError),
+    /// A nonlinear solve did not converge.
+    #[error("nonlinear solve at x_nom = [{x1:e}, {x2:e}] m did not converge: {source}")]
+    Newton {
+        /// Nominal stroke of input 1 [m].
+        x1: f64,
+        /// Nominal stroke of input 2 [m].
+        x2: f64,
+        /// Cause.
+        #[source]
+        source: NewtonError,
+    },
+    /// The problem could not be built.
+    #[error("problem: {0}")]
+    Topopt(#[from] flexstage_topopt::TopoptError),
+    /// The Lanczos iteration did not converge.
+    #[error(
+        "modal analysis: {converged} of {wanted} modes converged in {steps} Lanczos steps \
+         (raise `ModalParams::max_steps`, accepted range [10, 5000])"
+    )]
+    Eigen {
+        /// Modes requested.
+        wanted: usize,
+        /// Modes converged.
+        converged: usize,
+        /// Steps taken.
+        steps: usize,
+    },
+}
+
+/// Result alias.
+pub type Result<T> = std::result::Result<T, ReduceError>;
+
+/// `Ok` if `ok`, else [`ReduceError::OutOfRange`].
+pub(crate) fn check(field: &'static str, value: f64, ok: bool, range: &'static str) -> Result<()> {
+    if ok && value.is_finite() {
+        Ok(())
+    } else {
+        Err(ReduceError::OutOfRange {
+            field,
+            value,
+            range,
+        })
+    }
+}
