@@ -10,6 +10,7 @@ mod identify;
 mod pea;
 mod run_dir;
 mod scenario_args;
+mod track;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -83,6 +84,21 @@ enum Command {
         #[command(subcommand)]
         what: pea::PeaCommand,
     },
+    /// Simulated tracking experiment (Section 4, Figures 9-11): controllers on the digital twin.
+    #[command(
+        after_help = "Runs each trajectory of the scenario with each controller variant on the
+simulated stage (Table 4 estimates, Bouc-Wen PEAs, cross terms, sensor noise) and writes
+<run>/track/<trajectory>_<variant>.csv (reference, measured, true, error, voltages, estimates),
+<trajectory>_<variant>_error.svg (Figures 9-10), <trajectory>_2d.svg (Figure 11) and
+metrics.csv; prints the metrics table.
+
+Examples:
+  flexstage track                                   # all trajectories, all variants
+  flexstage track --trajectory lissajous-3 --variant robust
+  flexstage track --compensation off                # hysteresis compensation switched off
+  flexstage track --params stage.toml --duration 0.5 --out runs/test"
+    )]
+    Track(track::TrackArgs),
 }
 
 fn main() -> ExitCode {
@@ -127,6 +143,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Design(args) => design::run(args),
         Command::Identify { what } => identify::run(what),
         Command::Pea { what } => pea::run(what),
+        Command::Track(args) => track::run(args),
     }
 }
 

@@ -5,9 +5,6 @@
 //! `reduce/`, `identify/`, `track/`). Re-running a stage overwrites that stage's files only;
 //! every file is written atomically.
 
-// The stage subcommands (design, identify, track, ...) use these helpers as they land.
-#![allow(dead_code)]
-
 use std::path::PathBuf;
 use std::time::Duration;
 

@@ -368,6 +368,20 @@ pub fn experiment(
     reference: Reference,
     duration: f64,
 ) -> Result<Record> {
+    experiment_with_progress(setup, variant, compensation, reference, duration, |_| {})
+}
+
+/// [`experiment`] with a progress callback (called with the number of samples done since the
+/// last call, every 1000 samples).
+pub fn experiment_with_progress(
+    setup: &Setup,
+    variant: Variant,
+    compensation: Compensation,
+    reference: Reference,
+    duration: f64,
+    progress: impl FnMut(usize),
+) -> Result<Record> {
+    crate::error::positive("duration", duration)?;
     let mut c = setup.controller(variant, compensation, reference)?;
     let mut plant = Plant::new(setup.plant.clone())?;
     Ok(run(
@@ -375,6 +389,6 @@ pub fn experiment(
         &mut plant,
         duration,
         setup.controller.observer.sample_time,
-        |_| {},
+        progress,
     ))
 }
