@@ -11,14 +11,18 @@
 //! ε = q_o − q_d, s = ε̇ + k_ε ε, ṡ = G ξ − Z + Δ_η with
 //!
 //! ```text
-//! Z(η, ξ̇, t) = q̈_d − k_ε ε̇ − N(η, ξ̇)                                         (A23)
+//! Z(ξ̇, t)    = q̈_d − k_ε ε̇ − N(η_d, ξ̇) − Δ̂_η                                 (A23*)
 //! a_m = G⁻¹ (Z − (k_η − 1) s)                                                  (A24)
 //! a_s = G⁻¹ (−s − ρ_η σ(s/φ_s))                                                (A25)
 //! a   = a_m + a_s                                                              (49)
 //! ```
 //!
-//! so that with ξ = a, ṡ = −k_η s − ρ_η σ(s/φ_s) + Δ_η (A27, first line), and ṡ s < 0
-//! outside the boundary layer whenever |Δ_η,i| ≤ ρ_η,i.
+//! so that with ξ = a, ṡ = −k_η s − ρ_η σ(s/φ_s) − Λ(ε, ε̇) + (Δ_η − Δ̂_η) (A27, first
+//! line), where η_d = (q_d, q̇_d), Λ is the mechanism's own spring and damper acting on the
+//! error (N(η) − N(η_d), passive) and Δ̂_η the observer's estimate of the model error
+//! ([`crate::observer`]); ṡ s < 0 outside the boundary layer whenever the residual
+//! |Δ_η,i − Δ̂_η,i| ≤ ρ_η,i. A23 as printed evaluates N at the measured η, which cancels the
+//! stiffness 2K_qo1/M ≈ 2·10⁸ s⁻²; see the crate docs for why the sampled loop cannot.
 //!
 //! # Step 2: v = ξ̇ (Eq. 45, 50–53, A26–A38)
 //! ε_a = ξ − a (A26) and ε̇_a = ξ̇ − ȧ + Δ_ε. With ξ̇ = v:
@@ -43,7 +47,8 @@
 //!
 //! # Corrections of Appendix D (each documented where it is used)
 //! * **A16, A23**: the output damping term β55 η5 (β66 η6) of row 5 (6) of B is missing from
-//!   Z; it is included (and the cross term β52 η2 when the model has one).
+//!   Z; it is included (and the cross term β52 η2 when the model has one). N is evaluated at
+//!   the reference (q_d, q̇_d), plus the estimate Δ̂_η (A23*).
 //! * **A22, A25**: the robust term −max|Δ_η| has no sign, so it does not oppose Δ_η when
 //!   s < 0; it is −ρ_η sgn(s), or the boundary-layer saturation σ(s/φ_s) against chattering.
 //! * **A34–A35**: (ξ̂₁ + Π11) is ε_a1 (A26 with a1 = −Π11); the paper's v_m1 = −k1 ε_a1/(ξ̂₁ +

@@ -25,6 +25,14 @@
 //! Frobenius norm). The construction fails unless F is Schur stable. On the noise-free linear
 //! plant the estimation error then follows ε_k = F^k ε_0 to rounding (`tests/observer.rs`).
 //!
+//! # Model-error state
+//! The observer state is [z, d] (10 numbers): d is the model error Δ_η of Eq. (36)/(43) on
+//! the output accelerations (rows 5–6), modelled as constant, with continuous injection
+//! κ_d S⁻¹ (S the static gain from d to q) in B0. Mismatched stiffness, cross terms and
+//! residual hysteresis all show up at low frequency as such a force; the law cancels the
+//! estimate, which gives the loop its integral action (crate docs). Everything above
+//! (Eq. 39 check, exact discretization, F) applies to the 10 × 10 matrices.
+//!
 //! # K-filter form (Eq. 40–41)
 //! ẑ = ζ + Ω₁ + Ω₂, with ζ_{k+1} = F ζ_k + L y_k (the filter of the output) and
 //! Ω_{i,k+1} = F Ω_{i,k} + Γ e_i u_{i,k} (the filters of each input). Eq. (40) writes
