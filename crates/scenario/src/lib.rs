@@ -162,7 +162,7 @@ impl Scenario {
                 change_tolerance: 1e-3,
                 kinematics: KinematicsKind::Nonlinear,
                 objective: ObjectiveKind::Workspace,
-                output_spring: 0.0,
+                output_spring: 1e7,
                 strain_energy_limit: 0.0,
                 strain_energy_factor: 2.0,
                 tilt_tolerance_deg: 2.0,

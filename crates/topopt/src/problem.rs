@@ -12,8 +12,8 @@
 //! * `regions` → passive solid / void elements (selectors pick element centroids);
 //! * `actuators.pea1/pea2` → input ports: a grounded spring `K_pea` on the x DOF and the force
 //!   `K_pea·x_nom` (Eq. 2–3), global signs;
-//! * `output.at` → the output node `L_o` (Eq. 7); with the displacement objective and
-//!   `optimization.output_spring > 0`, grounded springs of that stiffness on both output DOFs.
+//! * `output.at` → the output node `L_o` (Eq. 7); with `optimization.output_spring > 0`,
+//!   grounded springs of that stiffness on both output DOFs (either objective).
 //!
 //! # Load cases (NOTES.md)
 //! The `p_m` samples walk the perimeter of the stroke square `[−a, a]²` in `(x_nom1, x_nom2)`,
@@ -243,21 +243,22 @@ impl Problem {
             Configuration::Reversed => -1.0,
         };
         let direction = [sign * theta.sin(), sign * theta.cos()];
+        if o.output_spring > 0.0 {
+            // The output port's load (the stage, Table 4's K_qo): grounded springs on both
+            // output DOFs. For the workspace objective this forces the mechanism to transmit
+            // force to the output instead of moving it through void "hinges".
+            bcs.add_spring(2 * out, o.output_spring)
+                .add_spring(2 * out + 1, o.output_spring);
+        }
         let (objective, cases) = match o.objective {
             ObjectiveKind::Workspace => (
                 Objective::Workspace { sign },
                 perimeter_walk(o.samples, a.stroke_amplitude),
             ),
-            ObjectiveKind::Displacement => {
-                if o.output_spring > 0.0 {
-                    bcs.add_spring(2 * out, o.output_spring)
-                        .add_spring(2 * out + 1, o.output_spring);
-                }
-                (
-                    Objective::Displacement { direction },
-                    vec![vec![a.stroke_amplitude, -a.stroke_amplitude]],
-                )
-            }
+            ObjectiveKind::Displacement => (
+                Objective::Displacement { direction },
+                vec![vec![a.stroke_amplitude, -a.stroke_amplitude]],
+            ),
         };
         for &d in &bcs.fixed {
             if d == 2 * n1 || d == 2 * n2 {
