@@ -13,6 +13,22 @@ use crate::mass::{PointMass, design_mass};
 use crate::modal::{ModalParams, Modes, modal_analysis};
 use crate::validity::{ValidityMap, ValidityParams, validity_map};
 
+/// The FE problem of the reduction: the scenario's final-analysis model (total Lagrangian,
+/// no additive material). The optimizer's artificial output load (`optimization.output_spring`,
+/// grounded springs on the output DOFs that make the optimized mechanism transmit force) is
+/// a design device, not part of the stage: unless `keep_output_spring`, it is removed, so that
+/// the output is free in statics as in Eq. 24 and `x_in1 = x_in2` is a rigid translation.
+pub fn reduction_problem(scenario: &Scenario, keep_output_spring: bool) -> Result<Problem> {
+    let mut s = scenario.clone();
+    if !keep_output_spring {
+        s.optimization.output_spring = 0.0;
+    }
+    Ok(Problem::from_scenario(
+        &s,
+        Some(Kinematics::TotalLagrangian),
+    )?)
+}
+
 /// Parameters of [`reduce`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReduceParams {

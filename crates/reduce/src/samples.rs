@@ -48,10 +48,11 @@ pub fn euler_bernoulli_frequency(
     beta_l * beta_l / (2.0 * std::f64::consts::PI * length * length) * ei_over_rho_a.sqrt()
 }
 
-/// The default stage scenario (`preset`) and its final-analysis problem (total Lagrangian).
+/// The default stage scenario (`preset`) and its reduction problem (total Lagrangian, the
+/// optimizer's output spring removed, [`crate::reduction_problem`]).
 pub fn stage(preset: Preset) -> Result<(Scenario, Problem)> {
     let s = Scenario::preset(preset);
-    let p = Problem::from_scenario(&s, Some(Kinematics::TotalLagrangian))?;
+    let p = crate::reduction_problem(&s, false)?;
     Ok((s, p))
 }
 
