@@ -76,18 +76,23 @@ impl ElementCoefficients {
     /// Coefficients for density `rho` and optional Yeoh coefficients `(c1e, c2e)`.
     #[inline]
     pub fn new(material: &Material, rho: f64, yeoh: Option<(f64, f64)>) -> Self {
+        // One power per element (integer penalties by multiplication): these coefficients are
+        // recomputed at every assembly, and `powf` was ~6 % of a design iteration.
+        let p = material.penalty;
+        let rp1 = if p.fract() == 0.0 && (1.0..=10.0).contains(&p) {
+            rho.powi(p as i32 - 1)
+        } else {
+            rho.powf(p - 1.0)
+        };
+        let rp = rp1 * rho;
         let (additive, dadditive, c1, c2) = match yeoh {
-            Some((c1, c2)) => (
-                1.0 - rho.powf(material.penalty),
-                -material.penalty * rho.powf(material.penalty - 1.0),
-                c1,
-                c2,
-            ),
+            Some((c1, c2)) => (1.0 - rp, -p * rp1, c1, c2),
             None => (0.0, 0.0, 0.0, 0.0),
         };
+        let de = material.e0 - material.e_min;
         Self {
-            modulus: material.modulus(rho),
-            dmodulus: material.dmodulus(rho),
+            modulus: material.e_min + rp * de,
+            dmodulus: p * rp1 * de,
             additive,
             dadditive,
             c1,
