@@ -36,9 +36,9 @@ use std::sync::Arc;
 use std::time::Instant;
 
 use flexstage_fem::{
-    AdditiveYeoh, BlockPcgWorkspace, ColumnOutcome, Design, Factor, LinearStrategy, Model,
-    NewtonParams, NewtonWorkspace, Passive, PcgParams, SolveWorkspace, SymbolicFactor, newton,
-    pcg_block,
+    AdditiveYeoh, BlockPcgWorkspace, ColumnOutcome, Design, Factor, Kinematics, LinearStrategy,
+    Model, NewtonParams, NewtonWorkspace, Passive, PcgParams, SolveWorkspace, SymbolicFactor,
+    newton, pcg_block,
 };
 use rayon::prelude::*;
 
@@ -540,6 +540,10 @@ impl<'p> Evaluator<'p> {
         self.timing.precondition = t0.elapsed().as_secs_f64();
         let t0 = Instant::now();
         let precond = &self.precond;
+        // Small-strain kinematics: K_T ≡ K(ρ) (also with the linearized additive material), so
+        // the shared matrix is every case's tangent and need not be assembled again.
+        let linear_tangent =
+            (model.kinematics() == Kinematics::Linear).then_some(&self.precond_ws.tangent);
         let params = self.params;
         let loads = &self.loads;
         let results: Vec<Result<(usize, usize, usize)>> = if self.groups.is_empty() {
@@ -568,6 +572,7 @@ impl<'p> Evaluator<'p> {
                         cases,
                         gws,
                         precond,
+                        linear_tangent,
                         &params,
                     )
                 })
@@ -874,6 +879,7 @@ fn solve_group(
     cases: &mut [CaseState],
     gws: &mut GroupWorkspace,
     precond: &Factor,
+    linear_tangent: Option<&flexstage_fem::SparseMatrix>,
     params: &AnalysisParams,
 ) -> Vec<Result<(usize, usize, usize)>> {
     #[derive(Clone, Copy, PartialEq)]
@@ -956,13 +962,17 @@ fn solve_group(
         .enumerate()
         .map(|(j, cs)| match st[j] {
             St::Done => {
-                model.assemble(
-                    design,
-                    &cs.u,
-                    Some(&mut cs.r),
-                    Some(&mut cs.ws.tangent),
-                    &mut cs.ws.assembly,
-                );
+                // `cs.r` already holds R(u) at the converged state (last sweep).
+                match linear_tangent {
+                    Some(k) => cs.ws.tangent.values_mut().copy_from_slice(k.values()),
+                    None => model.assemble(
+                        design,
+                        &cs.u,
+                        None,
+                        Some(&mut cs.ws.tangent),
+                        &mut cs.ws.assembly,
+                    ),
+                }
                 Ok((its[j], 0, its[j]))
             }
             _ => {
