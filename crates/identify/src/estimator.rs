@@ -1,0 +1,524 @@
+//! The online estimator: four RLS rows (flexstage-piezo's [`Rls`], forgetting factor) over
+//! the regression of [`crate::regression`], with an optional prefilter and decimation.
+//!
+//! # Prefilter
+//! The regression is a linear, time-invariant relation between delayed samples of the six
+//! signals, so filtering *every* signal with the same linear filter keeps it exact (the
+//! filter commutes with the delays and differences). A second-order Butterworth low-pass
+//! ([`IdentifyParams::prefilter`]) removes the sensor noise and quantization above the
+//! excitation band, where the second differences amplify it most (|1 − e^{−jωT}|² = 16 at
+//! Nyquist).
+//!
+//! # Decimation
+//! `decimation` = d > 1 runs the regression at d·T_s on every d-th (filtered) sample. The
+//! second-difference signal grows as d² while the noise does not; the central-difference
+//! error grows as (ωdT_s)²/12. The prefilter is then the anti-aliasing filter.
+
+use flexstage_piezo::{Rls, RlsParams};
+use flexstage_scenario::StageParams;
+use nalgebra::{DMatrix, SymmetricEigen};
+
+use crate::data::StageRecord;
+use crate::error::{IdentifyError, Result, check};
+use crate::regression::{
+    OUTPUT_REGRESSORS, PLATE_REGRESSORS, Physical, Rows, Scheme, Theta, Window, physical, rows,
+};
+
+/// Positions are scaled to µm inside the estimator so that the regressors are O(1) and the
+/// prior Cov(0) = c·I is weak against the data.
+const SCALE: f64 = 1e6;
+
+/// Settings of the identification.
+#[derive(Debug, Clone, PartialEq)]
+pub struct IdentifyParams {
+    /// Forgetting factor λ_f of the four RLS rows, in (0, 1]. 1 (default): least squares
+    /// over the whole record.
+    pub forgetting: f64,
+    /// Initial covariance c of Cov(0) = c·I (positions in µm), > 0. Default 1e6.
+    pub initial_covariance: f64,
+    /// Prefilter cut-off [Hz] (second-order Butterworth, applied to every signal), ≥ 0 and
+    /// below the Nyquist frequency of the record; 0 switches it off. Default 1000 Hz.
+    pub prefilter: f64,
+    /// Decimation d ≥ 1: the regression runs at d·T_s. Default 1.
+    pub decimation: usize,
+    /// Sampling of the stiffness regressors. Default [`Scheme::Numerov`].
+    pub scheme: Scheme,
+    /// Estimate the cross-term coupling k_c (third column of the output rows). Default true.
+    pub coupling: bool,
+    /// Condition number (of the information matrix with unit-scaled columns) above which a
+    /// warning says the excitation is not persistent in some direction, > 1. Default 1e8.
+    pub condition_warning: f64,
+    /// Relative tolerance of the sample-time check of records, in (0, 0.5). Default 1e-3.
+    pub sampling_tolerance: f64,
+    /// Points of the convergence history, ≥ 2. Default 400.
+    pub history_points: usize,
+}
+
+impl Default for IdentifyParams {
+    fn default() -> Self {
+        IdentifyParams {
+            forgetting: 1.0,
+            initial_covariance: 1e6,
+            prefilter: 1000.0,
+            decimation: 1,
+            scheme: Scheme::Numerov,
+            coupling: true,
+            condition_warning: 1e8,
+            sampling_tolerance: 1e-3,
+            history_points: 400,
+        }
+    }
+}
+
+impl IdentifyParams {
+    /// Checks the fields.
+    pub fn validate(&self) -> Result<()> {
+        check(
+            "identify.forgetting",
+            self.forgetting,
+            self.forgetting > 0.0 && self.forgetting <= 1.0,
+            "a number in (0, 1]",
+        )?;
+        check(
+            "identify.initial_covariance",
+            self.initial_covariance,
+            self.initial_covariance > 0.0,
+            "a finite number > 0",
+        )?;
+        check(
+            "identify.prefilter",
+            self.prefilter,
+            self.prefilter >= 0.0,
+            "a frequency ≥ 0 [Hz] (0: off) below the Nyquist frequency",
+        )?;
+        check(
+            "identify.decimation",
+            self.decimation as f64,
+            (1..=1000).contains(&self.decimation),
+            "an integer in 1..=1000",
+        )?;
+        check(
+            "identify.condition_warning",
+            self.condition_warning,
+            self.condition_warning > 1.0,
+            "a number > 1",
+        )?;
+        check(
+            "identify.sampling_tolerance",
+            self.sampling_tolerance,
+            self.sampling_tolerance > 0.0 && self.sampling_tolerance < 0.5,
+            "a number in (0, 0.5)",
+        )?;
+        check(
+            "identify.history_points",
+            self.history_points as f64,
+            self.history_points >= 2,
+            "an integer ≥ 2",
+        )
+    }
+}
+
+/// Second-order Butterworth low-pass (bilinear, prewarped), direct form II transposed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Biquad {
+    b: [f64; 3],
+    a: [f64; 2],
+    z: [f64; 2],
+}
+
+impl Biquad {
+    /// Cut-off `fc` [Hz] at sample time `ts` [s]; `fc` = 0 gives the identity.
+    pub fn lowpass(fc: f64, ts: f64) -> Biquad {
+        if fc <= 0.0 {
+            return Biquad {
+                b: [1.0, 0.0, 0.0],
+                a: [0.0, 0.0],
+                z: [0.0; 2],
+            };
+        }
+        let k = (std::f64::consts::PI * fc * ts).tan();
+        let r2 = std::f64::consts::SQRT_2;
+        let norm = 1.0 / (1.0 + r2 * k + k * k);
+        let b0 = k * k * norm;
+        Biquad {
+            b: [b0, 2.0 * b0, b0],
+            a: [2.0 * (k * k - 1.0) * norm, (1.0 - r2 * k + k * k) * norm],
+            z: [0.0; 2],
+        }
+    }
+
+    /// Sets the state to the steady state of a constant input `x`.
+    pub fn settle(&mut self, x: f64) {
+        self.z[1] = (self.b[2] - self.a[1]) * x;
+        self.z[0] = (self.b[1] - self.a[0]) * x + self.z[1];
+    }
+
+    /// Filters one sample.
+    #[inline]
+    pub fn step(&mut self, x: f64) -> f64 {
+        let y = self.b[0] * x + self.z[0];
+        self.z[0] = self.b[1] * x - self.a[0] * y + self.z[1];
+        self.z[1] = self.b[2] * x - self.a[1] * y;
+        y
+    }
+}
+
+/// The online stage identifier: feed samples with [`StageIdentifier::update`].
+/// No allocation per sample.
+#[derive(Debug, Clone)]
+pub struct StageIdentifier {
+    known: StageParams,
+    ts: f64,
+    decimation: usize,
+    coupling: bool,
+    scheme: Scheme,
+    filters: [Biquad; 6],
+    window: Window,
+    seen: u64,
+    filled: u8,
+    output: [Rls<3>; 2],
+    plate: [Rls<5>; 2],
+    info_output: [[[f64; 3]; 3]; 2],
+    info_plate: [[[f64; 5]; 5]; 2],
+    updates: u64,
+}
+
+impl StageIdentifier {
+    /// An identifier for records sampled at `sample_time` [s], starting from `guess` (its
+    /// masses and α are the weighed / Eq. 27 values kept fixed; its stiffnesses and dampings
+    /// the initial θ) with an initial coupling `k_c0` [N/m].
+    pub fn new(
+        guess: &StageParams,
+        k_c0: f64,
+        sample_time: f64,
+        params: &IdentifyParams,
+    ) -> Result<StageIdentifier> {
+        params.validate()?;
+        guess
+            .validate("guess")
+            .map_err(|e| crate::error::data_error("initial guess", e.to_string()))?;
+        check(
+            "sample_time",
+            sample_time,
+            sample_time > 0.0,
+            "a finite time step > 0 [s]",
+        )?;
+        check(
+            "identify.prefilter",
+            params.prefilter,
+            params.prefilter < 0.5 / sample_time,
+            &format!("a frequency below the Nyquist frequency {} Hz", 0.5 / sample_time),
+        )?;
+        let ts = sample_time * params.decimation as f64;
+        let k_c0 = if params.coupling { k_c0 } else { 0.0 };
+        let theta = Theta::from_params(guess, k_c0, ts);
+        let rls = RlsParams {
+            forgetting: params.forgetting,
+            weight: 1.0,
+            initial_covariance: params.initial_covariance,
+            max_trace: f64::INFINITY,
+        };
+        let filter = Biquad::lowpass(params.prefilter, sample_time);
+        Ok(StageIdentifier {
+            known: guess.clone(),
+            ts,
+            decimation: params.decimation,
+            coupling: params.coupling,
+            scheme: params.scheme,
+            filters: [filter; 6],
+            window: Window::default(),
+            seen: 0,
+            filled: 0,
+            output: [
+                Rls::new(rls, theta.output1)?,
+                Rls::new(rls, theta.output2)?,
+            ],
+            plate: [Rls::new(rls, theta.plate[0])?, Rls::new(rls, theta.plate[1])?],
+            info_output: [[[0.0; 3]; 3]; 2],
+            info_plate: [[[0.0; 5]; 5]; 2],
+            updates: 0,
+        })
+    }
+
+    /// The regression's sample time d·T_s [s].
+    pub fn regression_time(&self) -> f64 {
+        self.ts
+    }
+
+    /// Regression updates so far.
+    pub fn updates(&self) -> u64 {
+        self.updates
+    }
+
+    /// Feeds one sample (SI). Returns true when the estimators were updated (after the first
+    /// three regression samples, on every `decimation`-th sample).
+    #[inline]
+    pub fn update(&mut self, x_nom: [f64; 2], x_in: [f64; 2], q: [f64; 2]) -> bool {
+        let raw = [x_nom[0], x_nom[1], x_in[0], x_in[1], q[0], q[1]];
+        let mut f = [0.0; 6];
+        for i in 0..6 {
+            let v = raw[i] * SCALE;
+            if self.seen == 0 {
+                self.filters[i].settle(v);
+            }
+            f[i] = self.filters[i].step(v);
+        }
+        self.seen += 1;
+        if (self.seen - 1) % self.decimation as u64 != 0 {
+            return false;
+        }
+        self.window.push([f[0], f[1]], [f[2], f[3]], [f[4], f[5]]);
+        if self.filled < 3 {
+            self.filled += 1;
+            if self.filled < 3 {
+                return false;
+            }
+        }
+        let r = rows(&self.window, self.known.alpha, self.scheme);
+        self.apply(&r);
+        true
+    }
+
+    #[inline]
+    fn apply(&mut self, r: &Rows) {
+        for i in 0..2 {
+            let (mut phi, y) = r.output[i];
+            if !self.coupling {
+                phi[2] = 0.0;
+            }
+            self.output[i].update(&phi, y);
+            accumulate(&mut self.info_output[i], &phi);
+            let (phi, y) = r.plate[i];
+            self.plate[i].update(&phi, y);
+            accumulate(&mut self.info_plate[i], &phi);
+        }
+        self.updates += 1;
+    }
+
+    /// The current θ.
+    pub fn theta(&self) -> Theta {
+        Theta {
+            output1: *self.output[0].theta(),
+            output2: *self.output[1].theta(),
+            plate: [*self.plate[0].theta(), *self.plate[1].theta()],
+        }
+    }
+
+    /// The current physical estimates ([`physical`]).
+    pub fn estimate(&self) -> Physical {
+        let cov = [self.plate[0].covariance(), self.plate[1].covariance()];
+        physical(&self.theta(), &cov, &self.known, self.ts)
+    }
+
+    /// Condition numbers of the information matrices Σφφᵀ of the four rows after scaling
+    /// every column to unit norm (1 = orthogonal regressors). For the plates, the column
+    /// q_o1 − x_in is left out: its direction carries the common scale that is taken from
+    /// K_qo1 ([`physical`]); the rest must be excited. Infinite when a regressor is zero.
+    pub fn conditioning(&self) -> [f64; 4] {
+        let out = |m: &[[f64; 3]; 3], coupling: bool| {
+            if coupling {
+                condition(m)
+            } else {
+                condition(&[[m[0][0], m[0][1]], [m[1][0], m[1][1]]])
+            }
+        };
+        let plate = |m: &[[f64; 5]; 5]| {
+            let idx = [0, 1, 3, 4];
+            let mut s = [[0.0; 4]; 4];
+            for (a, &i) in idx.iter().enumerate() {
+                for (b, &j) in idx.iter().enumerate() {
+                    s[a][b] = m[i][j];
+                }
+            }
+            condition(&s)
+        };
+        [
+            out(&self.info_output[0], self.coupling),
+            out(&self.info_output[1], self.coupling),
+            plate(&self.info_plate[0]),
+            plate(&self.info_plate[1]),
+        ]
+    }
+
+    /// Checks that every regressor was excited; Err names the first that was not.
+    pub fn check_excitation(&self) -> Result<()> {
+        let rows_out = ["q_o1", "q_o2"];
+        let rows_plate = ["x_in1", "x_in2"];
+        let hint_out = "excite both PEAs with different signals so that x_in1 + x_in2 and \
+                        x_in1 − x_in2 both move, and include frequencies of a few hundred Hz";
+        let hint_plate = "the PEA must move its plate, and the two PEAs must be driven \
+                          differently";
+        let limit = 1e-12 * self.updates.max(1) as f64;
+        for i in 0..2 {
+            let n = if self.coupling { 3 } else { 2 };
+            for j in 0..n {
+                if !(self.info_output[i][j][j] > limit) {
+                    return Err(IdentifyError::NotExcited {
+                        row: rows_out[i],
+                        regressor: OUTPUT_REGRESSORS[j],
+                        hint: hint_out,
+                    });
+                }
+            }
+            for j in 0..5 {
+                if !(self.info_plate[i][j][j] > limit) {
+                    return Err(IdentifyError::NotExcited {
+                        row: rows_plate[i],
+                        regressor: PLATE_REGRESSORS[j],
+                        hint: hint_plate,
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+#[inline]
+fn accumulate<const P: usize>(m: &mut [[f64; P]; P], phi: &[f64; P]) {
+    for a in 0..P {
+        for b in 0..P {
+            m[a][b] += phi[a] * phi[b];
+        }
+    }
+}
+
+/// Condition number of a symmetric PSD matrix after unit-diagonal scaling.
+fn condition<const P: usize>(m: &[[f64; P]; P]) -> f64 {
+    let mut s = DMatrix::<f64>::zeros(P, P);
+    for a in 0..P {
+        for b in 0..P {
+            let d = (m[a][a] * m[b][b]).sqrt();
+            if !(d > 0.0) {
+                return f64::INFINITY;
+            }
+            s[(a, b)] = m[a][b] / d;
+        }
+    }
+    let e = SymmetricEigen::new(s).eigenvalues;
+    let max = e.iter().cloned().fold(f64::MIN, f64::max);
+    let min = e.iter().cloned().fold(f64::MAX, f64::min);
+    if min <= 0.0 { f64::INFINITY } else { max / min }
+}
+
+/// One point of the convergence history.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HistoryPoint {
+    /// Time of the record [s].
+    pub t: f64,
+    /// The estimates then.
+    pub estimate: Physical,
+}
+
+/// The result of [`identify`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Identification {
+    /// The record's sample time T_s [s].
+    pub sample_time: f64,
+    /// The regression's sample time d·T_s [s].
+    pub regression_time: f64,
+    /// Regression updates.
+    pub updates: u64,
+    /// The final θ.
+    pub theta: Theta,
+    /// The final physical estimates (raw: dampings may be negative).
+    pub raw: Physical,
+    /// The parameter set to use (e.g. in `flexstage track`): the estimates, with any
+    /// negative damping estimate replaced by the guess (listed in `warnings`).
+    pub params: StageParams,
+    /// Condition numbers of the four rows ([`StageIdentifier::conditioning`]).
+    pub conditioning: [f64; 4],
+    /// Convergence history.
+    pub history: Vec<HistoryPoint>,
+    /// Warnings (ill-conditioning, replaced dampings).
+    pub warnings: Vec<String>,
+}
+
+/// Identifies the stage parameters from a record, starting from `guess` (masses and α
+/// fixed, see [`StageIdentifier::new`]). Errors when a regressor is not excited or a
+/// stiffness estimate is not positive; warns when the information matrix is ill-conditioned.
+pub fn identify(
+    record: &StageRecord,
+    guess: &StageParams,
+    params: &IdentifyParams,
+) -> Result<Identification> {
+    let ts = record.sample_time();
+    let mut id = StageIdentifier::new(guess, 0.0, ts, params)?;
+    let n = record.len();
+    let every = (n / params.history_points).max(1);
+    let mut history = Vec::with_capacity(params.history_points + 1);
+    for k in 0..n {
+        id.update(
+            [record.x_nom[0][k], record.x_nom[1][k]],
+            [record.x_in[0][k], record.x_in[1][k]],
+            [record.q[0][k], record.q[1][k]],
+        );
+        if (k + 1) % every == 0 || k + 1 == n {
+            history.push(HistoryPoint {
+                t: record.t[k],
+                estimate: id.estimate(),
+            });
+        }
+    }
+    id.check_excitation()?;
+    let conditioning = id.conditioning();
+    let mut warnings = Vec::new();
+    let names = ["q_o1", "q_o2", "x_in1", "x_in2"];
+    for (i, &c) in conditioning.iter().enumerate() {
+        if !(c <= params.condition_warning) {
+            warnings.push(format!(
+                "the {} regression is ill-conditioned (condition number {c:.3e} > {:.1e}): the \
+                 excitation is not persistent in some direction; its estimates are unreliable \
+                 (use a richer or longer excitation: both PEAs, independent signals, \
+                 frequencies up to a few hundred Hz)",
+                names[i], params.condition_warning
+            ));
+        }
+    }
+    let raw = id.estimate();
+    let p = &raw.params;
+    for (name, v) in [
+        ("k_qo1", p.k_qo1),
+        ("k_qo2", p.k_qo2),
+        ("k_pea1", p.k_pea1),
+        ("k_pea2", p.k_pea2),
+        ("k_in1", p.k_in1),
+        ("k_in2", p.k_in2),
+    ] {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(IdentifyError::Estimate {
+                what: name.into(),
+                reason: format!(
+                    "the estimate {v:e} N/m is not a positive stiffness: the record does not \
+                     identify the model (check the columns' units [m] and the excitation)"
+                ),
+            });
+        }
+    }
+    let mut out = p.clone();
+    for (name, v, g, slot) in [
+        ("c_qo1", p.c_qo1, guess.c_qo1, &mut out.c_qo1),
+        ("c_qo2", p.c_qo2, guess.c_qo2, &mut out.c_qo2),
+        ("c_in1", p.c_in1, guess.c_in1, &mut out.c_in1),
+        ("c_in2", p.c_in2, guess.c_in2, &mut out.c_in2),
+    ] {
+        if !(v >= 0.0 && v.is_finite()) {
+            warnings.push(format!(
+                "{name}: the damping estimate {v:e} N·s/m is not physical; the guess {g:e} is \
+                 written instead (damping is weakly identifiable, see the docs)"
+            ));
+            *slot = g;
+        }
+    }
+    Ok(Identification {
+        sample_time: ts,
+        regression_time: id.regression_time(),
+        updates: id.updates(),
+        theta: id.theta(),
+        raw,
+        params: out,
+        conditioning,
+        history,
+        warnings,
+    })
+}

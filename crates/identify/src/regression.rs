@@ -1,0 +1,305 @@
+//! The discretized regression of Eq. (54)–(56), derived from Eq. (31) and (34) (A13–A14).
+//!
+//! # Derivation
+//! Central differences at t − T_s,
+//!
+//! ```text
+//! ẍ(t−T_s) ≈ [x(t) − 2x(t−T_s) + x(t−2T_s)] / T_s²,   ẋ(t−T_s) ≈ [x(t) − x(t−2T_s)] / (2T_s),
+//! ```
+//!
+//! turn Eq. (31), M q̈_o = K(A₀x_in − q_o) + C(A₀ẋ_in − q̇_o) (+ cross terms), multiplied by
+//! T_s² M⁻¹, into
+//!
+//! ```text
+//! Δ²q_o = T_s²M⁻¹K · [A₀x_in − q_o](t−T_s) + (T_s/2)M⁻¹C · Δ[A₀x_in − q_o] − T_s²M⁻¹k_c · q̄_o(t−T_s)
+//! ```
+//!
+//! with Δ²s = s(t) − 2s(t−T_s) + s(t−2T_s) and Δs = s(t) − s(t−2T_s). The first two columns
+//! are the first two rows of φ in Eq. (54) and of θ in Eq. (55); the target is the first row
+//! of u_r in Eq. (56). (q̄_o = [q_o2, q_o1] swaps the axes; see "cross terms" below.)
+//!
+//! Eq. (34), written per input plate i with the entries of Eq. (35),
+//! m_in,i ẍ_in,i = K_pea,i x_nom,i − (K_qo1 + K_in,i + K_pea,i) x_in,i − (C_qo1 + C_in,i) ẋ_in,i
+//! + K_qo1 q_o1 + C_qo1 q̇_o1, is regrouped by the spring each term belongs to,
+//!
+//! ```text
+//! m_in ẍ_in = K_pea(x_nom − x_in) − K_in x_in + K_qo1(q_o1 − x_in) − C_in ẋ_in + C_qo1(q̇_o1 − ẋ_in)
+//! ```
+//!
+//! and discretized the same way:
+//!
+//! ```text
+//! Δ²x_in,i = a₁ (x_nom,i − x_in,i)(t−T_s) + a₂ (−x_in,i(t−T_s)) + a₃ (q_o1 − x_in,i)(t−T_s)
+//!          + a₄ (−Δx_in,i) + a₅ Δ(q_o1 − x_in,i),
+//! a = T_s²/m_in,i · [K_pea,i, K_in,i, K_qo1] and (T_s/2)/m_in,i · [C_in,i, C_qo1].
+//! ```
+//!
+//! The paper's θ₃ = T_s² M_in⁻¹ K_in and θ₄ = (T_s/2) M_in⁻¹ C_in of Eq. (55) (the lumped
+//! entries of Eq. 35) are a₁ + a₂ + a₃ and a₄ + a₅; the paper's regressors −x_in(t−T_s) and
+//! −Δx_in are the sums of our columns' x_in parts ([`paper_theta`]).
+//!
+//! # Corrections of Eq. (54)–(56)
+//! * **Eq. (54), third row**: −x̂(t−T_s) is −x̂_in(t−T_s) (the stiffness term of Eq. 34).
+//! * **Eq. (56), second row**: "− u + M_in⁻¹K_in x_in(t−T_s)" is inconsistent: the K_in term
+//!   is already the regressor of θ₃ (it cannot also be in the target), it lacks T_s², and the
+//!   input term u = T_s²M_in⁻¹K_pea x_nom contains K_pea, which is inside the unknown lumped
+//!   K_in of Eq. (35). We move no unknown into the target: the target is Δ²x_in alone, and
+//!   x_nom, q_o1 and Δq_o1 enter as regressors (the K_pea, K_qo1 and C_qo1 columns).
+//! * **Eq. (54), signs**: with these regressors every θ entry is a positive stiffness or
+//!   damping (the paper's third and fourth rows carry the minus signs of Eq. 34).
+//! * **Eq. (33)**: the second plate's damper is C_qo1 (as in Eq. 35 and A14), not C_qo2.
+//! * **Time index**: the two-step delays are read as written: the stiffness regressors at
+//!   t − T_s (the centre of the three samples), the damping regressors as the central
+//!   difference over t − 2T_s … t, the target the second difference centred at t − T_s.
+//!
+//! # Cross terms
+//! Eq. (30) leaves the cross terms as a disturbance Δ_q. A coupling spring k_c between the
+//! output directions (the simulated plant has one, 5 % of √(2K_qo1K_qo2)) is as large as the
+//! signal that identifies K (the output lags A₀x_in by only (ω/ω_n)² at excitation
+//! frequencies below the modes), so ignoring it biases K_qo1 and K_qo2 by tens of per cent.
+//! The output rows therefore have a third column −q_o,other(t−T_s) with θ = T_s²k_c/M
+//! ([`crate::IdentifyParams::coupling`], on by default; off gives the paper's two columns).
+
+use flexstage_scenario::StageParams;
+
+/// Names of the output-row regressors (q_o1 and q_o2 rows).
+pub const OUTPUT_REGRESSORS: [&str; 3] = ["A0 x_in - q_o", "Δ(A0 x_in - q_o)", "-q_o(other axis)"];
+/// Names of the input-plate regressors.
+pub const PLATE_REGRESSORS: [&str; 5] = [
+    "x_nom - x_in",
+    "-x_in",
+    "q_o1 - x_in",
+    "-Δx_in",
+    "Δ(q_o1 - x_in)",
+];
+
+/// Three consecutive samples s(t−2T_s), s(t−T_s), s(t) of the six signals.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Window {
+    /// x_nom1, x_nom2 at t−2T_s, t−T_s, t.
+    pub x_nom: [[f64; 3]; 2],
+    /// x_in1, x_in2.
+    pub x_in: [[f64; 3]; 2],
+    /// q_o1, q_o2.
+    pub q: [[f64; 3]; 2],
+}
+
+impl Window {
+    /// Shifts in the sample at t.
+    #[inline]
+    pub fn push(&mut self, x_nom: [f64; 2], x_in: [f64; 2], q: [f64; 2]) {
+        for i in 0..2 {
+            self.x_nom[i] = [self.x_nom[i][1], self.x_nom[i][2], x_nom[i]];
+            self.x_in[i] = [self.x_in[i][1], self.x_in[i][2], x_in[i]];
+            self.q[i] = [self.q[i][1], self.q[i][2], q[i]];
+        }
+    }
+}
+
+/// One regression sample: φ and the target y of each of the four rows.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Rows {
+    /// q_o1 and q_o2 rows: (φ, y).
+    pub output: [([f64; 3], f64); 2],
+    /// Input plates 1 and 2: (φ, y).
+    pub plate: [([f64; 5], f64); 2],
+}
+
+#[inline]
+fn d2(s: &[f64; 3]) -> f64 {
+    s[2] - 2.0 * s[1] + s[0]
+}
+
+#[inline]
+fn d1(s: &[f64; 3]) -> f64 {
+    s[2] - s[0]
+}
+
+/// How the stiffness regressors are sampled.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Scheme {
+    /// Eq. (54) as printed: s(t − T_s). The central second difference then carries a
+    /// relative error (ωT_s)²/12 (0.3 % at 300 Hz and 10 kHz), which biases K_qo1 and
+    /// K_qo2 low by about 0.2 % for the default excitation.
+    Central,
+    /// Numerov's weighting (s(t) + 10 s(t−T_s) + s(t−2T_s))/12 of the stiffness regressors,
+    /// against the same second-difference target: fourth-order accurate ((ωT_s)⁴/240), same
+    /// θ and u_r. Default: K_in is a small spring (its force is below the plate's inertial
+    /// force at a few hundred Hz), so the 0.2 % bias of K_qo1 becomes ≈ 3 % in K_in.
+    Numerov,
+}
+
+#[inline]
+fn mid(s: &[f64; 3], scheme: Scheme) -> f64 {
+    match scheme {
+        Scheme::Central => s[1],
+        Scheme::Numerov => (s[0] + 10.0 * s[1] + s[2]) / 12.0,
+    }
+}
+
+/// Regressors and targets of the window (module docs), with α of Eq. (27).
+#[inline]
+pub fn rows(w: &Window, alpha: f64, scheme: Scheme) -> Rows {
+    let [x1, x2] = &w.x_in;
+    let [q1, q2] = &w.q;
+    // A₀ x_in − q_o at the three samples (A₀ of Eq. 32).
+    let mut e1 = [0.0; 3];
+    let mut e2 = [0.0; 3];
+    for j in 0..3 {
+        e1[j] = 0.5 * (x1[j] + x2[j]) - q1[j];
+        e2[j] = alpha * (x1[j] - x2[j]) - q2[j];
+    }
+    let output = [
+        ([mid(&e1, scheme), d1(&e1), -mid(q2, scheme)], d2(q1)),
+        ([mid(&e2, scheme), d1(&e2), -mid(q1, scheme)], d2(q2)),
+    ];
+    let plate = [0, 1].map(|i| {
+        let x = &w.x_in[i];
+        let u = &w.x_nom[i];
+        let r = [q1[0] - x[0], q1[1] - x[1], q1[2] - x[2]];
+        let un = [u[0] - x[0], u[1] - x[1], u[2] - x[2]];
+        (
+            [
+                mid(&un, scheme),
+                -mid(x, scheme),
+                mid(&r, scheme),
+                -d1(x),
+                d1(&r),
+            ],
+            d2(x),
+        )
+    });
+    Rows { output, plate }
+}
+
+/// θ of the four rows.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Theta {
+    /// q_o1 row: T_s²2K_qo1/M, (T_s/2)2C_qo1/M, T_s²k_c/M.
+    pub output1: [f64; 3],
+    /// q_o2 row: T_s²K_qo2/M, (T_s/2)C_qo2/M, T_s²k_c/M.
+    pub output2: [f64; 3],
+    /// Plates: T_s²/m_in·[K_pea, K_in, K_qo1], (T_s/2)/m_in·[C_in, C_qo1].
+    pub plate: [[f64; 5]; 2],
+}
+
+impl Theta {
+    /// θ of a parameter set (the initial guess) at sample time `ts`, with coupling `k_c`.
+    pub fn from_params(p: &StageParams, k_c: f64, ts: f64) -> Theta {
+        let (s2, s1) = (ts * ts, 0.5 * ts);
+        let m = p.mass;
+        let plate = |k_pea: f64, k_in: f64, c_in: f64, m_in: f64| {
+            [
+                s2 * k_pea / m_in,
+                s2 * k_in / m_in,
+                s2 * p.k_qo1 / m_in,
+                s1 * c_in / m_in,
+                s1 * p.c_qo1 / m_in,
+            ]
+        };
+        Theta {
+            output1: [s2 * 2.0 * p.k_qo1 / m, s1 * 2.0 * p.c_qo1 / m, s2 * k_c / m],
+            output2: [s2 * p.k_qo2 / m, s1 * p.c_qo2 / m, s2 * k_c / m],
+            plate: [
+                plate(p.k_pea1, p.k_in1, p.c_in1, p.m_in1),
+                plate(p.k_pea2, p.k_in2, p.c_in2, p.m_in2),
+            ],
+        }
+    }
+}
+
+/// The physical parameters recovered from θ.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Physical {
+    /// The parameter set: estimated stiffnesses and dampings, weighed masses and α from
+    /// the known set.
+    pub params: StageParams,
+    /// Coupling stiffness k_c from the q_o1 and q_o2 rows [N/m].
+    pub coupling: [f64; 2],
+    /// K_qo1 from each plate row's own scale (a₃ m_in/T_s²): a consistency check, poorly
+    /// determined (the plate rows fix ratios well and their scale only through the small
+    /// inertial term, see [`physical`]).
+    pub plate_k_qo1: [f64; 2],
+}
+
+/// Recovers the physical parameters (Section 4.2) from θ with the weighed masses and α of
+/// `known`. `plate_cov` is the covariance (inverse information) of the two plate rows.
+///
+/// * K_qo1 = θ₁₁ M/(2T_s²), C_qo1 = θ₁₂ M/T_s; K_qo2 = θ₂₁ M/T_s², C_qo2 = 2θ₂₂ M/T_s;
+///   k_c = θ₁₃ M/T_s² (and θ₂₃ M/T_s²).
+/// * Plates: the least-squares estimate *constrained* to a₃ = T_s²K_qo1/m_in with K_qo1 of
+///   the output row, θ_c = θ − P e₃ (θ₃ − a₃)/P₃₃ (the exact equality-constrained least
+///   squares from the unconstrained θ and its covariance P), then K_pea = θ_c1 m_in/T_s²,
+///   K_in = θ_c2 m_in/T_s², C_in = 2θ_c4 m_in/T_s. These are the values "calculated
+///   algebraically from the estimated K_in and K_qo1" (Section 4.2).
+///
+/// Why constrained: the plate equation is nearly a static balance at excitation
+/// frequencies far below the ≈ 12 kHz plate mode, K_pea(x_nom − x_in) − K_in x_in +
+/// K_qo1(q_o1 − x_in) ≈ 0, which holds for any common scale of the three stiffnesses; only
+/// the (ω/ω_in)² ≈ 10⁻³ inertial term fixes it. That direction of θ is the worst determined,
+/// and with sensor noise the unconstrained estimate shrinks along it (errors in variables).
+/// The scale is well determined by the output row through the weighed mass M; fixing it
+/// there leaves K_pea and K_in well conditioned.
+pub fn physical(
+    theta: &Theta,
+    plate_cov: &[[[f64; 5]; 5]; 2],
+    known: &StageParams,
+    ts: f64,
+) -> Physical {
+    let m = known.mass;
+    let (s2, s1) = (ts * ts, 0.5 * ts);
+    let k_qo1 = theta.output1[0] * m / (2.0 * s2);
+    let c_qo1 = theta.output1[1] * m / (2.0 * s1);
+    let k_qo2 = theta.output2[0] * m / s2;
+    let c_qo2 = theta.output2[1] * m / s1;
+    let coupling = [theta.output1[2] * m / s2, theta.output2[2] * m / s2];
+    let plate = |a: &[f64; 5], p: &[[f64; 5]; 5], m_in: f64| {
+        let target = s2 * k_qo1 / m_in;
+        let mut c = *a;
+        if p[2][2] > 0.0 {
+            let shift = (a[2] - target) / p[2][2];
+            for j in 0..5 {
+                c[j] = a[j] - p[j][2] * shift;
+            }
+        }
+        (c[0] * m_in / s2, c[1] * m_in / s2, c[3] * m_in / s1)
+    };
+    let (k_pea1, k_in1, c_in1) = plate(&theta.plate[0], &plate_cov[0], known.m_in1);
+    let (k_pea2, k_in2, c_in2) = plate(&theta.plate[1], &plate_cov[1], known.m_in2);
+    Physical {
+        params: StageParams {
+            k_qo1,
+            k_qo2,
+            k_pea1,
+            k_pea2,
+            k_in1,
+            k_in2,
+            c_qo1,
+            c_qo2,
+            c_in1,
+            c_in2,
+            ..known.clone()
+        },
+        coupling,
+        plate_k_qo1: [
+            theta.plate[0][2] * known.m_in1 / s2,
+            theta.plate[1][2] * known.m_in2 / s2,
+        ],
+    }
+}
+
+/// θ in the paper's form, Eq. (55), diagonals only: [T_s²M⁻¹K (2), (T_s/2)M⁻¹C (2),
+/// T_s²M_in⁻¹K_in (2, lumped as in Eq. 35), (T_s/2)M_in⁻¹C_in (2, lumped)].
+pub fn paper_theta(theta: &Theta) -> [f64; 8] {
+    let p = &theta.plate;
+    [
+        theta.output1[0],
+        theta.output2[0],
+        theta.output1[1],
+        theta.output2[1],
+        p[0][0] + p[0][1] + p[0][2],
+        p[1][0] + p[1][1] + p[1][2],
+        p[0][3] + p[0][4],
+        p[1][3] + p[1][4],
+    ]
+}
