@@ -8,6 +8,7 @@ mod build;
 mod design;
 mod identify;
 mod pea;
+mod reduce;
 mod run_dir;
 mod scenario_args;
 mod track;
@@ -70,6 +71,13 @@ enum Command {
   flexstage design --resume runs/paper            # continue after an interruption
   flexstage design --check-gradients              # adjoint vs central differences")]
     Design(design::DesignArgs),
+    /// Reduced spring-mass model of a design (Section 3.2.1): transfer matrix, lumped
+    /// parameters for `track --params`, natural frequencies, validity of the tangent model.
+    #[command(after_help = "Examples:
+  flexstage reduce --preset quick                       # the run's design (or uniform)
+  flexstage reduce --design runs/paper --modes 10       # a finished design
+  flexstage reduce --operating-point 30,-30 --scales \"\"  # tangent at a stroke, no validity map")]
+    Reduce(reduce::ReduceArgs),
     /// Identify model parameters from measured or simulated records.
     #[command(after_help = "Examples:
   flexstage identify pea --data pea1.csv")]
@@ -141,6 +149,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         }
         Command::Analyze(args) => analyze::run(args),
         Command::Design(args) => design::run(args),
+        Command::Reduce(args) => reduce::run(args),
         Command::Identify { what } => identify::run(what),
         Command::Pea { what } => pea::run(what),
         Command::Track(args) => track::run(args),
