@@ -31,6 +31,23 @@ Examples:
   flexstage identify pea --data lab.csv --pea 2 --forgetting 0.99998 --out runs/lab"
     )]
     Pea(PeaArgs),
+    /// Identify the stage stiffnesses and dampings by online least squares (Section 4.2,
+    /// Eq. 54-56, Table 4), from a record or from the simulated stage.
+    #[command(
+        after_help = "The CSV needs a header with the columns t [s], x_nom1, x_nom2 [m] (or U1, U2 [V],
+turned into x_nom by the scenario's Bouc-Wen PEA model), x_in1, x_in2, q1, q2 [m], sampled
+uniformly. Masses and alpha are taken from the scenario's stage.guess (weighed, Eq. 27).
+Writes <run>/identify/stage/: params.toml (for `flexstage track --params`), table.csv
+(guess / estimate / truth / error, like Table 4), convergence.svg and convergence.csv, and
+record.csv with --simulate.
+
+Examples:
+  flexstage identify stage --simulate                     # 4 s multisine on the digital twin
+  flexstage identify stage --simulate --plant linear --noise-free --duration 1
+  flexstage identify stage --data lab.csv --out runs/lab
+  flexstage track --params runs/paper/identify/stage/params.toml"
+    )]
+    Stage(crate::identify_stage::StageArgs),
 }
 
 /// Options of `identify pea`.
@@ -61,6 +78,7 @@ pub struct PeaArgs {
 pub fn run(cmd: IdentifyCommand) -> anyhow::Result<()> {
     match cmd {
         IdentifyCommand::Pea(args) => pea(args),
+        IdentifyCommand::Stage(args) => crate::identify_stage::run(args),
     }
 }
 

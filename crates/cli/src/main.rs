@@ -7,6 +7,7 @@ mod analyze;
 mod build;
 mod design;
 mod identify;
+mod identify_stage;
 mod pea;
 mod reduce;
 mod run_dir;
@@ -80,7 +81,8 @@ enum Command {
     Reduce(reduce::ReduceArgs),
     /// Identify model parameters from measured or simulated records.
     #[command(after_help = "Examples:
-  flexstage identify pea --data pea1.csv")]
+  flexstage identify pea --data pea1.csv
+  flexstage identify stage --simulate")]
     Identify {
         #[command(subcommand)]
         what: identify::IdentifyCommand,

@@ -244,7 +244,8 @@ impl StageRecord {
                 StageRecord::new(t, x_nom, columns.x_in, columns.q, None, tolerance)
             }
             Input::Voltage(u) => {
-                let x_nom = [0, 1].map(|i| voltage_to_x_nom(&t, &u[i], &hysteresis[i], bias_voltage));
+                let x_nom =
+                    [0, 1].map(|i| voltage_to_x_nom(&t, &u[i], &hysteresis[i], bias_voltage));
                 StageRecord::new(t, x_nom, columns.x_in, columns.q, Some(u), tolerance)
             }
         }
@@ -330,7 +331,12 @@ pub fn check_uniform(t: &[f64], tolerance: f64) -> Result<()> {
     if ts.is_nan() || ts <= 0.0 {
         return Err(data_error(
             "stage record",
-            format!("time must increase: t[0] = {}, t[{}] = {}", t[0], n - 1, t[n - 1]),
+            format!(
+                "time must increase: t[0] = {}, t[{}] = {}",
+                t[0],
+                n - 1,
+                t[n - 1]
+            ),
         ));
     }
     for k in 1..n {

@@ -25,7 +25,9 @@ pub enum IdentifyError {
         reason: String,
     },
     /// A CSV file lacks a required column.
-    #[error("{origin}: missing column {column:?} (found columns: {found}); expected a header with {expected}")]
+    #[error(
+        "{origin}: missing column {column:?} (found columns: {found}); expected a header with {expected}"
+    )]
     MissingColumn {
         /// File name or other origin.
         origin: String,

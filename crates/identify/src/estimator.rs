@@ -37,7 +37,7 @@ pub struct IdentifyParams {
     /// Initial covariance c of Cov(0) = c·I (positions in µm), > 0. Default 1e6.
     pub initial_covariance: f64,
     /// Prefilter cut-off [Hz] (second-order Butterworth, applied to every signal), ≥ 0 and
-    /// below the Nyquist frequency of the record; 0 switches it off. Default 1000 Hz.
+    /// below the Nyquist frequency of the record; 0 switches it off. Default 300 Hz.
     pub prefilter: f64,
     /// Decimation d ≥ 1: the regression runs at d·T_s. Default 1.
     pub decimation: usize,
@@ -59,7 +59,7 @@ impl Default for IdentifyParams {
         IdentifyParams {
             forgetting: 1.0,
             initial_covariance: 1e6,
-            prefilter: 1000.0,
+            prefilter: 300.0,
             decimation: 1,
             scheme: Scheme::Numerov,
             coupling: true,
@@ -207,7 +207,10 @@ impl StageIdentifier {
             "identify.prefilter",
             params.prefilter,
             params.prefilter < 0.5 / sample_time,
-            &format!("a frequency below the Nyquist frequency {} Hz", 0.5 / sample_time),
+            &format!(
+                "a frequency below the Nyquist frequency {} Hz",
+                0.5 / sample_time
+            ),
         )?;
         let ts = sample_time * params.decimation as f64;
         let k_c0 = if params.coupling { k_c0 } else { 0.0 };
@@ -229,11 +232,11 @@ impl StageIdentifier {
             window: Window::default(),
             seen: 0,
             filled: 0,
-            output: [
-                Rls::new(rls, theta.output1)?,
-                Rls::new(rls, theta.output2)?,
+            output: [Rls::new(rls, theta.output1)?, Rls::new(rls, theta.output2)?],
+            plate: [
+                Rls::new(rls, theta.plate[0])?,
+                Rls::new(rls, theta.plate[1])?,
             ],
-            plate: [Rls::new(rls, theta.plate[0])?, Rls::new(rls, theta.plate[1])?],
             info_output: [[[0.0; 3]; 3]; 2],
             info_plate: [[[0.0; 5]; 5]; 2],
             updates: 0,

@@ -30,12 +30,13 @@ use crate::error::{Result, check};
 /// Settings of the excitation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Excitation {
-    /// Duration [s], > 0. Default 2 s (the length the noisy 5 % requirement needs, see the
+    /// Duration [s], > 0. Default 4 s (the length the noisy 5 % requirement needs, see the
     /// crate docs).
     pub duration: f64,
     /// Frequency resolution f₀ [Hz], > 0 (lines at k·f₀). Default 5 Hz.
     pub f_min: f64,
-    /// Highest line [Hz], ≥ 2 f₀. Default 300 Hz.
+    /// Highest line [Hz], ≥ 2 f₀. Default 150 Hz (crate docs: K_in needs the plate's
+    /// damping and inertial forces, which grow with frequency, to stay small).
     pub f_max: f64,
     /// Peak of each x_nom [m], > 0. Default 27 µm (90 % of the 30 µm stroke).
     pub amplitude: f64,
@@ -46,9 +47,9 @@ pub struct Excitation {
 impl Default for Excitation {
     fn default() -> Self {
         Excitation {
-            duration: 2.0,
+            duration: 4.0,
             f_min: 5.0,
-            f_max: 300.0,
+            f_max: 150.0,
             amplitude: 27e-6,
             ramp: 0.02,
         }
@@ -212,7 +213,11 @@ pub fn simulate(sim: &SimulationParams) -> Result<StageRecord> {
     ];
     let quantize = |v: f64| {
         let res = sim.plate_sensor[0];
-        if res > 0.0 { (v / res).round() * res } else { v }
+        if res > 0.0 {
+            (v / res).round() * res
+        } else {
+            v
+        }
     };
     let bias = pp.bias_voltage;
     let [lo, hi] = pp.voltage_range;

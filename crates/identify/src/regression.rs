@@ -254,12 +254,19 @@ pub fn physical(
     let c_qo2 = theta.output2[1] * m / s1;
     let coupling = [theta.output1[2] * m / s2, theta.output2[2] * m / s2];
     let plate = |a: &[f64; 5], p: &[[f64; 5]; 5], m_in: f64| {
-        let target = s2 * k_qo1 / m_in;
+        // Equality constraints θ₃ = T_s²K_qo1/m_in, θ₅ = (T_s/2)C_qo1/m_in:
+        // θ_c = θ − P E (EᵀPE)⁻¹ (Eᵀθ − c), E = [e₃, e₅].
+        let r = [a[2] - s2 * k_qo1 / m_in, a[4] - s1 * c_qo1 / m_in];
+        let g = [[p[2][2], p[2][4]], [p[4][2], p[4][4]]];
+        let det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
         let mut c = *a;
-        if p[2][2] > 0.0 {
-            let shift = (a[2] - target) / p[2][2];
+        if det > 0.0 {
+            let w = [
+                (g[1][1] * r[0] - g[0][1] * r[1]) / det,
+                (g[0][0] * r[1] - g[1][0] * r[0]) / det,
+            ];
             for j in 0..5 {
-                c[j] = a[j] - p[j][2] * shift;
+                c[j] = a[j] - p[j][2] * w[0] - p[j][4] * w[1];
             }
         }
         (c[0] * m_in / s2, c[1] * m_in / s2, c[3] * m_in / s1)
