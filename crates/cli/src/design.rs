@@ -122,6 +122,7 @@ fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
         ("volume", &|r| r.volume),
         ("grey", &|r| r.grey),
         ("change", &|r| r.change),
+        ("mean_change", &|r| r.mean_change),
         ("kkt", &|r| r.kkt.unwrap_or(f64::NAN)),
         ("beta", &|r| r.beta),
         ("newton_total", &|r| r.newton_total as f64),

@@ -267,6 +267,14 @@ pub enum RegionKind {
     Void,
 }
 
+fn default_stagnation_window() -> usize {
+    20
+}
+
+fn default_stagnation_tolerance() -> f64 {
+    1e-5
+}
+
 /// Topology-optimization settings (Table 3, Eq. 5, NOTES.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -310,8 +318,19 @@ pub struct Optimization {
     /// Largest angle [deg] between the differential output and the tilted target axis θ
     /// (`output.tilt_deg`), in (0, 45]; only used when θ ≠ 0.
     pub tilt_tolerance_deg: f64,
-    /// Stop when additionally the KKT residual of the MMA problem is below this, > 0.
+    /// Stop when additionally the KKT residual of the MMA problem is below this, > 0
+    /// (Svanberg's kktcheck max norm of the scaled problem per unit max(1, |f0|)).
     pub kkt_tolerance: f64,
+    /// Stagnation window W [iterations], in [0, 10000]; 0 = off. At the final β the run also
+    /// stops when, over the last W iterations, the objective varied by at most
+    /// `stagnation_tolerance` (relative), every update's mean |Δx| was below
+    /// `change_tolerance`, the constraints hold and the KKT residual is below
+    /// `kkt_tolerance`. Default 20.
+    #[serde(default = "default_stagnation_window")]
+    pub stagnation_window: usize,
+    /// Relative objective variation over the stagnation window, in (0, 1). Default 1e-5.
+    #[serde(default = "default_stagnation_tolerance")]
+    pub stagnation_tolerance: f64,
     /// Heaviside projection with β continuation (NOTES.md filtering).
     pub projection: Projection,
     /// Additive Yeoh hyperelasticity in low-density elements (Appendix A, Eq. A2–A4).
@@ -423,6 +442,18 @@ impl Optimization {
             "a number in (0, 45]",
         )?;
         positive("optimization.kkt_tolerance", self.kkt_tolerance)?;
+        check(
+            "optimization.stagnation_window",
+            self.stagnation_window as f64,
+            self.stagnation_window <= 10_000,
+            "an integer in [0, 10000]",
+        )?;
+        check(
+            "optimization.stagnation_tolerance",
+            self.stagnation_tolerance,
+            self.stagnation_tolerance > 0.0 && self.stagnation_tolerance < 1.0,
+            "a number in (0, 1)",
+        )?;
         within(
             "optimization.projection.beta_max",
             self.projection.beta_max,

@@ -175,7 +175,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.change_tolerance",
-        "Stop when the largest density change is below this, in (0, 1).",
+        "Stop when the largest density change is below this (stagnation test: the mean change), in (0, 1).",
     ),
     (
         "optimization.kinematics",
@@ -204,6 +204,14 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     (
         "optimization.kkt_tolerance",
         "Stop when the density change and the MMA KKT residual are both small; KKT bound, > 0.",
+    ),
+    (
+        "optimization.stagnation_window",
+        "At the final beta, also stop when the objective, densities and KKT stagnate over this many iterations; 0 = off.",
+    ),
+    (
+        "optimization.stagnation_tolerance",
+        "Largest relative objective variation over the stagnation window, in (0, 1).",
     ),
     (
         "optimization.projection",

@@ -167,6 +167,8 @@ impl Scenario {
                 strain_energy_factor: 2.0,
                 tilt_tolerance_deg: 2.0,
                 kkt_tolerance: 1e-3,
+                stagnation_window: 20,
+                stagnation_tolerance: 1e-5,
                 projection: Projection {
                     enabled: true,
                     beta_max: 16.0,
