@@ -6,6 +6,7 @@
 mod analyze;
 mod build;
 mod design;
+mod export;
 mod identify;
 mod identify_stage;
 mod pea;
@@ -109,6 +110,16 @@ Examples:
   flexstage track --params stage.toml --duration 0.5 --out runs/test"
     )]
     Track(track::TrackArgs),
+    /// Manufacturing outline of a design (Section 4.1): the ρ = 0.5 iso-contour as DXF and
+    /// SVG closed polylines, and a binary STL extruded by the thickness t.
+    #[command(after_help = "Writes <run>/export/outline.dxf (R2000 LWPOLYLINE), outline.svg and
+outline.stl.
+
+Examples:
+  flexstage export --preset quick                 # the design of runs/quick, millimetres
+  flexstage export --design runs/paper --units m  # metres
+  flexstage export --smoothing 0                  # the raw marching-squares polygon")]
+    Export(export::ExportArgs),
 }
 
 fn main() -> ExitCode {
@@ -155,6 +166,7 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Identify { what } => identify::run(what),
         Command::Pea { what } => pea::run(what),
         Command::Track(args) => track::run(args),
+        Command::Export(args) => export::run(args),
     }
 }
 

@@ -13,6 +13,7 @@
 //! ```
 
 pub mod image;
+pub mod outline;
 pub mod plot;
 pub mod vtk;
 
