@@ -945,12 +945,27 @@ fn solve_group(
         if running == 0 {
             break;
         }
-        if let Err(e) = precond.solve_columns_in_place(rhs, m, &mut gws.sws) {
+        // Pack the running columns to the front (k ≤ j, so forward copies are safe) and solve
+        // only those: late sweeps have few cases left.
+        let mut k = 0;
+        for j in 0..m {
+            if st[j] == St::Run {
+                if k != j {
+                    rhs.copy_within(j * nf..(j + 1) * nf, k * nf);
+                }
+                k += 1;
+            }
+        }
+        if let Err(e) =
+            precond.solve_columns_in_place(&mut rhs[..running * nf], running, &mut gws.sws)
+        {
             return vec![Err(e.into())];
         }
+        let mut k = 0;
         for (j, cs) in cases.iter_mut().enumerate() {
             if st[j] == St::Run {
-                cs.aa.step(&rhs[j * nf..(j + 1) * nf]);
+                cs.aa.step(&rhs[k * nf..(k + 1) * nf]);
+                k += 1;
                 for (x, &d) in cs.aa.x.iter().zip(free) {
                     cs.u[d] = *x;
                 }
