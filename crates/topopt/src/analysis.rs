@@ -948,8 +948,8 @@ fn solve_group(
         // Pack the running columns to the front (k ≤ j, so forward copies are safe) and solve
         // only those: late sweeps have few cases left.
         let mut k = 0;
-        for j in 0..m {
-            if st[j] == St::Run {
+        for (j, &s) in st.iter().enumerate() {
+            if s == St::Run {
                 if k != j {
                     rhs.copy_within(j * nf..(j + 1) * nf, k * nf);
                 }
