@@ -11,6 +11,8 @@ mod identify;
 mod identify_stage;
 mod pea;
 mod reduce;
+mod report;
+mod run;
 mod run_dir;
 mod scenario_args;
 mod track;
@@ -112,14 +114,33 @@ Examples:
     Track(track::TrackArgs),
     /// Manufacturing outline of a design (Section 4.1): the ρ = 0.5 iso-contour as DXF and
     /// SVG closed polylines, and a binary STL extruded by the thickness t.
-    #[command(after_help = "Writes <run>/export/outline.dxf (R2000 LWPOLYLINE), outline.svg and
+    #[command(
+        after_help = "Writes <run>/export/outline.dxf (R2000 LWPOLYLINE), outline.svg and
 outline.stl.
 
 Examples:
   flexstage export --preset quick                 # the design of runs/quick, millimetres
   flexstage export --design runs/paper --units m  # metres
-  flexstage export --smoothing 0                  # the raw marching-squares polygon")]
+  flexstage export --smoothing 0                  # the raw marching-squares polygon"
+    )]
     Export(export::ExportArgs),
+    /// The whole scheme on one scenario: design, outline export, reduce, PEA and stage
+    /// identification on simulated data, tracking with every controller, and an HTML report.
+    #[command(
+        after_help = "Each stage feeds the next through files in the run folder; running
+the same command again resumes after the last finished stage (run_state.json).
+Ends with a summary and the path of <run>/report.html (self-contained, opens offline).
+
+Examples:
+  flexstage run                      # quick preset, runs/quick, well under a minute
+  flexstage run --preset paper       # the paper's settings (Tables 1, 3, 4, A1)
+  flexstage run my.toml --out runs/mine --restart"
+    )]
+    Run(run::RunArgs),
+    /// Rebuild <run>/report.html from a run folder (partial runs show \"not run\").
+    #[command(after_help = "Examples:
+  flexstage report runs/quick")]
+    Report(report::ReportArgs),
 }
 
 fn main() -> ExitCode {
@@ -167,6 +188,8 @@ fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Pea { what } => pea::run(what),
         Command::Track(args) => track::run(args),
         Command::Export(args) => export::run(args),
+        Command::Run(args) => run::run(args),
+        Command::Report(args) => report::run(args),
     }
 }
 

@@ -12,6 +12,7 @@
 //!   <stage>/...        one sub-folder per pipeline stage (design, reduce, identify, track)
 //! ```
 
+pub mod html;
 pub mod image;
 pub mod outline;
 pub mod plot;

@@ -1,0 +1,115 @@
+//! Reference: issue #10 "`flexstage run`, an HTML report, CAD outline export". Goal: the
+//! README's main command runs every stage on the quick preset, writes a self-contained
+//! `report.html` with every section and its figures (no network needed), the outline files,
+//! and running it again resumes (every stage skipped).
+
+use std::path::PathBuf;
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_flexstage");
+
+/// Section ids of the report, in order (flexstage_report::html::SECTIONS).
+const SECTIONS: [&str; 9] = [
+    "summary",
+    "design",
+    "convergence",
+    "reduce",
+    "modes",
+    "pea",
+    "stage",
+    "tracking",
+    "export",
+];
+
+fn run(dir: &PathBuf) -> (String, String) {
+    let out = Command::new(BIN)
+        .args(["run", "--preset", "quick", "--out"])
+        .arg(dir)
+        .output()
+        .expect("flexstage runs");
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "flexstage run failed:\n{stderr}");
+    (stdout, stderr)
+}
+
+/// The text of every `attr="..."` value in the HTML.
+fn attribute_values<'a>(html: &'a str, attr: &str) -> Vec<&'a str> {
+    html.split(&format!("{attr}=\""))
+        .skip(1)
+        .filter_map(|s| s.split('"').next())
+        .collect()
+}
+
+#[test]
+fn run_writes_a_self_contained_report_with_every_section_and_resumes() {
+    let dir = std::env::temp_dir().join(format!("flexstage-run-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let (stdout, _) = run(&dir);
+    assert!(stdout.contains("report: "), "prints where the report is");
+    assert!(stdout.contains("workspace area"), "prints the summary");
+    assert!(stdout.contains("tracking RMS"), "prints the tracking RMS");
+
+    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    // Every section present, in order, and none reported as not run.
+    let mut at = 0;
+    for id in SECTIONS {
+        let pos = html
+            .find(&format!("<section id=\"{id}\">"))
+            .unwrap_or_else(|| panic!("section {id} missing"));
+        assert!(pos > at, "section {id} out of order");
+        at = pos;
+    }
+    assert_eq!(
+        html.matches("<section").count(),
+        html.matches("</section>").count()
+    );
+    assert!(
+        !html.contains("class=\"notrun\""),
+        "a stage is missing in a full run"
+    );
+    // Images: embedded only, decodable SVG/PNG, and enough of them: density, workspace,
+    // convergence, validity, mode shapes, hysteresis/A2, Table 4 convergence, tracking.
+    let srcs = attribute_values(&html, "src");
+    assert!(srcs.len() >= 20, "only {} images", srcs.len());
+    for s in &srcs {
+        assert!(
+            s.starts_with("data:image/svg+xml;base64,") || s.starts_with("data:image/png;base64,"),
+            "not an embedded image: {}",
+            &s[..s.len().min(60)]
+        );
+    }
+    for id in SECTIONS.iter().skip(1) {
+        let start = html.find(&format!("<section id=\"{id}\">")).unwrap();
+        let end = start + html[start..].find("</section>").unwrap();
+        assert!(
+            html[start..end].contains("<img"),
+            "section {id} has no image"
+        );
+    }
+    // No network: no external URL in any src/href (the nav links are fragments).
+    for h in attribute_values(&html, "href") {
+        assert!(h.starts_with('#'), "external link {h}");
+    }
+    assert!(!html.contains("src=\"http"), "external image");
+    assert!(!html.contains("<script"), "no scripts needed");
+
+    // Outline export: DXF with LWPOLYLINE entities, STL with its declared triangle count.
+    let dxf = std::fs::read_to_string(dir.join("export/outline.dxf")).unwrap();
+    assert!(
+        dxf.contains("LWPOLYLINE") && dxf.contains("AC1015"),
+        "R2000 DXF outline"
+    );
+    let stl = std::fs::read(dir.join("export/outline.stl")).unwrap();
+    let n = u32::from_le_bytes(stl[80..84].try_into().unwrap()) as usize;
+    assert!(n > 0 && stl.len() == 84 + 50 * n);
+
+    // Resume: every finished stage is skipped.
+    let (_, stderr) = run(&dir);
+    assert_eq!(
+        stderr.matches("done earlier, skipped").count(),
+        7,
+        "{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
