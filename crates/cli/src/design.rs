@@ -116,7 +116,7 @@ fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
         header.push(n);
         cols.push(col(&|r| r.constraints[i]));
     }
-    let rest: [Column; 12] = [
+    let rest: [Column; 13] = [
         ("energy_J", &|r| r.energy),
         ("stroke_ratio", &|r| r.stroke),
         ("volume", &|r| r.volume),
