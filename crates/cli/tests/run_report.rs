@@ -104,6 +104,14 @@ fn run_writes_a_self_contained_report_with_every_section_and_resumes() {
     let n = u32::from_le_bytes(stl[80..84].try_into().unwrap()) as usize;
     assert!(n > 0 && stl.len() == 84 + 50 * n);
 
+    // The simulated stage is the designed one: the plant's truth is the reduced model.
+    let reduced: flexstage_scenario::StageParams =
+        toml::from_str(&std::fs::read_to_string(dir.join("reduce/params.toml")).unwrap()).unwrap();
+    let plant =
+        flexstage_scenario::Scenario::load(&dir.join("plant.toml")).expect("plant.toml is valid");
+    assert_eq!(plant.stage.truth, reduced);
+    assert_eq!(plant.stage.guess.mass, reduced.mass);
+
     // Resume: every finished stage is skipped.
     let (_, stderr) = run(&dir);
     assert_eq!(
