@@ -6,7 +6,7 @@
 use std::io::Read;
 
 use flexstage_control::actuator::preload;
-use flexstage_piezo::{BoucWen, BoucWenParams, MICROMETRE};
+use flexstage_piezo::{BoucWen, BoucWenParams, MICROMETRE, NumericCsv, PiezoError};
 
 use crate::error::{IdentifyError, Result, data_error};
 
@@ -120,37 +120,23 @@ impl StageRecord {
     /// ignored, `#` comment lines skipped). Errors name the file, 1-based line and column.
     /// Returns the columns and the input as found; see [`StageRecord::from_input`].
     pub fn read_csv(reader: impl Read, origin: &str) -> Result<(Vec<f64>, Input, Columns)> {
-        let mut rdr = csv::ReaderBuilder::new()
-            .has_headers(true)
-            .trim(csv::Trim::All)
-            .comment(Some(b'#'))
-            .flexible(true)
-            .from_reader(reader);
-        let csv_err = |e: csv::Error| {
-            let line = e.position().map(|p| p.line()).unwrap_or(0);
-            IdentifyError::Csv {
-                origin: origin.to_string(),
+        // The shared reader reports bad lines as PiezoError::Csv; keep this crate's variant.
+        let csv_err = |e: PiezoError| match e {
+            PiezoError::Csv {
+                origin,
                 line,
-                reason: e.to_string(),
-            }
+                reason,
+            } => IdentifyError::Csv {
+                origin,
+                line,
+                reason,
+            },
+            other => other.into(),
         };
-        let headers = rdr.headers().map_err(csv_err)?.clone();
-        let position = |name: &str| headers.iter().position(|h| h.eq_ignore_ascii_case(name));
+        let table = NumericCsv::open(reader, origin).map_err(csv_err)?;
         let expected = "t, x_nom1, x_nom2 (or U1, U2), x_in1, x_in2, q1, q2";
-        let find = |name: &str| {
-            position(name).ok_or_else(|| IdentifyError::MissingColumn {
-                origin: origin.to_string(),
-                column: name.to_string(),
-                found: if headers.is_empty() {
-                    "none".into()
-                } else {
-                    headers.iter().collect::<Vec<_>>().join(", ")
-                },
-                expected: expected.into(),
-            })
-        };
-        let nominal = position("x_nom1").is_some() || position("x_nom2").is_some();
-        let input_names = if nominal || position("U1").is_none() {
+        let nominal = table.position("x_nom1").is_some() || table.position("x_nom2").is_some();
+        let input_names = if nominal || table.position("U1").is_none() {
             ["x_nom1", "x_nom2"]
         } else {
             ["U1", "U2"]
@@ -166,52 +152,20 @@ impl StageRecord {
         ];
         let mut cols = [0usize; 7];
         for (c, name) in cols.iter_mut().zip(names) {
-            *c = find(name)?;
-        }
-        let mut data: [Vec<f64>; 7] = Default::default();
-        let mut record = csv::StringRecord::new();
-        let mut prev_t: Option<(f64, u64)> = None;
-        loop {
-            match rdr.read_record(&mut record) {
-                Ok(true) => {}
-                Ok(false) => break,
-                Err(e) => return Err(csv_err(e)),
-            }
-            let line = record.position().map(|p| p.line()).unwrap_or(0);
-            let bad = |reason: String| IdentifyError::Csv {
-                origin: origin.to_string(),
-                line,
-                reason,
-            };
-            for (i, &c) in cols.iter().enumerate() {
-                let cell = record.get(c).ok_or_else(|| {
-                    bad(format!(
-                        "missing value for column {} (the row has {} fields)",
-                        names[i],
-                        record.len()
-                    ))
+            *c = table
+                .position(name)
+                .ok_or_else(|| IdentifyError::MissingColumn {
+                    origin: origin.to_string(),
+                    column: name.to_string(),
+                    found: table.found(),
+                    expected: expected.into(),
                 })?;
-                let v: f64 = cell
-                    .parse()
-                    .map_err(|_| bad(format!("column {}: {cell:?} is not a number", names[i])))?;
-                if !v.is_finite() {
-                    return Err(bad(format!(
-                        "column {}: {cell} is not a finite number",
-                        names[i]
-                    )));
-                }
-                data[i].push(v);
-            }
-            let tk = data[0][data[0].len() - 1];
-            if let Some((tp, lp)) = prev_t
-                && tk <= tp
-            {
-                return Err(bad(format!(
-                    "time is not increasing: t = {tk} after t = {tp} on line {lp}"
-                )));
-            }
-            prev_t = Some((tk, line));
         }
+        let data: [Vec<f64>; 7] = table
+            .read(&cols, &names)
+            .map_err(csv_err)?
+            .try_into()
+            .expect("one vector per requested column");
         let [t, i1, i2, x1, x2, q1, q2] = data;
         let input = if input_names[0] == "U1" {
             Input::Voltage([i1, i2])

@@ -45,7 +45,7 @@ pub mod synth;
 pub use compensate::{
     Compensated, CompensatedLoop, CompensatorParams, InverseCompensator, compensated_loop,
 };
-pub use data::PeaData;
+pub use data::{NumericCsv, PeaData};
 pub use error::{PiezoError, Result};
 pub use hysteresis::{
     HysteresisLoop, LoopMetrics, LoopParams, WaveShape, Waveform, loop_metrics, steady_state_loop,
