@@ -5,7 +5,9 @@ use rayon::prelude::*;
 use crate::error::MmaError;
 use crate::kkt::{KktProblem, KktResidual, Multipliers, kkt_residual};
 use crate::params::MmaParams;
-use crate::subsolv::{ALFA, BETA, CHUNK, LOW, P0, PQ, Q0, SubConsts, SubSolver, UPP, XState};
+use crate::subsolv::{
+    ALFA, BETA, CHUNK, ETA, LOW, NSTATE, P0, PQ, Q0, SubConsts, SubSolver, UPP, X, XSI, idx,
+};
 
 /// What one [`Mma::update`] did.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -245,9 +247,9 @@ impl Mma {
         self.xold1.copy_from_slice(&state.xold1);
         self.xold2.copy_from_slice(&state.xold2);
         let stride = self.sub.stride;
-        for (j, r) in self.sub.nodes.chunks_exact_mut(stride).enumerate() {
-            r[LOW] = state.low[j];
-            r[UPP] = state.upp[j];
+        for j in 0..n {
+            self.sub.nodes[idx(j, LOW, stride)] = state.low[j];
+            self.sub.nodes[idx(j, UPP, stride)] = state.upp[j];
         }
         self.sub.lam.copy_from_slice(&state.lam);
         self.sub.y.copy_from_slice(&state.y);
@@ -262,12 +264,12 @@ impl Mma {
 
     /// Lower asymptotes used by the last update (an empty-history optimizer returns zeros).
     pub fn low(&self) -> impl ExactSizeIterator<Item = f64> + '_ {
-        self.sub.nodes.chunks_exact(self.sub.stride).map(|r| r[LOW])
+        (0..self.n).map(|j| self.sub.nodes[idx(j, LOW, self.sub.stride)])
     }
 
     /// Upper asymptotes used by the last update.
     pub fn upp(&self) -> impl ExactSizeIterator<Item = f64> + '_ {
-        self.sub.nodes.chunks_exact(self.sub.stride).map(|r| r[UPP])
+        (0..self.n).map(|j| self.sub.nodes[idx(j, UPP, self.sub.stride)])
     }
 
     /// Lagrange multipliers λ of the constraints from the last subproblem.
@@ -389,14 +391,14 @@ impl Mma {
                         .par_chunks_mut(CHUNK)
                         .zip(self.eta.par_chunks_mut(CHUNK)),
                 )
-                .zip(sub.state.par_chunks(CHUNK))
+                .zip(sub.state.par_chunks(CHUNK * NSTATE))
                 .map(|(((xs, xo), (xsi, eta)), st)| write_chunk(xs, xo, xsi, eta, st))
                 .reduce(|| 0.0, f64::max)
         } else {
             x.chunks_mut(CHUNK)
                 .zip(self.xold1.chunks_mut(CHUNK))
                 .zip(self.xsi.chunks_mut(CHUNK).zip(self.eta.chunks_mut(CHUNK)))
-                .zip(sub.state.chunks(CHUNK))
+                .zip(sub.state.chunks(CHUNK * NSTATE))
                 .map(|(((xs, xo), (xsi, eta)), st)| write_chunk(xs, xo, xsi, eta, st))
                 .fold(0.0, f64::max)
         }
@@ -449,22 +451,23 @@ impl Mma {
     }
 }
 
-/// Copies x into xold1, the new iterate into x and ξ, η out; returns the max change.
+/// Copies x into xold1, the new iterate into x and ξ, η out (one chunk of `state`);
+/// returns the max change.
 fn write_chunk(
     xs: &mut [f64],
     xo: &mut [f64],
     xsi: &mut [f64],
     eta: &mut [f64],
-    st: &[XState],
+    st: &[f64],
 ) -> f64 {
     let mut ch = 0.0f64;
     for k in 0..xs.len() {
-        let s = &st[k];
+        let xn = st[X * CHUNK + k];
         xo[k] = xs[k];
-        ch = ch.max((s.x - xs[k]).abs());
-        xs[k] = s.x;
-        xsi[k] = s.xsi;
-        eta[k] = s.eta;
+        ch = ch.max((xn - xs[k]).abs());
+        xs[k] = xn;
+        xsi[k] = st[XSI * CHUNK + k];
+        eta[k] = st[ETA * CHUNK + k];
     }
     ch
 }
@@ -487,9 +490,12 @@ fn build_chunk(ctx: &BuildCtx<'_>, c: usize, nodes: &mut [f64], b: &mut [f64]) {
     let (n, m, p) = (ctx.n, ctx.m, &ctx.p);
     let stride = PQ + 2 * m;
     let start = c * CHUNK;
+    let len = (n - start).min(CHUNK);
+    debug_assert_eq!(nodes.len(), CHUNK * stride);
     b.fill(0.0);
-    for (k, nd) in nodes.chunks_exact_mut(stride).enumerate() {
+    for k in 0..len {
         let j = start + k;
+        let nd = |f: usize| f * CHUNK + k;
         let xv = ctx.x[j];
         let (xmin, xmax) = (ctx.xmin[j], ctx.xmax[j]);
         let range = xmax - xmin;
@@ -505,8 +511,8 @@ fn build_chunk(ctx: &BuildCtx<'_>, c: usize, nodes: &mut [f64], b: &mut [f64]) {
             } else {
                 1.0
             };
-            let low = xv - factor * (xo1 - nd[LOW]);
-            let upp = xv + factor * (nd[UPP] - xo1);
+            let low = xv - factor * (xo1 - nodes[nd(LOW)]);
+            let upp = xv + factor * (nodes[nd(UPP)] - xo1);
             let low = low.max(xv - p.asymax * range).min(xv - p.asymin * range);
             let upp = upp.min(xv + p.asymax * range).max(xv + p.asymin * range);
             (low, upp)
@@ -525,20 +531,20 @@ fn build_chunk(ctx: &BuildCtx<'_>, c: usize, nodes: &mut [f64], b: &mut [f64]) {
         let g = ctx.df0dx[j];
         let (pp, qq) = (g.max(0.0), (-g).max(0.0));
         let pq0 = 0.001 * (pp + qq) + p.raa0 * xmamiinv;
-        nd[LOW] = low;
-        nd[UPP] = upp;
-        nd[ALFA] = alfa;
-        nd[BETA] = beta;
-        nd[P0] = (pp + pq0) * ux2;
-        nd[Q0] = (qq + pq0) * xl2;
+        nodes[nd(LOW)] = low;
+        nodes[nd(UPP)] = upp;
+        nodes[nd(ALFA)] = alfa;
+        nodes[nd(BETA)] = beta;
+        nodes[nd(P0)] = (pp + pq0) * ux2;
+        nodes[nd(Q0)] = (qq + pq0) * xl2;
         for i in 0..m {
             let g = ctx.dfdx[i * n + j];
             let (pp, qq) = (g.max(0.0), (-g).max(0.0));
             let pq = 0.001 * (pp + qq) + p.raa0 * xmamiinv;
             let pij = (pp + pq) * ux2;
             let qij = (qq + pq) * xl2;
-            nd[PQ + i] = pij;
-            nd[PQ + m + i] = qij;
+            nodes[nd(PQ + i)] = pij;
+            nodes[nd(PQ + m + i)] = qij;
             b[i] += pij * uxinv + qij * xlinv;
         }
     }

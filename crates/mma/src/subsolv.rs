@@ -1,22 +1,44 @@
 //! Primal–dual interior-point solver of the MMA subproblem (`subsolv` of Svanberg's
-//! `mmasub.m`), restructured for large `n` and small `m`.
+//! `mmasub.m`, K. Svanberg, *MMA and GCMMA – two methods for nonlinear optimization*, KTH
+//! 2007, section 5), restructured for large `n` and small `m`.
 //!
 //! The algorithm is exactly `subsolv`: the same starting point, the same relaxed KKT system
-//! with barrier parameter ε (1, 0.1, … down to `epsimin`), the same Newton directions, the
-//! same fraction-to-the-boundary factor 1.01 and the same backtracking on the residual norm.
-//! Only the order of the floating-point work differs:
+//! with barrier parameter ε (1, 0.1, … down to `epsimin`), the same Newton directions
+//! (the (m+1)×(m+1) reduced system of the note for `m < n`, the (n+1)×(n+1) one otherwise),
+//! the same fraction-to-the-boundary factor 1.01 and the same backtracking on the residual
+//! norm, so the same steps are accepted. Only the order of the floating-point work differs:
 //!
-//! * The per-variable data of the subproblem (`low`, `upp`, `α`, `β`, `p₀`, `q₀`, `P`, `Q`) is
-//!   stored variable-major in one array (`nodes`), and the per-variable iterate
-//!   (`x`, `ξ`, `η`, `Δx`) in another (`state`), so that every O(n) pass streams two arrays.
-//! * One *evaluation* pass at a trial point computes the residual norm (for ε and ε/10) and
-//!   the whole reduced Newton system for the next step (`gvec`, `Σ GGᵀ/diagx`, and
-//!   `Σ G·delx/diagx` split into its ε-free and ε-linear parts). A second *direction* pass
-//!   computes Δx from Δλ and the largest feasible step. Trial points `x + t·Δx` are never
-//!   stored: they are recomputed from the base point and Δx, so the line search only reads.
-//! * The O(n) passes are split in fixed chunks; each chunk reduces into its own slot and the
-//!   slots are summed in order, so the result does not depend on the number of threads.
+//! * Layout. The per-variable data of the subproblem (`low`, `upp`, `α`, `β`, `p₀`, `q₀`,
+//!   `P`, `Q`) and the per-variable iterate (`x`, `ξ`, `η`, `Δx`, `Δξ`, `Δη`) are stored
+//!   structure-of-arrays within fixed chunks of [`CHUNK`] variables: chunk `c` is one block
+//!   of the array, holding field `f` at `f·CHUNK..(f+1)·CHUNK` (see [`idx`]). The last
+//!   chunk is padded with harmless values that never enter a sum or the step length.
+//! * SIMD. The O(n) passes work on [`LANES`] variables at a time with `[f64; LANES]` values,
+//!   accumulate the sums and maxima in per-lane accumulators and reduce the lanes in a fixed
+//!   order at the end of each chunk. The chunk kernels are compiled for AVX-512, AVX2 and
+//!   plain x86-64 (or any other architecture) and chosen at run time (`multiversion`). No
+//!   fused multiply–add is used, so every variant gives bitwise the same results.
+//! * Divisions. Each pass forms the reciprocals 1/(u−x), 1/(x−l), 1/(x−α), 1/(β−x) once
+//!   per variable and multiplies by them; Δξ, Δη are stored with Δx instead of being
+//!   recomputed at every trial point.
+//! * Passes. An *evaluation* pass at a trial point `base + t·Δ` computes the residual norm
+//!   (for ε and ε/10) and the whole reduced Newton system for the next step (`gvec`,
+//!   `Σ GGᵀ/diagx`, and `Σ G·delx/diagx` split into its ε-free and ε-linear parts). A
+//!   *direction* pass computes Δx, Δξ, Δη from Δλ and the largest feasible step, and stores
+//!   the current point as the new base. The m-dimensional directions are known before the
+//!   direction pass; when they allow the full step, the direction pass also evaluates the
+//!   trial point at t = 1 (speculatively). If the whole step is then 1 (the usual case once
+//!   a barrier level is nearly solved), this evaluation is the first one of the line search
+//!   and no separate evaluation pass is needed; otherwise it is discarded and the line
+//!   search runs as in `subsolv`. Trial points are never stored: they are recomputed from
+//!   the base point and Δ, so the line search only reads.
+//! * Threads. The O(n) passes run chunk by chunk (with rayon when `parallel`); each chunk
+//!   reduces into its own slot and the slots are summed in order, so the result does not
+//!   depend on the number of threads.
 
+use std::ops::{Add, Div, Mul, Neg, Sub};
+
+use multiversion::multiversion;
 use rayon::prelude::*;
 
 use crate::dense::solve_in_place;
@@ -36,39 +58,62 @@ macro_rules! dispatch_m {
     };
 }
 
-/// Variables per chunk of the O(n) passes.
-pub(crate) const CHUNK: usize = 4096;
+/// Variables per SIMD block of the O(n) passes.
+pub(crate) const LANES: usize = 8;
+/// Variables per chunk of the O(n) passes (a multiple of [`LANES`]).
+pub(crate) const CHUNK: usize = 1024;
 /// Marker for "m not known at compile time".
 const DYN: usize = usize::MAX;
+/// Largest `m` with a compile-time kernel (see `dispatch_m`).
+const MAX_STATIC_M: usize = 4;
 
-/// Offsets inside one variable's record of `nodes`.
+/// Fields of `nodes`: `P[i]` is field `PQ + i`, `Q[i]` field `PQ + m + i`.
 pub(crate) const LOW: usize = 0;
 pub(crate) const UPP: usize = 1;
 pub(crate) const ALFA: usize = 2;
 pub(crate) const BETA: usize = 3;
 pub(crate) const P0: usize = 4;
 pub(crate) const Q0: usize = 5;
-/// `P[i]` is at `PQ + i`, `Q[i]` at `PQ + m + i`.
 pub(crate) const PQ: usize = 6;
+
+/// Fields of `state`: the base point and the Newton direction.
+pub(crate) const X: usize = 0;
+pub(crate) const XSI: usize = 1;
+pub(crate) const ETA: usize = 2;
+const DX: usize = 3;
+const DXSI: usize = 4;
+const DETA: usize = 5;
+/// Number of fields of `state`.
+pub(crate) const NSTATE: usize = 6;
 
 /// Newton steps per barrier level before giving up on the level (as in `subsolv`).
 const MAX_NEWTON_PER_LEVEL: usize = 200;
 /// Halvings of the step in the line search (as in `subsolv`).
 const MAX_HALVINGS: usize = 50;
 
-/// Number of scalar slots (6 residual pieces, gvec, b0, b1, H) before the scratch area.
+/// Index of field `f` of variable `j` in a chunked array with `nf` fields per variable.
+#[inline]
+pub(crate) fn idx(j: usize, f: usize, nf: usize) -> usize {
+    (j / CHUNK) * CHUNK * nf + f * CHUNK + j % CHUNK
+}
+
+/// Number of scalar slots (6 residual pieces, gvec, b0, b1, H) of a reduction.
 fn reduced_len(m: usize) -> usize {
     6 + 3 * m + m * m
 }
 
-/// Per-variable iterate of the interior-point method.
-#[derive(Clone, Copy, Debug, Default)]
-pub(crate) struct XState {
-    pub x: f64,
-    pub xsi: f64,
-    pub eta: f64,
-    pub dx: f64,
+/// Per-chunk lane accumulators needed when `m` is not a compile-time constant: gvec, b0,
+/// b1, the lower triangle of H, and G of the current block.
+fn dyn_lanes(m: usize) -> usize {
+    if m > MAX_STATIC_M {
+        4 * m + m * (m + 1) / 2
+    } else {
+        1
+    }
 }
+
+/// One chunk of a pass: its index, node block, state block (`S`), slot and lane scratch.
+type ChunkItem<'x, S> = (usize, ((&'x [f64], S), (&'x mut [f64], &'x mut [V])));
 
 /// Constants of the artificial variables and the stopping level.
 #[derive(Clone, Copy, Debug)]
@@ -105,16 +150,21 @@ pub(crate) struct SubReport {
 pub(crate) struct SubSolver {
     pub n: usize,
     pub m: usize,
+    /// Fields per variable in `nodes`: `PQ + 2m`.
     pub stride: usize,
     pub parallel: bool,
-    /// Variable-major records `[low, upp, α, β, p₀, q₀, P₀..P_{m-1}, Q₀..Q_{m-1}]`.
+    /// Chunked records `[low, upp, α, β, p₀, q₀, P₀..P_{m-1}, Q₀..Q_{m-1}]` (see [`idx`]).
     pub nodes: Vec<f64>,
     /// `b` of the subproblem constraints.
     pub b: Vec<f64>,
-    pub state: Vec<XState>,
+    /// Chunked per-variable iterate `[x, ξ, η, Δx, Δξ, Δη]` (see [`idx`]).
+    pub state: Vec<f64>,
     /// Per-chunk reduction slots.
     pub acc: Vec<f64>,
     pub slot: usize,
+    /// Per-chunk lane accumulators for `m > 4`.
+    lanes: Vec<V>,
+    lslot: usize,
     // m-dimensional iterate.
     pub y: Vec<f64>,
     pub lam: Vec<f64>,
@@ -130,6 +180,8 @@ pub(crate) struct SubSolver {
     dlam: Vec<f64>,
     dmu: Vec<f64>,
     ds: Vec<f64>,
+    /// λ + Δλ, the multipliers of the speculative trial point.
+    lam1: Vec<f64>,
     // Reduced Newton system pieces.
     gvec: Vec<f64>,
     b0: Vec<f64>,
@@ -145,28 +197,38 @@ pub(crate) struct SubSolver {
     gg: Vec<f64>,
     delx: Vec<f64>,
     diagx: Vec<f64>,
-    /// The stored `state` is the base point; the current point is
-    /// `base + steg·Δ(eps)` with `(steg, eps) = pending`.
-    pending: (f64, f64),
+    /// The stored `state` holds the base point; the current point is `base + pending·Δ`.
+    pending: f64,
 }
 
 impl SubSolver {
     pub(crate) fn new(n: usize, m: usize, parallel: bool) -> Self {
         let stride = PQ + 2 * m;
         let nchunks = n.div_ceil(CHUNK);
-        let slot = reduced_len(m) + m;
+        let slot = reduced_len(m) + 1;
+        let lslot = dyn_lanes(m);
         let small = n <= m;
         let k = if small { n + 1 } else { m + 1 };
+        // Harmless data for the padding of the last chunk (overwritten for j < n).
+        let mut nodes = vec![1.0; nchunks * CHUNK * stride];
+        for c in 0..nchunks {
+            let blk = &mut nodes[c * CHUNK * stride..][..CHUNK * stride];
+            blk[LOW * CHUNK..][..CHUNK].fill(-1.0);
+            blk[UPP * CHUNK..][..CHUNK].fill(2.0);
+            blk[ALFA * CHUNK..][..CHUNK].fill(0.0);
+        }
         Self {
             n,
             m,
             stride,
             parallel,
-            nodes: vec![0.0; n * stride],
+            nodes,
             b: vec![0.0; m],
-            state: vec![XState::default(); n],
+            state: vec![0.0; nchunks * CHUNK * NSTATE],
             acc: vec![0.0; nchunks * slot],
             slot,
+            lanes: vec![V::splat(0.0); nchunks * lslot],
+            lslot,
             y: vec![1.0; m],
             lam: vec![1.0; m],
             mu: vec![1.0; m],
@@ -181,6 +243,7 @@ impl SubSolver {
             dlam: vec![0.0; m],
             dmu: vec![0.0; m],
             ds: vec![0.0; m],
+            lam1: vec![0.0; m],
             gvec: vec![0.0; m],
             b0: vec![0.0; m],
             b1: vec![0.0; m],
@@ -194,7 +257,7 @@ impl SubSolver {
             gg: if small { vec![0.0; n * m] } else { Vec::new() },
             delx: if small { vec![0.0; n] } else { Vec::new() },
             diagx: if small { vec![0.0; n] } else { Vec::new() },
-            pending: (0.0, 1.0),
+            pending: 0.0,
         }
     }
 
@@ -202,8 +265,8 @@ impl SubSolver {
         self.n <= self.m
     }
 
-    /// Solves the subproblem whose data is in `nodes` and `b`. On return `state[j].x`,
-    /// `.xsi`, `.eta` and the m-dimensional fields hold the solution.
+    /// Solves the subproblem whose data is in `nodes` and `b`. On return the fields `X`,
+    /// `XSI`, `ETA` of `state` and the m-dimensional fields hold the solution.
     pub(crate) fn solve(&mut self, k: &SubConsts) -> SubReport {
         let m = self.m;
         // Starting point of subsolv.
@@ -214,17 +277,16 @@ impl SubSolver {
         self.s.fill(1.0);
         self.z = 1.0;
         self.zet = 1.0;
-        self.pending = (0.0, 1.0);
+        self.pending = 0.0;
 
         let mut epsi = 1.0f64;
         let need_h = !self.small_branch();
-        let mut ev = self.eval(0.0, 1.0, epsi, need_h);
+        let mut ev = self.eval(0.0, epsi, need_h);
         let mut itera = 0usize;
         let mut resnorm = f64::NAN;
         while epsi > k.epsimin {
             if ev.eps_a != epsi && ev.eps_b != epsi {
-                let (st, ep) = self.pending;
-                ev = self.eval(st, ep, epsi, need_h);
+                ev = self.eval(self.pending, epsi, need_h);
             }
             let (mut rn, mut rmax) = self.residual(&ev, epsi, k);
             resnorm = rn;
@@ -233,28 +295,19 @@ impl SubSolver {
                 ittt += 1;
                 itera += 1;
                 self.newton_prelude(epsi, k);
-                let stm_n = if self.small_branch() {
-                    self.small_direction(epsi, k)
+                // Directions, and whether the direction pass evaluated the full step.
+                let (stm, speculated) = if self.small_branch() {
+                    let stm_n = self.small_direction(epsi, k);
+                    (stm_n.max(self.m_directions(epsi)), false)
                 } else {
-                    self.large_direction(epsi, k)
+                    self.solve_reduced(epsi, k);
+                    let stm_m = self.m_directions(epsi);
+                    let spec = stm_m <= 1.0;
+                    let stm_n = self.direction_pass(epsi, spec, need_h);
+                    (stm_n.max(stm_m), spec)
                 };
-                // Directions of the m-dimensional variables and the step length.
-                let mut stm = stm_n;
-                for i in 0..m {
-                    let dy = (self.dlam[i] - self.dely[i]) / self.diagy[i];
-                    self.dy[i] = dy;
-                    self.dmu[i] = -self.mu[i] + epsi / self.y[i] - self.mu[i] * dy / self.y[i];
-                    self.ds[i] =
-                        -self.s[i] + epsi / self.lam[i] - self.s[i] * self.dlam[i] / self.lam[i];
-                    stm = stm
-                        .max(-1.01 * dy / self.y[i])
-                        .max(-1.01 * self.dlam[i] / self.lam[i])
-                        .max(-1.01 * self.dmu[i] / self.mu[i])
-                        .max(-1.01 * self.ds[i] / self.s[i]);
-                }
                 let dz = self.rhs_dz();
                 let dzet = -self.zet + epsi / self.z - self.zet * dz / self.z;
-                stm = stm.max(-1.01 * dz / self.z).max(-1.01 * dzet / self.zet);
                 let mut steg = 1.0 / stm.max(1.0);
 
                 self.yo.copy_from_slice(&self.y);
@@ -276,14 +329,19 @@ impl SubSolver {
                     }
                     self.z = zo + steg * dz;
                     self.zet = zeto + steg * dzet;
-                    ev = self.eval(steg, epsi, epsi, need_h);
+                    ev = if itto == 1 && speculated && steg == 1.0 {
+                        // The direction pass evaluated exactly this point (λ + 1·Δλ = λ₁).
+                        self.reduce_eval(epsi)
+                    } else {
+                        self.eval(steg, epsi, need_h)
+                    };
                     let (n2, mx) = self.residual(&ev, epsi, k);
                     resinew = n2;
                     rmax = mx;
                     accepted = steg;
                     steg /= 2.0;
                 }
-                self.pending = (accepted, epsi);
+                self.pending = accepted;
                 rn = resinew;
                 resnorm = rn;
             }
@@ -301,91 +359,125 @@ impl SubSolver {
         self.rhs[self.rhs.len() - 1]
     }
 
-    /// x = (α+β)/2, ξ = max(1/(x−α), 1), η = max(1/(β−x), 1).
+    /// Δy, Δμ, Δs from Δλ (Δz is in `rhs`); returns the largest step ratio of y, λ, μ, s,
+    /// z and ζ.
+    fn m_directions(&mut self, epsi: f64) -> f64 {
+        let mut stm = f64::NEG_INFINITY;
+        for i in 0..self.m {
+            let dy = (self.dlam[i] - self.dely[i]) / self.diagy[i];
+            self.dy[i] = dy;
+            self.dmu[i] = -self.mu[i] + epsi / self.y[i] - self.mu[i] * dy / self.y[i];
+            self.ds[i] = -self.s[i] + epsi / self.lam[i] - self.s[i] * self.dlam[i] / self.lam[i];
+            stm = stm
+                .max(-1.01 * dy / self.y[i])
+                .max(-1.01 * self.dlam[i] / self.lam[i])
+                .max(-1.01 * self.dmu[i] / self.mu[i])
+                .max(-1.01 * self.ds[i] / self.s[i]);
+        }
+        let dz = self.rhs_dz();
+        let dzet = -self.zet + epsi / self.z - self.zet * dz / self.z;
+        stm.max(-1.01 * dz / self.z).max(-1.01 * dzet / self.zet)
+    }
+
+    /// x = (α+β)/2, ξ = max(1/(x−α), 1), η = max(1/(β−x), 1), Δ = 0 (padding included).
     fn init_state(&mut self) {
         let stride = self.stride;
         let nodes = &self.nodes;
-        let f = |(c, st): (usize, &mut [XState])| {
-            let start = c * CHUNK;
-            for (k, s) in st.iter_mut().enumerate() {
-                let nd = &nodes[(start + k) * stride..];
-                let (alfa, beta) = (nd[ALFA], nd[BETA]);
+        let f = |(nd, st): (&[f64], &mut [f64])| {
+            let _ = stride;
+            for k in 0..CHUNK {
+                let (alfa, beta) = (nd[ALFA * CHUNK + k], nd[BETA * CHUNK + k]);
                 let x = 0.5 * (alfa + beta);
-                *s = XState {
-                    x,
-                    xsi: (1.0 / (x - alfa)).max(1.0),
-                    eta: (1.0 / (beta - x)).max(1.0),
-                    dx: 0.0,
-                };
+                st[X * CHUNK + k] = x;
+                st[XSI * CHUNK + k] = (1.0 / (x - alfa)).max(1.0);
+                st[ETA * CHUNK + k] = (1.0 / (beta - x)).max(1.0);
             }
+            st[DX * CHUNK..].fill(0.0);
         };
         if self.parallel {
-            self.state.par_chunks_mut(CHUNK).enumerate().for_each(f);
+            nodes
+                .par_chunks(CHUNK * stride)
+                .zip(self.state.par_chunks_mut(CHUNK * NSTATE))
+                .for_each(f);
         } else {
-            self.state.chunks_mut(CHUNK).enumerate().for_each(f);
+            nodes
+                .chunks(CHUNK * stride)
+                .zip(self.state.chunks_mut(CHUNK * NSTATE))
+                .for_each(f);
         }
     }
 
     /// Applies the pending step to the stored base point.
     fn materialize(&mut self) {
-        let (steg, eps) = self.pending;
+        let steg = self.pending;
         if steg == 0.0 {
             return;
         }
-        let stride = self.stride;
-        let nodes = &self.nodes;
-        let f = |(c, st): (usize, &mut [XState])| {
-            let start = c * CHUNK;
-            for (k, s) in st.iter_mut().enumerate() {
-                let nd = &nodes[(start + k) * stride..];
-                let (x, xsi, eta) = trial(s, nd[ALFA], nd[BETA], steg, eps);
-                *s = XState {
-                    x,
-                    xsi,
-                    eta,
-                    dx: 0.0,
-                };
+        let f = |st: &mut [f64]| {
+            let (pt, d) = st.split_at_mut(DX * CHUNK);
+            for (p, d) in pt.iter_mut().zip(d.iter()) {
+                *p += steg * d;
             }
         };
         if self.parallel {
-            self.state.par_chunks_mut(CHUNK).enumerate().for_each(f);
+            self.state.par_chunks_mut(CHUNK * NSTATE).for_each(f);
         } else {
-            self.state.chunks_mut(CHUNK).enumerate().for_each(f);
+            self.state.chunks_mut(CHUNK * NSTATE).for_each(f);
         }
-        self.pending = (0.0, eps);
+        self.pending = 0.0;
     }
 
-    /// Evaluation pass at the point `base + steg·Δ(eps_dir)` with the current m-dimensional
+    /// Evaluation pass at the point `base + steg·Δ` with the current m-dimensional
     /// variables; fills `gvec` (and `b0`, `b1`, `h` when `need_h`).
-    fn eval(&mut self, steg: f64, eps_dir: f64, eps_a: f64, need_h: bool) -> Eval {
-        let eps_b = 0.1 * eps_a;
+    fn eval(&mut self, steg: f64, eps_a: f64, need_h: bool) -> Eval {
         let ctx = EvalCtx {
             n: self.n,
             m: self.m,
-            stride: self.stride,
-            nodes: &self.nodes,
-            state: &self.state,
             lam: &self.lam,
             steg,
-            eps_dir,
             eps_a,
-            eps_b,
+            eps_b: 0.1 * eps_a,
             need_h,
         };
-        dispatch_m!(
-            self.m,
-            eval_pass,
-            &ctx,
-            &mut self.acc,
-            self.slot,
-            self.parallel
-        );
-        // Ordered reduction over chunks.
+        let stride = self.stride;
+        let lslot = self.lslot;
+        let f = |(c, ((nd, st), (a, ln))): ChunkItem<'_, &[f64]>| {
+            dispatch_m!(self.m, eval_chunk, &ctx, c, nd, st, a, ln)
+        };
+        if self.parallel {
+            self.nodes
+                .par_chunks(CHUNK * stride)
+                .zip(self.state.par_chunks(CHUNK * NSTATE))
+                .zip(
+                    self.acc
+                        .par_chunks_mut(self.slot)
+                        .zip(self.lanes.par_chunks_mut(lslot)),
+                )
+                .enumerate()
+                .for_each(f);
+        } else {
+            self.nodes
+                .chunks(CHUNK * stride)
+                .zip(self.state.chunks(CHUNK * NSTATE))
+                .zip(
+                    self.acc
+                        .chunks_mut(self.slot)
+                        .zip(self.lanes.chunks_mut(lslot)),
+                )
+                .enumerate()
+                .for_each(f);
+        }
+        self.reduce_eval(eps_a)
+    }
+
+    /// Ordered reduction over the chunk slots of an evaluation (by [`Self::eval`] or the
+    /// speculative part of [`Self::direction_pass`]).
+    fn reduce_eval(&mut self, eps_a: f64) -> Eval {
         let m = self.m;
         let r = reduced_len(m);
         let mut e = Eval {
             eps_a,
-            eps_b,
+            eps_b: 0.1 * eps_a,
             sum_x: 0.0,
             max_x: 0.0,
             sum_a: 0.0,
@@ -462,9 +554,8 @@ impl SubSolver {
         }
     }
 
-    /// The (m+1)×(m+1) branch (`m < n`): solves for Δλ, Δz, then the direction pass gives
-    /// Δx. Returns the largest step ratio of the n-dimensional variables.
-    fn large_direction(&mut self, eps: f64, k: &SubConsts) -> f64 {
+    /// The (m+1)×(m+1) branch (`m < n`): solves for Δλ, Δz (Δz is left in `rhs[m]`).
+    fn solve_reduced(&mut self, eps: f64, k: &SubConsts) {
         let m = self.m;
         let kk = m + 1;
         let alam: f64 = self.lam.iter().sum::<f64>() * k.a;
@@ -485,44 +576,100 @@ impl SubSolver {
         self.rhs[m] = delz;
         solve_in_place(&mut self.mat, &mut self.rhs, kk);
         self.dlam.copy_from_slice(&self.rhs[..m]);
+    }
 
-        let (steg_p, eps_p) = self.pending;
+    /// Direction pass of the (m+1)×(m+1) branch: moves the base point to the current point,
+    /// stores Δx, Δξ, Δη there and returns the largest step ratio of the n-dimensional
+    /// variables. With `spec`, also evaluates the trial point `base + Δ` with λ + Δλ into the
+    /// chunk slots (read by [`Self::reduce_eval`]).
+    fn direction_pass(&mut self, eps: f64, spec: bool, need_h: bool) -> f64 {
+        let m = self.m;
+        for i in 0..m {
+            self.lam1[i] = self.lam[i] + self.dlam[i];
+        }
         let ctx = DirCtx {
+            n: self.n,
             m,
-            stride: self.stride,
-            nodes: &self.nodes,
             lam: &self.lam,
             dlam: &self.dlam,
             eps,
-            steg_p,
-            eps_p,
+            steg_p: self.pending,
+            spec: spec.then_some(EvalCtx {
+                n: self.n,
+                m,
+                lam: &self.lam1,
+                steg: 1.0,
+                eps_a: eps,
+                eps_b: 0.1 * eps,
+                need_h,
+            }),
         };
-        dispatch_m!(
-            m,
-            direction_pass,
-            &ctx,
-            &mut self.state,
-            &mut self.acc,
-            self.slot,
-            self.parallel
-        );
-        self.pending = (0.0, eps);
+        let stride = self.stride;
+        let lslot = self.lslot;
+        let f = |(c, ((nd, st), (a, ln))): ChunkItem<'_, &mut [f64]>| {
+            dispatch_m!(m, direction_chunk, &ctx, c, nd, st, a, ln)
+        };
+        if self.parallel {
+            self.nodes
+                .par_chunks(CHUNK * stride)
+                .zip(self.state.par_chunks_mut(CHUNK * NSTATE))
+                .zip(
+                    self.acc
+                        .par_chunks_mut(self.slot)
+                        .zip(self.lanes.par_chunks_mut(lslot)),
+                )
+                .enumerate()
+                .for_each(f);
+        } else {
+            self.nodes
+                .chunks(CHUNK * stride)
+                .zip(self.state.chunks_mut(CHUNK * NSTATE))
+                .zip(
+                    self.acc
+                        .chunks_mut(self.slot)
+                        .zip(self.lanes.chunks_mut(lslot)),
+                )
+                .enumerate()
+                .for_each(f);
+        }
+        self.pending = 0.0;
+        let r = reduced_len(m);
         self.acc
             .chunks_exact(self.slot)
-            .fold(f64::NEG_INFINITY, |acc, a| acc.max(a[0]))
+            .fold(f64::NEG_INFINITY, |acc, a| acc.max(a[r]))
     }
 
     /// The (n+1)×(n+1) branch (`n <= m`), as in `subsolv`. Serial: n is small here.
+    /// Stores Δx, Δξ, Δη and returns the largest step ratio of the n-dimensional variables.
     fn small_direction(&mut self, eps: f64, k: &SubConsts) -> f64 {
         self.materialize();
-        let (n, m) = (self.n, self.m);
+        let (n, m, st) = (self.n, self.m, self.stride);
         let kk = n + 1;
+        let nd = |j: usize, f: usize| self.nodes[idx(j, f, st)];
         for j in 0..n {
-            let nd = &self.nodes[j * self.stride..(j + 1) * self.stride];
-            let s = self.state[j];
-            let t = Terms::new(nd, m, &self.lam, s.x, s.xsi, s.eta);
+            let (x, xsi, eta) = (
+                self.state[idx(j, X, NSTATE)],
+                self.state[idx(j, XSI, NSTATE)],
+                self.state[idx(j, ETA, NSTATE)],
+            );
+            let (mut plam, mut qlam) = (nd(j, P0), nd(j, Q0));
             for i in 0..m {
-                self.gg[j * m + i] = nd[PQ + i] * t.uxinv2 - nd[PQ + m + i] * t.xlinv2;
+                plam += nd(j, PQ + i) * self.lam[i];
+                qlam += nd(j, PQ + m + i) * self.lam[i];
+            }
+            let t = terms(
+                nd(j, LOW),
+                nd(j, UPP),
+                nd(j, ALFA),
+                nd(j, BETA),
+                plam,
+                qlam,
+                x,
+                xsi,
+                eta,
+            );
+            for i in 0..m {
+                self.gg[j * m + i] = nd(j, PQ + i) * t.uxinv2 - nd(j, PQ + m + i) * t.xlinv2;
             }
             self.delx[j] = t.dpsidx + eps * t.e;
             self.diagx[j] = t.diagx;
@@ -573,221 +720,559 @@ impl SubSolver {
         let mut stm = f64::NEG_INFINITY;
         for j in 0..n {
             let dx = self.rhs[j];
-            let nd = &self.nodes[j * self.stride..];
-            let s = &mut self.state[j];
-            s.dx = dx;
-            stm = stm.max(step_ratio(s.x, s.xsi, s.eta, dx, nd[ALFA], nd[BETA], eps));
+            let (alfa, beta) = (self.nodes[idx(j, ALFA, st)], self.nodes[idx(j, BETA, st)]);
+            let (x, xsi, eta) = (
+                self.state[idx(j, X, NSTATE)],
+                self.state[idx(j, XSI, NSTATE)],
+                self.state[idx(j, ETA, NSTATE)],
+            );
+            let xainv = 1.0 / (x - alfa);
+            let bxinv = 1.0 / (beta - x);
+            let d = step(x, xsi, eta, dx, xainv, bxinv, eps);
+            self.state[idx(j, DX, NSTATE)] = dx;
+            self.state[idx(j, DXSI, NSTATE)] = d.dxsi;
+            self.state[idx(j, DETA, NSTATE)] = d.deta;
+            stm = stm.max(d.ratio);
         }
         stm
     }
 }
 
-/// Trial point `base + steg·Δ`, where Δξ, Δη follow from Δx at the base point and level `eps`.
-#[inline(always)]
-fn trial(s: &XState, alfa: f64, beta: f64, steg: f64, eps: f64) -> (f64, f64, f64) {
-    if steg == 0.0 {
-        return (s.x, s.xsi, s.eta);
+// ---------------------------------------------------------------------------------------
+// Lane arithmetic.
+
+/// `LANES` variables' values of one quantity.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct V([f64; LANES]);
+
+impl V {
+    #[inline(always)]
+    fn splat(v: f64) -> Self {
+        Self([v; LANES])
     }
-    let xa = s.x - alfa;
-    let bx = beta - s.x;
-    let dxsi = -s.xsi + eps / xa - s.xsi * s.dx / xa;
-    let deta = -s.eta + eps / bx + s.eta * s.dx / bx;
-    (s.x + steg * s.dx, s.xsi + steg * dxsi, s.eta + steg * deta)
+
+    /// Lanes `o..o+LANES` of `s`.
+    #[inline(always)]
+    fn load(s: &[f64], o: usize) -> Self {
+        let mut a = [0.0; LANES];
+        a.copy_from_slice(&s[o..o + LANES]);
+        Self(a)
+    }
+
+    /// Writes the first `valid` lanes to `s[o..]`.
+    #[inline(always)]
+    fn store<const MASK: bool>(self, s: &mut [f64], o: usize, valid: usize) {
+        if MASK {
+            s[o..o + valid].copy_from_slice(&self.0[..valid]);
+        } else {
+            s[o..o + LANES].copy_from_slice(&self.0);
+        }
+    }
+
+    /// `self` in the first `valid` lanes and `fill` in the others (only when `MASK`).
+    #[inline(always)]
+    fn keep<const MASK: bool>(self, valid: usize, fill: f64) -> Self {
+        if MASK {
+            let mut r = self.0;
+            for (l, v) in r.iter_mut().enumerate() {
+                if l >= valid {
+                    *v = fill;
+                }
+            }
+            Self(r)
+        } else {
+            self
+        }
+    }
+
+    /// Sum of the lanes, in lane order.
+    #[inline(always)]
+    fn hsum(self) -> f64 {
+        self.0.iter().fold(0.0, |a, &b| a + b)
+    }
+
+    /// Maximum of the lanes and `init`.
+    #[inline(always)]
+    fn hmax(self, init: f64) -> f64 {
+        self.0.iter().fold(init, |a, &b| a.max(b))
+    }
 }
 
-/// Largest ratio `-1.01·Δv/v` over x−α, β−x, ξ, η (the step is `1/max(ratio, 1)`).
-#[inline(always)]
-fn step_ratio(x: f64, xsi: f64, eta: f64, dx: f64, alfa: f64, beta: f64, eps: f64) -> f64 {
-    let xa = x - alfa;
-    let bx = beta - x;
-    let dxsi = -xsi + eps / xa - xsi * dx / xa;
-    let deta = -eta + eps / bx + eta * dx / bx;
-    (-1.01 * dx / xa)
-        .max(1.01 * dx / bx)
-        .max(-1.01 * dxsi / xsi)
-        .max(-1.01 * deta / eta)
+macro_rules! lane_op {
+    ($tr:ident, $f:ident, $op:tt) => {
+        impl $tr for V {
+            type Output = V;
+            #[inline(always)]
+            #[allow(clippy::needless_range_loop)]
+            fn $f(self, o: V) -> V {
+                let mut r = [0.0; LANES];
+                for l in 0..LANES {
+                    r[l] = self.0[l] $op o.0[l];
+                }
+                V(r)
+            }
+        }
+    };
 }
+lane_op!(Add, add, +);
+lane_op!(Sub, sub, -);
+lane_op!(Mul, mul, *);
+lane_op!(Div, div, /);
+
+impl Neg for V {
+    type Output = V;
+    #[inline(always)]
+    fn neg(self) -> V {
+        V(self.0.map(|v| -v))
+    }
+}
+
+/// The arithmetic shared by the scalar (`f64`) and lane (`V`) code.
+trait Real:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    fn splat(v: f64) -> Self;
+    /// `max`, equal to `f64::max` for numbers.
+    fn maxv(self, o: Self) -> Self;
+    fn absv(self) -> Self;
+}
+
+impl Real for f64 {
+    #[inline(always)]
+    fn splat(v: f64) -> Self {
+        v
+    }
+    #[inline(always)]
+    fn maxv(self, o: Self) -> Self {
+        self.max(o)
+    }
+    #[inline(always)]
+    fn absv(self) -> Self {
+        self.abs()
+    }
+}
+
+impl Real for V {
+    #[inline(always)]
+    fn splat(v: f64) -> Self {
+        V::splat(v)
+    }
+    #[inline(always)]
+    #[allow(clippy::needless_range_loop)]
+    fn maxv(self, o: Self) -> Self {
+        let mut r = [0.0; LANES];
+        for l in 0..LANES {
+            r[l] = if o.0[l] > self.0[l] {
+                o.0[l]
+            } else {
+                self.0[l]
+            };
+        }
+        V(r)
+    }
+    #[inline(always)]
+    fn absv(self) -> Self {
+        V(self.0.map(f64::abs))
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Per-variable formulas (Svanberg 2007, section 5: the relaxed KKT conditions and the
+// reduced Newton system), written once for f64 and for lanes.
 
 /// Quantities of one variable at a point, shared by the passes.
-struct Terms {
-    uxinv: f64,
-    xlinv: f64,
-    uxinv2: f64,
-    xlinv2: f64,
-    dpsidx: f64,
+#[derive(Clone, Copy)]
+struct Terms<T> {
+    uxinv: T,
+    xlinv: T,
+    uxinv2: T,
+    xlinv2: T,
+    /// 1/(x−α), 1/(β−x).
+    xainv: T,
+    bxinv: T,
+    /// ∂ψ/∂x = (p₀ + λᵀP)/(u−x)² − (q₀ + λᵀQ)/(x−l)².
+    dpsidx: T,
     /// ∂²ψ/∂x² + ξ/(x−α) + η/(β−x).
-    diagx: f64,
+    diagx: T,
     /// 1/(β−x) − 1/(x−α): `delx = dpsidx + ε·e`.
-    e: f64,
+    e: T,
 }
 
-impl Terms {
-    #[inline(always)]
-    fn new(nd: &[f64], m: usize, lam: &[f64], x: f64, xsi: f64, eta: f64) -> Self {
-        let uxinv = 1.0 / (nd[UPP] - x);
-        let xlinv = 1.0 / (x - nd[LOW]);
-        let uxinv2 = uxinv * uxinv;
-        let xlinv2 = xlinv * xlinv;
-        let mut plam = nd[P0];
-        let mut qlam = nd[Q0];
-        for i in 0..m {
-            plam += nd[PQ + i] * lam[i];
-            qlam += nd[PQ + m + i] * lam[i];
-        }
-        let xainv = 1.0 / (x - nd[ALFA]);
-        let bxinv = 1.0 / (nd[BETA] - x);
-        Self {
-            uxinv,
-            xlinv,
-            uxinv2,
-            xlinv2,
-            dpsidx: plam * uxinv2 - qlam * xlinv2,
-            diagx: 2.0 * (plam * uxinv2 * uxinv + qlam * xlinv2 * xlinv)
-                + xsi * xainv
-                + eta * bxinv,
-            e: bxinv - xainv,
-        }
+/// [`Terms`] at `(x, ξ, η)`, with `plam = p₀ + λᵀP`, `qlam = q₀ + λᵀQ`.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn terms<T: Real>(
+    low: T,
+    upp: T,
+    alfa: T,
+    beta: T,
+    plam: T,
+    qlam: T,
+    x: T,
+    xsi: T,
+    eta: T,
+) -> Terms<T> {
+    let one = T::splat(1.0);
+    let uxinv = one / (upp - x);
+    let xlinv = one / (x - low);
+    let xainv = one / (x - alfa);
+    let bxinv = one / (beta - x);
+    let uxinv2 = uxinv * uxinv;
+    let xlinv2 = xlinv * xlinv;
+    let pu = plam * uxinv2;
+    let ql = qlam * xlinv2;
+    Terms {
+        uxinv,
+        xlinv,
+        uxinv2,
+        xlinv2,
+        xainv,
+        bxinv,
+        dpsidx: pu - ql,
+        diagx: T::splat(2.0) * (pu * uxinv + ql * xlinv) + xsi * xainv + eta * bxinv,
+        e: bxinv - xainv,
     }
 }
+
+/// Δξ, Δη and the step ratio of one variable.
+struct Step<T> {
+    dxsi: T,
+    deta: T,
+    /// Largest ratio `-1.01·Δv/v` over x−α, β−x, ξ, η (the step is `1/max(ratio, 1)`).
+    ratio: T,
+}
+
+/// Δξ = −ξ + ε/(x−α) − ξΔx/(x−α), Δη = −η + ε/(β−x) + ηΔx/(β−x), and the step ratio.
+#[inline(always)]
+fn step<T: Real>(x: T, xsi: T, eta: T, dx: T, xainv: T, bxinv: T, eps: f64) -> Step<T> {
+    let _ = x;
+    let epsv = T::splat(eps);
+    let dxsi = epsv * xainv - xsi - xsi * dx * xainv;
+    let deta = epsv * bxinv - eta + eta * dx * bxinv;
+    let c = T::splat(1.01);
+    let mc = T::splat(-1.01);
+    let ratio = (mc * dx * xainv)
+        .maxv(c * dx * bxinv)
+        .maxv(mc * dxsi / xsi)
+        .maxv(mc * deta / eta);
+    Step { dxsi, deta, ratio }
+}
+
+// ---------------------------------------------------------------------------------------
+// Chunk kernels.
 
 struct EvalCtx<'a> {
     n: usize,
     m: usize,
-    stride: usize,
-    nodes: &'a [f64],
-    state: &'a [XState],
     lam: &'a [f64],
+    /// The point is `base + steg·Δ`.
     steg: f64,
-    eps_dir: f64,
     eps_a: f64,
     eps_b: f64,
     need_h: bool,
 }
 
-fn eval_pass<const M: usize>(ctx: &EvalCtx<'_>, acc: &mut [f64], slot: usize, parallel: bool) {
-    let f = |(c, a): (usize, &mut [f64])| eval_chunk::<M>(ctx, c, a);
-    if parallel {
-        acc.par_chunks_mut(slot).enumerate().for_each(f);
-    } else {
-        acc.chunks_mut(slot).enumerate().for_each(f);
+/// Lane accumulators of one chunk's evaluation.
+struct EvalAcc<'s> {
+    head: [V; 6],
+    gvec: &'s mut [V],
+    b0: &'s mut [V],
+    b1: &'s mut [V],
+    /// Lower triangle of H, row by row.
+    h: &'s mut [V],
+    /// G of the current block.
+    g: &'s mut [V],
+}
+
+/// Storage of [`EvalAcc`] for `m ≤ 4`, kept in registers by the compiler.
+struct StaticAcc {
+    gvec: [V; MAX_STATIC_M],
+    b0: [V; MAX_STATIC_M],
+    b1: [V; MAX_STATIC_M],
+    h: [V; MAX_STATIC_M * (MAX_STATIC_M + 1) / 2],
+    g: [V; MAX_STATIC_M],
+}
+
+impl StaticAcc {
+    #[inline(always)]
+    fn new() -> Self {
+        let z = V::splat(0.0);
+        Self {
+            gvec: [z; MAX_STATIC_M],
+            b0: [z; MAX_STATIC_M],
+            b1: [z; MAX_STATIC_M],
+            h: [z; MAX_STATIC_M * (MAX_STATIC_M + 1) / 2],
+            g: [z; MAX_STATIC_M],
+        }
     }
 }
 
-#[inline(always)]
-fn eval_chunk<const M: usize>(ctx: &EvalCtx<'_>, c: usize, a: &mut [f64]) {
-    let m = if M == DYN { ctx.m } else { M };
-    let stride = if M == DYN { ctx.stride } else { PQ + 2 * M };
-    let start = c * CHUNK;
-    let end = (start + CHUNK).min(ctx.n);
-    let nodes = &ctx.nodes[start * stride..end * stride];
-    let states = &ctx.state[start..end];
-    let lam = &ctx.lam[..m];
-    let r = reduced_len(m);
-    let (red, scratch) = a.split_at_mut(r);
-    red.fill(0.0);
-    let (head, rest) = red.split_at_mut(6);
-    let (gvec, rest) = rest.split_at_mut(m);
-    let (b0, rest) = rest.split_at_mut(m);
-    let (b1, h) = rest.split_at_mut(m);
-    let g = &mut scratch[..m];
-    let (eps_a, eps_b) = (ctx.eps_a, ctx.eps_b);
-    let (mut sx, mut mx, mut sa, mut ma, mut sb, mut mb) =
-        (0.0f64, 0.0f64, 0.0, 0.0f64, 0.0, 0.0f64);
-    for (nd, s) in nodes.chunks_exact(stride).zip(states) {
-        let (alfa, beta) = (nd[ALFA], nd[BETA]);
-        let (x, xsi, eta) = trial(s, alfa, beta, ctx.steg, ctx.eps_dir);
-        let t = Terms::new(nd, m, lam, x, xsi, eta);
-        let rex = t.dpsidx - xsi + eta;
-        sx += rex * rex;
-        mx = mx.max(rex.abs());
-        let cx = xsi * (x - alfa);
-        let ce = eta * (beta - x);
-        let (r1, r2) = (cx - eps_a, ce - eps_a);
-        sa += r1 * r1 + r2 * r2;
-        ma = ma.max(r1.abs()).max(r2.abs());
-        let (r1, r2) = (cx - eps_b, ce - eps_b);
-        sb += r1 * r1 + r2 * r2;
-        mb = mb.max(r1.abs()).max(r2.abs());
-        let p = &nd[PQ..PQ + m];
-        let q = &nd[PQ + m..PQ + 2 * m];
-        for i in 0..m {
-            gvec[i] += p[i] * t.uxinv + q[i] * t.xlinv;
+impl<'s> EvalAcc<'s> {
+    /// Zeroed accumulators for `m` constraints: in `st` when `M` is static, else in `ln`.
+    #[inline(always)]
+    fn new<const M: usize>(m: usize, st: &'s mut StaticAcc, ln: &'s mut [V]) -> Self {
+        let tri = m * (m + 1) / 2;
+        let (gvec, b0, b1, h, g) = if M == DYN {
+            ln.fill(V::splat(0.0));
+            let (gvec, r) = ln.split_at_mut(m);
+            let (b0, r) = r.split_at_mut(m);
+            let (b1, r) = r.split_at_mut(m);
+            let (h, g) = r.split_at_mut(tri);
+            (gvec, b0, b1, h, g)
+        } else {
+            (
+                &mut st.gvec[..m],
+                &mut st.b0[..m],
+                &mut st.b1[..m],
+                &mut st.h[..tri],
+                &mut st.g[..m],
+            )
+        };
+        Self {
+            head: [V::splat(0.0); 6],
+            gvec,
+            b0,
+            b1,
+            h,
+            g,
         }
-        if ctx.need_h {
-            let dinv = 1.0 / t.diagx;
-            let w0 = t.dpsidx * dinv;
-            let w1 = t.e * dinv;
-            for i in 0..m {
-                let gi = p[i] * t.uxinv2 - q[i] * t.xlinv2;
-                g[i] = gi;
-                b0[i] += gi * w0;
-                b1[i] += gi * w1;
-                let gd = gi * dinv;
-                for k in 0..=i {
-                    h[i * m + k] += gd * g[k];
-                }
+    }
+
+    /// Horizontal sums into a chunk slot (`reduced_len(m)` entries).
+    #[inline(always)]
+    fn finish(&self, m: usize, a: &mut [f64]) {
+        a[0] = self.head[0].hsum();
+        a[1] = self.head[1].hmax(0.0);
+        a[2] = self.head[2].hsum();
+        a[3] = self.head[3].hmax(0.0);
+        a[4] = self.head[4].hsum();
+        a[5] = self.head[5].hmax(0.0);
+        let a = &mut a[6..];
+        for i in 0..m {
+            a[i] = self.gvec[i].hsum();
+            a[m + i] = self.b0[i].hsum();
+            a[2 * m + i] = self.b1[i].hsum();
+            for k in 0..=i {
+                a[3 * m + i * m + k] = self.h[i * (i + 1) / 2 + k].hsum();
             }
         }
     }
-    head.copy_from_slice(&[sx, mx, sa, ma, sb, mb]);
+}
+
+/// One chunk's node fields.
+#[derive(Clone, Copy)]
+struct Nodes<'a>(&'a [f64]);
+
+impl Nodes<'_> {
+    #[inline(always)]
+    fn get(self, f: usize, o: usize) -> V {
+        V::load(&self.0[f * CHUNK..(f + 1) * CHUNK], o)
+    }
+}
+
+/// `p₀ + λᵀP` and `q₀ + λᵀQ` of a block.
+#[inline(always)]
+fn plam_qlam(nd: Nodes<'_>, m: usize, lam: &[f64], o: usize) -> (V, V) {
+    let mut plam = nd.get(P0, o);
+    let mut qlam = nd.get(Q0, o);
+    for (i, &l) in lam.iter().enumerate().take(m) {
+        let l = V::splat(l);
+        plam = plam + nd.get(PQ + i, o) * l;
+        qlam = qlam + nd.get(PQ + m + i, o) * l;
+    }
+    (plam, qlam)
+}
+
+/// Adds one block's residual pieces and reduced-system terms at `(x, ξ, η)` with the
+/// multipliers `ctx.lam` to `acc`.
+#[inline(always)]
+fn eval_block<const MASK: bool>(
+    ctx: &EvalCtx<'_>,
+    m: usize,
+    nd: Nodes<'_>,
+    o: usize,
+    valid: usize,
+    (x, xsi, eta): (V, V, V),
+    acc: &mut EvalAcc<'_>,
+) {
+    let (low, upp, alfa, beta) = (
+        nd.get(LOW, o),
+        nd.get(UPP, o),
+        nd.get(ALFA, o),
+        nd.get(BETA, o),
+    );
+    let (plam, qlam) = plam_qlam(nd, m, ctx.lam, o);
+    let t = terms(low, upp, alfa, beta, plam, qlam, x, xsi, eta);
+    let rex = (t.dpsidx - xsi + eta).keep::<MASK>(valid, 0.0);
+    let cx = xsi * (x - alfa);
+    let ce = eta * (beta - x);
+    let (ea, eb) = (V::splat(ctx.eps_a), V::splat(ctx.eps_b));
+    let (ra1, ra2) = (
+        (cx - ea).keep::<MASK>(valid, 0.0),
+        (ce - ea).keep::<MASK>(valid, 0.0),
+    );
+    let (rb1, rb2) = (
+        (cx - eb).keep::<MASK>(valid, 0.0),
+        (ce - eb).keep::<MASK>(valid, 0.0),
+    );
+    let hd = &mut acc.head;
+    hd[0] = hd[0] + rex * rex;
+    hd[1] = hd[1].maxv(rex.absv());
+    hd[2] = hd[2] + (ra1 * ra1 + ra2 * ra2);
+    hd[3] = hd[3].maxv(ra1.absv()).maxv(ra2.absv());
+    hd[4] = hd[4] + (rb1 * rb1 + rb2 * rb2);
+    hd[5] = hd[5].maxv(rb1.absv()).maxv(rb2.absv());
+    let (uxinv, xlinv) = (
+        t.uxinv.keep::<MASK>(valid, 0.0),
+        t.xlinv.keep::<MASK>(valid, 0.0),
+    );
+    for i in 0..m {
+        let (p, q) = (nd.get(PQ + i, o), nd.get(PQ + m + i, o));
+        acc.gvec[i] = acc.gvec[i] + (p * uxinv + q * xlinv);
+    }
+    if ctx.need_h {
+        let dinv = (V::splat(1.0) / t.diagx).keep::<MASK>(valid, 0.0);
+        let w0 = t.dpsidx * dinv;
+        let w1 = t.e * dinv;
+        for i in 0..m {
+            let (p, q) = (nd.get(PQ + i, o), nd.get(PQ + m + i, o));
+            let gi = p * t.uxinv2 - q * t.xlinv2;
+            acc.g[i] = gi;
+            acc.b0[i] = acc.b0[i] + gi * w0;
+            acc.b1[i] = acc.b1[i] + gi * w1;
+            let gd = gi * dinv;
+            for k in 0..=i {
+                let hk = i * (i + 1) / 2 + k;
+                acc.h[hk] = acc.h[hk] + gd * acc.g[k];
+            }
+        }
+    }
+}
+
+/// The point `base + steg·Δ` of a block.
+#[inline(always)]
+fn point(st: &[f64], o: usize, steg: f64) -> (V, V, V) {
+    let s = V::splat(steg);
+    let f = |k: usize| V::load(&st[k * CHUNK..(k + 1) * CHUNK], o);
+    (f(X) + s * f(DX), f(XSI) + s * f(DXSI), f(ETA) + s * f(DETA))
+}
+
+/// Blocks of a chunk: `(offset, valid lanes)`, the last one possibly partial.
+#[inline(always)]
+fn chunk_len(n: usize, c: usize) -> (usize, usize) {
+    let len = (n - c * CHUNK).min(CHUNK);
+    (len / LANES, len % LANES)
+}
+
+#[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"))]
+fn eval_chunk<'a, const M: usize>(
+    ctx: &EvalCtx<'a>,
+    c: usize,
+    nodes: &[f64],
+    st: &[f64],
+    a: &mut [f64],
+    ln: &mut [V],
+) {
+    let m = if M == DYN { ctx.m } else { M };
+    let nd = Nodes(nodes);
+    let mut sacc = StaticAcc::new();
+    let mut acc = EvalAcc::new::<M>(m, &mut sacc, ln);
+    let (full, tail) = chunk_len(ctx.n, c);
+    for b in 0..full {
+        let o = b * LANES;
+        let p = point(st, o, ctx.steg);
+        eval_block::<false>(ctx, m, nd, o, LANES, p, &mut acc);
+    }
+    if tail > 0 {
+        let o = full * LANES;
+        let p = point(st, o, ctx.steg);
+        eval_block::<true>(ctx, m, nd, o, tail, p, &mut acc);
+    }
+    acc.finish(m, a);
 }
 
 struct DirCtx<'a> {
+    n: usize,
     m: usize,
-    stride: usize,
-    nodes: &'a [f64],
     lam: &'a [f64],
     dlam: &'a [f64],
     eps: f64,
+    /// The current point is `base + steg_p·Δ`.
     steg_p: f64,
-    eps_p: f64,
+    /// Evaluation of the full step, when speculating.
+    spec: Option<EvalCtx<'a>>,
 }
 
-fn direction_pass<const M: usize>(
-    ctx: &DirCtx<'_>,
-    state: &mut [XState],
-    acc: &mut [f64],
-    slot: usize,
-    parallel: bool,
-) {
-    let f =
-        |(c, (st, a)): (usize, (&mut [XState], &mut [f64]))| direction_chunk::<M>(ctx, c, st, a);
-    if parallel {
-        state
-            .par_chunks_mut(CHUNK)
-            .zip(acc.par_chunks_mut(slot))
-            .enumerate()
-            .for_each(f);
-    } else {
-        state
-            .chunks_mut(CHUNK)
-            .zip(acc.chunks_mut(slot))
-            .enumerate()
-            .for_each(f);
-    }
-}
-
+/// One block of the direction pass: Δx = −(δx + GᵀΔλ)/diagx at the current point, Δξ, Δη,
+/// the step ratio; stores the point and Δ; evaluates the full step when speculating.
+#[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn direction_chunk<const M: usize>(ctx: &DirCtx<'_>, c: usize, st: &mut [XState], a: &mut [f64]) {
-    let m = if M == DYN { ctx.m } else { M };
-    let stride = if M == DYN { ctx.stride } else { PQ + 2 * M };
-    let start = c * CHUNK;
-    let nodes = &ctx.nodes[start * stride..(start + st.len()) * stride];
-    let lam = &ctx.lam[..m];
-    let dlam = &ctx.dlam[..m];
-    let eps = ctx.eps;
-    let mut stm = f64::NEG_INFINITY;
-    for (nd, s) in nodes.chunks_exact(stride).zip(st.iter_mut()) {
-        let (alfa, beta) = (nd[ALFA], nd[BETA]);
-        let (x, xsi, eta) = trial(s, alfa, beta, ctx.steg_p, ctx.eps_p);
-        let t = Terms::new(nd, m, lam, x, xsi, eta);
-        let mut rhs = t.dpsidx + eps * t.e;
-        for i in 0..m {
-            rhs += (nd[PQ + i] * t.uxinv2 - nd[PQ + m + i] * t.xlinv2) * dlam[i];
-        }
-        let dx = -rhs / t.diagx;
-        *s = XState { x, xsi, eta, dx };
-        stm = stm.max(step_ratio(x, xsi, eta, dx, alfa, beta, eps));
+fn direction_block<const MASK: bool>(
+    ctx: &DirCtx<'_>,
+    m: usize,
+    nd: Nodes<'_>,
+    st: &mut [f64],
+    o: usize,
+    valid: usize,
+    stm: &mut V,
+    acc: &mut EvalAcc<'_>,
+) {
+    let (x, xsi, eta) = point(st, o, ctx.steg_p);
+    let (low, upp, alfa, beta) = (
+        nd.get(LOW, o),
+        nd.get(UPP, o),
+        nd.get(ALFA, o),
+        nd.get(BETA, o),
+    );
+    let (plam, qlam) = plam_qlam(nd, m, ctx.lam, o);
+    let t = terms(low, upp, alfa, beta, plam, qlam, x, xsi, eta);
+    let mut rhs = t.dpsidx + V::splat(ctx.eps) * t.e;
+    for (i, &dl) in ctx.dlam.iter().enumerate().take(m) {
+        let (p, q) = (nd.get(PQ + i, o), nd.get(PQ + m + i, o));
+        rhs = rhs + (p * t.uxinv2 - q * t.xlinv2) * V::splat(dl);
     }
-    a[0] = stm;
+    let dx = -rhs / t.diagx;
+    let s = step(x, xsi, eta, dx, t.xainv, t.bxinv, ctx.eps);
+    *stm = stm.maxv(s.ratio.keep::<MASK>(valid, f64::NEG_INFINITY));
+    for (f, v) in [
+        (X, x),
+        (XSI, xsi),
+        (ETA, eta),
+        (DX, dx),
+        (DXSI, s.dxsi),
+        (DETA, s.deta),
+    ] {
+        v.store::<MASK>(&mut st[f * CHUNK..(f + 1) * CHUNK], o, valid);
+    }
+    if let Some(e) = &ctx.spec {
+        let p1 = (x + dx, xsi + s.dxsi, eta + s.deta);
+        eval_block::<MASK>(e, m, nd, o, valid, p1, acc);
+    }
+}
+
+#[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"))]
+fn direction_chunk<'a, const M: usize>(
+    ctx: &DirCtx<'a>,
+    c: usize,
+    nodes: &[f64],
+    st: &mut [f64],
+    a: &mut [f64],
+    ln: &mut [V],
+) {
+    let m = if M == DYN { ctx.m } else { M };
+    let nd = Nodes(nodes);
+    let mut sacc = StaticAcc::new();
+    let mut acc = EvalAcc::new::<M>(m, &mut sacc, ln);
+    let mut stm = V::splat(f64::NEG_INFINITY);
+    let (full, tail) = chunk_len(ctx.n, c);
+    for b in 0..full {
+        direction_block::<false>(ctx, m, nd, st, b * LANES, LANES, &mut stm, &mut acc);
+    }
+    if tail > 0 {
+        direction_block::<true>(ctx, m, nd, st, full * LANES, tail, &mut stm, &mut acc);
+    }
+    if ctx.spec.is_some() {
+        acc.finish(m, a);
+    }
+    a[reduced_len(m)] = stm.hmax(f64::NEG_INFINITY);
 }
