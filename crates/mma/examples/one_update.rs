@@ -61,14 +61,15 @@ fn main() {
     let a: Vec<f64> = (0..M * n)
         .map(|k| 1.0 + ((k * 104_729) % 997) as f64 / 997.0)
         .collect();
-    // A second argument `serial` keeps rayon out (callgrind then counts every instruction).
-    let serial = std::env::args().nth(2).is_some_and(|s| s == "serial");
+    // A second argument `serial` keeps rayon out (callgrind then counts every instruction),
+    // `parallel` uses it whatever n.
+    let parallel_threshold = match std::env::args().nth(2).as_deref() {
+        Some("serial") => usize::MAX,
+        Some("parallel") => 0,
+        _ => MmaParams::default().parallel_threshold,
+    };
     let params = MmaParams {
-        parallel_threshold: if serial {
-            usize::MAX
-        } else {
-            MmaParams::default().parallel_threshold
-        },
+        parallel_threshold,
         ..MmaParams::default()
     };
     let mut mma = Mma::new(n, M, vec![1e-3; n], vec![1.0; n], params).unwrap();

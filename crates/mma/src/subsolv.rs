@@ -1072,11 +1072,13 @@ impl Nodes<'_> {
 
 /// `p₀ + λᵀP` and `q₀ + λᵀQ` of a block.
 #[inline(always)]
+#[allow(clippy::needless_range_loop)]
 fn plam_qlam(nd: Nodes<'_>, m: usize, lam: &[f64], o: usize) -> (V, V) {
     let mut plam = nd.get(P0, o);
     let mut qlam = nd.get(Q0, o);
-    for (i, &l) in lam.iter().enumerate().take(m) {
-        let l = V::splat(l);
+    let lam = &lam[..m];
+    for i in 0..m {
+        let l = V::splat(lam[i]);
         plam = plam + nd.get(PQ + i, o) * l;
         qlam = qlam + nd.get(PQ + m + i, o) * l;
     }
@@ -1207,6 +1209,7 @@ struct DirCtx<'a> {
 /// the step ratio; stores the point and Δ; evaluates the full step when speculating.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
+#[allow(clippy::needless_range_loop)]
 fn direction_block<const MASK: bool>(
     ctx: &DirCtx<'_>,
     m: usize,
@@ -1227,9 +1230,10 @@ fn direction_block<const MASK: bool>(
     let (plam, qlam) = plam_qlam(nd, m, ctx.lam, o);
     let t = terms(low, upp, alfa, beta, plam, qlam, x, xsi, eta);
     let mut rhs = t.dpsidx + V::splat(ctx.eps) * t.e;
-    for (i, &dl) in ctx.dlam.iter().enumerate().take(m) {
+    let dlam = &ctx.dlam[..m];
+    for i in 0..m {
         let (p, q) = (nd.get(PQ + i, o), nd.get(PQ + m + i, o));
-        rhs = rhs + (p * t.uxinv2 - q * t.xlinv2) * V::splat(dl);
+        rhs = rhs + (p * t.uxinv2 - q * t.xlinv2) * V::splat(dlam[i]);
     }
     let dx = -rhs / t.diagx;
     let s = step(x, xsi, eta, dx, t.xainv, t.bxinv, ctx.eps);
