@@ -384,7 +384,6 @@ impl SubSolver {
         let stride = self.stride;
         let nodes = &self.nodes;
         let f = |(nd, st): (&[f64], &mut [f64])| {
-            let _ = stride;
             for k in 0..CHUNK {
                 let (alfa, beta) = (nd[ALFA * CHUNK + k], nd[BETA * CHUNK + k]);
                 let x = 0.5 * (alfa + beta);
@@ -728,7 +727,7 @@ impl SubSolver {
             );
             let xainv = 1.0 / (x - alfa);
             let bxinv = 1.0 / (beta - x);
-            let d = step(x, xsi, eta, dx, xainv, bxinv, eps);
+            let d = step(xsi, eta, dx, xainv, bxinv, eps);
             self.state[idx(j, DX, NSTATE)] = dx;
             self.state[idx(j, DXSI, NSTATE)] = d.dxsi;
             self.state[idx(j, DETA, NSTATE)] = d.deta;
@@ -944,8 +943,7 @@ struct Step<T> {
 
 /// Δξ = −ξ + ε/(x−α) − ξΔx/(x−α), Δη = −η + ε/(β−x) + ηΔx/(β−x), and the step ratio.
 #[inline(always)]
-fn step<T: Real>(x: T, xsi: T, eta: T, dx: T, xainv: T, bxinv: T, eps: f64) -> Step<T> {
-    let _ = x;
+fn step<T: Real>(xsi: T, eta: T, dx: T, xainv: T, bxinv: T, eps: f64) -> Step<T> {
     let epsv = T::splat(eps);
     let dxsi = epsv * xainv - xsi - xsi * dx * xainv;
     let deta = epsv * bxinv - eta + eta * dx * bxinv;
@@ -1236,7 +1234,7 @@ fn direction_block<const MASK: bool>(
         rhs = rhs + (p * t.uxinv2 - q * t.xlinv2) * V::splat(dlam[i]);
     }
     let dx = -rhs / t.diagx;
-    let s = step(x, xsi, eta, dx, t.xainv, t.bxinv, ctx.eps);
+    let s = step(xsi, eta, dx, t.xainv, t.bxinv, ctx.eps);
     *stm = stm.maxv(s.ratio.keep::<MASK>(valid, f64::NEG_INFINITY));
     for (f, v) in [
         (X, x),
