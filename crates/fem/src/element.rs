@@ -272,6 +272,7 @@ impl ElementKernel {
     }
 
     /// Internal force `r_e` and (optionally) the consistent tangent `k_e` (row-major 8×8).
+    #[inline(always)]
     pub fn residual_tangent(
         &self,
         c: &ElementCoefficients,

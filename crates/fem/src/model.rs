@@ -19,6 +19,7 @@
 
 use std::sync::Arc;
 
+use multiversion::multiversion;
 use rayon::prelude::*;
 
 use crate::element::{ElementCoefficients, ElementKernel};
@@ -358,16 +359,93 @@ impl SparseMatrix {
 }
 
 impl SparseMatrix {
-    /// `Y = A X` for `k` column-major vectors (`x`, `y` of length `n·k`).
+    /// `Y = A X` for `k` column-major vectors (`x`, `y` of length `n·k`). The matrix is read
+    /// once for up to four columns (sparse mat-vecs are bound by reading the matrix, so a
+    /// block of columns costs little more than one).
     pub fn matvec_columns(&self, x: &[f64], y: &mut [f64], k: usize) {
         let n = self.pattern.n;
         assert!(
             x.len() == n * k && y.len() == n * k,
             "matvec_columns lengths"
         );
-        // Column by column: the symmetric CSC sweep is cheap and cache-friendly per column.
-        for (xc, yc) in x.chunks_exact(n).zip(y.chunks_exact_mut(n)) {
-            self.matvec(xc, yc);
+        let mut done = 0;
+        while done < k {
+            let w = (k - done).min(4);
+            let (xb, yb) = (
+                &x[done * n..(done + w) * n],
+                &mut y[done * n..(done + w) * n],
+            );
+            match w {
+                1 => self.matvec(xb, yb),
+                2 => self.matvec_block::<2>(xb, yb),
+                3 => self.matvec_block::<3>(xb, yb),
+                _ => self.matvec_block::<4>(xb, yb),
+            }
+            done += w;
+        }
+    }
+
+    /// `Y = A X` for exactly `K` columns, one sweep over the matrix.
+    fn matvec_block<const K: usize>(&self, x: &[f64], y: &mut [f64]) {
+        let p = &*self.pattern;
+        let n = p.n;
+        y.fill(0.0);
+        let xs: [&[f64]; K] = std::array::from_fn(|t| &x[t * n..(t + 1) * n]);
+        let mut it = y.chunks_exact_mut(n);
+        let ys: [&mut [f64]; K] = std::array::from_fn(|_| it.next().expect("K columns"));
+        for c in 0..n {
+            let xc: [f64; K] = std::array::from_fn(|t| xs[t][c]);
+            let mut acc = [0.0; K];
+            for k in p.col_ptr[c]..p.col_ptr[c + 1] {
+                let r = p.row_idx[k];
+                let v = self.values[k];
+                if r != c {
+                    for t in 0..K {
+                        ys[t][r] += v * xc[t];
+                        acc[t] += v * xs[t][r];
+                    }
+                } else {
+                    for t in 0..K {
+                        acc[t] += v * xc[t];
+                    }
+                }
+            }
+            for t in 0..K {
+                ys[t][c] += acc[t];
+            }
+        }
+    }
+}
+
+/// Element residuals (and packed tangents when `need_k`) of the elements `e0, e0 + 1, …`.
+/// Compiled for AVX-512 and AVX2 + FMA as well as baseline x86-64 and chosen at run time:
+/// the kernel's rows of eight (B, D·B, k_e) then map onto vector registers, about twice as
+/// fast as baseline x86-64 on the 120×60 assembly.
+#[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"))]
+fn element_chunk(
+    model: &Model,
+    design: &Design,
+    u: &[f64],
+    e0: usize,
+    ke: &mut [[f64; ELEM_PACKED]],
+    re: &mut [[f64; 8]],
+    need_k: bool,
+) {
+    let kernel = &model.kernel;
+    for (i, (ke, re)) in ke.iter_mut().zip(re.iter_mut()).enumerate() {
+        let e = e0 + i;
+        let c = model.coefficients(design, e);
+        let ue = model.element_displacement(e, u);
+        if need_k {
+            let mut k = [[0.0; 8]; 8];
+            kernel.residual_tangent(&c, &ue, re, Some(&mut k));
+            for p in 0..8 {
+                for q in p..8 {
+                    ke[pack_index(p, q)] = k[p][q];
+                }
+            }
+        } else {
+            kernel.residual_tangent(&c, &ue, re, None);
         }
     }
 }
@@ -570,26 +648,12 @@ impl Model {
     ) {
         self.check_sizes(design, u);
         let need_k = tangent.is_some();
-        let kernel = &self.kernel;
         ws.ke
-            .par_iter_mut()
-            .zip(ws.re.par_iter_mut())
+            .par_chunks_mut(CHUNK)
+            .zip(ws.re.par_chunks_mut(CHUNK))
             .enumerate()
-            .with_min_len(CHUNK)
-            .for_each(|(e, (ke, re))| {
-                let c = self.coefficients(design, e);
-                let ue = self.element_displacement(e, u);
-                if need_k {
-                    let mut k = [[0.0; 8]; 8];
-                    kernel.residual_tangent(&c, &ue, re, Some(&mut k));
-                    for p in 0..8 {
-                        for q in p..8 {
-                            ke[pack_index(p, q)] = k[p][q];
-                        }
-                    }
-                } else {
-                    kernel.residual_tangent(&c, &ue, re, None);
-                }
+            .for_each(|(c, (ke, re))| {
+                element_chunk(self, design, u, c * CHUNK, ke, re, need_k);
             });
         if let Some(r) = residual {
             assert_eq!(r.len(), self.n_dofs(), "residual length");

@@ -461,6 +461,7 @@ pub struct BlockPcgWorkspace {
     q: Vec<f64>,
     bn: Vec<f64>,
     rz: Vec<f64>,
+    running: Vec<usize>,
 }
 
 impl BlockPcgWorkspace {
@@ -475,6 +476,7 @@ impl BlockPcgWorkspace {
             q: vec![0.0; n * k],
             bn: vec![0.0; k],
             rz: vec![0.0; k],
+            running: Vec::with_capacity(k),
         }
     }
     /// Largest number of columns.
@@ -496,14 +498,43 @@ pub enum ColumnOutcome {
     NotConverged,
 }
 
+/// `q_j = A_j p_j` for the columns selected by `want`, with one sweep over each matrix for a
+/// run of consecutive columns that share it (same reference).
+fn block_matvec(
+    mats: &[&SparseMatrix],
+    p: &[f64],
+    q: &mut [f64],
+    n: usize,
+    want: impl Fn(usize) -> bool,
+) {
+    let k = mats.len();
+    let mut a = 0;
+    while a < k {
+        let mut b = a + 1;
+        while b < k && std::ptr::eq(mats[b], mats[a]) {
+            b += 1;
+        }
+        if let (Some(f), Some(l)) = ((a..b).find(|&j| want(j)), (a..b).rev().find(|&j| want(j))) {
+            let w = l + 1 - f;
+            mats[a].matvec_columns(&p[f * n..(l + 1) * n], &mut q[f * n..(l + 1) * n], w);
+        }
+        a = b;
+    }
+}
+
 /// [`pcg`] for `k` systems `A_j x_j = b_j` at once, each column with its own matrix
 /// (`mats[j]`, e.g. the tangents of several load cases) and one shared preconditioner `m`:
 /// independent CG recurrences per column, but one sweep over the factor applies the
-/// preconditioner to every column ([`Factor::solve_columns_in_place`], ~3× cheaper per column
-/// than single solves at 20 columns). `b`, `x` are column-major (`n·k`); `x` holds the initial
-/// guesses. A column that fails (indefinite, not converged) is frozen and reported in
-/// `outcome` while the others continue. Returns the summed iterations; `sws` needs scratch
-/// for `k` columns ([`SolveWorkspace::with_columns`]).
+/// preconditioner to every running column ([`Factor::solve_columns_in_place`], ~3× cheaper
+/// per column than single solves at 20 columns), and consecutive columns with the same
+/// matrix share one sweep over it ([`SparseMatrix::matvec_columns`]). `b`, `x` are
+/// column-major (`n·k`).
+///
+/// `x` holds the initial guesses (e.g. the solutions of a previous, similar system): each is
+/// first scaled by `s = xᵀb / xᵀAx`, the multiple with the smallest A-norm error, so a guess
+/// never starts CG worse than zero does. A column that fails (indefinite, not converged) is
+/// frozen and reported in `outcome` while the others continue. Returns the summed
+/// iterations; `sws` needs scratch for `k` columns ([`SolveWorkspace::with_columns`]).
 #[allow(clippy::too_many_arguments)]
 pub fn pcg_block(
     mats: &[&SparseMatrix],
@@ -522,7 +553,14 @@ pub fn pcg_block(
         "pcg_block lengths"
     );
     let BlockPcgWorkspace {
-        r, z, p, q, bn, rz, ..
+        r,
+        z,
+        p,
+        q,
+        bn,
+        rz,
+        running,
+        ..
     } = ws;
     let (r, z, p, q) = (
         &mut r[..n * k],
@@ -531,17 +569,27 @@ pub fn pcg_block(
         &mut q[..n * k],
     );
     let col = |j: usize| j * n..(j + 1) * n;
-    let mut total = 0;
-    let mut running = 0;
     for j in 0..k {
         assert_eq!(mats[j].n(), n, "pcg_block matrix order");
-        mats[j].matvec(&x[col(j)], &mut q[col(j)]);
+    }
+    block_matvec(mats, x, q, n, |_| true);
+    let mut total = 0;
+    running.clear();
+    for j in 0..k {
         bn[j] = dot(&b[col(j)], &b[col(j)]).sqrt();
         if !bn[j].is_finite() {
             return Err(SolverError::NonFinite { what: "pcg rhs" });
         }
+        // Scaled initial guess (0 when x = 0, or when the curvature along it is not positive).
+        let (xb, xq) = (dot(&x[col(j)], &b[col(j)]), dot(&x[col(j)], &q[col(j)]));
+        let s = if xq > 0.0 && (xb / xq).is_finite() {
+            xb / xq
+        } else {
+            0.0
+        };
         for i in col(j) {
-            r[i] = b[i] - q[i];
+            x[i] *= s;
+            r[i] = b[i] - s * q[i];
         }
         outcome[j] = if bn[j] == 0.0 {
             x[col(j)].fill(0.0);
@@ -549,28 +597,28 @@ pub fn pcg_block(
         } else if dot(&r[col(j)], &r[col(j)]).sqrt() <= params.rel_tol * bn[j] {
             ColumnOutcome::Converged(0)
         } else {
-            running += 1;
+            running.push(j);
             ColumnOutcome::Running
         };
-        if outcome[j] != ColumnOutcome::Running {
-            r[col(j)].fill(0.0);
-        }
     }
-    if running == 0 {
+    if running.is_empty() {
         return Ok(0);
     }
-    z.copy_from_slice(r);
-    m.solve_columns_in_place(z, k, sws)?;
-    p.copy_from_slice(z);
-    for j in 0..k {
-        rz[j] = dot(&r[col(j)], &z[col(j)]);
+    // z (packed: the running columns first) = M⁻¹ r.
+    let precondition = |running: &[usize], r: &[f64], z: &mut [f64], sws: &mut SolveWorkspace| {
+        for (c, &j) in running.iter().enumerate() {
+            z[col(c)].copy_from_slice(&r[col(j)]);
+        }
+        m.solve_columns_in_place(&mut z[..running.len() * n], running.len(), sws)
+    };
+    precondition(running, r, z, sws)?;
+    for (c, &j) in running.iter().enumerate() {
+        p[col(j)].copy_from_slice(&z[col(c)]);
+        rz[j] = dot(&r[col(j)], &z[col(c)]);
     }
     for it in 1..=params.max_iter {
-        for j in 0..k {
-            if outcome[j] != ColumnOutcome::Running {
-                continue;
-            }
-            mats[j].matvec(&p[col(j)], &mut q[col(j)]);
+        block_matvec(mats, p, q, n, |j| outcome[j] == ColumnOutcome::Running);
+        for &j in running.iter() {
             let pq = dot(&p[col(j)], &q[col(j)]);
             total += 1;
             let stop = if pq <= 0.0 || !pq.is_finite() {
@@ -594,24 +642,19 @@ pub fn pcg_block(
             };
             if let Some(o) = stop {
                 outcome[j] = o;
-                running -= 1;
-                r[col(j)].fill(0.0);
             }
         }
-        if running == 0 {
+        running.retain(|&j| outcome[j] == ColumnOutcome::Running);
+        if running.is_empty() {
             break;
         }
-        z.copy_from_slice(r);
-        m.solve_columns_in_place(z, k, sws)?;
-        for j in 0..k {
-            if outcome[j] != ColumnOutcome::Running {
-                continue;
-            }
-            let rz_new = dot(&r[col(j)], &z[col(j)]);
+        precondition(running, r, z, sws)?;
+        for (c, &j) in running.iter().enumerate() {
+            let rz_new = dot(&r[col(j)], &z[col(c)]);
             let beta = rz_new / rz[j];
             rz[j] = rz_new;
-            for i in col(j) {
-                p[i] = z[i] + beta * p[i];
+            for (pi, zi) in p[col(j)].iter_mut().zip(&z[col(c)]) {
+                *pi = zi + beta * *pi;
             }
         }
     }

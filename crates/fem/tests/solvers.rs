@@ -425,4 +425,73 @@ fn block_solves_and_block_pcg_match_single_columns() {
         let bn = bj.iter().map(|v| v * v).sum::<f64>().sqrt();
         assert!(r <= 1e-9 * bn, "column {j}: residual {:e}", r / bn);
     }
+
+    // Multi-column mat-vec (one sweep over the matrix for up to 4 columns) = single mat-vecs,
+    // for every block width including the split of 5 into 4 + 1.
+    for w in 1..=k {
+        let mut yb = vec![0.0; n * w];
+        k2.matvec_columns(&b[..n * w], &mut yb, w);
+        for j in 0..w {
+            k2.matvec(&b[j * n..(j + 1) * n], &mut y);
+            let d = yb[j * n..(j + 1) * n]
+                .iter()
+                .zip(&y)
+                .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+            let s = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            assert!(d <= 1e-13 * s, "width {w}, column {j}: {d:e}");
+        }
+    }
+
+    // Warm starts: runs of columns sharing a matrix (one sweep per run); initial guesses that
+    // are multiples of the solutions (−1, 2, 0.5, 0, 3) are rescaled by xᵀb/xᵀAx to the exact
+    // solution, so every column converges without an iteration — except the zero guess,
+    // which must behave as a cold start.
+    let mats: Vec<&SparseMatrix> = vec![&k2, &k2, &k2, &k1, &k1];
+    let mut x = vec![0.0; n * k];
+    let mut outcome = vec![ColumnOutcome::Running; k];
+    pcg_block(
+        &mats,
+        &f1,
+        &b,
+        &mut x,
+        params,
+        &mut ws,
+        &mut sws,
+        &mut outcome,
+    )
+    .unwrap();
+    let solved = x.clone();
+    let factors = [-1.0, 2.0, 0.5, 0.0, 3.0];
+    for (j, f) in factors.iter().enumerate() {
+        for v in &mut x[j * n..(j + 1) * n] {
+            *v *= f;
+        }
+    }
+    pcg_block(
+        &mats,
+        &f1,
+        &b,
+        &mut x,
+        params,
+        &mut ws,
+        &mut sws,
+        &mut outcome,
+    )
+    .unwrap();
+    for j in 0..k {
+        if factors[j] == 0.0 {
+            // k1 is the preconditioner: one iteration from zero.
+            assert_eq!(outcome[j], ColumnOutcome::Converged(1), "column {j}");
+        } else {
+            assert_eq!(outcome[j], ColumnOutcome::Converged(0), "column {j}");
+        }
+        let d = x[j * n..(j + 1) * n]
+            .iter()
+            .zip(&solved[j * n..(j + 1) * n])
+            .fold(0.0f64, |a, (p, q)| a.max((p - q).abs()));
+        let s = solved[j * n..(j + 1) * n]
+            .iter()
+            .fold(0.0f64, |a, v| a.max(v.abs()));
+        assert!(d <= 1e-8 * s, "column {j}: {d:e}");
+    }
 }
