@@ -67,6 +67,17 @@ fn main() {
             tm.adjoint_iterations,
             rec.area
         );
+        if std::env::var_os("PROFILE_CASES").is_some() {
+            println!("  sweeps per case: {:?}", ev.response.newton_iterations);
+            println!(
+                "  adjoint its per case: {:?}",
+                opt.evaluator
+                    .cases
+                    .iter()
+                    .map(|c| c.adjoint_iterations())
+                    .collect::<Vec<_>>()
+            );
+        }
     }
     let eps = opt.evaluator.max_element_strains();
     let (dens, _) = opt.last().unwrap();

@@ -316,6 +316,9 @@ pub struct Optimizer<'p> {
     stopped: Option<StopReason>,
 }
 
+/// Version of the checkpoint format: 2 added the adjoint warm starts.
+const CHECKPOINT_VERSION: u32 = 2;
+
 /// Serializable scalars of a checkpoint.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 struct CheckpointHeader {
@@ -646,7 +649,7 @@ impl<'p> Optimizer<'p> {
     pub fn checkpoint(&self) -> Vec<u8> {
         let st = self.mma.state();
         let header = CheckpointHeader {
-            version: 1,
+            version: CHECKPOINT_VERSION,
             n: self.x.len(),
             m: self.mma.m(),
             cases: self.evaluator.cases.len(),
@@ -674,8 +677,13 @@ impl<'p> Optimizer<'p> {
         if let Some(y) = &self.yeoh {
             vecs.push(&y.c2);
         }
+        // Per case: the warm starts of the next evaluation (displacements, then each
+        // response's adjoint, empty when there is none yet).
         for cs in &self.evaluator.cases {
             vecs.push(&cs.u);
+            for q in 0..4 {
+                vecs.push(if cs.warm[q] { &cs.lambdas[q] } else { &[] });
+            }
         }
         for v in vecs {
             out.extend_from_slice(&(v.len() as u64).to_le_bytes());
@@ -718,6 +726,13 @@ impl<'p> Optimizer<'p> {
                 .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
                 .collect())
         };
+        if h.version != CHECKPOINT_VERSION {
+            return Err(bad(&format!(
+                "checkpoint format version {} (this flexstage reads version {}); start the \
+                 design again",
+                h.version, CHECKPOINT_VERSION
+            )));
+        }
         let mut o = Optimizer::new(problem, params)?;
         if h.n != o.x.len()
             || h.m != o.mma.m()
@@ -764,6 +779,16 @@ impl<'p> Optimizer<'p> {
                 return Err(bad("displacement length"));
             }
             cs.u = u;
+            for q in 0..4 {
+                let lam = read()?;
+                cs.warm[q] = !lam.is_empty();
+                if cs.warm[q] {
+                    if lam.len() != cs.lambdas[q].len() {
+                        return Err(bad("adjoint length"));
+                    }
+                    cs.lambdas[q] = lam;
+                }
+            }
         }
         o.iteration = h.iteration;
         o.beta = h.beta;
