@@ -25,13 +25,15 @@
 //!   (for ε and ε/10) and the whole reduced Newton system for the next step (`gvec`,
 //!   `Σ GGᵀ/diagx`, and `Σ G·delx/diagx` split into its ε-free and ε-linear parts). A
 //!   *direction* pass computes Δx, Δξ, Δη from Δλ and the largest feasible step, and stores
-//!   the current point as the new base. The m-dimensional directions are known before the
-//!   direction pass; when they allow the full step, the direction pass also evaluates the
-//!   trial point at t = 1 (speculatively). If the whole step is then 1 (the usual case once
-//!   a barrier level is nearly solved), this evaluation is the first one of the line search
-//!   and no separate evaluation pass is needed; otherwise it is discarded and the line
-//!   search runs as in `subsolv`. Trial points are never stored: they are recomputed from
-//!   the base point and Δ, so the line search only reads.
+//!   the current point as the new base. The m-dimensional directions (Δy, Δλ, Δμ, Δs, Δz,
+//!   Δζ) are known before the direction pass, and so is the step `t_m` they allow; the
+//!   direction pass also evaluates the trial point at `t_m` (speculatively). If the
+//!   n-dimensional variables allow that step too (the usual case: the step is 1 once a
+//!   barrier level is nearly solved, and otherwise mostly limited by y, λ, μ or s), this is
+//!   bitwise the first evaluation of the line search and no separate evaluation pass is
+//!   needed; otherwise it is discarded and the line search runs as in `subsolv`. Trial
+//!   points are never stored: they are recomputed from the base point and Δ, so the line
+//!   search only reads.
 //! * Threads. The O(n) passes run chunk by chunk (with rayon when `parallel`); each chunk
 //!   reduces into its own slot and the slots are summed in order, so the result does not
 //!   depend on the number of threads.
@@ -180,7 +182,7 @@ pub(crate) struct SubSolver {
     dlam: Vec<f64>,
     dmu: Vec<f64>,
     ds: Vec<f64>,
-    /// λ + Δλ, the multipliers of the speculative trial point.
+    /// λ + t·Δλ, the multipliers of the speculative trial point.
     lam1: Vec<f64>,
     // Reduced Newton system pieces.
     gvec: Vec<f64>,
@@ -296,15 +298,17 @@ impl SubSolver {
                 itera += 1;
                 self.newton_prelude(epsi, k);
                 // Directions, and whether the direction pass evaluated the full step.
+                // Directions, and the step at which the direction pass evaluated the trial
+                // point (the step of the m-dimensional variables alone).
                 let (stm, speculated) = if self.small_branch() {
                     let stm_n = self.small_direction(epsi, k);
-                    (stm_n.max(self.m_directions(epsi)), false)
+                    (stm_n.max(self.m_directions(epsi)), None)
                 } else {
                     self.solve_reduced(epsi, k);
                     let stm_m = self.m_directions(epsi);
-                    let spec = stm_m <= 1.0;
-                    let stm_n = self.direction_pass(epsi, spec, need_h);
-                    (stm_n.max(stm_m), spec)
+                    let steg_m = 1.0 / stm_m.max(1.0);
+                    let stm_n = self.direction_pass(epsi, steg_m, need_h);
+                    (stm_n.max(stm_m), Some(steg_m))
                 };
                 let dz = self.rhs_dz();
                 let dzet = -self.zet + epsi / self.z - self.zet * dz / self.z;
@@ -329,8 +333,9 @@ impl SubSolver {
                     }
                     self.z = zo + steg * dz;
                     self.zet = zeto + steg * dzet;
-                    ev = if itto == 1 && speculated && steg == 1.0 {
-                        // The direction pass evaluated exactly this point (λ + 1·Δλ = λ₁).
+                    ev = if itto == 1 && speculated == Some(steg) {
+                        // The direction pass evaluated exactly this point: the n-dimensional
+                        // variables did not shorten the step.
                         self.reduce_eval(epsi)
                     } else {
                         self.eval(steg, epsi, need_h)
@@ -579,12 +584,13 @@ impl SubSolver {
 
     /// Direction pass of the (m+1)×(m+1) branch: moves the base point to the current point,
     /// stores Δx, Δξ, Δη there and returns the largest step ratio of the n-dimensional
-    /// variables. With `spec`, also evaluates the trial point `base + Δ` with λ + Δλ into the
-    /// chunk slots (read by [`Self::reduce_eval`]).
-    fn direction_pass(&mut self, eps: f64, spec: bool, need_h: bool) -> f64 {
+    /// variables. Also evaluates the trial point `base + t·Δ` with λ + t·Δλ (`t = steg`, the
+    /// step allowed by the m-dimensional variables) into the chunk slots, read by
+    /// [`Self::reduce_eval`] if the n-dimensional variables allow that step too.
+    fn direction_pass(&mut self, eps: f64, steg: f64, need_h: bool) -> f64 {
         let m = self.m;
         for i in 0..m {
-            self.lam1[i] = self.lam[i] + self.dlam[i];
+            self.lam1[i] = self.lam[i] + steg * self.dlam[i];
         }
         let ctx = DirCtx {
             n: self.n,
@@ -593,11 +599,11 @@ impl SubSolver {
             dlam: &self.dlam,
             eps,
             steg_p: self.pending,
-            spec: spec.then_some(EvalCtx {
+            spec: Some(EvalCtx {
                 n: self.n,
                 m,
                 lam: &self.lam1,
-                steg: 1.0,
+                steg,
                 eps_a: eps,
                 eps_b: 0.1 * eps,
                 need_h,
@@ -1199,12 +1205,12 @@ struct DirCtx<'a> {
     eps: f64,
     /// The current point is `base + steg_p·Δ`.
     steg_p: f64,
-    /// Evaluation of the full step, when speculating.
+    /// Evaluation of the trial point `point + steg·Δ`, when speculating.
     spec: Option<EvalCtx<'a>>,
 }
 
 /// One block of the direction pass: Δx = −(δx + GᵀΔλ)/diagx at the current point, Δξ, Δη,
-/// the step ratio; stores the point and Δ; evaluates the full step when speculating.
+/// the step ratio; stores the point and Δ; evaluates the trial step when speculating.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 #[allow(clippy::needless_range_loop)]
@@ -1247,7 +1253,9 @@ fn direction_block<const MASK: bool>(
         v.store::<MASK>(&mut st[f * CHUNK..(f + 1) * CHUNK], o, valid);
     }
     if let Some(e) = &ctx.spec {
-        let p1 = (x + dx, xsi + s.dxsi, eta + s.deta);
+        // The same arithmetic as `point` at the next evaluation pass.
+        let t = V::splat(e.steg);
+        let p1 = (x + t * dx, xsi + t * s.dxsi, eta + t * s.deta);
         eval_block::<MASK>(e, m, nd, o, valid, p1, acc);
     }
 }
