@@ -22,7 +22,7 @@ struct Setup {
 fn setup(nl: usize, nw: usize) -> Setup {
     let stage = samples::Stage::paper(nl, nw, Kinematics::TotalLagrangian).unwrap();
     let rho = stage.random_density(0.01, 1.0, 42, 1e-3);
-    let sym = SymbolicFactor::new(stage.model.pattern().clone()).unwrap();
+    let sym = SymbolicFactor::for_model(&stage.model).unwrap();
     Setup { stage, rho, sym }
 }
 
@@ -73,8 +73,7 @@ fn assemble_tangent_residual_with_yeoh(b: Bencher, (nl, nw): (usize, usize)) {
 #[divan::bench(args = SIZES)]
 fn symbolic_factorization(b: Bencher, (nl, nw): (usize, usize)) {
     let s = setup(nl, nw);
-    let p = s.stage.model.pattern().clone();
-    b.bench_local(|| SymbolicFactor::new(p.clone()).unwrap());
+    b.bench_local(|| SymbolicFactor::for_model(&s.stage.model).unwrap());
 }
 
 #[divan::bench(args = SIZES)]

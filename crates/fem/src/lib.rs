@@ -42,7 +42,7 @@
 //! let model = &stage.model;
 //! let rho = stage.uniform_density(0.5, 1e-6);
 //! let design = Design::new(&rho);
-//! let symbolic = SymbolicFactor::new(model.pattern().clone()).unwrap(); // once per pattern
+//! let symbolic = SymbolicFactor::for_model(&model).unwrap(); // once per mesh
 //! let mut ws = NewtonWorkspace::new(model, symbolic.clone());            // one per thread
 //!
 //! // PEA strokes +30 µm (left) and −30 µm (right).

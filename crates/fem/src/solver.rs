@@ -31,6 +31,61 @@ pub struct SymbolicFactor {
 }
 
 impl SymbolicFactor {
+    /// Symbolic analysis of a model's pattern with the nested-dissection order of its mesh
+    /// nodes ([`crate::Mesh::nested_dissection`], both DOFs of a node together): less fill
+    /// than AMD on the structured grids, so faster factorizations and solves.
+    pub fn for_model(model: &crate::Model) -> Result<Arc<Self>, SolverError> {
+        let dofs = model.dofs();
+        let perm: Vec<usize> = model
+            .mesh()
+            .nested_dissection()
+            .into_iter()
+            .flat_map(|n| [2 * n, 2 * n + 1])
+            .filter_map(|d| dofs.reduced(d))
+            .collect();
+        Self::with_order(model.pattern().clone(), perm)
+    }
+
+    /// Symbolic analysis with a given elimination order (`order[k]` is the unknown eliminated
+    /// k-th; a permutation of `0..n`).
+    pub fn with_order(
+        pattern: Arc<SparsityPattern>,
+        order: Vec<usize>,
+    ) -> Result<Arc<Self>, SolverError> {
+        let n = pattern.n();
+        let mut inv = vec![usize::MAX; n];
+        for (k, &i) in order.iter().enumerate() {
+            if i >= n || inv[i] != usize::MAX {
+                return Err(SolverError::Symbolic(format!(
+                    "order is not a permutation of 0..{n} (entry {k} = {i})"
+                )));
+            }
+            inv[i] = k;
+        }
+        if order.len() != n {
+            return Err(SolverError::Symbolic(format!(
+                "order has {} entries, the matrix order is {n}",
+                order.len()
+            )));
+        }
+        let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(
+            pattern.n(),
+            pattern.n(),
+            pattern.col_ptr(),
+            None,
+            pattern.row_idx(),
+        );
+        let perm = faer::perm::PermRef::new_checked(&order, &inv, n);
+        let inner = factorize_symbolic_cholesky(
+            sym,
+            Side::Lower,
+            SymmetricOrdering::Custom(perm),
+            CholeskySymbolicParams::default(),
+        )
+        .map_err(|e| SolverError::Symbolic(format!("{e:?}")))?;
+        Ok(Arc::new(Self { inner, pattern }))
+    }
+
     /// AMD ordering and symbolic analysis of the pattern (≈7 ms at 120×60).
     pub fn new(pattern: Arc<SparsityPattern>) -> Result<Arc<Self>, SolverError> {
         let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(

@@ -205,7 +205,7 @@ impl Condenser {
                 "the output node is an input node".into(),
             ));
         }
-        let symbolic: Arc<SymbolicFactor> = SymbolicFactor::new(model.pattern().clone())?;
+        let symbolic: Arc<SymbolicFactor> = SymbolicFactor::for_model(model)?;
         let mut factor = Factor::new(symbolic.clone());
         factor.allow_indefinite = true;
         Ok(Self {

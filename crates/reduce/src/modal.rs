@@ -179,7 +179,7 @@ pub fn modal_analysis(
     let zero = model.zero_vector();
     let mut aws = model.new_workspace();
     model.assemble(&design, &zero, None, Some(&mut k), &mut aws);
-    let symbolic = SymbolicFactor::new(model.pattern().clone())?;
+    let symbolic = SymbolicFactor::for_model(model)?;
     let mut factor = Factor::new(symbolic.clone());
     factor.allow_indefinite = false;
     factor.factorize(&k)?;

@@ -177,7 +177,7 @@ pub fn reduce(
                     "an operating point needs Kinematics::TotalLagrangian".into(),
                 ));
             }
-            let sym = SymbolicFactor::new(model.pattern().clone())?;
+            let sym = SymbolicFactor::for_model(model)?;
             let mut ws = NewtonWorkspace::new(model, sym);
             let mut p = model.zero_vector();
             for (port, xi) in problem.inputs.iter().zip(x) {

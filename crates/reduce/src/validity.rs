@@ -163,7 +163,7 @@ pub fn validity_map(
     let ports = Ports::from_problem(problem)?;
     let design = Design::new(rho);
     design.validate(model.mesh().n_elements())?;
-    let symbolic = SymbolicFactor::new(model.pattern().clone())?;
+    let symbolic = SymbolicFactor::for_model(model)?;
     // Linear FE: q = G x_nom (stiffness at u = 0, springs included).
     let g = {
         let mut k = model.new_matrix();

@@ -1,11 +1,11 @@
 //! Per-iteration timing of a preset (default: paper): `cargo run --release -p flexstage-topopt
-//! --example profile_paper -- [paper|quick] [iterations] [checkpoint]`. Prints the wall time of each design
+//! --example profile_paper -- [paper|quick|inverter] [iterations] [checkpoint]`. Prints the wall time of each design
 //! iteration split into preconditioner, Newton solves and adjoints, with Newton/PCG counts.
 
 use std::time::Instant;
 
 use flexstage_scenario::{Preset, Scenario};
-use flexstage_topopt::{Optimizer, OptimizerParams, Problem};
+use flexstage_topopt::{Optimizer, OptimizerParams, Problem, samples};
 
 /// Process CPU time (user + system) [s] from /proc/self/stat (Linux; 0 elsewhere).
 fn cpu_time() -> f64 {
@@ -31,9 +31,19 @@ fn main() {
     };
     let iters: usize = args.get(2).and_then(|v| v.parse().ok()).unwrap_or(8);
     let s = Scenario::preset(preset);
-    let problem = Problem::from_scenario(&s, None).unwrap();
+    // "inverter": the linear 120×60 displacement inverter of the benchmark.
+    let inverter = args.get(1).map(String::as_str) == Some("inverter");
+    let problem = if inverter {
+        samples::inverter(120, 60).unwrap()
+    } else {
+        Problem::from_scenario(&s, None).unwrap()
+    };
     // Optional third argument: a checkpoint (design/checkpoint.bin of a run of this preset).
-    let params = OptimizerParams::from_scenario(&s);
+    let params = if inverter {
+        samples::inverter_params(100_000)
+    } else {
+        OptimizerParams::from_scenario(&s)
+    };
     let mut opt = match args.get(3) {
         Some(path) => {
             let bytes = std::fs::read(path).unwrap();

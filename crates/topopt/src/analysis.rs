@@ -446,7 +446,7 @@ impl<'p> Evaluator<'p> {
         params.validate()?;
         problem.validate()?;
         let model = &problem.model;
-        let symbolic = SymbolicFactor::new(model.pattern().clone())?;
+        let symbolic = SymbolicFactor::for_model(model)?;
         let nc = problem.cases.len();
         let cases = (0..nc).map(|_| CaseState::new(model, &symbolic)).collect();
         let per_group = nc.div_ceil(GROUPS);
