@@ -624,8 +624,8 @@ pub fn pcg_block(
         &mut q[..n * k],
     );
     let col = |j: usize| j * n..(j + 1) * n;
-    for j in 0..k {
-        assert_eq!(mats[j].n(), n, "pcg_block matrix order");
+    for a in mats {
+        assert_eq!(a.n(), n, "pcg_block matrix order");
     }
     block_matvec(mats, x, q, n, |_| true);
     let mut total = 0;
