@@ -53,6 +53,12 @@ impl SymbolicFactor {
         order: Vec<usize>,
     ) -> Result<Arc<Self>, SolverError> {
         let n = pattern.n();
+        if order.len() != n {
+            return Err(SolverError::Symbolic(format!(
+                "order has {} entries, the matrix order is {n}",
+                order.len()
+            )));
+        }
         let mut inv = vec![usize::MAX; n];
         for (k, &i) in order.iter().enumerate() {
             if i >= n || inv[i] != usize::MAX {
@@ -62,12 +68,19 @@ impl SymbolicFactor {
             }
             inv[i] = k;
         }
-        if order.len() != n {
-            return Err(SolverError::Symbolic(format!(
-                "order has {} entries, the matrix order is {n}",
-                order.len()
-            )));
-        }
+        let perm = faer::perm::PermRef::new_checked(&order, &inv, n);
+        Self::analyze(pattern, SymmetricOrdering::Custom(perm))
+    }
+
+    /// AMD ordering and symbolic analysis of the pattern (≈7 ms at 120×60).
+    pub fn new(pattern: Arc<SparsityPattern>) -> Result<Arc<Self>, SolverError> {
+        Self::analyze(pattern, SymmetricOrdering::Amd)
+    }
+
+    fn analyze(
+        pattern: Arc<SparsityPattern>,
+        ordering: SymmetricOrdering<'_, usize>,
+    ) -> Result<Arc<Self>, SolverError> {
         let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(
             pattern.n(),
             pattern.n(),
@@ -75,35 +88,16 @@ impl SymbolicFactor {
             None,
             pattern.row_idx(),
         );
-        let perm = faer::perm::PermRef::new_checked(&order, &inv, n);
         let inner = factorize_symbolic_cholesky(
             sym,
             Side::Lower,
-            SymmetricOrdering::Custom(perm),
+            ordering,
             CholeskySymbolicParams::default(),
         )
         .map_err(|e| SolverError::Symbolic(format!("{e:?}")))?;
         Ok(Arc::new(Self { inner, pattern }))
     }
 
-    /// AMD ordering and symbolic analysis of the pattern (≈7 ms at 120×60).
-    pub fn new(pattern: Arc<SparsityPattern>) -> Result<Arc<Self>, SolverError> {
-        let sym = faer::sparse::SymbolicSparseColMatRef::new_checked(
-            pattern.n(),
-            pattern.n(),
-            pattern.col_ptr(),
-            None,
-            pattern.row_idx(),
-        );
-        let inner = factorize_symbolic_cholesky(
-            sym,
-            Side::Lower,
-            SymmetricOrdering::Amd,
-            CholeskySymbolicParams::default(),
-        )
-        .map_err(|e| SolverError::Symbolic(format!("{e:?}")))?;
-        Ok(Arc::new(Self { inner, pattern }))
-    }
     /// Order of the system.
     pub fn n(&self) -> usize {
         self.inner.nrows()
