@@ -7,6 +7,7 @@ use crate::kkt::{KktProblem, KktResidual, Multipliers, kkt_residual};
 use crate::params::MmaParams;
 use crate::subsolv::{
     ALFA, BETA, CHUNK, ETA, LOW, NSTATE, P0, PQ, Q0, SubConsts, SubSolver, UPP, X, XSI, idx,
+    min_len,
 };
 
 /// What one [`Mma::update`] did.
@@ -106,6 +107,7 @@ fn check_len(name: &'static str, s: &[f64], expected: usize) -> Result<(), MmaEr
 }
 
 pub(crate) fn check_finite(name: &'static str, s: &[f64], parallel: bool) -> Result<(), MmaError> {
+    // A plain search when serial: rayon's `position_first` checks a shared atomic per element.
     let bad = if parallel {
         s.par_iter().position_first(|v| !v.is_finite())
     } else {
@@ -383,25 +385,17 @@ impl Mma {
     /// Copies x into xold1 and the subproblem solution into x, ξ, η; returns the max change.
     fn write_back(&mut self, x: &mut [f64]) -> f64 {
         let sub = &self.sub;
-        if sub.parallel {
-            x.par_chunks_mut(CHUNK)
-                .zip(self.xold1.par_chunks_mut(CHUNK))
-                .zip(
-                    self.xsi
-                        .par_chunks_mut(CHUNK)
-                        .zip(self.eta.par_chunks_mut(CHUNK)),
-                )
-                .zip(sub.state.par_chunks(CHUNK * NSTATE))
-                .map(|(((xs, xo), (xsi, eta)), st)| write_chunk(xs, xo, xsi, eta, st))
-                .reduce(|| 0.0, f64::max)
-        } else {
-            x.chunks_mut(CHUNK)
-                .zip(self.xold1.chunks_mut(CHUNK))
-                .zip(self.xsi.chunks_mut(CHUNK).zip(self.eta.chunks_mut(CHUNK)))
-                .zip(sub.state.chunks(CHUNK * NSTATE))
-                .map(|(((xs, xo), (xsi, eta)), st)| write_chunk(xs, xo, xsi, eta, st))
-                .fold(0.0, f64::max)
-        }
+        x.par_chunks_mut(CHUNK)
+            .zip(self.xold1.par_chunks_mut(CHUNK))
+            .zip(
+                self.xsi
+                    .par_chunks_mut(CHUNK)
+                    .zip(self.eta.par_chunks_mut(CHUNK)),
+            )
+            .zip(sub.state.par_chunks(CHUNK * NSTATE))
+            .with_min_len(min_len(sub.parallel))
+            .map(|(((xs, xo), (xsi, eta)), st)| write_chunk(xs, xo, xsi, eta, st))
+            .reduce(|| 0.0, f64::max)
     }
 
     /// Asymptotes, move limits α, β, and the p/q approximations (`mmasub`).
@@ -425,21 +419,13 @@ impl Mma {
         let f_chunk = |(c, (nodes, acc)): (usize, (&mut [f64], &mut [f64]))| {
             build_chunk(&ctx, c, nodes, &mut acc[..m]);
         };
-        if self.sub.parallel {
-            self.sub
-                .nodes
-                .par_chunks_mut(CHUNK * stride)
-                .zip(self.sub.acc.par_chunks_mut(slot))
-                .enumerate()
-                .for_each(f_chunk);
-        } else {
-            self.sub
-                .nodes
-                .chunks_mut(CHUNK * stride)
-                .zip(self.sub.acc.chunks_mut(slot))
-                .enumerate()
-                .for_each(f_chunk);
-        }
+        self.sub
+            .nodes
+            .par_chunks_mut(CHUNK * stride)
+            .zip(self.sub.acc.par_chunks_mut(slot))
+            .enumerate()
+            .with_min_len(min_len(self.sub.parallel))
+            .for_each(f_chunk);
         for (b, fi) in self.sub.b.iter_mut().zip(f) {
             *b = -fi;
         }

@@ -64,6 +64,13 @@ macro_rules! dispatch_m {
 pub(crate) const LANES: usize = 8;
 /// Variables per chunk of the O(n) passes (a multiple of [`LANES`]).
 pub(crate) const CHUNK: usize = 1024;
+
+/// Smallest number of chunks per rayon job: 1 lets rayon spread the chunks over its threads;
+/// `usize::MAX` keeps the whole pass one job on the calling thread (the serial mode). The
+/// chunks and their ordered reductions are the same either way, hence the same bits.
+pub(crate) fn min_len(parallel: bool) -> usize {
+    if parallel { 1 } else { usize::MAX }
+}
 /// Marker for "m not known at compile time".
 const DYN: usize = usize::MAX;
 /// Largest `m` with a compile-time kernel (see `dispatch_m`).
@@ -398,17 +405,11 @@ impl SubSolver {
             }
             st[DX * CHUNK..].fill(0.0);
         };
-        if self.parallel {
-            nodes
-                .par_chunks(CHUNK * stride)
-                .zip(self.state.par_chunks_mut(CHUNK * NSTATE))
-                .for_each(f);
-        } else {
-            nodes
-                .chunks(CHUNK * stride)
-                .zip(self.state.chunks_mut(CHUNK * NSTATE))
-                .for_each(f);
-        }
+        nodes
+            .par_chunks(CHUNK * stride)
+            .zip(self.state.par_chunks_mut(CHUNK * NSTATE))
+            .with_min_len(min_len(self.parallel))
+            .for_each(f);
     }
 
     /// Applies the pending step to the stored base point.
@@ -423,11 +424,10 @@ impl SubSolver {
                 *p += steg * d;
             }
         };
-        if self.parallel {
-            self.state.par_chunks_mut(CHUNK * NSTATE).for_each(f);
-        } else {
-            self.state.chunks_mut(CHUNK * NSTATE).for_each(f);
-        }
+        self.state
+            .par_chunks_mut(CHUNK * NSTATE)
+            .with_min_len(min_len(self.parallel))
+            .for_each(f);
         self.pending = 0.0;
     }
 
@@ -448,29 +448,17 @@ impl SubSolver {
         let f = |(c, ((nd, st), (a, ln))): ChunkItem<'_, &[f64]>| {
             dispatch_m!(self.m, eval_chunk, &ctx, c, nd, st, a, ln)
         };
-        if self.parallel {
-            self.nodes
-                .par_chunks(CHUNK * stride)
-                .zip(self.state.par_chunks(CHUNK * NSTATE))
-                .zip(
-                    self.acc
-                        .par_chunks_mut(self.slot)
-                        .zip(self.lanes.par_chunks_mut(lslot)),
-                )
-                .enumerate()
-                .for_each(f);
-        } else {
-            self.nodes
-                .chunks(CHUNK * stride)
-                .zip(self.state.chunks(CHUNK * NSTATE))
-                .zip(
-                    self.acc
-                        .chunks_mut(self.slot)
-                        .zip(self.lanes.chunks_mut(lslot)),
-                )
-                .enumerate()
-                .for_each(f);
-        }
+        self.nodes
+            .par_chunks(CHUNK * stride)
+            .zip(self.state.par_chunks(CHUNK * NSTATE))
+            .zip(
+                self.acc
+                    .par_chunks_mut(self.slot)
+                    .zip(self.lanes.par_chunks_mut(lslot)),
+            )
+            .enumerate()
+            .with_min_len(min_len(self.parallel))
+            .for_each(f);
         self.reduce_eval(eps_a)
     }
 
@@ -614,29 +602,17 @@ impl SubSolver {
         let f = |(c, ((nd, st), (a, ln))): ChunkItem<'_, &mut [f64]>| {
             dispatch_m!(m, direction_chunk, &ctx, c, nd, st, a, ln)
         };
-        if self.parallel {
-            self.nodes
-                .par_chunks(CHUNK * stride)
-                .zip(self.state.par_chunks_mut(CHUNK * NSTATE))
-                .zip(
-                    self.acc
-                        .par_chunks_mut(self.slot)
-                        .zip(self.lanes.par_chunks_mut(lslot)),
-                )
-                .enumerate()
-                .for_each(f);
-        } else {
-            self.nodes
-                .chunks(CHUNK * stride)
-                .zip(self.state.chunks_mut(CHUNK * NSTATE))
-                .zip(
-                    self.acc
-                        .chunks_mut(self.slot)
-                        .zip(self.lanes.chunks_mut(lslot)),
-                )
-                .enumerate()
-                .for_each(f);
-        }
+        self.nodes
+            .par_chunks(CHUNK * stride)
+            .zip(self.state.par_chunks_mut(CHUNK * NSTATE))
+            .zip(
+                self.acc
+                    .par_chunks_mut(self.slot)
+                    .zip(self.lanes.par_chunks_mut(lslot)),
+            )
+            .enumerate()
+            .with_min_len(min_len(self.parallel))
+            .for_each(f);
         self.pending = 0.0;
         let r = reduced_len(m);
         self.acc
