@@ -1,6 +1,8 @@
-//! Per-iteration timing of a preset (default: paper): `cargo run --release -p flexstage-topopt
-//! --example profile_paper -- [paper|quick|inverter] [iterations] [checkpoint]`. Prints the wall time of each design
-//! iteration split into preconditioner, Newton solves and adjoints, with Newton/PCG counts.
+//! Per-iteration timing of a preset (default: paper) or of the 120×60 linear inverter:
+//! `cargo run --release -p flexstage-topopt --example profile_paper --
+//! [paper|quick|inverter] [iterations] [checkpoint]`. Prints the wall time of each design
+//! iteration split into preconditioner, Newton solves and adjoints, with Newton/PCG counts
+//! (per case with `PROFILE_CASES=1`).
 
 use std::time::Instant;
 

@@ -92,9 +92,10 @@ impl Default for AnalysisParams {
             retry_increments: 4,
             retries: 2,
             lockstep_iterations: 25,
-            // Gradient error ~ PCG tolerance × a modest κ(K⁻¹K_T). A column still running after 8 iterations (strongly nonlinear designs, where the
-            // preconditioner is far from the converged tangent) is cheaper to finish by a
-            // factorization of its case's tangent (~8 ms ≈ 15 block iterations).
+            // Gradient error ~ PCG tolerance × a modest κ(K⁻¹K_T). A column still running
+            // after 8 iterations (strongly nonlinear designs, where the preconditioner is far
+            // from the converged tangent) is cheaper to finish by a factorization of its
+            // case's tangent (~8 ms ≈ 15 block iterations).
             adjoint: Some(PcgParams {
                 rel_tol: 1e-7,
                 max_iter: 8,
