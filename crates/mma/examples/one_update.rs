@@ -3,7 +3,7 @@
 //! ```text
 //! cargo build --release -p flexstage-mma --example one_update
 //! valgrind --tool=callgrind --toggle-collect='*timed_update*' \
-//!     target/release/examples/one_update 10000 serial
+//!     target/release/examples/one_update 10000 serial [dual]
 //! ```
 //!
 //! The optimizer is advanced three iterations first (as in the bench); only the fourth
@@ -11,7 +11,7 @@
 
 use std::time::Instant;
 
-use flexstage_mma::{Mma, MmaParams, UpdateReport};
+use flexstage_mma::{Mma, MmaParams, Subsolver, UpdateReport};
 
 const M: usize = 3;
 
@@ -68,8 +68,14 @@ fn main() {
         Some("parallel") => 0,
         _ => MmaParams::default().parallel_threshold,
     };
+    // A third argument `dual` selects the dual interior-point subproblem solver.
+    let subsolver = match std::env::args().nth(3).as_deref() {
+        Some("dual") => Subsolver::Dual,
+        _ => Subsolver::PrimalDual,
+    };
     let params = MmaParams {
         parallel_threshold,
+        subsolver,
         ..MmaParams::default()
     };
     let mut mma = Mma::new(n, M, vec![1e-3; n], vec![1.0; n], params).unwrap();
@@ -85,7 +91,8 @@ fn main() {
     let dt = t.elapsed();
     let sum: f64 = x.iter().sum();
     println!(
-        "n = {n}: {} Newton steps, residual {:.3e}, {:.3} ms, sum(x) = {sum:.15e}, lambda = {:?}",
+        "n = {n}: {:?}, {} Newton steps, residual {:.3e}, {:.3} ms, sum(x) = {sum:.15e}, lambda = {:?}",
+        rep.subsolver,
         rep.subproblem_iterations,
         rep.subproblem_residual,
         dt.as_secs_f64() * 1e3,

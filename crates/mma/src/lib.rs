@@ -86,7 +86,10 @@
 
 #![warn(missing_docs)]
 
+#[macro_use]
+mod lanes;
 mod dense;
+mod dual;
 mod error;
 mod kkt;
 mod mma;
@@ -98,5 +101,5 @@ mod subsolv;
 pub use error::{MmaError, ParamError};
 pub use kkt::{KktProblem, KktResidual, Multipliers, kkt_residual};
 pub use mma::{Mma, MmaState, UpdateReport};
-pub use params::MmaParams;
+pub use params::{MmaParams, Subsolver};
 pub use solve::{Problem, Solution, StopCriteria, minimize};

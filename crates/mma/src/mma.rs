@@ -1,13 +1,15 @@
 //! The stateful MMA optimizer (`mmasub`).
 
+use multiversion::multiversion;
 use rayon::prelude::*;
 
+use crate::dual::{DualData, DualSolver, SubMultipliers, WarmStart, pq};
 use crate::error::MmaError;
 use crate::kkt::{KktProblem, KktResidual, Multipliers, kkt_residual};
-use crate::params::MmaParams;
+use crate::lanes::{CHUNK, min_len};
+use crate::params::{MmaParams, Subsolver};
 use crate::subsolv::{
-    ALFA, BETA, CHUNK, ETA, LOW, NSTATE, P0, PQ, Q0, SubConsts, SubSolver, UPP, X, XSI, idx,
-    min_len,
+    ALFA, BETA, ETA, LOW, NSTATE, P0, PQ, Q0, SubConsts, SubSolver, UPP, X, XSI, idx,
 };
 
 /// What one [`Mma::update`] did.
@@ -21,6 +23,9 @@ pub struct UpdateReport {
     pub subproblem_iterations: usize,
     /// Norm of the relaxed KKT residual of the subproblem at its last barrier level.
     pub subproblem_residual: f64,
+    /// The solver that solved the subproblem: [`Subsolver::Dual`] falls back to
+    /// [`Subsolver::PrimalDual`] when it fails (see [`Subsolver`]).
+    pub subsolver: Subsolver,
 }
 
 /// The history an [`Mma`] carries between updates, for checkpoints: restoring it into an
@@ -90,6 +95,10 @@ pub struct Mma {
     xold1: Vec<f64>,
     xold2: Vec<f64>,
     sub: SubSolver,
+    /// The dual solver, when `params.subsolver` is [`Subsolver::Dual`].
+    dual: Option<DualSolver>,
+    /// `raa0 / max(xmax − xmin, 1e-5)`: one value if all ranges are equal, else n values.
+    raa: Vec<f64>,
     xsi: Vec<f64>,
     eta: Vec<f64>,
 }
@@ -106,21 +115,33 @@ fn check_len(name: &'static str, s: &[f64], expected: usize) -> Result<(), MmaEr
     }
 }
 
-pub(crate) fn check_finite(name: &'static str, s: &[f64], parallel: bool) -> Result<(), MmaError> {
-    // A plain search when serial: rayon's `position_first` checks a shared atomic per element.
-    let bad = if parallel {
-        s.par_iter().position_first(|v| !v.is_finite())
+/// Values per job of the parallel input checks.
+const CHECK_BLOCK: usize = 16 * CHUNK;
+
+/// Whether `ok(i)` holds for all `i < len`: a branch-free (vectorizable) scan per block, the
+/// blocks spread over threads when `parallel`.
+fn all_ok(len: usize, parallel: bool, ok: impl Fn(usize) -> bool + Sync) -> bool {
+    let block = |start: usize| (start..(start + CHECK_BLOCK).min(len)).fold(true, |a, i| a & ok(i));
+    if parallel {
+        (0..len.div_ceil(CHECK_BLOCK))
+            .into_par_iter()
+            .all(|b| block(b * CHECK_BLOCK))
     } else {
-        s.iter().position(|v| !v.is_finite())
-    };
-    match bad {
-        None => Ok(()),
-        Some(index) => Err(MmaError::NonFinite {
-            name,
-            index,
-            value: s[index],
-        }),
+        (0..len).step_by(CHECK_BLOCK).all(block)
     }
+}
+
+pub(crate) fn check_finite(name: &'static str, s: &[f64], parallel: bool) -> Result<(), MmaError> {
+    if all_ok(s.len(), parallel, |i| s[i].is_finite()) {
+        return Ok(());
+    }
+    // Only on failure: the first offending index.
+    let index = s.iter().position(|v| !v.is_finite()).unwrap_or(0);
+    Err(MmaError::NonFinite {
+        name,
+        index,
+        value: s[index],
+    })
 }
 
 impl Mma {
@@ -153,6 +174,13 @@ impl Mma {
             });
         }
         let parallel = n >= params.parallel_threshold;
+        let raa_of = |j: usize| params.raa0 * (1.0 / (xmax[j] - xmin[j]).max(1e-5));
+        let raa = if (1..n).all(|j| xmax[j] - xmin[j] == xmax[0] - xmin[0]) {
+            vec![raa_of(0)]
+        } else {
+            (0..n).map(raa_of).collect()
+        };
+        let dual = (params.subsolver == Subsolver::Dual).then(|| DualSolver::new(n, m, parallel));
         Ok(Self {
             n,
             m,
@@ -163,6 +191,8 @@ impl Mma {
             xold1: vec![0.0; n],
             xold2: vec![0.0; n],
             sub: SubSolver::new(n, m, parallel),
+            dual,
+            raa,
             xsi: vec![0.0; n],
             eta: vec![0.0; n],
         })
@@ -351,7 +381,9 @@ impl Mma {
         check_finite("df0dx", df0dx, par)?;
         check_finite("f", f, false)?;
         check_finite("dfdx", dfdx, par)?;
-        if let Some(index) = (0..n).find(|&j| !(self.xmin[j] <= x[j] && x[j] <= self.xmax[j])) {
+        let inside = |j: usize| self.xmin[j] <= x[j] && x[j] <= self.xmax[j];
+        if !all_ok(n, par, |j| inside(j)) {
+            let index = (0..n).find(|&j| !inside(j)).unwrap_or(0);
             return Err(MmaError::OutOfBounds {
                 index,
                 value: x[index],
@@ -361,25 +393,93 @@ impl Mma {
         }
 
         self.iter += 1;
-        self.build_subproblem(x, df0dx, f, dfdx);
-        let p = &self.params;
-        let rep = self.sub.solve(&SubConsts {
+        let p = self.params;
+        let k = SubConsts {
             a0: p.a0,
             a: p.a,
             c: p.c,
             d: p.d,
             epsimin: p.subproblem_tolerance,
-        });
-
-        // xold2 <- xold1, xold1 <- x, x <- xmma; expose ξ, η.
-        std::mem::swap(&mut self.xold1, &mut self.xold2);
-        let max_change = self.write_back(x);
+        };
+        let dual = self.dual.take();
+        let (report, max_change) = match dual {
+            Some(mut dual) => {
+                self.build_subproblem(x, df0dx, f, dfdx, Build::Bounds);
+                let data = DualData {
+                    n,
+                    m,
+                    nodes: &self.sub.nodes,
+                    stride: self.sub.stride,
+                    df0dx,
+                    dfdx,
+                    raa: &self.raa,
+                    b: &self.sub.b,
+                };
+                // Warm start from the previous subproblem's multipliers (part of MmaState, so a
+                // restored optimizer starts from the same point).
+                let warm = (self.iter > 1).then_some(WarmStart {
+                    lam: &self.sub.lam,
+                    y: &self.sub.y,
+                    s: &self.sub.s,
+                    z: self.sub.z,
+                });
+                let solved = dual.solve(&data, x, &k, warm);
+                let out = match solved {
+                    Some(rep) => {
+                        std::mem::swap(&mut self.xold1, &mut self.xold2);
+                        let max_change =
+                            dual.finish(&data, x, &mut self.xold1, &mut self.xsi, &mut self.eta);
+                        let sub = &mut self.sub;
+                        dual.multipliers(
+                            &k,
+                            SubMultipliers {
+                                lam: &mut sub.lam,
+                                y: &mut sub.y,
+                                z: &mut sub.z,
+                                mu: &mut sub.mu,
+                                zet: &mut sub.zet,
+                                s: &mut sub.s,
+                            },
+                        );
+                        let report = (rep.iterations, rep.residual_norm, Subsolver::Dual);
+                        Some((report, max_change))
+                    }
+                    None => None,
+                };
+                self.dual = Some(dual);
+                match out {
+                    Some(out) => out,
+                    None => {
+                        // Fall back to subsolv on the same subproblem.
+                        self.build_subproblem(x, df0dx, f, dfdx, Build::PqOnly);
+                        self.primal_dual(x, &k)
+                    }
+                }
+            }
+            None => {
+                self.build_subproblem(x, df0dx, f, dfdx, Build::Full);
+                self.primal_dual(x, &k)
+            }
+        };
         Ok(UpdateReport {
             iteration: self.iter,
             max_change,
-            subproblem_iterations: rep.iterations,
-            subproblem_residual: rep.residual_norm,
+            subproblem_iterations: report.0,
+            subproblem_residual: report.1,
+            subsolver: report.2,
         })
+    }
+
+    /// Solves the subproblem built in `nodes` with `subsolv` and writes the result back.
+    fn primal_dual(&mut self, x: &mut [f64], k: &SubConsts) -> ((usize, f64, Subsolver), f64) {
+        let rep = self.sub.solve(k);
+        // xold2 <- xold1, xold1 <- x, x <- xmma; expose ξ, η.
+        std::mem::swap(&mut self.xold1, &mut self.xold2);
+        let max_change = self.write_back(x);
+        (
+            (rep.iterations, rep.residual_norm, Subsolver::PrimalDual),
+            max_change,
+        )
     }
 
     /// Copies x into xold1 and the subproblem solution into x, ξ, η; returns the max change.
@@ -398,14 +498,15 @@ impl Mma {
             .reduce(|| 0.0, f64::max)
     }
 
-    /// Asymptotes, move limits α, β, and the p/q approximations (`mmasub`).
-    fn build_subproblem(&mut self, x: &[f64], df0dx: &[f64], f: &[f64], dfdx: &[f64]) {
+    /// Asymptotes, move limits α, β, and the p/q approximations (`mmasub`); `b`.
+    fn build_subproblem(&mut self, x: &[f64], df0dx: &[f64], f: &[f64], dfdx: &[f64], what: Build) {
         let (n, m) = (self.n, self.m);
         let ctx = BuildCtx {
             n,
             m,
             p: self.params,
             init: self.iter <= 2,
+            what,
             x,
             xold1: &self.xold1,
             xold2: &self.xold2,
@@ -458,11 +559,23 @@ fn write_chunk(
     ch
 }
 
+/// What [`Mma::build_subproblem`] writes to `nodes`.
+#[derive(Clone, Copy, PartialEq)]
+enum Build {
+    /// Asymptotes, α, β and the p/q coefficients (for `subsolv`).
+    Full,
+    /// Asymptotes, α and β only (the dual solver recomputes p and q).
+    Bounds,
+    /// The p/q coefficients for the asymptotes already in `nodes` (fallback to `subsolv`).
+    PqOnly,
+}
+
 struct BuildCtx<'a> {
     n: usize,
     m: usize,
     p: MmaParams,
     init: bool,
+    what: Build,
     x: &'a [f64],
     xold1: &'a [f64],
     xold2: &'a [f64],
@@ -472,7 +585,8 @@ struct BuildCtx<'a> {
     dfdx: &'a [f64],
 }
 
-fn build_chunk(ctx: &BuildCtx<'_>, c: usize, nodes: &mut [f64], b: &mut [f64]) {
+#[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"))]
+fn build_chunk<'a>(ctx: &BuildCtx<'a>, c: usize, nodes: &mut [f64], b: &mut [f64]) {
     let (n, m, p) = (ctx.n, ctx.m, &ctx.p);
     let stride = PQ + 2 * m;
     let start = c * CHUNK;
@@ -485,7 +599,9 @@ fn build_chunk(ctx: &BuildCtx<'_>, c: usize, nodes: &mut [f64], b: &mut [f64]) {
         let xv = ctx.x[j];
         let (xmin, xmax) = (ctx.xmin[j], ctx.xmax[j]);
         let range = xmax - xmin;
-        let (low, upp) = if ctx.init {
+        let (low, upp) = if ctx.what == Build::PqOnly {
+            (nodes[nd(LOW)], nodes[nd(UPP)])
+        } else if ctx.init {
             (xv - p.asyinit * range, xv + p.asyinit * range)
         } else {
             let (xo1, xo2) = (ctx.xold1[j], ctx.xold2[j]);
@@ -509,28 +625,29 @@ fn build_chunk(ctx: &BuildCtx<'_>, c: usize, nodes: &mut [f64], b: &mut [f64]) {
         let beta = (upp - p.albefa * (upp - xv))
             .min(xv + p.move_limit * range)
             .min(xmax);
-        let xmamiinv = 1.0 / range.max(1e-5);
+        let raa = p.raa0 * (1.0 / range.max(1e-5));
         let ux1 = upp - xv;
         let xl1 = xv - low;
         let (ux2, xl2) = (ux1 * ux1, xl1 * xl1);
         let (uxinv, xlinv) = (1.0 / ux1, 1.0 / xl1);
-        let g = ctx.df0dx[j];
-        let (pp, qq) = (g.max(0.0), (-g).max(0.0));
-        let pq0 = 0.001 * (pp + qq) + p.raa0 * xmamiinv;
-        nodes[nd(LOW)] = low;
-        nodes[nd(UPP)] = upp;
-        nodes[nd(ALFA)] = alfa;
-        nodes[nd(BETA)] = beta;
-        nodes[nd(P0)] = (pp + pq0) * ux2;
-        nodes[nd(Q0)] = (qq + pq0) * xl2;
+        let store_pq = ctx.what != Build::Bounds;
+        if ctx.what != Build::PqOnly {
+            nodes[nd(LOW)] = low;
+            nodes[nd(UPP)] = upp;
+            nodes[nd(ALFA)] = alfa;
+            nodes[nd(BETA)] = beta;
+        }
+        if store_pq {
+            let (p0, q0) = pq(ctx.df0dx[j], ux2, xl2, raa);
+            nodes[nd(P0)] = p0;
+            nodes[nd(Q0)] = q0;
+        }
         for i in 0..m {
-            let g = ctx.dfdx[i * n + j];
-            let (pp, qq) = (g.max(0.0), (-g).max(0.0));
-            let pq = 0.001 * (pp + qq) + p.raa0 * xmamiinv;
-            let pij = (pp + pq) * ux2;
-            let qij = (qq + pq) * xl2;
-            nodes[nd(PQ + i)] = pij;
-            nodes[nd(PQ + m + i)] = qij;
+            let (pij, qij) = pq(ctx.dfdx[i * n + j], ux2, xl2, raa);
+            if store_pq {
+                nodes[nd(PQ + i)] = pij;
+                nodes[nd(PQ + m + i)] = qij;
+            }
             b[i] += pij * uxinv + qij * xlinv;
         }
     }

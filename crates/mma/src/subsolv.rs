@@ -38,43 +38,11 @@
 //!   reduces into its own slot and the slots are summed in order, so the result does not
 //!   depend on the number of threads.
 
-use std::ops::{Add, Div, Mul, Neg, Sub};
-
 use multiversion::multiversion;
 use rayon::prelude::*;
 
 use crate::dense::solve_in_place;
-
-/// Calls `$func::<M>(args)` with `M` the compile-time value of `m` for m ≤ 4, so that the
-/// inner loops over the constraints are unrolled, and with `M = DYN` otherwise.
-macro_rules! dispatch_m {
-    ($m:expr, $func:ident, $($arg:expr),*) => {
-        match $m {
-            0 => $func::<0>($($arg),*),
-            1 => $func::<1>($($arg),*),
-            2 => $func::<2>($($arg),*),
-            3 => $func::<3>($($arg),*),
-            4 => $func::<4>($($arg),*),
-            _ => $func::<DYN>($($arg),*),
-        }
-    };
-}
-
-/// Variables per SIMD block of the O(n) passes.
-pub(crate) const LANES: usize = 8;
-/// Variables per chunk of the O(n) passes (a multiple of [`LANES`]).
-pub(crate) const CHUNK: usize = 1024;
-
-/// Smallest number of chunks per rayon job: 1 lets rayon spread the chunks over its threads;
-/// `usize::MAX` keeps the whole pass one job on the calling thread (the serial mode). The
-/// chunks and their ordered reductions are the same either way, hence the same bits.
-pub(crate) fn min_len(parallel: bool) -> usize {
-    if parallel { 1 } else { usize::MAX }
-}
-/// Marker for "m not known at compile time".
-const DYN: usize = usize::MAX;
-/// Largest `m` with a compile-time kernel (see `dispatch_m`).
-const MAX_STATIC_M: usize = 4;
+use crate::lanes::{CHUNK, DYN, LANES, MAX_STATIC_M, Nodes, Real, V, chunk_len, min_len};
 
 /// Fields of `nodes`: `P[i]` is field `PQ + i`, `Q[i]` field `PQ + m + i`.
 pub(crate) const LOW: usize = 0;
@@ -720,144 +688,6 @@ impl SubSolver {
 }
 
 // ---------------------------------------------------------------------------------------
-// Lane arithmetic.
-
-/// `LANES` variables' values of one quantity.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct V([f64; LANES]);
-
-impl V {
-    #[inline(always)]
-    fn splat(v: f64) -> Self {
-        Self([v; LANES])
-    }
-
-    /// Lanes `o..o+LANES` of `s`.
-    #[inline(always)]
-    fn load(s: &[f64], o: usize) -> Self {
-        let mut a = [0.0; LANES];
-        a.copy_from_slice(&s[o..o + LANES]);
-        Self(a)
-    }
-
-    /// Writes the first `valid` lanes to `s[o..]`.
-    #[inline(always)]
-    fn store<const MASK: bool>(self, s: &mut [f64], o: usize, valid: usize) {
-        if MASK {
-            s[o..o + valid].copy_from_slice(&self.0[..valid]);
-        } else {
-            s[o..o + LANES].copy_from_slice(&self.0);
-        }
-    }
-
-    /// `self` in the first `valid` lanes and `fill` in the others (only when `MASK`).
-    #[inline(always)]
-    fn keep<const MASK: bool>(self, valid: usize, fill: f64) -> Self {
-        if MASK {
-            let mut r = self.0;
-            for (l, v) in r.iter_mut().enumerate() {
-                if l >= valid {
-                    *v = fill;
-                }
-            }
-            Self(r)
-        } else {
-            self
-        }
-    }
-
-    /// Sum of the lanes, in lane order.
-    #[inline(always)]
-    fn hsum(self) -> f64 {
-        self.0.iter().fold(0.0, |a, &b| a + b)
-    }
-
-    /// Maximum of the lanes and `init`.
-    #[inline(always)]
-    fn hmax(self, init: f64) -> f64 {
-        self.0.iter().fold(init, |a, &b| a.max(b))
-    }
-}
-
-macro_rules! lane_op {
-    ($tr:ident, $f:ident, $op:tt) => {
-        impl $tr for V {
-            type Output = V;
-            #[inline(always)]
-            #[allow(clippy::needless_range_loop)]
-            fn $f(self, o: V) -> V {
-                let mut r = [0.0; LANES];
-                for l in 0..LANES {
-                    r[l] = self.0[l] $op o.0[l];
-                }
-                V(r)
-            }
-        }
-    };
-}
-lane_op!(Add, add, +);
-lane_op!(Sub, sub, -);
-lane_op!(Mul, mul, *);
-lane_op!(Div, div, /);
-
-impl Neg for V {
-    type Output = V;
-    #[inline(always)]
-    fn neg(self) -> V {
-        V(self.0.map(|v| -v))
-    }
-}
-
-/// The arithmetic shared by the scalar (`f64`) and lane (`V`) code.
-trait Real:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
-{
-    fn splat(v: f64) -> Self;
-    /// `max`, equal to `f64::max` for numbers.
-    fn maxv(self, o: Self) -> Self;
-    fn absv(self) -> Self;
-}
-
-impl Real for f64 {
-    #[inline(always)]
-    fn splat(v: f64) -> Self {
-        v
-    }
-    #[inline(always)]
-    fn maxv(self, o: Self) -> Self {
-        self.max(o)
-    }
-    #[inline(always)]
-    fn absv(self) -> Self {
-        self.abs()
-    }
-}
-
-impl Real for V {
-    #[inline(always)]
-    fn splat(v: f64) -> Self {
-        V::splat(v)
-    }
-    #[inline(always)]
-    #[allow(clippy::needless_range_loop)]
-    fn maxv(self, o: Self) -> Self {
-        let mut r = [0.0; LANES];
-        for l in 0..LANES {
-            r[l] = if o.0[l] > self.0[l] {
-                o.0[l]
-            } else {
-                self.0[l]
-            };
-        }
-        V(r)
-    }
-    #[inline(always)]
-    fn absv(self) -> Self {
-        V(self.0.map(f64::abs))
-    }
-}
-
-// ---------------------------------------------------------------------------------------
 // Per-variable formulas (Svanberg 2007, section 5: the relaxed KKT conditions and the
 // reduced Newton system), written once for f64 and for lanes.
 
@@ -1039,17 +869,6 @@ impl<'s> EvalAcc<'s> {
     }
 }
 
-/// One chunk's node fields.
-#[derive(Clone, Copy)]
-struct Nodes<'a>(&'a [f64]);
-
-impl Nodes<'_> {
-    #[inline(always)]
-    fn get(self, f: usize, o: usize) -> V {
-        V::load(&self.0[f * CHUNK..(f + 1) * CHUNK], o)
-    }
-}
-
 /// `p₀ + λᵀP` and `q₀ + λᵀQ` of a block.
 #[inline(always)]
 #[allow(clippy::needless_range_loop)]
@@ -1137,13 +956,6 @@ fn point(st: &[f64], o: usize, steg: f64) -> (V, V, V) {
     let s = V::splat(steg);
     let f = |k: usize| V::load(&st[k * CHUNK..(k + 1) * CHUNK], o);
     (f(X) + s * f(DX), f(XSI) + s * f(DXSI), f(ETA) + s * f(DETA))
-}
-
-/// Blocks of a chunk: `(offset, valid lanes)`, the last one possibly partial.
-#[inline(always)]
-fn chunk_len(n: usize, c: usize) -> (usize, usize) {
-    let len = (n - c * CHUNK).min(CHUNK);
-    (len / LANES, len % LANES)
 }
 
 #[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"))]
