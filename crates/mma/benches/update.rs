@@ -1,24 +1,27 @@
-//! One MMA update for n = 10⁴, 10⁵, 10⁶ variables and m = 3 constraints.
+//! One MMA update for n = 10⁴, 10⁵, 10⁶ variables and m = 3 constraints, with each
+//! subproblem solver.
 //!
 //! Run with `cargo bench -p flexstage-mma`. The optimizer is first advanced three
-//! iterations on a synthetic problem (so the asymptote-update branch is used), then each
-//! sample times one `Mma::update` from that same state.
+//! iterations on a synthetic problem (so the asymptote-update branch is used and the dual
+//! solver is warm-started), then each sample times one `Mma::update` from that same state.
 
-use flexstage_mma::{Mma, MmaParams};
+use flexstage_mma::{Mma, MmaParams, Subsolver};
 
 fn main() {
     // Newton steps of the benchmarked update, so the time per step and variable can be read.
-    for n in SIZES {
-        let s = setup(n);
-        let rep = s
-            .mma
-            .clone()
-            .update(&mut s.x.clone(), s.f0, &s.df0dx, &s.f, &s.dfdx)
-            .unwrap();
-        println!(
-            "n = {n}: {} interior-point Newton steps per update",
-            rep.subproblem_iterations
-        );
+    for sub in [Subsolver::PrimalDual, Subsolver::Dual] {
+        for n in SIZES {
+            let s = setup(n, sub);
+            let rep = s
+                .mma
+                .clone()
+                .update(&mut s.x.clone(), s.f0, &s.df0dx, &s.f, &s.dfdx)
+                .unwrap();
+            println!(
+                "{sub:?}, n = {n}: {} interior-point Newton steps per update",
+                rep.subproblem_iterations
+            );
+        }
     }
     divan::main();
 }
@@ -76,9 +79,13 @@ struct Setup {
     dfdx: Vec<f64>,
 }
 
-fn setup(n: usize) -> Setup {
+fn setup(n: usize, subsolver: Subsolver) -> Setup {
     let p = Synthetic::new(n);
-    let mut mma = Mma::new(n, M, vec![1e-3; n], vec![1.0; n], MmaParams::default()).unwrap();
+    let params = MmaParams {
+        subsolver,
+        ..MmaParams::default()
+    };
+    let mut mma = Mma::new(n, M, vec![1e-3; n], vec![1.0; n], params).unwrap();
     let mut x = vec![0.5; n];
     let (mut df0dx, mut f, mut dfdx) = (vec![0.0; n], vec![0.0; M], vec![0.0; M * n]);
     let mut f0 = p.eval(&x, &mut df0dx, &mut f, &mut dfdx);
@@ -96,9 +103,20 @@ fn setup(n: usize) -> Setup {
     }
 }
 
+/// `Subsolver::PrimalDual` (the default, Svanberg's `subsolv`).
 #[divan::bench(args = SIZES, sample_count = 10, sample_size = 1)]
 fn mma_update(bencher: divan::Bencher, n: usize) {
-    let s = setup(n);
+    bench(bencher, n, Subsolver::PrimalDual);
+}
+
+/// `Subsolver::Dual`.
+#[divan::bench(args = SIZES, sample_count = 10, sample_size = 1)]
+fn mma_update_dual(bencher: divan::Bencher, n: usize) {
+    bench(bencher, n, Subsolver::Dual);
+}
+
+fn bench(bencher: divan::Bencher, n: usize, subsolver: Subsolver) {
+    let s = setup(n, subsolver);
     bencher
         .counter(divan::counter::ItemsCount::new(n))
         .with_inputs(|| (s.mma.clone(), s.x.clone()))

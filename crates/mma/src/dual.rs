@@ -175,8 +175,6 @@ pub(crate) struct DualSolver {
 enum Row {
     /// −λᵢ ≤ 0; its multiplier is the slack sᵢ of constraint i of the subproblem.
     Positive(usize),
-    /// −wᵢ ≤ 0 (d > 0).
-    WPositive(usize),
     /// λᵢ − wᵢ ≤ c (d > 0); its multiplier is yᵢ.
     WCap(usize),
     /// λᵢ ≤ c (d = 0); its multiplier is yᵢ.
@@ -188,9 +186,9 @@ enum Row {
 impl DualSolver {
     pub(crate) fn new(n: usize, m: usize, parallel: bool) -> Self {
         let nchunks = n.div_ceil(CHUNK);
-        let slot = reduced_len(m);
+        let slot = reduced_len(m).max(1);
         let lslot = dyn_lanes(m);
-        let kmax = 3 * m + 1;
+        let kmax = 2 * m + 1;
         let nvmax = 2 * m;
         Self {
             m,
@@ -235,7 +233,6 @@ impl DualSolver {
         }
         if k.d > 0.0 {
             for i in 0..m {
-                push(Row::WPositive(i), 0.0);
                 push(Row::WCap(i), k.c);
             }
         } else {
@@ -287,10 +284,13 @@ impl DualSolver {
         Some(rep)
     }
 
-    /// λ = 1 (inside the caps), w = 1.
+    /// λ = 1 (inside the caps), w = max(0, λ − c + 1).
     fn start_cold(&mut self, k: &SubConsts) {
         let (m, nv) = (self.m, self.nv);
-        self.v[..nv].fill(1.0);
+        self.v[..m].fill(1.0);
+        for i in m..nv {
+            self.v[i] = (1.0 - k.c + 1.0).max(0.0);
+        }
         if k.d == 0.0 {
             self.v[..m].fill((0.5 * k.c).min(1.0));
         }
@@ -311,19 +311,18 @@ impl DualSolver {
         for i in 0..m {
             self.v[i] = w.lam[i].max(delta);
             if nv > m {
-                self.v[m + i] = (k.d * w.y[i]).max(delta).max(self.v[i] - k.c + delta);
+                self.v[m + i] = (k.d * w.y[i]).max(self.v[i] - k.c + delta);
             }
         }
         for r in 0..nk {
             let s = self.abar[r] - a_row(self.kind[r], &self.v, m, k.a);
-            if !(s > 0.0) {
+            if s.is_nan() || s <= 0.0 {
                 return false;
             }
             let prev = match self.kind[r] {
                 Row::Positive(i) => w.s[i],
                 Row::WCap(i) | Row::Cap(i) => w.y[i],
                 Row::Z => w.z,
-                Row::WPositive(_) => 0.0,
             };
             self.nu[r] = prev.max(delta / s);
         }
@@ -477,6 +476,9 @@ impl DualSolver {
     /// One pass: `g(x(λ)) − b` and Σ_free G Gᵀ/ψ'' at the current λ.
     fn evaluate(&mut self, data: &DualData<'_>, x: &[f64]) {
         let m = self.m;
+        if m == 0 {
+            return;
+        }
         let ctx = PassCtx {
             data: *data,
             x,
@@ -520,7 +522,6 @@ impl DualSolver {
                 Row::Positive(i) => out.s[i] = self.nu[r],
                 Row::WCap(i) | Row::Cap(i) => out.y[i] = self.nu[r],
                 Row::Z => *out.z = self.nu[r],
-                Row::WPositive(_) => {}
             }
         }
         for i in 0..m {
@@ -562,7 +563,6 @@ impl DualSolver {
 fn a_row(kind: Row, v: &[f64], m: usize, a: f64) -> f64 {
     match kind {
         Row::Positive(i) => -v[i],
-        Row::WPositive(i) => -v[m + i],
         Row::WCap(i) => v[i] - v[m + i],
         Row::Cap(i) => v[i],
         Row::Z => a * v[..m].iter().sum::<f64>(),
@@ -575,7 +575,6 @@ fn add_at(kind: &[Row], w: &[f64], scale: f64, m: usize, a: f64, out: &mut [f64]
         let v = scale * wr;
         match kd {
             Row::Positive(i) => out[i] -= v,
-            Row::WPositive(i) => out[m + i] -= v,
             Row::WCap(i) => {
                 out[i] += v;
                 out[m + i] -= v;
@@ -590,7 +589,6 @@ fn add_at(kind: &[Row], w: &[f64], scale: f64, m: usize, a: f64, out: &mut [f64]
 fn add_row_outer(kind: Row, wt: f64, m: usize, nv: usize, a: f64, mat: &mut [f64]) {
     match kind {
         Row::Positive(i) | Row::Cap(i) => mat[i * nv + i] += wt,
-        Row::WPositive(i) => mat[(m + i) * nv + m + i] += wt,
         Row::WCap(i) => {
             let (l, w) = (i, m + i);
             mat[l * nv + l] += wt;
@@ -635,6 +633,7 @@ struct Block {
 /// `x(λ)` for the block of variables `j..j+LANES` (offset `o` in its chunk, `valid` lanes
 /// real); `xk` holds xᵏ.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn minimizer<const MASK: bool>(
     d: &DualData<'_>,
     m: usize,
@@ -711,8 +710,9 @@ fn dual_block<const MASK: bool>(
         b.uxinv.keep::<MASK>(valid, 0.0),
         b.xlinv.keep::<MASK>(valid, 0.0),
     );
-    let (uxinv2, xlinv2) = (b.uxinv * b.uxinv, b.xlinv * b.xlinv);
-    let psi2 = V::splat(2.0) * (b.p * uxinv2 * b.uxinv + b.q * xlinv2 * b.xlinv);
+    // Padding lanes are zeroed through `uxinv`, `xlinv` and `dinv`.
+    let (uxinv2, xlinv2) = (uxinv * uxinv, xlinv * xlinv);
+    let psi2 = V::splat(2.0) * (b.p * uxinv2 * uxinv + b.q * xlinv2 * xlinv);
     let dinv = (V::splat(1.0) / psi2)
         .where_inside(b.x, b.alfa, b.beta, V::splat(0.0))
         .keep::<MASK>(valid, 0.0);
@@ -833,4 +833,134 @@ fn finish_chunk<const M: usize>(
         ch = ch.maxv(finish_block::<true>(d, m, lam, nd, j0 + o, o, tail, out));
     }
     ch.hmax(0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    //! Reference: central finite differences of the dual function W(λ), evaluated by a plain
+    //! scalar minimization per variable written independently of the SIMD passes.
+    //! Goal: the pass's ∂W/∂λ and −∂²W/∂λ² (hand-written, eq. in the module docs) match.
+
+    use super::*;
+
+    /// A random subproblem: n = 37 (a partial SIMD block), m = 2.
+    struct Case {
+        nodes: Vec<f64>,
+        x: Vec<f64>,
+        df0: Vec<f64>,
+        dfdx: Vec<f64>,
+        raa: Vec<f64>,
+        b: Vec<f64>,
+    }
+
+    const N: usize = 37;
+    const M: usize = 2;
+    const STRIDE: usize = 4;
+
+    fn case() -> Case {
+        let mut seed = 12345u64;
+        let mut rnd = move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let mut nodes = vec![0.0; CHUNK * STRIDE];
+        let mut x = vec![0.0; N];
+        for j in 0..N {
+            let xv = 0.2 + 0.6 * rnd();
+            let (low, upp) = (xv - 0.1 - 0.4 * rnd(), xv + 0.1 + 0.4 * rnd());
+            x[j] = xv;
+            nodes[LOW * CHUNK + j] = low;
+            nodes[UPP * CHUNK + j] = upp;
+            // Tight move limits, so that some minimizers sit on α or β.
+            nodes[ALFA * CHUNK + j] = xv - 0.05 * rnd();
+            nodes[BETA * CHUNK + j] = xv + 0.05 * rnd();
+        }
+        let df0 = (0..N).map(|_| rnd() - 0.7).collect();
+        let dfdx = (0..M * N).map(|_| rnd() - 0.3).collect();
+        Case {
+            nodes,
+            x,
+            df0,
+            dfdx,
+            raa: vec![1e-3],
+            b: vec![0.3, -0.2],
+        }
+    }
+
+    fn data(c: &Case) -> DualData<'_> {
+        DualData {
+            n: N,
+            m: M,
+            nodes: &c.nodes,
+            stride: STRIDE,
+            df0dx: &c.df0,
+            dfdx: &c.dfdx,
+            raa: &c.raa,
+            b: &c.b,
+        }
+    }
+
+    /// W_x(λ) − λᵀb by a scalar closed-form minimization, and the number of clamped x.
+    fn w_of(c: &Case, lam: &[f64]) -> (f64, usize) {
+        let (mut w, mut clamped) = (0.0, 0);
+        for j in 0..N {
+            let nd = |f: usize| c.nodes[f * CHUNK + j];
+            let (low, upp) = (nd(LOW), nd(UPP));
+            let (ux2, xl2) = ((upp - c.x[j]).powi(2), (c.x[j] - low).powi(2));
+            let (mut p, mut q) = pq(c.df0[j], ux2, xl2, c.raa[0]);
+            for (i, l) in lam.iter().enumerate() {
+                let (pi, qi) = pq(c.dfdx[i * N + j], ux2, xl2, c.raa[0]);
+                p += l * pi;
+                q += l * qi;
+            }
+            let xs = (low * p.sqrt() + upp * q.sqrt()) / (p.sqrt() + q.sqrt());
+            let xc = xs.clamp(nd(ALFA), nd(BETA));
+            clamped += usize::from(xc != xs);
+            w += p / (upp - xc) + q / (xc - low);
+        }
+        let lb: f64 = lam.iter().zip(&c.b).map(|(l, b)| l * b).sum();
+        (w - lb, clamped)
+    }
+
+    #[test]
+    fn dual_gradient_and_hessian_match_central_differences() {
+        let c = case();
+        let d = data(&c);
+        let mut solver = DualSolver::new(N, M, false);
+        let lam = [0.7, 0.4];
+        let eval = |s: &mut DualSolver, l: &[f64]| {
+            s.v[..M].copy_from_slice(l);
+            s.evaluate(&d, &c.x);
+            (s.gb.clone(), s.hx.clone())
+        };
+        let (g, h) = eval(&mut solver, &lam);
+        // Some variables are clamped at α or β and some are free, so both branches count.
+        let clamped = w_of(&c, &lam).1;
+        assert!(clamped > 3 && clamped < N - 3, "{clamped} of {N} clamped");
+        let h_step = 1e-5;
+        for i in 0..M {
+            let (mut lp, mut lm) = (lam, lam);
+            lp[i] += h_step;
+            lm[i] -= h_step;
+            let fd = (w_of(&c, &lp).0 - w_of(&c, &lm).0) / (2.0 * h_step);
+            assert!(
+                (g[i] - fd).abs() <= 1e-7 * fd.abs().max(1.0),
+                "∂W/∂λ{i}: pass {} vs FD {fd}",
+                g[i]
+            );
+            let (gp, _) = eval(&mut solver, &lp);
+            let (gm, _) = eval(&mut solver, &lm);
+            for k in 0..M {
+                let fd2 = -(gp[k] - gm[k]) / (2.0 * h_step);
+                let an = h[k * M + i];
+                assert!(
+                    (an - fd2).abs() <= 1e-6 * fd2.abs().max(1.0),
+                    "-∂²W/∂λ{k}∂λ{i}: pass {an} vs FD {fd2}"
+                );
+            }
+        }
+        assert!(h[0] > 0.0 && h[0] * h[3] - h[1] * h[2] > 0.0, "H = {h:?}");
+    }
 }

@@ -382,7 +382,7 @@ impl Mma {
         check_finite("f", f, false)?;
         check_finite("dfdx", dfdx, par)?;
         let inside = |j: usize| self.xmin[j] <= x[j] && x[j] <= self.xmax[j];
-        if !all_ok(n, par, |j| inside(j)) {
+        if !all_ok(n, par, inside) {
             let index = (0..n).find(|&j| !inside(j)).unwrap_or(0);
             return Err(MmaError::OutOfBounds {
                 index,

@@ -3,10 +3,10 @@
 // root of Σ aj xj(λ) = b, found by a 1-D bisection on the multiplier.
 // Goal (property test over random feasible instances): every MMA iterate stays inside the
 // box, and the final objective matches the analytic optimum (relative 1e-5), the final point
-// is feasible (to 1e-6) and λ matches the analytic multiplier.
+// is feasible (to 1e-6) and λ matches the analytic multiplier, with either subproblem solver.
 
 use flexstage_mma::samples::{SeparableQuadratic, separable_quadratic};
-use flexstage_mma::{Mma, MmaParams};
+use flexstage_mma::{Mma, MmaParams, Subsolver};
 use proptest::prelude::*;
 
 fn instance() -> impl Strategy<Value = (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>, f64, f64)> {
@@ -26,7 +26,7 @@ proptest! {
     #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
 
     #[test]
-    fn mma_matches_dual_bisection((h, t, a, l, frac, width) in instance()) {
+    fn mma_matches_dual_bisection((h, t, a, l, frac, width) in instance(), dual in any::<bool>()) {
         let n = h.len();
         let u: Vec<f64> = l.iter().map(|l| l + 1.0 + width).collect();
         let lo: f64 = a.iter().zip(&l).map(|(a, l)| a * l).sum();
@@ -38,7 +38,8 @@ proptest! {
         let s = separable_quadratic(q, x0, l.clone(), u.clone());
         let p = s.problem.as_ref();
 
-        let params = MmaParams { raa0: 0.1, ..MmaParams::default() };
+        let subsolver = if dual { Subsolver::Dual } else { Subsolver::PrimalDual };
+        let params = MmaParams { raa0: 0.1, subsolver, ..MmaParams::default() };
         let mut mma = Mma::new(n, 1, l.clone(), u.clone(), params).unwrap();
         let mut x = s.x0.clone();
         let (mut g, mut f, mut dfdx) = (vec![0.0; n], vec![0.0; 1], vec![0.0; n]);
