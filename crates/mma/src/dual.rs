@@ -41,10 +41,22 @@
 //! p/q coefficients from the gradients instead of reading stored copies (72 bytes per
 //! variable for m = 3 against 192 read and written per Newton step by `subsolv`).
 //!
+//! The term of y is written with an extra unknown wᵢ per constraint (when d > 0):
+//! `min_y (c − λ)y + ½dy² = max_w { −wᵢ²/(2d) : wᵢ ≥ λᵢ − c }`, so that the kink of W at
+//! λᵢ = c becomes a linear constraint of the interior-point method (its multiplier is yᵢ)
+//! instead of a jump in Newton's model; without `w ≥ 0` the problem stays non-degenerate
+//! when y = 0.
+//!
+//! Warm start: from the second update on, the solve starts from the previous subproblem's
+//! multipliers (λ, y, s, z — the ones saved in `MmaState`, so a restored optimizer repeats
+//! the same steps) moved `1e-3` into the interior; once the active constraints settle this
+//! takes 2–3 Newton steps. A warm start that has not converged after 20 steps is abandoned
+//! for the cold start λ = 1.
+//!
 //! Stopping: `max(‖∇W − Aᵀν‖∞, max sᵢνᵢ) ≤ epsimin`, the measure of `subsolv` at its last
 //! barrier level. The solution is then the exact minimizer `x(λ)` of the Lagrangian for the
 //! final λ, and the multipliers of `subsolv` follow from λ and ν (see
-//! [`DualSolver::multipliers`]). If the method fails (no convergence in [`MAX_STEPS`] steps,
+//! [`DualSolver::multipliers`]). If the method fails (no convergence in `MAX_STEPS` steps,
 //! a non-finite value, or `c = d = 0`, which leaves the dual no interior), the caller falls
 //! back to `subsolv`.
 

@@ -57,7 +57,8 @@
 //! subject to  f̃ᵢ(x) − aᵢ z − yᵢ ≤ 0,   α ≤ x ≤ β,   y ≥ 0,   z ≥ 0
 //! ```
 //!
-//! is solved by the primal–dual interior-point method `subsolv`: Newton's method on the
+//! is solved by the primal–dual interior-point method `subsolv` (the default,
+//! [`Subsolver::PrimalDual`]): Newton's method on the
 //! KKT conditions perturbed by ε (ε = 1, 0.1, …, down to `subproblem_tolerance`), with
 //! multipliers λ, ξ, η, μ, ζ, s. The Newton system is reduced to the (m+1)×(m+1) system
 //! in (Δλ, Δz)
@@ -70,6 +71,12 @@
 //! (`G` the m × n Jacobian of the approximations, `D_x` diagonal), followed by the
 //! componentwise back-substitution `Δx = −D_x⁻¹ (δ_x + Gᵀ Δλ)`. Each Newton step therefore
 //! costs O(n·m² + m³); when `n ≤ m` the (n+1)×(n+1) system of `subsolv` is used instead.
+//!
+//! For large `n`, [`Subsolver::Dual`] solves the same subproblem through its Lagrangian
+//! dual, whose unknowns are m-dimensional: x(λ) has a closed form, each Newton step is one
+//! read-only pass over the variables, and the solve is warm-started from the previous
+//! multipliers (typically 2–3 steps). Its iterates agree with those of `subsolv` to the
+//! subproblem tolerance; if it fails, the update falls back to `subsolv`.
 //!
 //! ## Usage
 //!
