@@ -174,7 +174,7 @@ impl Mma {
             });
         }
         let parallel = n >= params.parallel_threshold;
-        let raa_of = |j: usize| params.raa0 * (1.0 / (xmax[j] - xmin[j]).max(1e-5));
+        let raa_of = |j: usize| raa_term(params.raa0, xmax[j] - xmin[j]);
         let raa = if (1..n).all(|j| xmax[j] - xmin[j] == xmax[0] - xmin[0]) {
             vec![raa_of(0)]
         } else {
@@ -401,54 +401,12 @@ impl Mma {
             d: p.d,
             epsimin: p.subproblem_tolerance,
         };
-        let dual = self.dual.take();
-        let (report, max_change) = match dual {
+        let report = match self.dual.take() {
             Some(mut dual) => {
-                self.build_subproblem(x, df0dx, f, dfdx, Build::Bounds);
-                let data = DualData {
-                    n,
-                    m,
-                    nodes: &self.sub.nodes,
-                    stride: self.sub.stride,
-                    df0dx,
-                    dfdx,
-                    raa: &self.raa,
-                    b: &self.sub.b,
-                };
-                // Warm start from the previous subproblem's multipliers (part of MmaState, so a
-                // restored optimizer starts from the same point).
-                let warm = (self.iter > 1).then_some(WarmStart {
-                    lam: &self.sub.lam,
-                    y: &self.sub.y,
-                    s: &self.sub.s,
-                    z: self.sub.z,
-                });
-                let solved = dual.solve(&data, x, &k, warm);
-                let out = match solved {
-                    Some(rep) => {
-                        std::mem::swap(&mut self.xold1, &mut self.xold2);
-                        let max_change =
-                            dual.finish(&data, x, &mut self.xold1, &mut self.xsi, &mut self.eta);
-                        let sub = &mut self.sub;
-                        dual.multipliers(
-                            &k,
-                            SubMultipliers {
-                                lam: &mut sub.lam,
-                                y: &mut sub.y,
-                                z: &mut sub.z,
-                                mu: &mut sub.mu,
-                                zet: &mut sub.zet,
-                                s: &mut sub.s,
-                            },
-                        );
-                        let report = (rep.iterations, rep.residual_norm, Subsolver::Dual);
-                        Some((report, max_change))
-                    }
-                    None => None,
-                };
+                let report = self.dual_update(&mut dual, x, df0dx, f, dfdx, &k);
                 self.dual = Some(dual);
-                match out {
-                    Some(out) => out,
+                match report {
+                    Some(report) => report,
                     None => {
                         // Fall back to subsolv on the same subproblem.
                         self.build_subproblem(x, df0dx, f, dfdx, Build::PqOnly);
@@ -461,25 +419,77 @@ impl Mma {
                 self.primal_dual(x, &k)
             }
         };
-        Ok(UpdateReport {
+        Ok(report)
+    }
+
+    /// Builds the subproblem without p/q and solves it with the dual solver; `None` (with
+    /// `x` and the history untouched) if that fails.
+    fn dual_update(
+        &mut self,
+        dual: &mut DualSolver,
+        x: &mut [f64],
+        df0dx: &[f64],
+        f: &[f64],
+        dfdx: &[f64],
+        k: &SubConsts,
+    ) -> Option<UpdateReport> {
+        let (n, m) = (self.n, self.m);
+        self.build_subproblem(x, df0dx, f, dfdx, Build::Bounds);
+        let data = DualData {
+            n,
+            m,
+            nodes: &self.sub.nodes,
+            stride: self.sub.stride,
+            df0dx,
+            dfdx,
+            raa: &self.raa,
+            b: &self.sub.b,
+        };
+        // Warm start from the previous subproblem's multipliers (part of MmaState, so a
+        // restored optimizer starts from the same point).
+        let warm = (self.iter > 1).then_some(WarmStart {
+            lam: &self.sub.lam,
+            y: &self.sub.y,
+            s: &self.sub.s,
+            z: self.sub.z,
+        });
+        let rep = dual.solve(&data, x, k, warm)?;
+        std::mem::swap(&mut self.xold1, &mut self.xold2);
+        let max_change = dual.finish(&data, x, &mut self.xold1, &mut self.xsi, &mut self.eta);
+        let sub = &mut self.sub;
+        dual.multipliers(
+            k,
+            SubMultipliers {
+                lam: &mut sub.lam,
+                y: &mut sub.y,
+                z: &mut sub.z,
+                mu: &mut sub.mu,
+                zet: &mut sub.zet,
+                s: &mut sub.s,
+            },
+        );
+        Some(UpdateReport {
             iteration: self.iter,
             max_change,
-            subproblem_iterations: report.0,
-            subproblem_residual: report.1,
-            subsolver: report.2,
+            subproblem_iterations: rep.iterations,
+            subproblem_residual: rep.residual_norm,
+            subsolver: Subsolver::Dual,
         })
     }
 
     /// Solves the subproblem built in `nodes` with `subsolv` and writes the result back.
-    fn primal_dual(&mut self, x: &mut [f64], k: &SubConsts) -> ((usize, f64, Subsolver), f64) {
+    fn primal_dual(&mut self, x: &mut [f64], k: &SubConsts) -> UpdateReport {
         let rep = self.sub.solve(k);
         // xold2 <- xold1, xold1 <- x, x <- xmma; expose ξ, η.
         std::mem::swap(&mut self.xold1, &mut self.xold2);
         let max_change = self.write_back(x);
-        (
-            (rep.iterations, rep.residual_norm, Subsolver::PrimalDual),
+        UpdateReport {
+            iteration: self.iter,
             max_change,
-        )
+            subproblem_iterations: rep.iterations,
+            subproblem_residual: rep.residual_norm,
+            subsolver: Subsolver::PrimalDual,
+        }
     }
 
     /// Copies x into xold1 and the subproblem solution into x, ξ, η; returns the max change.
@@ -559,6 +569,11 @@ fn write_chunk(
     ch
 }
 
+/// The regularisation `raa0 / max(xmax − xmin, 1e-5)` of the p/q coefficients.
+fn raa_term(raa0: f64, range: f64) -> f64 {
+    raa0 * (1.0 / range.max(1e-5))
+}
+
 /// What [`Mma::build_subproblem`] writes to `nodes`.
 #[derive(Clone, Copy, PartialEq)]
 enum Build {
@@ -625,7 +640,7 @@ fn build_chunk<'a>(ctx: &BuildCtx<'a>, c: usize, nodes: &mut [f64], b: &mut [f64
         let beta = (upp - p.albefa * (upp - xv))
             .min(xv + p.move_limit * range)
             .min(xmax);
-        let raa = p.raa0 * (1.0 / range.max(1e-5));
+        let raa = raa_term(p.raa0, range);
         let ux1 = upp - xv;
         let xl1 = xv - low;
         let (ux2, xl2) = (ux1 * ux1, xl1 * xl1);
