@@ -1,5 +1,5 @@
 //! `flexstage analyze`: nonlinear statics of a design for given actuator inputs or for the
-//! p_m samples of the workspace (NOTES.md), the output polygon and its area, and a VTK file.
+//! p_m samples of the workspace (DECISIONS.md), the output polygon and its area, and a VTK file.
 
 use std::path::PathBuf;
 

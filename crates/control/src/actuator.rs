@@ -35,7 +35,7 @@ pub enum Compensation {
 pub struct ActuatorParams {
     /// Bouc–Wen parameters of PEA1 and PEA2 (µm, V, s; Table A1).
     pub hysteresis: [BoucWenParams; 2],
-    /// Amplifier range [V] (NOTES.md: 0–1000).
+    /// Amplifier range [V] (DECISIONS.md: 0–1000).
     pub voltage_range: [f64; 2],
     /// Preload bias voltage U_b [V] (default: the middle of the range).
     pub bias_voltage: f64,

@@ -1,6 +1,6 @@
 //! # flexstage-control — model, observer, controller and simulated experiment
 //!
-//! Section 3.2, Section 4 and Appendices C–D of the paper, with the defaults of NOTES.md:
+//! Section 3.2, Section 4 and Appendices C–D of the paper, with the defaults of DECISIONS.md:
 //!
 //! * [`model`]: the linear 8-state model of Eq. (36) with B and D of (A13–A14), from a
 //!   [`flexstage_scenario::StageParams`] (Table 4 or the file of `flexstage reduce`);

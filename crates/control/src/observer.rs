@@ -10,7 +10,7 @@
 //!
 //! # Why not forward Euler
 //! With g = 1e5 s⁻¹ and T = 1e-4 s, forward Euler maps the pole −g to 1 − gT = −9: unstable
-//! (NOTES.md). The continuous observer needs y(t) between samples, which a sampled controller
+//! (DECISIONS.md). The continuous observer needs y(t) between samples, which a sampled controller
 //! does not have, so it is discretized in the form that is *exact for sampled
 //! measurements*:
 //!

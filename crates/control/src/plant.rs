@@ -11,7 +11,7 @@
 //! * Time: continuous. Each sample is split into `substeps`; on each substep the mechanics
 //!   are advanced with the exact exponential (x_nom constant at its substep mean) and the
 //!   Bouc–Wen state with its exact integrator, so the ≈ 12 kHz PEA mode is resolved even
-//!   though the controller samples at 10 kHz (NOTES.md).
+//!   though the controller samples at 10 kHz (DECISIONS.md).
 
 use flexstage_piezo::{BoucWen, BoucWenParams, GaussianNoise, MICROMETRE};
 use flexstage_scenario::StageParams;

@@ -1,5 +1,5 @@
 //! Reference: Section 4.2 and Figures 9–11 (robust vs non-robust on the 3:1 Lissajous curve),
-//! Section 3.1 (hysteresis compensation), NOTES.md (baselines: non-robust controller, PID
+//! Section 3.1 (hysteresis compensation), DECISIONS.md (baselines: non-robust controller, PID
 //! with inverse-hysteresis feedforward).
 //! Goal: on the full simulated plant with the default scenario and 3:1 Lissajous curve, the
 //! robust controller's RMS error is below the non-robust one's and the PID + feedforward

@@ -1,4 +1,4 @@
-//! Reference: Eq. (31)–(36) and Appendix C (A13–A14), Table 4, NOTES.md time scales.
+//! Reference: Eq. (31)–(36) and Appendix C (A13–A14), Table 4, DECISIONS.md time scales.
 //! Goal: B, D and the derived quantities are those of the paper's model, and the model has
 //! the expected modes (stage ≈ 1.5–2.4 kHz, PEA ≈ 12 kHz) and static gain (Eq. 29).
 

@@ -1,5 +1,5 @@
 //! Reference: Eq. (37)–(42) (K-filters, B0 Hurwitz via the Lyapunov equation (39), error
-//! dynamics (42)) and NOTES.md (forward Euler with gain 1e5 at 0.1 ms is unstable).
+//! dynamics (42)) and DECISIONS.md (forward Euler with gain 1e5 at 0.1 ms is unstable).
 //! Goal: the observer design is verified as the paper asks, and the exactly discretized
 //! K-filter's error follows its error dynamics ε_{k+1} = F ε_k to 1e-9 on the noise-free
 //! linear plant, with F inheriting e^{B0 T} in the injected columns.

@@ -1,5 +1,5 @@
 //! Benchmarks on the paper's stage problem (0.12 × 0.06 × 0.01 m, E = 73 GPa, ν = 0.33, PEA
-//! springs K_pea = 2.5e8 N/m on roller input nodes, x_nom = ±30 µm; NOTES.md), TL kinematics,
+//! springs K_pea = 2.5e8 N/m on roller input nodes, x_nom = ±30 µm; DECISIONS.md), TL kinematics,
 //! random densities in [0.01, 1] with passive solid ports. Run: `cargo bench -p flexstage-fem`.
 
 use std::sync::Arc;

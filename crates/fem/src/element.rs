@@ -7,7 +7,7 @@
 //! * consistent tangent `k_e = ∂r_e/∂u_e = Σ w (Bᵀ D_tot B + G(S + S̃))`, with the geometric
 //!   stiffness `G_ab = (∇N_a · (S+S̃) ∇N_b) I₂` (absent for [`Kinematics::Linear`]);
 //! * `∂r_e/∂ρ_e = Σ w Bᵀ ∂(S+S̃)/∂ρ`, where `∂S/∂ρ = E'(ρ) D̂ E` and
-//!   `∂S̃/∂ρ = −pρ^{p−1} S̃_unit` — the additive term's `(1 − ρ^p)` factor (NOTES.md);
+//!   `∂S̃/∂ρ = −pρ^{p−1} S̃_unit` — the additive term's `(1 − ρ^p)` factor (DECISIONS.md);
 //! * strain energy `W_e = Σ w (Ψ_SVK + Ψ̃)`, with `∂W_e/∂u_e = r_e` (hyperelastic) and
 //!   `∂W_e/∂ρ_e`.
 //!

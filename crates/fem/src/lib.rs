@@ -1,7 +1,7 @@
 //! # flexstage-fem
 //!
 //! Geometrically nonlinear finite elements for the topology-optimized compliant positioning
-//! stage of the paper (`/work/shared/paper/paper.md`, Section 2 and Appendix A).
+//! stage of the paper (Actuators 2022, 11(7), 179; Section 2 and Appendix A).
 //!
 //! ## Formulation
 //!

@@ -53,7 +53,7 @@ pub enum Passive {
     /// Ordinary design element.
     #[default]
     Design,
-    /// Passive solid (ρ = 1), e.g. the load-spreading patches at the ports (NOTES.md).
+    /// Passive solid (ρ = 1), e.g. the load-spreading patches at the ports (DECISIONS.md).
     Solid,
     /// Passive void (ρ = ρ_min).
     Void,

@@ -32,7 +32,7 @@ use crate::mesh::{Edge, Mesh};
 pub enum Component {
     /// x only (a roller with normal x).
     X,
-    /// y only (a roller with normal y, e.g. the PEA input ports in NOTES.md).
+    /// y only (a roller with normal y, e.g. the PEA input ports in DECISIONS.md).
     Y,
     /// Both (clamp).
     Both,

@@ -82,7 +82,7 @@ impl Cantilever {
     }
 }
 
-/// The paper's stage problem (Section 2.1, Fig. 2b, NOTES.md): the 0.12 × 0.06 × 0.01 m domain,
+/// The paper's stage problem (Section 2.1, Fig. 2b, DECISIONS.md): the 0.12 × 0.06 × 0.01 m domain,
 /// PEA1 on the left and PEA2 on the right edge at mid-height, acting along x through grounded
 /// springs `K_pea` (Eq. (2)–(3)), input ports on rollers (`u_y = 0`), output at the centre of
 /// the top edge, and small passive-solid patches at the three ports.

@@ -1,6 +1,6 @@
 //! Reference: adjoint sensitivity of a discretized nonlinear equilibrium (Buhl, Pedersen &
 //! Sigmund 2000, "Stiffness design of geometrically nonlinear structures using topology
-//! optimization", SMO 19; paper Eq. (9)–(13) with the exact ∂R/∂ρ as required by NOTES.md).
+//! optimization", SMO 19; paper Eq. (9)–(13) with the exact ∂R/∂ρ as required by DECISIONS.md).
 //! Goal: d u_out/dρ_e = −λᵀ ∂R/∂ρ_e with K_T λ = L_o (factor of the converged tangent) matches
 //! central finite differences of full Newton re-solves, with the additive Yeoh material on, and
 //! the same gradient obtained with PCG (a factor of another design as preconditioner) agrees.

@@ -1,5 +1,5 @@
 //! Reference: consistent linearization check by central finite differences (e.g. Wriggers,
-//! "Nonlinear Finite Element Methods", 2008, §5; the NOTES.md rule "check every gradient against
+//! "Nonlinear Finite Element Methods", 2008, §5; the DECISIONS.md rule "check every gradient against
 //! central finite differences").
 //! Goal: the assembled tangent K_T = ∂R/∂u, the design derivative ∂R/∂ρ (incl. the additive
 //! term's (1 − ρ^p) factor) and ∂W/∂ρ match central differences to a relative error < 1e-6,

@@ -6,7 +6,7 @@ use flexstage_scenario::{Scenario, StageParams};
 
 use crate::excitation::{Excitation, SimulationParams};
 
-/// Table 4's guess (the estimator's starting point), damping ratio 2 % (NOTES.md).
+/// Table 4's guess (the estimator's starting point), damping ratio 2 % (DECISIONS.md).
 pub fn table4_guess() -> StageParams {
     Scenario::paper().stage.guess
 }

@@ -3,7 +3,7 @@
 //! Eq. (21), U = (x_nom_d + H(U))/d_p, is implicit: the hysteretic state H(U) at the current
 //! sample depends on the voltage being chosen. Figure 5 draws it as a feedback loop through
 //! the model. Using the *previous* sample's h (an explicit, one-sample-delayed version) leaves
-//! an error of order (dh/dU)·ΔU per sample. Here, as NOTES.md asks, the equation is solved
+//! an error of order (dh/dU)·ΔU per sample. Here, as DECISIONS.md asks, the equation is solved
 //! at each sample: with the state (U_{k−1}, h_{k−1}) of the previous sample, find U_k with
 //!
 //! ```text
@@ -25,9 +25,9 @@ use crate::model::{BoucWen, BoucWenParams, advance};
 /// Settings of the compensator.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CompensatorParams {
-    /// Lowest amplifier voltage [V]. Default 0 (NOTES.md).
+    /// Lowest amplifier voltage [V]. Default 0 (DECISIONS.md).
     pub u_min: f64,
-    /// Highest amplifier voltage [V], > u_min. Default 1000 (NOTES.md).
+    /// Highest amplifier voltage [V], > u_min. Default 1000 (DECISIONS.md).
     pub u_max: f64,
     /// Accepted |d_p U − h − x_nom_d| [µm], > 0. Default 1e-9 (1 fm).
     pub tolerance: f64,

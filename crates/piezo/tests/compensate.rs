@@ -1,5 +1,5 @@
 // Reference: paper Eq. (19)–(21) and Figure 5 (inverse multiplicative compensation),
-// NOTES.md "PEA hysteresis" (solve Eq. 21 at each sample with the previous state).
+// DECISIONS.md "PEA hysteresis" (solve Eq. 21 at each sample with the previous state).
 // Goal: compensation on the model itself cuts the hysteresis width by at least 10×, from the
 // uncompensated 7–11 % to ≤ 1 % of range, at 10 kHz; voltages stay in the amplifier range and
 // unreachable references saturate.

@@ -1,4 +1,4 @@
-// Reference: NOTES.md "Units" (Table A1 with 0–1000 V gives about 56–58 µm of stroke and
+// Reference: DECISIONS.md "Units" (Table A1 with 0–1000 V gives about 56–58 µm of stroke and
 // 7–11 % hysteresis), Table 1 (60 µm stroke).
 // Goal: the steady-state loops of PEA1 and PEA2 under a 0–1000 V, 1 Hz sine have a stroke of
 // 55–60 µm and a loop width of 5–12 % of range; the metrics are right on a loop with a known

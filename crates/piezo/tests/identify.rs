@@ -1,4 +1,4 @@
-// Reference: paper Appendix B (Eq. A8–A12, Algorithm A1, Table A1), NOTES.md "PEA
+// Reference: paper Appendix B (Eq. A8–A12, Algorithm A1, Table A1), DECISIONS.md "PEA
 // hysteresis" (on noise-free synthetic data the estimators must recover known parameters),
 // issue #7 ("noise-free synthetic data recovers the true parameters within 1 %; with sensor
 // noise of 10 nm, within 5 %").

@@ -1,4 +1,4 @@
-// Reference: paper Eq. (18) with n = 1 (Section 3.1), NOTES.md "PEA hysteresis", Table A1.
+// Reference: paper Eq. (18) with n = 1 (Section 3.1), DECISIONS.md "PEA hysteresis", Table A1.
 // Goal: the exact integrator reproduces the analytic virgin loading curve
 // h(U) = A/(B+Γ)(1 − e^{−(B+Γ)U}) for δ = 0, keeps |h| ≤ A/(B+Γ), is rate-independent for
 // δ = 0 (and only then), agrees with substeps and with a fine RK4 reference at 0.1 ms, and

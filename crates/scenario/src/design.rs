@@ -1,5 +1,5 @@
 //! Parameter groups of the design stage: domain, material, actuators, supports, output port,
-//! passive regions and the optimization settings (paper Section 2, Tables 1–3, NOTES.md).
+//! passive regions and the optimization settings (paper Section 2, Tables 1–3, DECISIONS.md).
 
 use serde::{Deserialize, Serialize};
 
@@ -186,7 +186,7 @@ pub enum Configuration {
     Reversed,
 }
 
-/// The two piezo actuators (Table 1, Eq. 2–3, NOTES.md).
+/// The two piezo actuators (Table 1, Eq. 2–3, DECISIONS.md).
 ///
 /// Each PEA acts on its input node as a grounded spring `stiffness` along x plus the force
 /// `stiffness · x_nom`, with global signs (positive x_nom pushes the tip along +x).
@@ -275,7 +275,7 @@ fn default_stagnation_tolerance() -> f64 {
     1e-5
 }
 
-/// Topology-optimization settings (Table 3, Eq. 5, NOTES.md).
+/// Topology-optimization settings (Table 3, Eq. 5, DECISIONS.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Optimization {
@@ -289,7 +289,7 @@ pub struct Optimization {
     pub samples: usize,
     /// Initial uniform density, in (ρ_min, 1]. The paper is silent; 0.5.
     pub initial_density: f64,
-    /// Density-filter radius in element sizes (0 = off). NOTES.md: a filter by default.
+    /// Density-filter radius in element sizes (0 = off). DECISIONS.md: a filter by default.
     pub filter_radius: f64,
     /// Upper bound on the volume fraction, in (0, 1]; 1 disables the constraint (the paper has
     /// none).
@@ -331,7 +331,7 @@ pub struct Optimization {
     /// Relative objective variation over the stagnation window, in (0, 1). Default 1e-5.
     #[serde(default = "default_stagnation_tolerance")]
     pub stagnation_tolerance: f64,
-    /// Heaviside projection with β continuation (NOTES.md filtering).
+    /// Heaviside projection with β continuation (DECISIONS.md filtering).
     pub projection: Projection,
     /// Additive Yeoh hyperelasticity in low-density elements (Appendix A, Eq. A2–A4).
     pub additive: Additive,

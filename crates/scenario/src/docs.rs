@@ -56,7 +56,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "actuators.pea1",
-        "Input node of PEA1 (left edge, mid-height; NOTES.md).",
+        "Input node of PEA1 (left edge, mid-height; DECISIONS.md).",
     ),
     (
         "actuators.pea1.kind",
@@ -68,7 +68,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "actuators.pea2",
-        "Input node of PEA2 (right edge, mid-height; NOTES.md).",
+        "Input node of PEA2 (right edge, mid-height; DECISIONS.md).",
     ),
     (
         "actuators.pea2.kind",
@@ -80,7 +80,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "supports",
-        "A support: the selected nodes have components `fix` (\"x\", \"y\" or \"xy\") held at zero. Default: rollers (u_y = 0) at both input ports; the PEA springs hold x (NOTES.md).",
+        "A support: the selected nodes have components `fix` (\"x\", \"y\" or \"xy\") held at zero. Default: rollers (u_y = 0) at both input ports; the PEA springs hold x (DECISIONS.md).",
     ),
     ("supports.fix", "Fixed components: \"x\", \"y\" or \"xy\"."),
     ("supports.at", "Selected nodes."),
@@ -123,7 +123,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "regions",
-        "A passive region: elements whose centroid is selected stay solid or void. Default: small solid patches at the three ports spread the point loads (NOTES.md).",
+        "A passive region: elements whose centroid is selected stay solid or void. Default: small solid patches at the three ports spread the point loads (DECISIONS.md).",
     ),
     ("regions.kind", "\"solid\" (ρ = 1) or \"void\" (ρ = ρ_min)."),
     ("regions.at", "Selected elements (by centroid)."),
@@ -167,7 +167,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.filter_radius",
-        "Density-filter radius in element sizes, in [0, 20]; 0 = off. Paper silent; NOTES.md asks for a filter.",
+        "Density-filter radius in element sizes, in [0, 20]; 0 = off. Paper silent; DECISIONS.md asks for a filter.",
     ),
     (
         "optimization.volume_fraction",
@@ -215,7 +215,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.projection",
-        "Heaviside projection of the filtered densities with β continuation (NOTES.md filtering).",
+        "Heaviside projection of the filtered densities with β continuation (DECISIONS.md filtering).",
     ),
     ("optimization.projection.enabled", "Use the projection."),
     (
@@ -252,11 +252,11 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "hysteresis.voltage_min",
-        "Lowest amplifier voltage [V]. NOTES.md: 0.",
+        "Lowest amplifier voltage [V]. DECISIONS.md: 0.",
     ),
     (
         "hysteresis.voltage_max",
-        "Highest amplifier voltage [V], > voltage_min. NOTES.md: 1000.",
+        "Highest amplifier voltage [V], > voltage_min. DECISIONS.md: 1000.",
     ),
     ("hysteresis.pea1", "PEA1, Table A1 estimates."),
     ("hysteresis.pea2", "PEA2, Table A1 estimates."),
@@ -294,7 +294,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "stage.damping_ratio",
-        "Modal damping ratio used for the default damping coefficients, in [0, 1). Paper silent; NOTES.md: 1-3 %.",
+        "Modal damping ratio used for the default damping coefficients, in [0, 1). Paper silent; DECISIONS.md: 1-3 %.",
     ),
     (
         "stage.guess",
@@ -482,7 +482,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "simulation",
-        "Timing of the simulated experiment (Section 4.1, NOTES.md).",
+        "Timing of the simulated experiment (Section 4.1, DECISIONS.md).",
     ),
     (
         "simulation.sample_time",
@@ -490,7 +490,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "simulation.substeps",
-        "Plant integration substeps per controller sample, ≥ 1 (NOTES.md: the PEA mode is ≈ 12 kHz).",
+        "Plant integration substeps per controller sample, ≥ 1 (DECISIONS.md: the PEA mode is ≈ 12 kHz).",
     ),
     (
         "simulation.seed",

@@ -6,7 +6,7 @@
 //! controller (Table 4), the sensors and the reference trajectories (Section 4).
 //!
 //! [`Scenario::paper`] is the built-in default and reproduces the paper, with the defaults of
-//! `NOTES.md` where the paper is silent. Every group has a `validate()` that names the field,
+//! `DECISIONS.md` where the paper is silent. Every group has a `validate()` that names the field,
 //! the value and the accepted range; unknown keys are rejected when parsing.
 //!
 //! ```
@@ -347,7 +347,7 @@ impl Scenario {
     pub fn to_commented_toml(&self) -> String {
         let mut out = String::from(
             "# flexstage scenario. Units are SI unless a comment says otherwise.\n\
-             # Sources: tables and equations of the paper (shared/paper/paper.md) and NOTES.md.\n\
+             # Sources: tables and equations of the paper (Actuators 2022, 11(7), 179) and docs/DECISIONS.md.\n\
              # Check it with `flexstage check FILE`.\n\n",
         );
         out.push_str(&docs::annotate(&self.to_toml()));
@@ -355,7 +355,7 @@ impl Scenario {
     }
 }
 
-/// Solid patches of `n × n` elements at the two input ports and the output port (NOTES.md).
+/// Solid patches of `n × n` elements at the two input ports and the output port (DECISIONS.md).
 fn port_patches(s: &Scenario, n: usize) -> Vec<Region> {
     let (dx, dy) = s.mesh.element_size();
     let (l, w) = (s.mesh.length, s.mesh.width);

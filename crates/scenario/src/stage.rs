@@ -1,5 +1,5 @@
 //! Parameter groups of the piezo actuators, the reduced stage model, the controller, the
-//! sensors and the tracking experiment (Sections 3–4, Table 4, Table A1, NOTES.md).
+//! sensors and the tracking experiment (Sections 3–4, Table 4, Table A1, DECISIONS.md).
 
 use serde::{Deserialize, Serialize};
 
@@ -42,13 +42,13 @@ impl BoucWen {
     }
 }
 
-/// The piezo actuators' hysteresis and the amplifier (Section 3.1, Table A1, NOTES.md).
+/// The piezo actuators' hysteresis and the amplifier (Section 3.1, Table A1, DECISIONS.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Hysteresis {
-    /// Lowest amplifier voltage [V]. NOTES.md: 0.
+    /// Lowest amplifier voltage [V]. DECISIONS.md: 0.
     pub voltage_min: f64,
-    /// Highest amplifier voltage [V]. NOTES.md: 1000.
+    /// Highest amplifier voltage [V]. DECISIONS.md: 1000.
     pub voltage_max: f64,
     /// PEA1, Table A1.
     pub pea1: BoucWen,
@@ -159,11 +159,11 @@ impl StageParams {
 }
 
 /// The stage parameters: Table 4's guess (the controller's starting model) and its estimate
-/// (the simulated plant's truth, NOTES.md).
+/// (the simulated plant's truth, DECISIONS.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Stage {
-    /// Damping ratio used to set the damping coefficients of the defaults (NOTES.md: 1–3 %).
+    /// Damping ratio used to set the damping coefficients of the defaults (DECISIONS.md: 1–3 %).
     pub damping_ratio: f64,
     /// Table 4 "Guess".
     pub guess: StageParams,
@@ -321,13 +321,13 @@ impl Sensors {
     }
 }
 
-/// Timing of the simulated experiment (Section 4.1, NOTES.md).
+/// Timing of the simulated experiment (Section 4.1, DECISIONS.md).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Simulation {
     /// Controller sample time T_s [s]. Section 4.1: 1e-4.
     pub sample_time: f64,
-    /// Plant integration substeps per sample (NOTES.md: much finer than T_s).
+    /// Plant integration substeps per sample (DECISIONS.md: much finer than T_s).
     pub substeps: usize,
     /// Seed of the noise generator, for reproducible runs.
     pub seed: u64,

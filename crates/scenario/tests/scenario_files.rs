@@ -62,7 +62,7 @@ fn paper_preset_reproduces_the_tables() {
     assert_eq!(s.stage.truth.k_in2, 0.89e5);
     // Table A1
     assert_eq!(s.hysteresis.pea2.gamma_bw, 5.3e-3);
-    // NOTES.md: damping ratio 2 % of the vertical output mode: c = 2ζ√(kM)
+    // DECISIONS.md: damping ratio 2 % of the vertical output mode: c = 2ζ√(kM)
     let c = 2.0 * 0.02 * (4.03e6f64 * 0.046).sqrt();
     assert!((s.stage.truth.c_qo2 - c).abs() < 1e-12 * c);
 }

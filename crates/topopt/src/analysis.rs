@@ -14,7 +14,7 @@
 //! `∂Q/∂u_k` combines the output selector `L_o` (Eq. 7), the input selectors and, for the strain
 //! energy `W(u) = Σ_e W_e(u, ρ)`, the internal force `∂W/∂u = R(u) − K_s u`.
 //!
-//! # Solver (NOTES.md "Loading": warm starts, reuse factorizations)
+//! # Solver (DECISIONS.md "Loading": warm starts, reuse factorizations)
 //! One factorization per design iteration, of the stiffness `K(ρ)` at `u = 0` (the centroid of
 //! the tangents of the ± symmetric stroke square), shared read-only by all cases. The cases are
 //! split into [`GROUPS`] fixed groups (one rayon task each) solved in lock-step:

@@ -1,4 +1,4 @@
-//! Density filter and smoothed Heaviside projection (NOTES.md "Filtering"; Bourdin 2001,
+//! Density filter and smoothed Heaviside projection (DECISIONS.md "Filtering"; Bourdin 2001,
 //! Wang, Lazarov & Sigmund 2011), with their adjoints for the chain rule.
 //!
 //! `ρ̃_e = Σ_j w_ej x_j / Σ_j w_ej`, `w_ej = max(0, r − dist(e, j))` (top88's conic weights,

@@ -15,7 +15,7 @@
 //! * `output.at` → the output node `L_o` (Eq. 7); with `optimization.output_spring > 0`,
 //!   grounded springs of that stiffness on both output DOFs (either objective).
 //!
-//! # Load cases (NOTES.md)
+//! # Load cases (DECISIONS.md)
 //! The `p_m` samples walk the perimeter of the stroke square `[−a, a]²` in `(x_nom1, x_nom2)`,
 //! `p_m/4` per side, starting at the corner `(+a, +a)`:
 //! `(+a,+a) → (+a,−a) → (−a,−a) → (−a,+a) → (+a,+a)`. Corner `(+a,−a)` (sample `p_m/4`) is the
