@@ -10,7 +10,9 @@ use std::fmt::Write as _;
 use std::fs;
 use std::path::Path;
 
+use crate::layout::{self, PeaIdentification, Tracking};
 use crate::plot::{Figure, Series};
+use crate::read_csv_columns as csv_cols;
 
 /// The sections of the report, in order: `(id, title)`.
 pub const SECTIONS: [(&str, &str); 9] = [
@@ -207,29 +209,6 @@ fn num(v: &serde_json::Value, path: &[&str]) -> Option<f64> {
     cur.as_f64()
 }
 
-/// Reads numeric CSV columns by name (missing or unparsable cells become NaN).
-fn csv_cols(text: &str, names: &[&str]) -> Option<Vec<Vec<f64>>> {
-    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
-    let header: Vec<&str> = lines.next()?.split(',').map(str::trim).collect();
-    let idx: Vec<usize> = names
-        .iter()
-        .map(|n| header.iter().position(|h| h == n))
-        .collect::<Option<_>>()?;
-    let mut out = vec![Vec::new(); names.len()];
-    for l in lines {
-        let cells: Vec<&str> = l.split(',').collect();
-        for (k, &i) in idx.iter().enumerate() {
-            out[k].push(
-                cells
-                    .get(i)
-                    .and_then(|c| c.trim().parse().ok())
-                    .unwrap_or(f64::NAN),
-            );
-        }
-    }
-    Some(out)
-}
-
 /// Mode shapes of a `modes.vtu` written by `flexstage reduce`: one small SVG per mode, the
 /// mesh cells with density ≥ 0.5 drawn deformed (largest displacement 6 % of the domain
 /// length), shaded by displacement magnitude. At most `max_modes`.
@@ -361,7 +340,7 @@ pub fn build_report(root: &Path) -> String {
         html: String::with_capacity(1 << 20),
     };
     let scenario_name = b
-        .text("scenario.toml")
+        .text(layout::SCENARIO)
         .and_then(|t| {
             t.lines()
                 .find(|l| l.trim_start().starts_with("name"))
@@ -406,7 +385,7 @@ pub fn summary_rows(root: &Path) -> Vec<(String, String)> {
         html: String::new(),
     };
     let mut rows: Vec<(String, String)> = Vec::new();
-    if let Some(d) = json(b, "design/summary.json") {
+    if let Some(d) = json(b, layout::design::SUMMARY) {
         if let (Some(a0), Some(a1), Some(g)) = (
             num(&d, &["area_initial_m2"]),
             num(&d, &["area_final_m2"]),
@@ -433,7 +412,7 @@ pub fn summary_rows(root: &Path) -> Vec<(String, String)> {
             ));
         }
     }
-    if let Some(r) = json(b, "reduce/summary.json") {
+    if let Some(r) = json(b, layout::reduce::SUMMARY_JSON) {
         if let Some(a) = num(&r, &["alpha_scalar"]) {
             rows.push(("α (Eq. 27)".into(), fmt_num(a)));
         }
@@ -444,7 +423,7 @@ pub fn summary_rows(root: &Path) -> Vec<(String, String)> {
             ));
         }
     }
-    if let Some(text) = b.text("identify/stage/table.csv")
+    if let Some(text) = b.text(layout::stage::TABLE)
         && let Some(c) = csv_cols(&text, &["error_pct"])
     {
         let worst = c[0]
@@ -456,7 +435,7 @@ pub fn summary_rows(root: &Path) -> Vec<(String, String)> {
             format!("{} %", fmt_num(worst)),
         ));
     }
-    if let Some(text) = b.text("track/metrics.csv") {
+    if let Some(text) = b.text(&Tracking::main().metrics()) {
         let mut lines = text.lines();
         let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
         let col = |n: &str| header.iter().position(|h| *h == n);
@@ -498,10 +477,10 @@ fn design(b: &mut Builder) {
          the workspace polygon of the output point: initial (uniform) design against final.</p>\
          <div class=\"grid\">",
     );
-    b.img("design/density.png", "Final density ρ");
-    if b.exists("design/workspace.svg") {
+    b.img(layout::design::DENSITY_PNG, "Final density ρ");
+    if b.exists(layout::design::WORKSPACE_SVG) {
         b.img(
-            "design/workspace.svg",
+            layout::design::WORKSPACE_SVG,
             "Workspace polygons, initial vs final",
         );
     }
@@ -513,7 +492,7 @@ fn convergence(b: &mut Builder) {
     b.open("convergence", SECTIONS[2].1);
     b.html.push_str("<div class=\"grid\">");
     let mut any = false;
-    if let Some(text) = b.text("design/history.csv")
+    if let Some(text) = b.text(layout::design::HISTORY_CSV)
         && let Some(c) = csv_cols(&text, &["iteration", "area_rel", "volume", "grey"])
     {
         let pts = |k: usize| -> Vec<(f64, f64)> {
@@ -540,15 +519,15 @@ fn convergence(b: &mut Builder) {
             b.svg(&svg, "Volume and grey fraction (design/history.csv)");
         }
     }
-    if b.exists("design/workspace_history.svg") {
+    if b.exists(layout::design::WORKSPACE_HISTORY_SVG) {
         b.img(
-            "design/workspace_history.svg",
+            layout::design::WORKSPACE_HISTORY_SVG,
             "Workspace polygon snapshots",
         );
         any = true;
     }
     if !any {
-        b.not_run("design/history.csv missing");
+        b.not_run(&format!("{} missing", layout::design::HISTORY_CSV));
     }
     b.html.push_str("</div>\n");
     b.close();
@@ -556,7 +535,7 @@ fn convergence(b: &mut Builder) {
 
 fn reduce(b: &mut Builder) {
     b.open("reduce", SECTIONS[3].1);
-    match json(b, "reduce/summary.json") {
+    match json(b, layout::reduce::SUMMARY_JSON) {
         Some(r) => {
             let f = |p: &[&str]| num(&r, p).map(fmt_num).unwrap_or_else(|| "–".into());
             let mut rows = vec![
@@ -590,18 +569,18 @@ fn reduce(b: &mut Builder) {
             }
             b.kv(&rows);
         }
-        None => b.not_run("reduce/summary.json missing"),
+        None => b.not_run(&format!("{} missing", layout::reduce::SUMMARY_JSON)),
     }
     b.html.push_str("<div class=\"grid\">");
-    if b.exists("reduce/validity.svg") {
+    if b.exists(layout::reduce::VALIDITY_SVG) {
         b.img(
-            "reduce/validity.svg",
+            layout::reduce::VALIDITY_SVG,
             "Validity map: reduced model vs nonlinear FE",
         );
     }
-    if b.exists("reduce/validity_scale.svg") {
+    if b.exists(layout::reduce::VALIDITY_SCALE_SVG) {
         b.img(
-            "reduce/validity_scale.svg",
+            layout::reduce::VALIDITY_SCALE_SVG,
             "Model error against stroke scale",
         );
     }
@@ -611,11 +590,11 @@ fn reduce(b: &mut Builder) {
 
 fn modes(b: &mut Builder) {
     b.open("modes", SECTIONS[4].1);
-    match b.text("reduce/modes.vtu") {
+    match b.text(layout::reduce::MODES_VTU) {
         Some(vtu) => {
             let shapes = mode_shape_svgs(&vtu, 4);
             if shapes.is_empty() {
-                b.not_run("reduce/modes.vtu has no mode shapes");
+                b.not_run(&format!("{} has no mode shapes", layout::reduce::MODES_VTU));
             }
             b.html.push_str("<div class=\"grid\">");
             for (name, svg) in shapes {
@@ -624,7 +603,7 @@ fn modes(b: &mut Builder) {
             }
             b.html.push_str("</div>\n");
         }
-        None => b.not_run("reduce/modes.vtu missing"),
+        None => b.not_run(&format!("{} missing", layout::reduce::MODES_VTU)),
     }
     b.close();
 }
@@ -632,7 +611,8 @@ fn modes(b: &mut Builder) {
 fn pea(b: &mut Builder) {
     b.open("pea", SECTIONS[5].1);
     let mut any = false;
-    if let Some(t) = b.text("identify/pea/estimates.toml")
+    let id = PeaIdentification { pea: 1 };
+    if let Some(t) = b.text(&id.estimates())
         && let Ok(v) = t.parse::<toml::Table>()
     {
         let est = v.get("recommended_params").and_then(|x| x.as_table());
@@ -667,56 +647,62 @@ fn pea(b: &mut Builder) {
     }
     b.html.push_str("<div class=\"grid\">");
     for (rel, cap) in [
-        ("pea/pea1_loop.svg", "Simulated PEA record: hysteresis loop"),
         (
-            "identify/pea/compensation.svg",
+            layout::pea::loop_svg(1),
+            "Simulated PEA record: hysteresis loop",
+        ),
+        (
+            id.compensation_svg(),
             "Hysteresis before and after inverse compensation",
         ),
-        ("identify/pea/loop.svg", "Measured vs identified model"),
+        (id.loop_svg(), "Measured vs identified model"),
         (
-            "identify/pea/convergence.svg",
+            id.convergence_svg(),
             "Identification convergence (Figure A2)",
         ),
     ] {
-        if b.exists(rel) {
-            b.img(rel, cap);
+        if b.exists(&rel) {
+            b.img(&rel, cap);
             any = true;
         }
     }
     b.html.push_str("</div>\n");
     if !any {
-        b.not_run("identify/pea missing");
+        b.not_run(&format!("{} missing", id.dir()));
     }
     b.close();
 }
 
 fn stage(b: &mut Builder) {
+    use layout::stage::{CONVERGENCE_SVG, TABLE};
     b.open("stage", SECTIONS[6].1);
-    if b.exists("identify/stage/table.csv") {
+    if b.exists(TABLE) {
         b.html.push_str(
             "<p class=\"note\">Initial guess (from the reduced model and weighing), online \
              least-squares estimate and the simulated truth, as in Table 4.</p>",
         );
-        b.csv_table("identify/stage/table.csv", |_| true);
+        b.csv_table(TABLE, |_| true);
         b.html.push_str("<div class=\"grid\">");
-        if b.exists("identify/stage/convergence.svg") {
-            b.img("identify/stage/convergence.svg", "Estimate convergence");
+        if b.exists(CONVERGENCE_SVG) {
+            b.img(CONVERGENCE_SVG, "Estimate convergence");
         }
         b.html.push_str("</div>\n");
     } else {
-        b.not_run("identify/stage/table.csv missing");
+        b.not_run(&format!("{TABLE} missing"));
     }
     b.close();
 }
 
 fn tracking(b: &mut Builder) {
     b.open("tracking", SECTIONS[7].1);
-    if !b.exists("track/metrics.csv") {
-        b.not_run("track/metrics.csv missing");
+    let track = Tracking::main();
+    let metrics = track.metrics();
+    let Some(text) = b.text(&metrics) else {
+        b.not_run(&format!("{metrics} missing"));
         b.close();
         return;
-    }
-    b.csv_table("track/metrics.csv", |h| {
+    };
+    b.csv_table(&metrics, |h| {
         matches!(
             h,
             "trajectory"
@@ -731,35 +717,30 @@ fn tracking(b: &mut Builder) {
                 | "saturated_samples"
         )
     });
-    let mut names: Vec<String> = fs::read_dir(b.root.join("track"))
-        .map(|rd| {
-            rd.filter_map(|e| e.ok())
-                .map(|e| e.file_name().to_string_lossy().into_owned())
-                .filter(|n| n.ends_with(".svg"))
-                .collect()
-        })
-        .unwrap_or_default();
-    names.sort();
-    let trajectories: Vec<String> = names
-        .iter()
-        .filter_map(|n| n.strip_suffix("_2d.svg").map(str::to_string))
-        .collect();
-    for t in &trajectories {
+    // (trajectory, controller) pairs in the table's order, grouped by trajectory.
+    let mut rows: Vec<(String, Vec<String>)> = Vec::new();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let col = |n: &str| header.iter().position(|h| *h == n);
+    if let (Some(tr), Some(va)) = (col("trajectory"), col("variant")) {
+        for l in lines {
+            let c: Vec<&str> = l.split(',').collect();
+            let (Some(t), Some(v)) = (c.get(tr), c.get(va)) else {
+                continue;
+            };
+            match rows.iter_mut().find(|(name, _)| name == t) {
+                Some((_, vs)) => vs.push(v.to_string()),
+                None => rows.push((t.to_string(), vec![v.to_string()])),
+            }
+        }
+    }
+    for (t, controllers) in &rows {
         let _ = writeln!(b.html, "<h3>{}</h3><div class=\"grid\">", esc(t));
-        b.img(
-            &format!("track/{t}_2d.svg"),
-            &format!("{t}: 2D trajectories"),
-        );
-        for n in names
-            .iter()
-            .filter(|n| n.starts_with(&format!("{t}_")) && n.ends_with("_error.svg"))
-        {
-            let variant = n
-                .trim_start_matches(&format!("{t}_"))
-                .trim_end_matches("_error.svg");
+        b.img(&track.paths_svg(t), &format!("{t}: 2D trajectories"));
+        for v in controllers {
             b.img(
-                &format!("track/{n}"),
-                &format!("{t}, {variant}: tracking error against time"),
+                &track.error_svg(t, v),
+                &format!("{t}, {v}: tracking error against time"),
             );
         }
         b.html.push_str("</div>\n");
@@ -768,17 +749,18 @@ fn tracking(b: &mut Builder) {
 }
 
 fn export(b: &mut Builder) {
+    use layout::export::SVG;
     b.open("export", SECTIONS[8].1);
-    if b.exists("export/outline.svg") {
+    if b.exists(SVG) {
         b.html.push_str(
             "<p class=\"note\">ρ = 0.5 iso-contour for wire cutting (Section 4.1): \
              export/outline.dxf, outline.svg and outline.stl (extruded by t).</p>\
              <div class=\"grid\">",
         );
-        b.img("export/outline.svg", "Manufacturing outline");
+        b.img(SVG, "Manufacturing outline");
         b.html.push_str("</div>\n");
     } else {
-        b.not_run("export/outline.svg missing");
+        b.not_run(&format!("{SVG} missing"));
     }
     b.close();
 }

@@ -11,9 +11,13 @@
 //!   scenario.toml      the scenario exactly as used
 //!   <stage>/...        one sub-folder per pipeline stage (design, reduce, identify, track)
 //! ```
+//!
+//! [`layout`] names every file of a run folder; the pipeline writes and the HTML report
+//! reads through it.
 
 pub mod html;
 pub mod image;
+pub mod layout;
 pub mod outline;
 pub mod plot;
 pub mod vtk;
@@ -26,7 +30,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum ReportError {
     /// A file or folder could not be written.
-    #[error("cannot write {path}: {source}")]
+    #[error("cannot write {path}")]
     Write {
         /// The path.
         path: PathBuf,
@@ -107,6 +111,40 @@ impl RunDir {
         write_atomic(&path, bytes)?;
         Ok(path)
     }
+
+    /// Whether a result file exists.
+    pub fn exists(&self, relative: impl AsRef<Path>) -> bool {
+        self.path(relative).is_file()
+    }
+
+    /// A result file as text, if it exists and reads.
+    pub fn read_to_string(&self, relative: impl AsRef<Path>) -> Option<String> {
+        fs::read_to_string(self.path(relative)).ok()
+    }
+}
+
+/// Reads numeric CSV columns by header name from text written by [`csv_columns`]; missing or
+/// unparsable cells become NaN. `None` when the text has no header or lacks a column.
+pub fn read_csv_columns(text: &str, names: &[&str]) -> Option<Vec<Vec<f64>>> {
+    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+    let header: Vec<&str> = lines.next()?.split(',').map(str::trim).collect();
+    let idx: Vec<usize> = names
+        .iter()
+        .map(|n| header.iter().position(|h| h == n))
+        .collect::<Option<_>>()?;
+    let mut out = vec![Vec::new(); names.len()];
+    for l in lines {
+        let cells: Vec<&str> = l.split(',').collect();
+        for (k, &i) in idx.iter().enumerate() {
+            out[k].push(
+                cells
+                    .get(i)
+                    .and_then(|c| c.trim().parse().ok())
+                    .unwrap_or(f64::NAN),
+            );
+        }
+    }
+    Some(out)
 }
 
 /// Formats numeric columns as CSV text: one header row, then one row per sample. Columns of
@@ -167,5 +205,10 @@ mod tests {
             .parse()
             .unwrap();
         assert_eq!(parsed, 1e-9);
+        let cols = read_csv_columns(&text, &["b", "a"]).unwrap();
+        assert_eq!(cols[1], a);
+        assert_eq!(cols[0][0], 2.5);
+        assert!(cols[0][1].is_nan(), "padding reads as NaN");
+        assert!(read_csv_columns(&text, &["c"]).is_none());
     }
 }
