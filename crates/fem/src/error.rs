@@ -133,7 +133,7 @@ pub struct IterationRecord {
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum NewtonError {
     /// The parameters are invalid.
-    #[error("invalid Newton parameters: {0}")]
+    #[error(transparent)]
     Params(#[from] ParamError),
     /// The load could not be applied: an increment failed even after the maximum number of
     /// cutbacks.
@@ -156,7 +156,7 @@ pub enum NewtonError {
         history: Vec<IterationRecord>,
     },
     /// A linear solve failed in a way cutbacks cannot fix.
-    #[error("linear solver failure in Newton iteration: {source}")]
+    #[error("linear solver failure in Newton iteration")]
     Linear {
         /// The underlying error.
         source: SolverError,

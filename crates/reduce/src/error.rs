@@ -20,13 +20,13 @@ pub enum ReduceError {
     #[error("invalid reduction input: {0}")]
     Input(String),
     /// The finite-element model rejected the input.
-    #[error("finite-element model: {0}")]
+    #[error(transparent)]
     Fem(#[from] FemParamError),
     /// A linear solve failed (e.g. `K_Tff` is singular: a mechanism).
-    #[error("linear solver: {0}")]
+    #[error(transparent)]
     Solver(#[from] SolverError),
     /// A nonlinear solve did not converge.
-    #[error("nonlinear solve at x_nom = [{x1:e}, {x2:e}] m did not converge: {source}")]
+    #[error("nonlinear solve at x_nom = [{x1:e}, {x2:e}] m did not converge")]
     Newton {
         /// Nominal stroke of input 1 [m].
         x1: f64,
@@ -37,7 +37,7 @@ pub enum ReduceError {
         source: NewtonError,
     },
     /// The problem could not be built.
-    #[error("problem: {0}")]
+    #[error(transparent)]
     Topopt(#[from] flexstage_topopt::TopoptError),
     /// The Lanczos iteration did not converge.
     #[error(

@@ -9,7 +9,7 @@ use image::{GrayImage, ImageFormat, Luma};
 #[derive(Debug, thiserror::Error)]
 pub enum ImageError {
     /// PNG encoding or decoding failed.
-    #[error("PNG: {0}")]
+    #[error("PNG encoding or decoding failed")]
     Png(#[from] image::ImageError),
     /// The image does not have the mesh's size.
     #[error("the image is {width} x {height} pixels; expected a multiple of the mesh {nl} x {nw}")]

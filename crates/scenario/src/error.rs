@@ -27,7 +27,7 @@ pub enum ScenarioError {
         reason: String,
     },
     /// The TOML text does not parse or does not match the schema (unknown key, wrong type).
-    #[error("{path}: {source}")]
+    #[error("cannot parse {path}")]
     Parse {
         /// Where the text came from.
         path: String,
@@ -36,7 +36,7 @@ pub enum ScenarioError {
         source: Box<toml::de::Error>,
     },
     /// The scenario file could not be read.
-    #[error("cannot read scenario {path}: {source}")]
+    #[error("cannot read scenario {path}")]
     Read {
         /// The file.
         path: PathBuf,

@@ -20,15 +20,15 @@ pub enum TopoptError {
     #[error("invalid problem: {0}")]
     Problem(String),
     /// The finite-element model rejected the input.
-    #[error("finite-element model: {0}")]
+    #[error(transparent)]
     Fem(#[from] FemParamError),
     /// A linear solve failed.
-    #[error("linear solver: {0}")]
+    #[error(transparent)]
     Solver(#[from] SolverError),
     /// A load case did not converge even after the cutback retries.
     #[error(
         "load case {case} (x_nom = [{x1:e}, {x2:e}] m) did not converge after {attempts} \
-         attempts: {source}"
+         attempts"
     )]
     LoadCase {
         /// Load case index.
@@ -52,7 +52,7 @@ pub enum TopoptError {
         iteration: usize,
     },
     /// MMA rejected its input.
-    #[error("MMA: {0}")]
+    #[error("MMA design update failed")]
     Mma(#[from] flexstage_mma::MmaError),
     /// A design or checkpoint file is malformed.
     #[error("{what}: {reason}")]

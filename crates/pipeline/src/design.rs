@@ -1,0 +1,548 @@
+//! `design`: workspace topology optimization (paper Section 2.2, Algorithm 1) with
+//! checkpoints, resume, the final nonlinear analysis and the adjoint gradient check.
+//!
+//! The loop is Algorithm 1 as [`Optimizer::step`] runs it: FE analysis of the p_m load cases,
+//! objective J (Eq. 4) and constraints with their exact adjoint gradients, MMA update, β
+//! continuation, until convergence, stagnation or the iteration limit. After it, the design is
+//! analysed once more with the *final-analysis* model (nonlinear, no additive material),
+//! together with the uniform start design, for the workspace growth of Figure 4.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use flexstage_fem::{AdditiveYeoh, Kinematics};
+use flexstage_report::{RunDir, csv_columns, layout::design as files};
+use flexstage_scenario::Scenario;
+use flexstage_topopt::{
+    AnalysisParams, DesignFile, Evaluator, IterationRecord, Optimizer, OptimizerParams, Problem,
+    Projection, Response, StopReason, check::check_gradients, density_csv, perimeter_walk,
+    shoelace,
+};
+
+use crate::error::{PipelineError, Result, require, to_json};
+use crate::figures::{cases_csv, polygon_csv, polygon_svg, read_polygon_csv, write_vtu};
+use crate::folder::RunFolder;
+use crate::progress::Progress;
+
+/// Options of the design stage.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DesignOptions {
+    /// Save a checkpoint every this many iterations, in [1, 100 000]. Default 10.
+    pub checkpoint_every: usize,
+    /// Save the workspace polygon every this many iterations (and at 0 and the end), in
+    /// [1, 100 000]. Default 25.
+    pub snapshot_every: usize,
+    /// Override `optimization.max_iterations` (in [1, 100 000]); `None` keeps the
+    /// scenario's.
+    pub max_iterations: Option<usize>,
+}
+
+impl Default for DesignOptions {
+    fn default() -> Self {
+        DesignOptions {
+            checkpoint_every: 10,
+            snapshot_every: 25,
+            max_iterations: None,
+        }
+    }
+}
+
+impl DesignOptions {
+    /// Checks every option.
+    pub fn validate(&self) -> Result<()> {
+        let every = "an integer in [1, 100000]";
+        let ok = |n: usize| (1..=100_000).contains(&n);
+        require(
+            ok(self.checkpoint_every),
+            "design.checkpoint_every",
+            self.checkpoint_every,
+            every,
+        )?;
+        require(
+            ok(self.snapshot_every),
+            "design.snapshot_every",
+            self.snapshot_every,
+            every,
+        )?;
+        if let Some(n) = self.max_iterations {
+            require(ok(n), "design.max_iterations", n, every)?;
+        }
+        Ok(())
+    }
+}
+
+/// How the design stage begins.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DesignStart {
+    /// A new design. Refused if the run holds a finished or interrupted design, unless
+    /// forced; a forced start clears `design/` first.
+    Fresh {
+        /// Replace an earlier design.
+        force: bool,
+    },
+    /// Continue from the run's checkpoint ([`files::CHECKPOINT`]).
+    Resume,
+}
+
+/// What the design stage produced.
+#[derive(Debug, Clone)]
+pub struct DesignSummary {
+    /// Why the loop stopped.
+    pub stop: StopReason,
+    /// Design iterations performed (all sessions).
+    pub iterations: usize,
+    /// The iteration this session resumed at, if it resumed.
+    pub resumed_at: Option<usize>,
+    /// Wall-clock time of this session [s].
+    pub seconds: f64,
+    /// Mean time per iteration over all sessions [s].
+    pub seconds_per_iteration: f64,
+    /// Workspace area of the uniform start design, final analysis [m²].
+    pub area_initial: f64,
+    /// Workspace area of the design, final analysis [m²].
+    pub area: f64,
+    /// Output of the compressive corner (+a, −a) of the final analysis [m].
+    pub compressive_corner: [f64; 2],
+    /// Fraction of design elements with 0.1 < ρ < 0.9 (of the last iteration).
+    pub grey_fraction: f64,
+    /// Volume fraction of the last iteration.
+    pub volume: f64,
+    /// Constraint values g ≤ 0 of the last iteration, by name.
+    pub constraints: Vec<(&'static str, f64)>,
+    /// Load cases that needed a cutback retry, summed over iterations.
+    pub retried_load_cases: usize,
+    /// The stage folder.
+    pub dir: PathBuf,
+}
+
+/// Runs the design stage on the run's scenario.
+pub fn design(
+    folder: &RunFolder,
+    options: &DesignOptions,
+    start: DesignStart,
+    progress: &dyn Progress,
+) -> Result<DesignSummary> {
+    options.validate()?;
+    let run = folder.dir();
+    if let DesignStart::Fresh { force } = start {
+        prepare_fresh(folder, force)?;
+    }
+    let mut s = folder.scenario().clone();
+    if let Some(n) = options.max_iterations {
+        s.optimization.max_iterations = n;
+    }
+    let problem = Problem::from_scenario(&s, None)?;
+    let params = OptimizerParams::from_scenario(&s);
+    let mut opt = match start {
+        DesignStart::Fresh { .. } => Optimizer::new(&problem, params)?,
+        DesignStart::Resume => {
+            let path = run.path(files::CHECKPOINT);
+            let bytes = std::fs::read(&path).map_err(|source| PipelineError::Read {
+                path: path.clone(),
+                source,
+            })?;
+            let o = Optimizer::resume(&problem, params, &bytes)?;
+            progress.note(&format!(
+                "resuming {} at iteration {}",
+                folder.root().display(),
+                o.iteration()
+            ));
+            o
+        }
+    };
+    let resumed_at = (start == DesignStart::Resume).then(|| opt.iteration());
+    let t0 = Instant::now();
+    let stop = optimize(
+        &mut opt,
+        run,
+        options,
+        s.optimization.max_iterations,
+        progress,
+    )?;
+    let seconds = t0.elapsed().as_secs_f64();
+    finish(&s, &problem, &opt, folder, stop, seconds, resumed_at)
+}
+
+/// Refuses to replace an earlier design unless forced; clears `design/` for a new one.
+fn prepare_fresh(folder: &RunFolder, force: bool) -> Result<()> {
+    let run = folder.dir();
+    if !force {
+        let hint = "--force starts a new design and replaces it";
+        if run.exists(files::DESIGN) {
+            return Err(PipelineError::Exists {
+                path: run.path(files::DESIGN),
+                what: "a finished design",
+                hint: hint.into(),
+            });
+        }
+        if run.exists(files::CHECKPOINT) {
+            return Err(PipelineError::Exists {
+                path: run.path(files::CHECKPOINT),
+                what: "an interrupted design",
+                hint: format!(
+                    "continue it with `flexstage design --resume {}`, or {hint}",
+                    folder.root().display()
+                ),
+            });
+        }
+    }
+    let dir = run.path(files::DIR);
+    if dir.is_dir() {
+        std::fs::remove_dir_all(&dir)
+            .map_err(|source| flexstage_report::ReportError::Write { path: dir, source })?;
+    }
+    Ok(())
+}
+
+/// Algorithm 1's loop with progress, polygon snapshots and checkpoints.
+fn optimize(
+    opt: &mut Optimizer,
+    run: &RunDir,
+    options: &DesignOptions,
+    max_iterations: usize,
+    progress: &dyn Progress,
+) -> Result<StopReason> {
+    let names = opt.constraint_names();
+    progress.start("design", max_iterations as u64 + 1);
+    progress.set_position(opt.iteration() as u64);
+    let stop = loop {
+        let rec = opt.step()?;
+        progress.set_position(rec.iteration as u64 + 1);
+        progress.set_message(&iteration_message(&names, &rec, opt.history()[0].area));
+        for &c in &rec.retried_cases {
+            progress.note(&format!(
+                "iteration {}: load case {c} needed a cutback retry",
+                rec.iteration
+            ));
+        }
+        let stopped = opt.stopped();
+        if rec.iteration % options.snapshot_every == 0 || stopped.is_some() {
+            let (_, ev) = opt.last().expect("an iteration was evaluated");
+            run.write(
+                files::snapshot(rec.iteration),
+                polygon_csv(&ev.response.outputs).as_bytes(),
+            )?;
+        }
+        if let Some(stop) = stopped {
+            break stop;
+        }
+        if opt.iteration() % options.checkpoint_every == 0 {
+            run.write(files::CHECKPOINT, &opt.checkpoint())?;
+            run.write(
+                files::HISTORY_CSV,
+                history_csv(&names, opt.history()).as_bytes(),
+            )?;
+        }
+    };
+    progress.finish();
+    Ok(stop)
+}
+
+fn iteration_message(names: &[&str], rec: &IterationRecord, area0: f64) -> String {
+    let g: Vec<String> = names
+        .iter()
+        .zip(&rec.constraints)
+        .map(|(n, v)| format!("{n} {v:+.3}"))
+        .collect();
+    format!(
+        "J {:.3e} m² ({:.2}x)  {}  grey {:.2}  β {}",
+        rec.area,
+        rec.area / area0,
+        g.join(" "),
+        rec.grey,
+        rec.beta
+    )
+}
+
+/// The final analyses of the start design and of `rho`: nonlinear, no additive material, the
+/// p_m workspace samples. Returns the problem, both responses and the displacement of the
+/// compressive corner of the design.
+fn final_analysis(s: &Scenario, rho: &[f64]) -> Result<(Problem, Response, Response, Vec<f64>)> {
+    let mut fin = Problem::from_scenario(s, Some(Kinematics::TotalLagrangian))?;
+    fin.cases = perimeter_walk(s.optimization.samples, s.actuators.stroke_amplitude);
+    let mut rho0 = vec![s.optimization.initial_density; rho.len()];
+    fin.mesh().apply_passive(&mut rho0, fin.rho_min);
+    let r0 = Evaluator::new(&fin, 0.0, AnalysisParams::default())?.solve_cases(&rho0, None)?;
+    let mut ev = Evaluator::new(&fin, 0.0, AnalysisParams::default())?;
+    let r = ev.solve_cases(rho, None)?;
+    let u = ev.cases[fin.differential_corners().0].u.clone();
+    Ok((fin, r0, r, u))
+}
+
+/// The final analysis and every result file of the design folder.
+fn finish(
+    s: &Scenario,
+    problem: &Problem,
+    opt: &Optimizer,
+    folder: &RunFolder,
+    stop: StopReason,
+    seconds: f64,
+    resumed_at: Option<usize>,
+) -> Result<DesignSummary> {
+    let run = folder.dir();
+    let h = opt.history();
+    let last = h.last().expect("at least one iteration");
+    let rho = &opt.last().expect("at least one iteration").0.physical;
+    let (fin, r0, r, u) = final_analysis(s, rho)?;
+    let mesh = problem.mesh();
+    let summary = DesignSummary {
+        stop,
+        iterations: h.len(),
+        resumed_at,
+        seconds,
+        seconds_per_iteration: h.iter().map(|r| r.time).sum::<f64>() / h.len() as f64,
+        area_initial: shoelace(&r0.outputs),
+        area: shoelace(&r.outputs),
+        compressive_corner: r.outputs[fin.differential_corners().0],
+        // The optimizer's own measure of the design it analysed last (= `rho`).
+        grey_fraction: last.grey,
+        volume: last.volume,
+        constraints: opt
+            .constraint_names()
+            .into_iter()
+            .zip(last.constraints.iter().copied())
+            .collect(),
+        retried_load_cases: h.iter().map(|r| r.retried_cases.len()).sum(),
+        dir: run.path(files::DIR),
+    };
+    let file = DesignFile {
+        version: 1,
+        scenario: s.name.clone(),
+        nl: mesh.nl,
+        nw: mesh.nw,
+        rho: rho.clone(),
+        iterations: h.len(),
+        area_initial: summary.area_initial,
+        area: summary.area,
+        grey_fraction: summary.grey_fraction,
+    };
+    let (nl, nw) = (mesh.nl, mesh.nw);
+    run.write(
+        files::DENSITY_CSV,
+        density_csv(nl, nw, mesh.dx(), mesh.dy(), rho).as_bytes(),
+    )?;
+    run.write(
+        files::DENSITY_PNG,
+        &flexstage_report::image::density_png(nl, nw, 4, |i, j| rho[i * nw + j])?,
+    )?;
+    write_vtu(run, files::VTU, &fin, rho, &u)?;
+    run.write(files::CASES, cases_csv(&fin, &r).as_bytes())?;
+    run.write(files::WORKSPACE_FINAL, polygon_csv(&r.outputs).as_bytes())?;
+    run.write(
+        files::WORKSPACE_INITIAL,
+        polygon_csv(&r0.outputs).as_bytes(),
+    )?;
+    let names = opt.constraint_names();
+    run.write(files::HISTORY_CSV, history_csv(&names, h).as_bytes())?;
+    run.write(files::HISTORY_JSON, to_json(&h).as_bytes())?;
+    write_figures(run, h.len(), &r0.outputs, &r.outputs)?;
+    run.write(files::SUMMARY, summary_json(&summary).as_bytes())?;
+    // Last: the finished design marks the stage as done for the other commands.
+    run.write(files::DESIGN, file.to_json().as_bytes())?;
+    Ok(summary)
+}
+
+/// Figure 4's polygons: snapshots during the optimization (optimization model), and initial
+/// against final (final analysis).
+fn write_figures(
+    run: &RunDir,
+    iterations: usize,
+    initial: &[[f64; 2]],
+    last: &[[f64; 2]],
+) -> Result<()> {
+    let mut snaps: Vec<(usize, Vec<[f64; 2]>)> = std::fs::read_dir(run.path(files::DIR))
+        .map(|rd| {
+            rd.flatten()
+                .filter_map(|e| {
+                    let k = files::snapshot_iteration(&e.file_name().to_string_lossy())?;
+                    let text = std::fs::read_to_string(e.path()).ok()?;
+                    (k < iterations).then(|| (k, read_polygon_csv(&text)))
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    snaps.sort_by_key(|(k, _)| *k);
+    let polys: Vec<(String, &[[f64; 2]])> = snaps
+        .iter()
+        .map(|(k, p)| (format!("iteration {k}"), p.as_slice()))
+        .collect();
+    run.write(
+        files::WORKSPACE_HISTORY_SVG,
+        polygon_svg("Output workspace during the optimization", &polys)?.as_bytes(),
+    )?;
+    let polys = [
+        ("initial design".to_string(), initial),
+        ("final design".to_string(), last),
+    ];
+    run.write(
+        files::WORKSPACE_SVG,
+        polygon_svg("Output workspace, nonlinear analysis", &polys)?.as_bytes(),
+    )?;
+    Ok(())
+}
+
+fn summary_json(s: &DesignSummary) -> String {
+    let constraints: BTreeMap<&str, f64> = s.constraints.iter().copied().collect();
+    to_json(&serde_json::json!({
+        "stop": format!("{:?}", s.stop),
+        "iterations": s.iterations,
+        "seconds": s.seconds,
+        "seconds_per_iteration": s.seconds_per_iteration,
+        "area_initial_m2": s.area_initial,
+        "area_final_m2": s.area,
+        "area_growth": s.area / s.area_initial,
+        "grey_fraction": s.grey_fraction,
+        "volume": s.volume,
+        "constraints": constraints,
+        "retried_load_cases": s.retried_load_cases,
+    }))
+}
+
+/// A named history column.
+type Column<'a> = (&'a str, &'a dyn Fn(&IterationRecord) -> f64);
+
+/// The iteration history as CSV, one column per recorded quantity.
+fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
+    let col = |f: &dyn Fn(&IterationRecord) -> f64| h.iter().map(f).collect::<Vec<f64>>();
+    let mut header = vec!["iteration", "area_m2", "objective", "f0"];
+    let mut cols = vec![
+        col(&|r| r.iteration as f64),
+        col(&|r| r.area),
+        col(&|r| r.objective),
+        col(&|r| r.f0),
+    ];
+    for (i, n) in names.iter().enumerate() {
+        header.push(n);
+        cols.push(col(&|r| r.constraints[i]));
+    }
+    let rest: [Column; 13] = [
+        ("energy_J", &|r| r.energy),
+        ("stroke_ratio", &|r| r.stroke),
+        ("volume", &|r| r.volume),
+        ("grey", &|r| r.grey),
+        ("change", &|r| r.change),
+        ("mean_change", &|r| r.mean_change),
+        ("kkt", &|r| r.kkt.unwrap_or(f64::NAN)),
+        ("beta", &|r| r.beta),
+        ("newton_total", &|r| r.newton_total as f64),
+        ("newton_max", &|r| r.newton_max as f64),
+        ("retried_cases", &|r| r.retried_cases.len() as f64),
+        ("time_s", &|r| r.time),
+        ("area_rel", &|r| r.area / h[0].area),
+    ];
+    for (n, f) in rest {
+        header.push(n);
+        cols.push(col(f));
+    }
+    let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    csv_columns(&header, &refs)
+}
+
+/// The gradient check's accepted relative error.
+pub const GRADIENT_TOLERANCE: f64 = 1e-5;
+
+/// The adjoint gradients against central differences, on a small problem.
+#[derive(Debug, Clone)]
+pub struct GradientReport {
+    /// The problem checked, in words.
+    pub setup: String,
+    /// One row per response.
+    pub checks: Vec<flexstage_topopt::check::GradientCheck>,
+}
+
+impl GradientReport {
+    /// `Ok` when every response is within [`GRADIENT_TOLERANCE`].
+    pub fn verdict(&self) -> Result<()> {
+        let failed = self
+            .checks
+            .iter()
+            .filter(|c| !(c.relative_error <= GRADIENT_TOLERANCE))
+            .count();
+        if failed == 0 {
+            Ok(())
+        } else {
+            Err(PipelineError::GradientCheck {
+                failed,
+                checked: self.checks.len(),
+                tolerance: GRADIENT_TOLERANCE,
+            })
+        }
+    }
+}
+
+/// Compares the adjoint gradients with central differences (h = 1e-6) on a 16 × 8 version of
+/// the scenario: nonlinear, additive material on, projection β = 2, 10 variables.
+pub fn gradient_check(scenario: &Scenario) -> Result<GradientReport> {
+    let mut s = scenario.clone();
+    s.mesh.nl = 16;
+    s.mesh.nw = 8;
+    s.optimization.samples = 8;
+    s.actuators.stroke_amplitude = 3e-4;
+    s.actuators.max_stroke = s.actuators.max_stroke.max(1e-3);
+    let problem = Problem::from_scenario(&s, None)?;
+    let ne = problem.mesh().n_elements();
+    let e0 = s.material.youngs_modulus;
+    let yeoh = AdditiveYeoh::uniform(ne, 1e-6 * e0, 1e-3 * e0);
+    let n = problem.design_elements().len();
+    let x: Vec<f64> = (0..n)
+        .map(|j| 0.3 + 0.6 * (0.5 + 0.5 * (j as f64 * 0.77).sin()))
+        .collect();
+    let proj = Projection {
+        beta: 2.0,
+        eta: 0.5,
+    };
+    let setup = format!(
+        "{} x {} mesh, p_m = {}, strokes ±{} µm, nonlinear, additive material on, filter {} \
+         elements, projection β = 2; central differences h = 1e-6",
+        s.mesh.nl,
+        s.mesh.nw,
+        s.optimization.samples,
+        s.actuators.stroke_amplitude * 1e6,
+        s.optimization.filter_radius
+    );
+    let radius = s.optimization.filter_radius;
+    let checks = check_gradients(&problem, radius, proj, Some(&yeoh), &x, 10, 1e-6)?;
+    Ok(GradientReport { setup, checks })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn options_name_the_option_and_range() {
+        DesignOptions::default().validate().unwrap();
+        let e = DesignOptions {
+            checkpoint_every: 0,
+            ..DesignOptions::default()
+        }
+        .validate()
+        .unwrap_err()
+        .to_string();
+        assert!(
+            e.contains("design.checkpoint_every = 0") && e.contains("[1, 100000]"),
+            "{e}"
+        );
+    }
+
+    #[test]
+    fn gradient_verdict_fails_above_the_tolerance() {
+        // Goal: the check can fail (a NaN error counts as a failure, not a pass).
+        let row = |e: f64| flexstage_topopt::check::GradientCheck {
+            name: "objective",
+            relative_error: e,
+            scale: 1.0,
+            checked: 10,
+        };
+        let mut r = GradientReport {
+            setup: String::new(),
+            checks: vec![row(1e-9)],
+        };
+        r.verdict().unwrap();
+        r.checks.push(row(f64::NAN));
+        r.checks.push(row(1e-3));
+        let e = r.verdict().unwrap_err().to_string();
+        assert!(e.contains("2 of 3"), "{e}");
+    }
+}

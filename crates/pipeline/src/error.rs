@@ -1,0 +1,153 @@
+//! Typed errors of the pipeline.
+//!
+//! Display strings never repeat their `source`: a caller that prints the whole chain
+//! (`anyhow`'s `{:#}`) shows every cause exactly once.
+
+use std::fmt::Display;
+use std::path::PathBuf;
+
+/// Everything that can stop a pipeline stage.
+#[derive(Debug, thiserror::Error)]
+pub enum PipelineError {
+    /// A stage option is out of its accepted range.
+    #[error("{option} = {value} is out of range: expected {expected}")]
+    Option {
+        /// The option, as `<stage>.<field>` (e.g. `reduce.modes`).
+        option: &'static str,
+        /// The value given, formatted.
+        value: String,
+        /// The accepted range in words.
+        expected: String,
+    },
+    /// A result exists and replacing it was not asked for.
+    #[error("{path} already holds {what}; {hint}")]
+    Exists {
+        /// The file or folder.
+        path: PathBuf,
+        /// What it holds.
+        what: &'static str,
+        /// How to go on.
+        hint: String,
+    },
+    /// An input a stage needs is missing.
+    #[error("{what} not found: {path} does not exist; {hint}")]
+    Missing {
+        /// What is missing.
+        what: &'static str,
+        /// Where it was looked for.
+        path: PathBuf,
+        /// How to produce it.
+        hint: String,
+    },
+    /// The run folder records another scenario than the one given.
+    #[error(
+        "{root} holds a run of another scenario ({recorded}); give that scenario, another \
+         folder (--out), or --force to replace its scenario"
+    )]
+    OtherScenario {
+        /// The run folder.
+        root: PathBuf,
+        /// The recorded scenario's name, or why it cannot be read.
+        recorded: String,
+    },
+    /// An input file could not be read.
+    #[error("cannot read {path}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// The I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// An input file has the wrong content.
+    #[error("{path}: {reason}")]
+    Format {
+        /// The file (or design source) read.
+        path: String,
+        /// What is wrong.
+        reason: String,
+    },
+    /// A `--params` file that lives in another run folder than the one written to.
+    #[error(
+        "{params} belongs to the run folder {owner}, but the results would go to {target}; \
+         give that run's scenario ({owner}/scenario.toml) or choose the folder with --out"
+    )]
+    ForeignParams {
+        /// The parameter file.
+        params: PathBuf,
+        /// Its run folder.
+        owner: PathBuf,
+        /// The run folder written to.
+        target: PathBuf,
+    },
+    /// The adjoint gradients disagree with central differences.
+    #[error("gradient check failed: {failed} of {checked} responses above {tolerance:e}")]
+    GradientCheck {
+        /// Responses above the tolerance.
+        failed: usize,
+        /// Responses checked.
+        checked: usize,
+        /// The tolerance on the relative error.
+        tolerance: f64,
+    },
+    /// Scenario errors (also of the derived plant).
+    #[error(transparent)]
+    Scenario(#[from] flexstage_scenario::ScenarioError),
+    /// Topology optimization and nonlinear analysis.
+    #[error(transparent)]
+    Topopt(#[from] flexstage_topopt::TopoptError),
+    /// Model reduction.
+    #[error(transparent)]
+    Reduce(#[from] flexstage_reduce::ReduceError),
+    /// Bouc–Wen model and PEA identification.
+    #[error(transparent)]
+    Piezo(#[from] flexstage_piezo::PiezoError),
+    /// Stage identification.
+    #[error(transparent)]
+    Identify(#[from] flexstage_identify::IdentifyError),
+    /// Controllers and the simulated experiment.
+    #[error(transparent)]
+    Control(#[from] flexstage_control::ControlError),
+    /// Writing results.
+    #[error(transparent)]
+    Write(#[from] flexstage_report::ReportError),
+    /// Figures.
+    #[error(transparent)]
+    Plot(#[from] flexstage_report::plot::PlotError),
+    /// VTK files.
+    #[error(transparent)]
+    Vtk(#[from] flexstage_report::vtk::VtkError),
+    /// Outline export.
+    #[error(transparent)]
+    Outline(#[from] flexstage_report::outline::OutlineError),
+    /// Density images.
+    #[error(transparent)]
+    Image(#[from] flexstage_report::image::ImageError),
+}
+
+/// Result alias of this crate.
+pub type Result<T> = std::result::Result<T, PipelineError>;
+
+/// `Ok` when `ok`, else [`PipelineError::Option`] naming the option, the value and the
+/// accepted range. Non-finite floats never pass (callers include `value.is_finite()`).
+pub(crate) fn require(
+    ok: bool,
+    option: &'static str,
+    value: impl Display,
+    expected: &str,
+) -> Result<()> {
+    if ok {
+        Ok(())
+    } else {
+        Err(PipelineError::Option {
+            option,
+            value: value.to_string(),
+            expected: expected.to_string(),
+        })
+    }
+}
+
+/// A serialization failure of our own summary types is a bug, not an input error.
+pub(crate) fn to_json(value: &impl serde::Serialize) -> String {
+    serde_json::to_string_pretty(value).expect("summaries serialize to JSON")
+}

@@ -1,0 +1,98 @@
+//! `export`: the manufacturing outline of a design (paper Section 4.1, wire-cut from a
+//! plate): the ρ = level iso-contour as DXF and SVG closed polylines, and a binary STL extruded
+//! by the plate thickness.
+
+use std::path::PathBuf;
+
+use flexstage_fem::Kinematics;
+use flexstage_report::layout::export as files;
+use flexstage_report::outline::{Outline, Unit};
+use flexstage_topopt::Problem;
+
+use crate::error::{Result, require};
+use crate::folder::RunFolder;
+use crate::source::{DesignSource, load_design};
+
+/// Options of `export`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExportOptions {
+    /// The design. Default: the run's finished design.
+    pub design: DesignSource,
+    /// Length unit of the files. Default millimetres.
+    pub unit: Unit,
+    /// Density level of the contour, in (0, 1). Default 0.5.
+    pub level: f64,
+    /// Taubin smoothing passes, in [0, 1000] (0: the raw marching-squares polygon).
+    /// Default 10.
+    pub smoothing: usize,
+}
+
+impl Default for ExportOptions {
+    fn default() -> Self {
+        ExportOptions {
+            design: DesignSource::Run,
+            unit: Unit::Millimetres,
+            level: 0.5,
+            smoothing: 10,
+        }
+    }
+}
+
+impl ExportOptions {
+    /// Checks every option.
+    pub fn validate(&self) -> Result<()> {
+        require(
+            self.level > 0.0 && self.level < 1.0,
+            "export.level",
+            self.level,
+            "a density in (0, 1)",
+        )?;
+        require(
+            self.smoothing <= 1000,
+            "export.smoothing",
+            self.smoothing,
+            "an integer in [0, 1000]",
+        )
+    }
+}
+
+/// What `export` wrote.
+#[derive(Debug, Clone)]
+pub struct ExportSummary {
+    /// The design exported.
+    pub design: DesignSource,
+    /// Number of closed loops (outer boundaries and holes).
+    pub loops: usize,
+    /// Area enclosed by the outline [m²].
+    pub area: f64,
+    /// Files written.
+    pub files: Vec<PathBuf>,
+    /// Whether earlier export files were replaced.
+    pub replaced: bool,
+}
+
+/// Exports the outline to [`files::DXF`], [`files::SVG`] and [`files::STL`].
+pub fn export(folder: &RunFolder, options: &ExportOptions) -> Result<ExportSummary> {
+    options.validate()?;
+    let s = folder.scenario();
+    let problem = Problem::from_scenario(s, Some(Kinematics::TotalLagrangian))?;
+    let rho = load_design(folder, &options.design, &problem)?;
+    let (nl, nw) = (s.mesh.nl, s.mesh.nw);
+    let (dx, dy) = (s.mesh.length / nl as f64, s.mesh.width / nw as f64);
+    let outline = Outline::from_fem_order(nl, nw, dx, dy, options.level, options.smoothing, &rho)?;
+    let replaced = folder.has_results(files::DIR);
+    let run = folder.dir();
+    let unit = options.unit;
+    let files = vec![
+        run.write(files::DXF, &outline.to_dxf(unit)?)?,
+        run.write(files::SVG, outline.to_svg(unit).as_bytes())?,
+        run.write(files::STL, &outline.to_stl(s.mesh.thickness, unit))?,
+    ];
+    Ok(ExportSummary {
+        design: options.design.clone(),
+        loops: outline.loops.len(),
+        area: outline.area(),
+        files,
+        replaced,
+    })
+}

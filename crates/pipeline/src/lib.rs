@@ -1,0 +1,77 @@
+//! # flexstage-pipeline
+//!
+//! The stages of the scheme of *Integrated Development of a Topology-Optimized Compliant
+//! Mechanism for Precise Positioning* (Actuators 2022, 11(7), 179) chained on one run folder:
+//!
+//! ```text
+//! design ─► export ─► reduce ─► pea (simulate + identify) ─► identify stage ─► track ─► report
+//! (Alg. 1)  (§4.1)    (§3.2.1)   (App. B, Eq. 21)              (Eq. 54–56)       (§4)
+//! ```
+//!
+//! * **One scenario per run, in memory.** [`RunFolder`] opens `runs/<scenario name>/` (or a
+//!   folder the caller picks), records the scenario, and hands it to every stage; no stage
+//!   re-reads the recorded copy. A folder of another scenario is refused unless replaced.
+//! * **One set of defaults.** Each stage takes a typed options struct ([`DesignOptions`],
+//!   [`AnalyzeOptions`], [`ExportOptions`], [`ReduceOptions`], [`PeaOptions`],
+//!   [`PeaIdOptions`], [`StageIdOptions`], [`TrackOptions`], [`RunOptions`]) whose `Default`
+//!   is the only place its defaults live, and whose `validate()` names the option, the value
+//!   and the accepted range. The CLI takes its defaults from these. The default scenario of
+//!   every command is [`DEFAULT_PRESET`].
+//! * **One layout.** Every file of a run folder is named in [`flexstage_report::layout`]; the
+//!   stages write and the HTML report reads through it.
+//! * **Nothing overwritten silently.** `design` refuses to replace a finished or interrupted
+//!   design unless forced; analyses and tracking conditions get their own folders
+//!   (`analyze/inputs_30_-30/`, `track/compensation-off/`); every other stage reports in its
+//!   summary whether it replaced earlier results.
+//! * **No printing.** Progress goes to a [`Progress`] (the CLI draws bars), results come back
+//!   as typed summaries.
+//! * **Resumable.** [`run::run`] records finished stages in `run_state.json` ([`RunState`],
+//!   the one place that reads and writes it) and resumes after them.
+//!
+//! The simulated experiments (stage identification, tracking) run on the *designed* stage
+//! once the run has a reduced model ([`Plant`]).
+
+pub mod analyze;
+pub mod design;
+pub mod error;
+pub mod export;
+mod figures;
+pub mod folder;
+pub mod pea;
+mod pea_files;
+pub mod plant;
+pub mod progress;
+pub mod reduce;
+mod reduce_files;
+pub mod run;
+pub mod source;
+pub mod stage_id;
+pub mod state;
+pub mod track;
+mod track_files;
+
+pub use analyze::{AnalyzeOptions, AnalyzeSummary, analyze};
+pub use design::{
+    DesignOptions, DesignStart, DesignSummary, GradientReport, design, gradient_check,
+};
+pub use error::{PipelineError, Result};
+pub use export::{ExportOptions, ExportSummary, export};
+pub use folder::{DEFAULT_PRESET, PRESETS, RunFolder, default_root, default_run, load_scenario};
+pub use pea::{
+    PeaIdOptions, PeaIdSummary, PeaOptions, PeaRecord, identify_pea, simulate_pea, write_pea_csv,
+    write_pea_record,
+};
+pub use plant::{Plant, PlantSource};
+pub use progress::{Progress, RunEvent, Silent, StartOver};
+pub use reduce::{ReduceOptions, ReduceSummary, reduce};
+pub use run::{RunOptions, RunSummary, Stage, StageSummary, write_report};
+pub use source::DesignSource;
+pub use stage_id::{StageData, StageIdOptions, StageIdSummary, identify_stage};
+pub use state::RunState;
+pub use track::{ModelSource, TrackOptions, TrackSummary, track};
+
+/// The stage crates' types that appear in options and summaries.
+pub use flexstage_control::{actuator::Compensation, experiment::Variant};
+pub use flexstage_piezo::WaveShape;
+pub use flexstage_report::outline::Unit;
+pub use flexstage_scenario::Scenario;

@@ -1,0 +1,62 @@
+//! Progress reporting: the pipeline never prints; it tells a [`Progress`] what happens and the
+//! caller decides how to show it (the CLI draws `indicatif` bars on standard error).
+
+use crate::run::{Stage, StageSummary};
+
+/// Receives progress from the stages. Every method has a do-nothing default, so an
+/// implementation overrides only what it shows. Implementations must be `Sync`: tracking runs
+/// its controllers in parallel and advances one task from several threads.
+pub trait Progress: Sync {
+    /// A task of `len` steps begins (e.g. `"design"` with `max_iterations + 1` steps).
+    fn start(&self, _task: &str, _len: u64) {}
+    /// The current task reached step `position`.
+    fn set_position(&self, _position: u64) {}
+    /// The current task advanced by `steps`.
+    fn advance(&self, _steps: u64) {}
+    /// A short status of the current task (e.g. the objective of the last iteration).
+    fn set_message(&self, _message: &str) {}
+    /// The current task is done.
+    fn finish(&self) {}
+    /// A line worth showing now: a warning or a notable event (a retried load case, a
+    /// resumed checkpoint).
+    fn note(&self, _line: &str) {}
+    /// A step of `flexstage run` ([`crate::run::run`]).
+    fn event(&self, _event: &RunEvent) {}
+}
+
+/// Shows nothing.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Silent;
+
+impl Progress for Silent {}
+
+/// Why `run` starts over instead of resuming.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StartOver {
+    /// The caller asked for it (`--restart`).
+    Requested,
+    /// The scenario differs from the one the finished stages ran with.
+    ScenarioChanged,
+}
+
+/// The steps of [`crate::run::run`].
+#[derive(Debug)]
+pub enum RunEvent<'a> {
+    /// Finished stages are discarded.
+    StartingOver(StartOver),
+    /// Resuming after these finished stages.
+    Resuming(&'a [Stage]),
+    /// A stage finished earlier is skipped.
+    Skipped(Stage),
+    /// A stage begins.
+    Started(Stage),
+    /// A stage ended.
+    Finished {
+        /// The stage.
+        stage: Stage,
+        /// Wall-clock time [s].
+        seconds: f64,
+        /// What it produced.
+        summary: &'a StageSummary,
+    },
+}

@@ -1,0 +1,362 @@
+//! The result files of `reduce` ([`flexstage_report::layout::reduce`]): the stage parameter
+//! file, the summary (TOML and JSON), the mode shapes and the validity map.
+
+use flexstage_reduce::{
+    MassLumping, ReduceParams, Reduction, ValidityMap, ValiditySample, stage_params_toml,
+};
+use flexstage_report::layout::reduce as files;
+use flexstage_report::plot::{Figure, Series};
+use flexstage_report::vtk::{PointField, QuadMesh};
+use flexstage_report::{RunDir, csv_columns};
+use flexstage_topopt::Problem;
+use serde::Serialize;
+
+use crate::error::{PipelineError, Result, to_json};
+use crate::source::DesignSource;
+
+/// Everything the files are made from.
+pub(crate) struct Outputs<'a> {
+    pub run: &'a RunDir,
+    pub design: &'a DesignSource,
+    pub problem: &'a Problem,
+    pub rho: &'a [f64],
+    pub reduction: &'a Reduction,
+    pub params: &'a ReduceParams,
+}
+
+#[derive(Debug, Serialize)]
+struct Summary {
+    design: String,
+    mesh: [usize; 2],
+    state: String,
+    /// ∂q/∂x_in, global frame (FE output, rigid translation included).
+    alpha_global: [[f64; 2]; 2],
+    /// Paper's α (Eq. 24): moving frame u_o = q − [½(x_in1 + x_in2), 0].
+    alpha_moving_frame: [[f64; 2]; 2],
+    eq26_residuals: [f64; 2],
+    tan_theta: f64,
+    theta_deg: f64,
+    alpha_scalar: f64,
+    a_theta: [[f64; 2]; 2],
+    a_theta_residual: f64,
+    output_compliance_m_per_n: [[f64; 2]; 2],
+    output_stiffness_n_per_m: [[f64; 2]; 2],
+    k_qo1: f64,
+    k_qo2: f64,
+    mass_kg: f64,
+    volume_fraction: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    operating_output_um: Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    modal: Option<ModalSummary>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    validity: Option<ValiditySummary>,
+}
+
+#[derive(Debug, Serialize)]
+struct ModalSummary {
+    mass: String,
+    plate_masses: bool,
+    frequencies_hz: Vec<f64>,
+    residuals: Vec<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    input_frequency_hz: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    assumption2_ratio: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    assumption2_holds: Option<bool>,
+    assumption2: String,
+}
+
+#[derive(Debug, Serialize)]
+struct ValiditySummary {
+    metric: String,
+    scales: Vec<f64>,
+    amplitude_um: Vec<f64>,
+    max_error: Vec<f64>,
+    rms_error: Vec<f64>,
+    max_error_linear_fe: Vec<f64>,
+    max_error_within_stroke: f64,
+    largest_scale_within_2_percent: f64,
+}
+
+impl Outputs<'_> {
+    /// Writes every file of the stage.
+    pub fn write(&self) -> Result<()> {
+        self.write_params()?;
+        self.write_summary()?;
+        if self.reduction.modes.is_some() {
+            self.write_modes()?;
+        }
+        if let Some(v) = &self.reduction.validity {
+            write_validity_tables(self.run, v)?;
+            write_validity_figures(self.run, v)?;
+        }
+        Ok(())
+    }
+
+    fn state(&self) -> String {
+        match self.reduction.operating_point {
+            None => "undeformed".to_string(),
+            Some(x) => format!(
+                "operating point x_nom = ({:.3}, {:.3}) um",
+                x[0] * 1e6,
+                x[1] * 1e6
+            ),
+        }
+    }
+
+    fn write_params(&self) -> Result<()> {
+        let header = vec![
+            "Reduced stage model (flexstage reduce), paper Eq. 31-35 / Appendix C, SI units."
+                .into(),
+            format!(
+                "design: {}; tangent at the {} state.",
+                self.design,
+                self.state()
+            ),
+            "K_qo1, K_qo2, mass and alpha come from the design; K_pea, k_in, m_in from the \
+             scenario,"
+                .into(),
+            "damping from stage.damping_ratio. The simulated plant of the run; `flexstage \
+             track --params FILE` uses it as the controller's model."
+                .into(),
+        ];
+        let text = stage_params_toml(&self.reduction.params, &header);
+        self.run.write(files::PARAMS, text.as_bytes())?;
+        Ok(())
+    }
+
+    fn write_summary(&self) -> Result<()> {
+        let r = self.reduction;
+        let c = &r.condensation;
+        let summary = Summary {
+            design: self.design.to_string(),
+            mesh: [self.problem.mesh().nl, self.problem.mesh().nw],
+            state: self.state(),
+            alpha_global: c.alpha_abs,
+            alpha_moving_frame: c.alpha,
+            eq26_residuals: c.eq26_residuals(),
+            tan_theta: c.tan_theta(),
+            theta_deg: c.theta().to_degrees(),
+            alpha_scalar: c.alpha_scalar(),
+            a_theta: c.a_theta(),
+            a_theta_residual: c.a_theta_residual(),
+            output_compliance_m_per_n: c.compliance,
+            output_stiffness_n_per_m: c.output_stiffness,
+            k_qo1: c.k_qo1(),
+            k_qo2: c.k_qo2(),
+            mass_kg: r.mass,
+            volume_fraction: r.volume_fraction,
+            operating_output_um: r
+                .operating_point
+                .map(|_| [r.operating_output[0] * 1e6, r.operating_output[1] * 1e6]),
+            modal: self.modal_summary(),
+            validity: r.validity.as_ref().map(validity_summary),
+        };
+        let toml = toml::to_string(&summary).map_err(|e| PipelineError::Format {
+            path: files::SUMMARY_TOML.into(),
+            reason: e.to_string(),
+        })?;
+        self.run.write(files::SUMMARY_TOML, toml.as_bytes())?;
+        self.run
+            .write(files::SUMMARY_JSON, to_json(&summary).as_bytes())?;
+        Ok(())
+    }
+
+    fn modal_summary(&self) -> Option<ModalSummary> {
+        let r = self.reduction;
+        let m = r.modes.as_ref()?;
+        let lumped = matches!(
+            self.params.modal.map(|p| p.lumping),
+            Some(MassLumping::Lumped)
+        );
+        let a2 = r.assumption2.as_ref();
+        Some(ModalSummary {
+            mass: format!(
+                "{} mass matrix, interpolation m = rho for rho >= 0.1, 0.1 (rho/0.1)^6 below",
+                if lumped { "lumped" } else { "consistent" }
+            ),
+            plate_masses: self.params.plate_masses,
+            frequencies_hz: m.frequencies.clone(),
+            residuals: m.residuals.clone(),
+            input_frequency_hz: a2.map(|a| a.input_frequency),
+            assumption2_ratio: a2.map(|a| a.ratio),
+            assumption2_holds: a2.map(|a| a.holds),
+            assumption2: a2
+                .map(|a| a.statement())
+                .unwrap_or_else(|| "not checked: the scenario has no trajectories".into()),
+        })
+    }
+
+    /// Mode shapes (scaled to a largest nodal displacement of 1) for ParaView, and the
+    /// frequencies as CSV.
+    fn write_modes(&self) -> Result<()> {
+        let Some(m) = &self.reduction.modes else {
+            return Ok(());
+        };
+        let mesh = self.problem.mesh();
+        let points: Vec<[f64; 2]> = (0..mesh.n_nodes()).map(|n| mesh.node_coords(n)).collect();
+        let cells: Vec<[usize; 4]> = (0..mesh.n_elements())
+            .map(|e| mesh.element_nodes(e))
+            .collect();
+        let shapes: Vec<Vec<[f64; 2]>> = m
+            .shapes
+            .iter()
+            .map(|phi| {
+                let mx = phi.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(1e-300);
+                (0..mesh.n_nodes())
+                    .map(|n| [phi[2 * n] / mx, phi[2 * n + 1] / mx])
+                    .collect()
+            })
+            .collect();
+        let names: Vec<String> = m
+            .frequencies
+            .iter()
+            .enumerate()
+            .map(|(k, f)| format!("mode_{}_{:.0}Hz", k + 1, f))
+            .collect();
+        let vtu = QuadMesh {
+            points: &points,
+            cells: &cells,
+            point_data: names
+                .iter()
+                .zip(&shapes)
+                .map(|(n, s)| (n.as_str(), PointField::Vector2(s)))
+                .collect(),
+            cell_data: vec![("density", self.rho)],
+        }
+        .to_vtu()?;
+        self.run.write(files::MODES_VTU, vtu.as_bytes())?;
+        let k: Vec<f64> = (1..=m.frequencies.len()).map(|k| k as f64).collect();
+        let csv = csv_columns(
+            &["mode", "frequency_hz", "residual"],
+            &[&k, &m.frequencies, &m.residuals],
+        );
+        self.run.write(files::MODES_CSV, csv.as_bytes())?;
+        Ok(())
+    }
+}
+
+fn validity_summary(v: &ValidityMap) -> ValiditySummary {
+    ValiditySummary {
+        metric: "|q_reduced - q_nonlinear_FE| / max_k |q_nonlinear_FE,k| over the p_m \
+                 perimeter samples at each stroke scale; q_reduced = alpha_global x_in(FE)"
+            .into(),
+        scales: v.scales.iter().map(|s| s.scale).collect(),
+        amplitude_um: v.scales.iter().map(|s| s.amplitude * 1e6).collect(),
+        max_error: v.scales.iter().map(|s| s.max_error).collect(),
+        rms_error: v.scales.iter().map(|s| s.rms_error).collect(),
+        max_error_linear_fe: v.scales.iter().map(|s| s.max_error_linear).collect(),
+        max_error_within_stroke: v.max_error_within_stroke(),
+        largest_scale_within_2_percent: v.valid_scale(0.02),
+    }
+}
+
+/// Named columns of the validity samples (µm for displacements).
+type SampleColumn = (&'static str, fn(&ValiditySample) -> f64);
+
+const SAMPLE_COLUMNS: [SampleColumn; 13] = [
+    ("scale", |s| s.scale),
+    ("x_nom1_um", |s| s.x_nom[0] * 1e6),
+    ("x_nom2_um", |s| s.x_nom[1] * 1e6),
+    ("x_in1_um", |s| s.x_in[0] * 1e6),
+    ("x_in2_um", |s| s.x_in[1] * 1e6),
+    ("q1_fe_um", |s| s.q_fe[0] * 1e6),
+    ("q2_fe_um", |s| s.q_fe[1] * 1e6),
+    ("q1_reduced_um", |s| s.q_reduced[0] * 1e6),
+    ("q2_reduced_um", |s| s.q_reduced[1] * 1e6),
+    ("q1_linear_um", |s| s.q_linear[0] * 1e6),
+    ("q2_linear_um", |s| s.q_linear[1] * 1e6),
+    ("error", |s| s.error),
+    ("error_linear", |s| s.error_linear),
+];
+
+/// Per-scale errors in percent: (amplitude µm, max, rms, max of linear FE).
+fn scale_errors(v: &ValidityMap) -> [Vec<f64>; 4] {
+    let col = |f: &dyn Fn(&flexstage_reduce::ScaleSummary) -> f64| {
+        v.scales.iter().map(f).collect::<Vec<f64>>()
+    };
+    [
+        col(&|s| s.amplitude * 1e6),
+        col(&|s| s.max_error * 100.0),
+        col(&|s| s.rms_error * 100.0),
+        col(&|s| s.max_error_linear * 100.0),
+    ]
+}
+
+fn write_validity_tables(run: &RunDir, v: &ValidityMap) -> Result<()> {
+    let cols: Vec<Vec<f64>> = SAMPLE_COLUMNS
+        .iter()
+        .map(|(_, f)| v.samples.iter().map(f).collect())
+        .collect();
+    let header: Vec<&str> = SAMPLE_COLUMNS.iter().map(|(n, _)| *n).collect();
+    let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    run.write(files::VALIDITY_CSV, csv_columns(&header, &refs).as_bytes())?;
+    let sc: Vec<f64> = v.scales.iter().map(|s| s.scale).collect();
+    let [amp, me, re, ml] = scale_errors(v);
+    let csv = csv_columns(
+        &[
+            "scale",
+            "amplitude_um",
+            "max_error_percent",
+            "rms_error_percent",
+            "max_error_linear_fe_percent",
+        ],
+        &[&sc, &amp, &me, &re, &ml],
+    );
+    run.write(files::VALIDITY_SCALE_CSV, csv.as_bytes())?;
+    Ok(())
+}
+
+/// The map: workspace polygons at the largest scale ≤ 1, and the error against stroke.
+fn write_validity_figures(run: &RunDir, v: &ValidityMap) -> Result<()> {
+    let top = v
+        .scales
+        .iter()
+        .rev()
+        .find(|s| s.scale <= 1.0 + 1e-12)
+        .unwrap_or(&v.scales[v.scales.len() - 1]);
+    let at: Vec<&ValiditySample> = v.samples.iter().filter(|s| s.scale == top.scale).collect();
+    let poly = |f: fn(&ValiditySample) -> [f64; 2]| {
+        at.iter()
+            .map(|s| (f(s)[0] * 1e6, f(s)[1] * 1e6))
+            .collect::<Vec<_>>()
+    };
+    let fig = Figure::new(
+        format!(
+            "Workspace at {:.0} % stroke: nonlinear FE vs reduced model (max error {:.2} %)",
+            top.scale * 100.0,
+            top.max_error * 100.0
+        ),
+        "q1 [µm]",
+        "q2 [µm]",
+    )
+    .equal_aspect()
+    .with(Series::closed("nonlinear FE", poly(|s| s.q_fe)))
+    .with(Series::closed(
+        "reduced: alpha x_in(FE)",
+        poly(|s| s.q_reduced),
+    ))
+    .with(Series::closed(
+        "linear FE, same PEA loads",
+        poly(|s| s.q_linear),
+    ));
+    run.write(files::VALIDITY_SVG, fig.to_svg()?.as_bytes())?;
+    let [amp, me, re, ml] = scale_errors(v);
+    let pts = |y: &[f64]| amp.iter().copied().zip(y.iter().copied()).collect();
+    let fig = Figure::new(
+        "Tangent-model error vs stroke (validity map)",
+        "stroke amplitude [µm]",
+        "error [% of workspace radius]",
+    )
+    .with(Series::line("max, reduced alpha x_in", pts(&me)))
+    .with(Series::line("rms, reduced alpha x_in", pts(&re)))
+    .with(Series::line("max, linear FE", pts(&ml)))
+    .with(Series::line(
+        "2 % limit",
+        vec![(0.0, 2.0), (amp.last().copied().unwrap_or(1.0), 2.0)],
+    ));
+    run.write(files::VALIDITY_SCALE_SVG, fig.to_svg()?.as_bytes())?;
+    Ok(())
+}

@@ -1,0 +1,443 @@
+//! `track`: the simulated tracking experiment (Section 4, Figures 9–11) on the run's stage.
+//!
+//! * **Plant**: the run's simulated stage ([`Plant::of_run`]): the designed mechanism once the
+//!   run has a reduced model, else the scenario's `stage.truth`.
+//! * **Controller's model**: [`TrackOptions::params`] if given; else the run's identified
+//!   parameters (`identify/stage/params.toml`) if the run has them; else the guess.
+//! * **Folder**: `track/` for the default conditions (inverse compensation, the default
+//!   model, each trajectory's own duration); other conditions get their own folder
+//!   ([`TrackOptions::conditions`]), e.g. `track/compensation-off/` or
+//!   `track/params-reduce/`, so they never overwrite each other. Running a subset of the
+//!   trajectories or controllers updates those rows of `metrics.csv` and keeps the others.
+//!
+//! Every (trajectory, controller) pair is independent and runs in parallel (rayon).
+
+use std::path::{Path, PathBuf};
+
+use flexstage_control::actuator::Compensation;
+use flexstage_control::experiment::{Metrics, Record, Setup, Variant, experiment_with_progress};
+use flexstage_control::trajectory::Reference;
+use flexstage_report::layout::{self, Tracking};
+use flexstage_report::plot::{Figure, Series};
+use flexstage_report::{RunDir, csv_columns, read_csv_columns};
+use rayon::prelude::*;
+
+use crate::error::{PipelineError, Result, require};
+use crate::folder::RunFolder;
+use crate::plant::{Plant, PlantSource, read_stage_params};
+use crate::progress::Progress;
+use crate::source::plain;
+
+/// The longest tracking run [s] (bounded work: 6·10⁶ samples at 10 kHz).
+pub const MAX_DURATION: f64 = 600.0;
+
+/// Options of `track`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackOptions {
+    /// One trajectory of the scenario by name; `None`: all.
+    pub trajectory: Option<String>,
+    /// The controllers to run. Default all ([`Variant::ALL`]).
+    pub controllers: Vec<Variant>,
+    /// Hysteresis compensation. Default [`Compensation::Inverse`] (Eq. 21, in the loop).
+    pub compensation: Compensation,
+    /// The controller's model (a `StageParams` TOML); `None`: the run's identified parameters
+    /// if it has them, else the scenario's `stage.guess` (with the design's mass and α).
+    pub params: Option<PathBuf>,
+    /// Accept a `params` file from another run folder (refused by default, so that a
+    /// parameter file never silently sends results to an unrelated run).
+    pub allow_foreign_params: bool,
+    /// Duration of every run [s], in (0, 600]; `None`: each trajectory's own.
+    pub duration: Option<f64>,
+}
+
+impl Default for TrackOptions {
+    fn default() -> Self {
+        TrackOptions {
+            trajectory: None,
+            controllers: Variant::ALL.to_vec(),
+            compensation: Compensation::Inverse,
+            params: None,
+            allow_foreign_params: false,
+            duration: None,
+        }
+    }
+}
+
+impl TrackOptions {
+    /// Checks every option.
+    pub fn validate(&self) -> Result<()> {
+        require(
+            !self.controllers.is_empty(),
+            "track.controllers",
+            "none",
+            "at least one controller",
+        )?;
+        if let Some(d) = self.duration {
+            require(
+                d.is_finite() && d > 0.0 && d <= MAX_DURATION,
+                "track.duration",
+                d,
+                "a duration in (0, 600] s",
+            )?;
+        }
+        Ok(())
+    }
+
+    /// The folder name of the conditions: empty for the defaults, else the non-default
+    /// conditions joined by `_` (`compensation-off`, `params-<name>`, `duration-<d>s`).
+    pub fn conditions(&self, folder: &RunFolder) -> String {
+        let mut parts = Vec::new();
+        match self.compensation {
+            Compensation::Inverse => {}
+            Compensation::Off => parts.push("compensation-off".to_string()),
+            Compensation::Ideal => parts.push("compensation-ideal".to_string()),
+        }
+        if let Some(p) = &self.params {
+            let same = |rel: &str| same_file(p, &folder.dir().path(rel));
+            let name = if same(layout::reduce::PARAMS) {
+                "reduce".to_string()
+            } else if same(layout::stage::PARAMS) {
+                "identified".to_string()
+            } else {
+                plain(&p.file_stem().unwrap_or_default().to_string_lossy())
+            };
+            parts.push(format!("params-{name}"));
+        }
+        if let Some(d) = self.duration {
+            parts.push(format!("duration-{d}s"));
+        }
+        plain_or_empty(&parts.join("_"))
+    }
+}
+
+fn plain_or_empty(s: &str) -> String {
+    if s.is_empty() {
+        String::new()
+    } else {
+        plain(s)
+    }
+}
+
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    }
+}
+
+/// Where the controller's model comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ModelSource {
+    /// A parameter file given by the caller.
+    File(PathBuf),
+    /// The run's identified parameters.
+    Identified(PathBuf),
+    /// The scenario's `stage.guess` (mass and α from the design when it is reduced).
+    Guess,
+}
+
+impl ModelSource {
+    /// A short label for tables: the file, or `guess`.
+    pub fn label(&self) -> String {
+        match self {
+            ModelSource::File(p) | ModelSource::Identified(p) => p.display().to_string(),
+            ModelSource::Guess => "guess".into(),
+        }
+    }
+}
+
+impl std::fmt::Display for ModelSource {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            ModelSource::File(p) => write!(f, "{}", p.display()),
+            ModelSource::Identified(p) => write!(f, "the identified parameters ({})", p.display()),
+            ModelSource::Guess => write!(f, "the scenario's stage.guess"),
+        }
+    }
+}
+
+/// One row of the metrics table.
+#[derive(Debug, Clone)]
+pub struct TrackRow {
+    /// Trajectory name.
+    pub trajectory: String,
+    /// Controller.
+    pub controller: Variant,
+    /// Errors against the true output.
+    pub metrics: Metrics,
+    /// Largest fraction of the designed workspace the reference uses.
+    pub usage: f64,
+}
+
+/// What `track` did.
+#[derive(Debug, Clone)]
+pub struct TrackSummary {
+    /// The simulated stage.
+    pub plant: PlantSource,
+    /// The controller's model.
+    pub model: ModelSource,
+    /// Hysteresis compensation.
+    pub compensation: Compensation,
+    /// The rows of this call (the folder's `metrics.csv` may hold more).
+    pub rows: Vec<TrackRow>,
+    /// Warnings (e.g. a trajectory leaving the designed workspace).
+    pub warnings: Vec<String>,
+    /// The result folder.
+    pub dir: PathBuf,
+    /// Whether earlier results were replaced.
+    pub replaced: bool,
+}
+
+/// The name of a compensation mode, as the CLI and `metrics.csv` spell it.
+pub fn compensation_name(c: Compensation) -> &'static str {
+    match c {
+        Compensation::Inverse => "inverse",
+        Compensation::Off => "off",
+        Compensation::Ideal => "ideal",
+    }
+}
+
+/// One planned run.
+struct Job<'a> {
+    trajectory: &'a str,
+    reference: Reference,
+    duration: f64,
+    controller: Variant,
+}
+
+/// Runs `track`.
+pub fn track(
+    folder: &RunFolder,
+    options: &TrackOptions,
+    progress: &dyn Progress,
+) -> Result<TrackSummary> {
+    options.validate()?;
+    let plant = Plant::of_run(folder)?;
+    let mut setup = Setup::from_scenario(&plant.scenario);
+    let model = model_source(folder, options)?;
+    if let ModelSource::File(p) | ModelSource::Identified(p) = &model {
+        setup.controller.model = read_stage_params(p)?;
+    }
+    let s = &plant.scenario;
+    let trajectories: Vec<_> = s
+        .trajectories
+        .iter()
+        .filter(|t| options.trajectory.as_deref().is_none_or(|n| t.name() == n))
+        .collect();
+    if trajectories.is_empty() {
+        let names: Vec<&str> = s.trajectories.iter().map(|t| t.name()).collect();
+        return Err(PipelineError::Option {
+            option: "track.trajectory",
+            value: format!("{:?}", options.trajectory.as_deref().unwrap_or("")),
+            expected: format!("a trajectory of the scenario: {}", names.join(", ")),
+        });
+    }
+    let dt = s.simulation.sample_time;
+    let workspace = setup.workspace()?;
+    let mut warnings = Vec::new();
+    let mut jobs = Vec::new();
+    for t in &trajectories {
+        let (reference, d) = Reference::from_scenario(t);
+        let duration = options.duration.unwrap_or(d);
+        let usage = workspace.max_usage(&reference, duration, dt);
+        if usage > 1.0 {
+            warnings.push(format!(
+                "trajectory {} leaves the designed workspace (uses {:.0} % of the stroke); \
+                 expect saturation",
+                t.name(),
+                100.0 * usage
+            ));
+        }
+        for &controller in &options.controllers {
+            jobs.push((
+                Job {
+                    trajectory: t.name(),
+                    reference,
+                    duration,
+                    controller,
+                },
+                usage,
+            ));
+        }
+    }
+    for w in &warnings {
+        progress.note(&format!("warning: {w}"));
+    }
+    let samples: f64 = jobs.iter().map(|(j, _)| j.duration / dt).sum();
+    progress.start("track", samples.round() as u64);
+    let records: Vec<Result<Record>> = jobs
+        .par_iter()
+        .map(|(j, _)| {
+            let advance = |n: usize| progress.advance(n as u64);
+            let rec = experiment_with_progress(
+                &setup,
+                j.controller,
+                options.compensation,
+                j.reference,
+                j.duration,
+                advance,
+            );
+            Ok(rec?)
+        })
+        .collect();
+    progress.finish();
+    let out = Tracking::variant(&options.conditions(folder));
+    let replaced = folder.has_results(out.dir());
+    let rows = write_results(folder.dir(), &out, &jobs, records, dt)?;
+    let merged = crate::track_files::write_metrics(
+        folder.dir(),
+        &out,
+        &rows,
+        compensation_name(options.compensation),
+        &model.label(),
+    )?;
+    crate::track_files::write_paths(folder.dir(), &out, &jobs_by_trajectory(&jobs), &merged)?;
+    Ok(TrackSummary {
+        plant: plant.source,
+        model,
+        compensation: options.compensation,
+        rows,
+        warnings,
+        dir: folder.dir().path(out.dir()),
+        replaced,
+    })
+}
+
+/// The trajectories of the jobs, each with its reference, in order.
+fn jobs_by_trajectory<'a>(jobs: &[(Job<'a>, f64)]) -> Vec<(&'a str, Reference, f64)> {
+    let mut out: Vec<(&str, Reference, f64)> = Vec::new();
+    for (j, _) in jobs {
+        if !out.iter().any(|(t, _, _)| *t == j.trajectory) {
+            out.push((j.trajectory, j.reference, j.duration));
+        }
+    }
+    out
+}
+
+/// The controller's model: the given file (refused if it belongs to another run folder,
+/// unless allowed), else the run's identified parameters, else the guess.
+fn model_source(folder: &RunFolder, options: &TrackOptions) -> Result<ModelSource> {
+    if let Some(p) = &options.params {
+        if !options.allow_foreign_params
+            && let Some(owner) = layout::run_of(p)
+            && !same_file(&owner, folder.root())
+        {
+            return Err(PipelineError::ForeignParams {
+                params: p.clone(),
+                owner,
+                target: folder.root().to_path_buf(),
+            });
+        }
+        return Ok(ModelSource::File(p.clone()));
+    }
+    let identified = folder.dir().path(layout::stage::PARAMS);
+    Ok(if identified.is_file() {
+        ModelSource::Identified(identified)
+    } else {
+        ModelSource::Guess
+    })
+}
+
+/// Writes each record's time series and error figure (Figures 9–10); returns the rows.
+fn write_results(
+    run: &RunDir,
+    out: &Tracking,
+    jobs: &[(Job, f64)],
+    records: Vec<Result<Record>>,
+    dt: f64,
+) -> Result<Vec<TrackRow>> {
+    let mut rows = Vec::with_capacity(jobs.len());
+    for ((job, usage), rec) in jobs.iter().zip(records) {
+        let rec = rec?;
+        let (t, v) = (job.trajectory, job.controller.name());
+        let csv = csv_columns(&Record::header(), &rec.columns());
+        run.write(out.record(t, v), csv.as_bytes())?;
+        let err = |i: usize| -> Vec<(f64, f64)> {
+            let step = (rec.len() / 4000).max(1);
+            (0..rec.len())
+                .step_by(step)
+                .map(|k| (rec.t[k], rec.error[i][k] * 1e9))
+                .collect()
+        };
+        let fig = Figure::new(
+            format!("{t}, {v}: tracking error (Figures 9-10)"),
+            "t [s]",
+            "error [nm]",
+        )
+        .with(Series::line("q1 (horizontal)", err(0)))
+        .with(Series::line("q2 (vertical)", err(1)));
+        run.write(out.error_svg(t, v), fig.to_svg()?.as_bytes())?;
+        let half = job.reference.half_range(job.duration, dt);
+        rows.push(TrackRow {
+            trajectory: t.to_string(),
+            controller: job.controller,
+            metrics: rec.metrics(half),
+            usage: *usage,
+        });
+    }
+    Ok(rows)
+}
+
+/// The true output paths of a record CSV [m] (columns `true1_m`, `true2_m`).
+pub(crate) fn read_paths(text: &str) -> Option<[Vec<f64>; 2]> {
+    let mut c = read_csv_columns(text, &["true1_m", "true2_m"])?;
+    let y = c.pop()?;
+    let x = c.pop()?;
+    Some([x, y])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn conditions_name_their_folder() {
+        // Goal: the cases that used to overwrite `track/` get their own folders.
+        let root = std::env::temp_dir().join(format!("flexstage-track-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let folder =
+            RunFolder::open(crate::folder::preset("quick").unwrap(), &root, false).unwrap();
+        let d = TrackOptions::default();
+        assert_eq!(d.conditions(&folder), "");
+        let off = TrackOptions {
+            compensation: Compensation::Off,
+            ..d.clone()
+        };
+        assert_eq!(off.conditions(&folder), "compensation-off");
+        let reduced = folder.dir().write(layout::reduce::PARAMS, b"").unwrap();
+        let p = TrackOptions {
+            params: Some(reduced),
+            duration: Some(0.5),
+            ..off
+        };
+        assert_eq!(
+            p.conditions(&folder),
+            "compensation-off_params-reduce_duration-0.5s"
+        );
+        assert_eq!(
+            Tracking::variant(&p.conditions(&folder)).dir(),
+            "track/compensation-off_params-reduce_duration-0.5s"
+        );
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn params_of_another_run_are_refused_unless_allowed() {
+        let base = std::env::temp_dir().join(format!("flexstage-foreign-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&base);
+        let quick = crate::folder::preset("quick").unwrap();
+        let a = RunFolder::open(quick.clone(), base.join("a"), false).unwrap();
+        let b = RunFolder::open(quick, base.join("b"), false).unwrap();
+        let p = a.dir().write(layout::reduce::PARAMS, b"").unwrap();
+        let mut o = TrackOptions {
+            params: Some(p.clone()),
+            ..TrackOptions::default()
+        };
+        assert_eq!(model_source(&a, &o).unwrap(), ModelSource::File(p.clone()));
+        let e = model_source(&b, &o).unwrap_err();
+        assert!(matches!(e, PipelineError::ForeignParams { .. }), "{e}");
+        o.allow_foreign_params = true;
+        assert_eq!(model_source(&b, &o).unwrap(), ModelSource::File(p));
+        std::fs::remove_dir_all(&base).unwrap();
+    }
+}

@@ -1,0 +1,129 @@
+//! The tables and figures of a tracking folder that span several runs: `metrics.csv` (merged
+//! by trajectory and controller) and the 2D paths of Figure 11.
+
+use flexstage_control::trajectory::Reference;
+use flexstage_report::RunDir;
+use flexstage_report::layout::Tracking;
+use flexstage_report::plot::{Figure, Series};
+
+use crate::error::Result;
+use crate::track::{TrackRow, read_paths};
+
+/// The header of `metrics.csv`.
+const HEADER: &str = "trajectory,variant,compensation,model,rms1_nm,rms2_nm,rms1_pct,rms2_pct,\
+max1_nm,max2_nm,max1_pct,max2_pct,settling_s,peak_voltage_V,saturated_samples,dropouts,\
+workspace_usage";
+
+fn line(r: &TrackRow, compensation: &str, model: &str) -> String {
+    let m = &r.metrics;
+    format!(
+        "{},{},{compensation},{model},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        r.trajectory,
+        r.controller.name(),
+        m.rms[0] * 1e9,
+        m.rms[1] * 1e9,
+        m.rms_pct[0],
+        m.rms_pct[1],
+        m.max[0] * 1e9,
+        m.max[1] * 1e9,
+        m.max_pct[0],
+        m.max_pct[1],
+        m.settling,
+        m.peak_voltage,
+        m.saturated,
+        m.dropouts,
+        r.usage
+    )
+}
+
+/// Writes `metrics.csv` with the rows of this call. Rows of other (trajectory, controller)
+/// pairs already in the file are kept when they were made under the same compensation and
+/// model; the rows of this call replace theirs in place, new ones are appended. Returns the
+/// (trajectory, controller) pairs of the file, in order.
+pub(crate) fn write_metrics(
+    run: &RunDir,
+    out: &Tracking,
+    rows: &[TrackRow],
+    compensation: &str,
+    model: &str,
+) -> Result<Vec<(String, String)>> {
+    let key = |l: &str| -> Option<(String, String)> {
+        let mut c = l.split(',');
+        Some((c.next()?.to_string(), c.next()?.to_string()))
+    };
+    let mut lines: Vec<String> = Vec::new();
+    if let Some(text) = run.read_to_string(out.metrics()) {
+        let mut it = text.lines();
+        if it.next() == Some(HEADER) {
+            // Same conditions only: a changed model or compensation replaces the table.
+            lines = it
+                .filter(|l| {
+                    let c: Vec<&str> = l.split(',').collect();
+                    c.get(2) == Some(&compensation) && c.get(3) == Some(&model)
+                })
+                .map(str::to_string)
+                .collect();
+        }
+    }
+    for r in rows {
+        let new = line(r, compensation, model);
+        let k = key(&new);
+        match lines.iter_mut().find(|l| key(l) == k) {
+            Some(l) => *l = new,
+            None => lines.push(new),
+        }
+    }
+    let text = format!("{HEADER}\n{}\n", lines.join("\n"));
+    run.write(out.metrics(), text.as_bytes())?;
+    Ok(lines.iter().filter_map(|l| key(l)).collect())
+}
+
+/// (x, y) points of a pair of series scaled by `scale`, at most about 4000 of them.
+fn decimate(xy: &[Vec<f64>; 2], scale: f64) -> Vec<(f64, f64)> {
+    let n = xy[0].len();
+    let step = (n / 4000).max(1);
+    (0..n)
+        .step_by(step)
+        .map(|k| (xy[0][k] * scale, xy[1][k] * scale))
+        .collect()
+}
+
+/// Figure 11 for each trajectory: the reference and the true output of every controller the
+/// folder's metrics list for it (read back from their time series).
+pub(crate) fn write_paths(
+    run: &RunDir,
+    out: &Tracking,
+    trajectories: &[(&str, Reference, f64)],
+    merged: &[(String, String)],
+) -> Result<()> {
+    for (name, reference, duration) in trajectories {
+        let n = 4000usize;
+        let reference_path: [Vec<f64>; 2] = {
+            let q: Vec<[f64; 2]> = (0..=n)
+                .map(|k| reference.sample(k as f64 * duration / n as f64).q)
+                .collect();
+            [
+                q.iter().map(|p| p[0]).collect(),
+                q.iter().map(|p| p[1]).collect(),
+            ]
+        };
+        let mut fig = Figure::new(
+            format!("{name}: output trajectory (Figure 11)"),
+            "q1 [µm]",
+            "q2 [µm]",
+        )
+        .equal_aspect()
+        .with(Series::line("reference", decimate(&reference_path, 1e6)));
+        for (_, controller) in merged.iter().filter(|(t, _)| t == name) {
+            let Some(paths) = run
+                .read_to_string(out.record(name, controller))
+                .and_then(|text| read_paths(&text))
+            else {
+                continue;
+            };
+            fig = fig.with(Series::line(controller.clone(), decimate(&paths, 1e6)));
+        }
+        run.write(out.paths_svg(name), fig.to_svg()?.as_bytes())?;
+    }
+    Ok(())
+}
