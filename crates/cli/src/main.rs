@@ -1,35 +1,32 @@
-//! The `flexstage` command-line tool: a thin layer over the stage crates.
+//! The `flexstage` command-line tool: parses arguments, calls `flexstage_pipeline`, prints.
 //!
-//! Errors are printed as one message (with its causes) and a non-zero exit status; never a
-//! backtrace.
+//! Every command uses the same default scenario (the `quick` preset) and writes into the run
+//! folder of its scenario, `runs/<scenario name>/` unless `--out` says otherwise. Errors are
+//! printed once, each cause once, with a non-zero exit status; never a backtrace.
 
-mod analyze;
-mod build;
-mod design;
-mod export;
-mod identify;
-mod identify_stage;
-mod pea;
-mod reduce;
-mod report;
-mod run;
-mod run_dir;
-mod scenario_args;
-mod track;
+mod args;
+mod bars;
+mod print;
+mod stages;
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{Args, Parser, Subcommand};
+use flexstage_pipeline::{
+    DEFAULT_PRESET, PRESETS, RunOptions, Scenario, default_root, default_run,
+};
 
-use scenario_args::ScenarioArgs;
+use args::ScenarioArgs;
 
 /// flexstage: design, reduce, identify and control a piezo-driven compliant positioning stage.
 #[derive(Debug, Parser)]
 #[command(name = "flexstage", version, about, long_about = None)]
 #[command(
-    after_help = "Start with `flexstage init` to get the paper's scenario as an annotated \
-                        TOML file.\nEach subcommand's --help shows an example."
+    after_help = "Start with `flexstage run` (the whole scheme on the quick preset), or \
+`flexstage init` for a scenario file to edit.
+Every command uses the quick preset unless given a scenario file or --preset paper, and writes \
+into runs/<scenario name>/ unless given --out. Each subcommand's --help shows examples."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -40,15 +37,15 @@ struct Cli {
 enum Command {
     /// Write a built-in scenario as a commented TOML file.
     #[command(after_help = "Examples:
-  flexstage init                          # scenario.toml, paper preset
-  flexstage init my.toml --preset quick   # the coarse, fast preset
+  flexstage init                          # scenario.toml, quick preset
+  flexstage init paper.toml --preset paper
   flexstage init -                        # print to standard output")]
     Init {
         /// Where to write ("-" for standard output).
         #[arg(default_value = "scenario.toml")]
         path: PathBuf,
-        /// Built-in scenario: "paper" (Tables 1, 3, 4, A1) or "quick" (coarse and fast).
-        #[arg(long, default_value = "paper", value_parser = ["paper", "quick"])]
+        /// Built-in scenario: "quick" (coarse and fast) or "paper" (Tables 1, 3, 4, A1).
+        #[arg(long, default_value = DEFAULT_PRESET, value_parser = PRESETS)]
         preset: String,
         /// Overwrite an existing file.
         #[arg(long)]
@@ -57,95 +54,126 @@ enum Command {
     /// Parse and validate a scenario, and print a summary.
     #[command(after_help = "Examples:
   flexstage check scenario.toml
-  flexstage check --preset quick")]
-    Check {
-        #[command(flatten)]
-        scenario: ScenarioArgs,
-    },
+  flexstage check --preset paper")]
+    Check(ScenarioArgs),
     /// Nonlinear statics of a design: output displacements, workspace polygon and area, VTK.
-    #[command(after_help = "Examples:
-  flexstage analyze --preset quick                          # uniform design, p_m workspace samples
-  flexstage analyze --design runs/paper --inputs 30,-30     # a finished design, one input pair (µm)
-  flexstage analyze my.toml --design density.png --out runs/check")]
-    Analyze(analyze::AnalyzeArgs),
-    /// Workspace topology optimization (Section 2.2, Algorithm 1): density, polygons, history.
-    #[command(after_help = "Examples:
-  flexstage design --preset quick                 # about 10 s; results in runs/quick/design
-  flexstage design                                # the paper's 120 x 60, p_m = 40 problem
-  flexstage design --resume runs/paper            # continue after an interruption
-  flexstage design --check-gradients              # adjoint vs central differences")]
-    Design(design::DesignArgs),
-    /// Reduced spring-mass model of a design (Section 3.2.1): transfer matrix, lumped
-    /// parameters for `track --params`, natural frequencies, validity of the tangent model.
-    #[command(after_help = "Examples:
-  flexstage reduce --preset quick                       # the run's design (or uniform)
-  flexstage reduce --design runs/paper --modes 10       # a finished design
-  flexstage reduce --operating-point 30,-30 --scales \"\"  # tangent at a stroke, no validity map")]
-    Reduce(reduce::ReduceArgs),
-    /// Identify model parameters from measured or simulated records.
-    #[command(after_help = "Examples:
-  flexstage identify pea --data pea1.csv
-  flexstage identify stage --simulate")]
-    Identify {
-        #[command(subcommand)]
-        what: identify::IdentifyCommand,
-    },
-    /// The piezo actuator model (Bouc–Wen hysteresis) on its own.
-    #[command(after_help = "Examples:
-  flexstage pea simulate --noise-nm 10 --output pea1.csv")]
-    Pea {
-        #[command(subcommand)]
-        what: pea::PeaCommand,
-    },
-    /// Simulated tracking experiment (Section 4, Figures 9-11): controllers on the digital twin.
     #[command(
-        after_help = "Runs each trajectory of the scenario with each controller variant on the
-simulated stage (Table 4 estimates, Bouc-Wen PEAs, cross terms, sensor noise) and writes
-<run>/track/<trajectory>_<variant>.csv (reference, measured, true, error, voltages, estimates),
-<trajectory>_<variant>_error.svg (Figures 9-10), <trajectory>_2d.svg (Figure 11) and
-metrics.csv; prints the metrics table.
+        after_help = "Analyses the run's finished design (the uniform start design if \
+there is none; --design picks another). Each analysis has its own folder:
+<run>/analyze/workspace/ (the p_m samples), <run>/analyze/inputs_30_-30/ (--inputs 30,-30),
+<run>/analyze/uniform_workspace/ (--design uniform), ...; the same analysis again replaces it.
 
 Examples:
-  flexstage track                                   # all trajectories, all variants
-  flexstage track --trajectory lissajous-3 --variant robust
-  flexstage track --compensation off                # hysteresis compensation switched off
-  flexstage track --params stage.toml --duration 0.5 --out runs/test"
+  flexstage analyze                              # workspace of runs/quick's design
+  flexstage analyze --inputs 30,-30              # one input pair (µm)
+  flexstage analyze --design uniform"
     )]
-    Track(track::TrackArgs),
+    Analyze(stages::AnalyzeArgs),
+    /// Workspace topology optimization (Section 2.2, Algorithm 1): density, polygons, history.
+    #[command(
+        after_help = "Writes <run>/design/. A finished or interrupted design is not \
+replaced unless --force.
+
+Examples:
+  flexstage design                          # quick preset, about 2 s; runs/quick/design
+  flexstage design --preset paper           # the paper's 120 x 60, p_m = 40 problem
+  flexstage design --resume runs/quick      # continue after an interruption
+  flexstage design --check-gradients        # adjoint vs central differences"
+    )]
+    Design(stages::DesignArgs),
+    /// Reduced spring-mass model of a design (Section 3.2.1): transfer matrix, lumped
+    /// parameters, natural frequencies, validity of the tangent model.
+    #[command(
+        after_help = "Writes <run>/reduce/. Its params.toml is the run's simulated stage \
+from then on (identify stage, track).
+
+Examples:
+  flexstage reduce                                     # the run's design
+  flexstage reduce --modes 10 --scales 0.5,1
+  flexstage reduce --operating-point 30,-30 --scales \"\"  # tangent at a stroke, no map"
+    )]
+    Reduce(stages::ReduceArgs),
+    /// Identify model parameters from measured or simulated records.
+    #[command(after_help = "Examples:
+  flexstage identify pea
+  flexstage identify stage")]
+    Identify {
+        #[command(subcommand)]
+        what: stages::IdentifyCommand,
+    },
+    /// The piezo actuator model (Bouc–Wen hysteresis) on its own.
+    Pea {
+        #[command(subcommand)]
+        what: stages::PeaCommand,
+    },
+    /// Simulated tracking experiment (Section 4, Figures 9-11): controllers on the run's stage.
+    #[command(
+        after_help = "Runs each trajectory of the scenario with each controller on the \
+run's simulated stage: the designed mechanism once `flexstage reduce` has run, else the \
+scenario's stage.truth (Table 4), with Bouc-Wen PEAs, cross terms and sensor noise. The \
+controller's model is --params FILE, else the run's identified parameters, else stage.guess; \
+the output says which. Writes <run>/track/ (per run a CSV and an error plot, Figures 9-10; per \
+trajectory the 2D paths, Figure 11; metrics.csv). Other conditions get their own folder: \
+track/compensation-off/, track/params-reduce/, track/duration-0.5s/, ...
+
+Examples:
+  flexstage track                                   # all trajectories, all controllers
+  flexstage track --trajectory lissajous-3 --variant robust
+  flexstage track --compensation off                # into runs/quick/track/compensation-off
+  flexstage track --params runs/quick/reduce/params.toml"
+    )]
+    Track(stages::TrackArgs),
     /// Manufacturing outline of a design (Section 4.1): the ρ = 0.5 iso-contour as DXF and
     /// SVG closed polylines, and a binary STL extruded by the thickness t.
     #[command(
-        after_help = "Writes <run>/export/outline.dxf (R2000 LWPOLYLINE), outline.svg and
-outline.stl.
+        after_help = "Writes <run>/export/outline.dxf (R2000 LWPOLYLINE), outline.svg \
+and outline.stl.
 
 Examples:
-  flexstage export --preset quick                 # the design of runs/quick, millimetres
-  flexstage export --design runs/paper --units m  # metres
-  flexstage export --smoothing 0                  # the raw marching-squares polygon"
+  flexstage export                    # the design of runs/quick, millimetres
+  flexstage export --units m
+  flexstage export --smoothing 0      # the raw marching-squares polygon"
     )]
-    Export(export::ExportArgs),
+    Export(stages::ExportArgs),
     /// The whole scheme on one scenario: design, outline export, reduce, PEA and stage
     /// identification on simulated data, tracking with every controller, and an HTML report.
     #[command(
-        after_help = "Each stage feeds the next through files in the run folder; running
-the same command again resumes after the last finished stage (run_state.json).
-Ends with a summary and the path of <run>/report.html (self-contained, opens offline).
+        after_help = "Each stage feeds the next through files in the run folder; the \
+same command again resumes after the last finished stage (run_state.json). Ends with a \
+summary and the path of <run>/report.html (self-contained, opens offline).
 
 Examples:
-  flexstage run                      # quick preset, runs/quick, well under a minute
+  flexstage run                      # quick preset, runs/quick, a few seconds
   flexstage run --preset paper       # the paper's settings (Tables 1, 3, 4, A1)
   flexstage run my.toml --out runs/mine --restart"
     )]
-    Run(run::RunArgs),
-    /// Rebuild <run>/report.html from a run folder (partial runs show \"not run\").
+    Run(RunArgs),
+    /// Rebuild <run>/report.html from a run folder (stages not run are marked "not run").
     #[command(after_help = "Examples:
-  flexstage report runs/quick")]
-    Report(report::ReportArgs),
+  flexstage report                 # runs/quick
+  flexstage report runs/paper")]
+    Report {
+        /// The run folder.
+        #[arg(default_value_os_t = default_run())]
+        run: PathBuf,
+    },
+}
+
+/// Arguments of `flexstage run`.
+#[derive(Debug, Args)]
+struct RunArgs {
+    #[command(flatten)]
+    scenario: ScenarioArgs,
+    /// Run folder (default runs/<scenario name>).
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Run every stage again, ignoring finished ones.
+    #[arg(long)]
+    restart: bool,
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
-    match run(cli) {
+    match dispatch(Cli::parse().command) {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
@@ -154,60 +182,78 @@ fn main() -> ExitCode {
     }
 }
 
-fn run(cli: Cli) -> anyhow::Result<()> {
-    match cli.command {
+fn dispatch(command: Command) -> anyhow::Result<()> {
+    match command {
         Command::Init {
             path,
             preset,
             force,
         } => init(&path, &preset, force),
-        Command::Check { scenario } => {
-            let s = scenario.load()?;
-            println!("{}: valid", scenario.describe());
+        Command::Check(scenario) => check(&scenario),
+        Command::Analyze(a) => stages::analyze(a),
+        Command::Design(a) => stages::design(a),
+        Command::Reduce(a) => stages::reduce(a),
+        Command::Identify { what } => stages::identify(what),
+        Command::Pea { what } => stages::pea(what),
+        Command::Track(a) => stages::track(a),
+        Command::Export(a) => stages::export(a),
+        Command::Run(a) => run(a),
+        Command::Report { run } => {
+            anyhow::ensure!(run.is_dir(), "{} is not a run folder", run.display());
             println!(
-                "  mesh {} x {} elements over {} x {} mm, p_m = {} samples, up to {} iterations",
-                s.mesh.nl,
-                s.mesh.nw,
-                s.mesh.length * 1e3,
-                s.mesh.width * 1e3,
-                s.optimization.samples,
-                s.optimization.max_iterations
-            );
-            println!(
-                "  {} supports, {} passive regions, {} trajectories",
-                s.supports.len(),
-                s.regions.len(),
-                s.trajectories.len()
+                "report: {}",
+                flexstage_pipeline::write_report(&run)?.display()
             );
             Ok(())
         }
-        Command::Analyze(args) => analyze::run(args),
-        Command::Design(args) => design::run(args),
-        Command::Reduce(args) => reduce::run(args),
-        Command::Identify { what } => identify::run(what),
-        Command::Pea { what } => pea::run(what),
-        Command::Track(args) => track::run(args),
-        Command::Export(args) => export::run(args),
-        Command::Run(args) => run::run(args),
-        Command::Report(args) => report::run(args),
     }
 }
 
-fn init(path: &std::path::Path, preset: &str, force: bool) -> anyhow::Result<()> {
-    let preset = flexstage_scenario::Preset::from_name(preset)
-        .ok_or_else(|| anyhow::anyhow!("unknown preset {preset:?}: expected paper or quick"))?;
-    let text = flexstage_scenario::Scenario::preset(preset).to_commented_toml();
+fn init(path: &std::path::Path, name: &str, force: bool) -> anyhow::Result<()> {
+    let text = flexstage_pipeline::folder::preset(name)?.to_commented_toml();
     if path.as_os_str() == "-" {
         print!("{text}");
         return Ok(());
     }
     if path.exists() && !force {
-        return Err(flexstage_report::ReportError::Exists {
-            path: path.to_path_buf(),
-        }
-        .into());
+        let path = path.to_path_buf();
+        return Err(flexstage_report::ReportError::Exists { path }.into());
     }
     flexstage_report::write_atomic(path, text.as_bytes())?;
     eprintln!("wrote {}", path.display());
+    Ok(())
+}
+
+fn check(scenario: &ScenarioArgs) -> anyhow::Result<()> {
+    let s: Scenario = scenario.load()?;
+    println!("{}: valid", scenario.describe());
+    println!(
+        "  mesh {} x {} elements over {} x {} mm, p_m = {} samples, up to {} iterations",
+        s.mesh.nl,
+        s.mesh.nw,
+        s.mesh.length * 1e3,
+        s.mesh.width * 1e3,
+        s.optimization.samples,
+        s.optimization.max_iterations
+    );
+    println!(
+        "  {} supports, {} passive regions, {} trajectories; run folder {}",
+        s.supports.len(),
+        s.regions.len(),
+        s.trajectories.len(),
+        default_root(&s).display()
+    );
+    Ok(())
+}
+
+fn run(a: RunArgs) -> anyhow::Result<()> {
+    let s = a.scenario.load()?;
+    let root = a.out.unwrap_or_else(|| default_root(&s));
+    let options = RunOptions {
+        restart: a.restart,
+        ..RunOptions::default()
+    };
+    let summary = flexstage_pipeline::run::run(s, &root, &options, &bars::Bars::default())?;
+    print::run(&summary);
     Ok(())
 }

@@ -37,6 +37,7 @@ pub mod error;
 pub mod export;
 mod figures;
 pub mod folder;
+pub mod names;
 pub mod pea;
 mod pea_files;
 pub mod plant;
@@ -66,7 +67,7 @@ pub use progress::{Progress, RunEvent, Silent, StartOver};
 pub use reduce::{ReduceOptions, ReduceSummary, reduce};
 pub use run::{RunOptions, RunSummary, Stage, StageSummary, write_report};
 pub use source::DesignSource;
-pub use stage_id::{StageData, StageIdOptions, StageIdSummary, identify_stage};
+pub use stage_id::{Simulation, StageData, StageIdOptions, StageIdSummary, identify_stage};
 pub use state::RunState;
 pub use track::{ModelSource, TrackOptions, TrackSummary, track};
 

@@ -90,15 +90,6 @@ impl PeaOptions {
     }
 }
 
-/// The name of a drive shape, as `WaveShape::from_name` reads it.
-pub fn shape_name(shape: WaveShape) -> &'static str {
-    match shape {
-        WaveShape::Sine => "sine",
-        WaveShape::Triangle => "triangle",
-        WaveShape::Decaying => "decaying",
-    }
-}
-
 fn check_pea(option: &'static str, pea: u8) -> Result<()> {
     require((1..=2).contains(&pea), option, pea, "1 or 2")
 }
@@ -191,7 +182,7 @@ pub fn write_pea_record(folder: &RunFolder, rec: &PeaRecord) -> Result<(Vec<Path
     let fig = Figure::new(
         format!(
             "pea{n}: simulated record ({} drive)",
-            shape_name(rec.options.shape)
+            crate::names::name(&crate::names::SHAPES, rec.options.shape)
         ),
         "U [V]",
         "x [µm]",

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use flexstage_control::experiment::Setup;
 use flexstage_control::plant::PlantActuator;
-use flexstage_identify::regression::{Scheme, paper_theta};
+use flexstage_identify::regression::paper_theta;
 use flexstage_identify::{Excitation, Identification, IdentifyParams, StageRecord, samples};
 use flexstage_report::layout::stage as files;
 use flexstage_report::plot::{Figure, Series};
@@ -21,22 +21,37 @@ use crate::progress::Progress;
 /// The longest simulated excitation [s] (bounded work: 6·10⁶ samples at 10 kHz).
 pub const MAX_DURATION: f64 = 600.0;
 
+/// The simulated excitation of the stage.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Simulation {
+    /// Excitation length [s], in (0, 600]. Default 4 (5 % on the stiffnesses with the default
+    /// sensor noise; 1 s is enough without noise).
+    pub duration: f64,
+    /// Highest excitation frequency [Hz] ([`Excitation::validate`]). Default 150.
+    pub f_max: f64,
+    /// Linear actuators (x_nom applied directly, no cross terms: the model of Eq. 36) instead
+    /// of the Bouc–Wen PEAs. Default false.
+    pub linear: bool,
+    /// Sensor noise and quantization on. Default true.
+    pub noise: bool,
+}
+
+impl Default for Simulation {
+    fn default() -> Self {
+        Simulation {
+            duration: Excitation::default().duration,
+            f_max: Excitation::default().f_max,
+            linear: false,
+            noise: true,
+        }
+    }
+}
+
 /// Where the record comes from.
 #[derive(Debug, Clone, PartialEq)]
 pub enum StageData {
     /// Excite the run's simulated stage with a multisine and log it.
-    Simulate {
-        /// Excitation length [s], in (0, 600]. Default 4 (5 % on the stiffnesses with the
-        /// default sensor noise; 1 s is enough without noise).
-        duration: f64,
-        /// Highest excitation frequency [Hz] ([`Excitation::validate`]). Default 150.
-        f_max: f64,
-        /// Linear actuators (x_nom applied directly, no cross terms: the model of Eq. 36)
-        /// instead of the Bouc–Wen PEAs. Default false.
-        linear: bool,
-        /// Sensor noise and quantization on. Default true.
-        noise: bool,
-    },
+    Simulate(Simulation),
     /// A CSV with columns t [s], x_nom1, x_nom2 [m] (or U1, U2 [V]), x_in1, x_in2, q1, q2 [m],
     /// uniformly sampled.
     Record(PathBuf),
@@ -44,12 +59,7 @@ pub enum StageData {
 
 impl Default for StageData {
     fn default() -> Self {
-        StageData::Simulate {
-            duration: Excitation::default().duration,
-            f_max: Excitation::default().f_max,
-            linear: false,
-            noise: true,
-        }
+        StageData::Simulate(Simulation::default())
     }
 }
 
@@ -66,7 +76,7 @@ pub struct StageIdOptions {
 impl StageIdOptions {
     /// Checks every option.
     pub fn validate(&self) -> Result<()> {
-        if let StageData::Simulate { duration, .. } = self.data {
+        if let StageData::Simulate(Simulation { duration, .. }) = self.data {
             require(
                 duration.is_finite() && duration > 0.0 && duration <= MAX_DURATION,
                 "identify_stage.duration",
@@ -130,12 +140,12 @@ pub fn identify_stage(
     let plant = Plant::of_run(folder)?;
     let guess = plant.scenario.stage.guess.clone();
     let (record, truth, source) = match &options.data {
-        StageData::Simulate {
+        StageData::Simulate(Simulation {
             duration,
             f_max,
             linear,
             noise,
-        } => {
+        }) => {
             let mut sim = samples::simulation(&plant.scenario, *duration, *linear, *noise);
             sim.excitation.f_max = *f_max;
             if !linear {
@@ -163,7 +173,7 @@ pub fn identify_stage(
     let id = flexstage_identify::identify(&record, &guess, &options.estimator)?;
     let run = folder.dir();
     let replaced = folder.has_results(files::DIR);
-    if matches!(options.data, StageData::Simulate { .. }) {
+    if matches!(options.data, StageData::Simulate(_)) {
         run.write(files::RECORD, record.to_csv().as_bytes())?;
     }
     let params_file = run.write(files::PARAMS, params_toml(&id, &source).as_bytes())?;
@@ -171,7 +181,7 @@ pub fn identify_stage(
     run.write(files::TABLE, table_csv(&rows, &id).as_bytes())?;
     write_convergence(run, &id, truth.as_ref())?;
     Ok(StageIdSummary {
-        plant: matches!(options.data, StageData::Simulate { .. }).then_some(plant.source),
+        plant: matches!(options.data, StageData::Simulate(_)).then_some(plant.source),
         samples: record.len(),
         identification: id,
         rows,
@@ -321,15 +331,6 @@ fn write_convergence(run: &RunDir, id: &Identification, truth: Option<&StagePara
     Ok(())
 }
 
-/// The regressor scheme by name (`numerov` or `central`).
-pub fn scheme(name: &str) -> Option<Scheme> {
-    match name {
-        "numerov" => Some(Scheme::Numerov),
-        "central" => Some(Scheme::Central),
-        _ => None,
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -338,12 +339,10 @@ mod tests {
     fn options_bound_the_excitation() {
         StageIdOptions::default().validate().unwrap();
         let o = StageIdOptions {
-            data: StageData::Simulate {
+            data: StageData::Simulate(Simulation {
                 duration: 1e6,
-                f_max: 150.0,
-                linear: false,
-                noise: true,
-            },
+                ..Simulation::default()
+            }),
             ..StageIdOptions::default()
         };
         let e = o.validate().unwrap_err().to_string();
@@ -363,12 +362,12 @@ mod tests {
         let folder =
             RunFolder::open(crate::folder::preset("quick").unwrap(), &root, false).unwrap();
         let o = StageIdOptions {
-            data: StageData::Simulate {
+            data: StageData::Simulate(Simulation {
                 duration: 1.0,
                 f_max: 150.0,
                 linear: true,
                 noise: false,
-            },
+            }),
             ..StageIdOptions::default()
         };
         let s = identify_stage(&folder, &o, &crate::Silent).unwrap();

@@ -188,15 +188,6 @@ pub struct TrackSummary {
     pub replaced: bool,
 }
 
-/// The name of a compensation mode, as the CLI and `metrics.csv` spell it.
-pub fn compensation_name(c: Compensation) -> &'static str {
-    match c {
-        Compensation::Inverse => "inverse",
-        Compensation::Off => "off",
-        Compensation::Ideal => "ideal",
-    }
-}
-
 /// One planned run.
 struct Job<'a> {
     trajectory: &'a str,
@@ -288,7 +279,7 @@ pub fn track(
         folder.dir(),
         &out,
         &rows,
-        compensation_name(options.compensation),
+        crate::names::compensation(options.compensation),
         &model.label(),
     )?;
     crate::track_files::write_paths(folder.dir(), &out, &jobs_by_trajectory(&jobs), &merged)?;

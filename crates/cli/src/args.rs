@@ -1,0 +1,106 @@
+//! Arguments shared by the subcommands: the scenario, the run folder, and value types whose
+//! defaults come from `flexstage_pipeline`'s options.
+
+use std::fmt;
+use std::path::PathBuf;
+use std::str::FromStr;
+
+use anyhow::Context;
+use clap::Args;
+use flexstage_pipeline::{
+    DEFAULT_PRESET, PRESETS, RunFolder, Scenario, Variant, default_root, load_scenario,
+};
+
+/// Which scenario: a file, or a built-in preset.
+#[derive(Debug, Args)]
+pub struct ScenarioArgs {
+    /// Scenario file (TOML). Without it, the built-in preset is used.
+    pub scenario: Option<PathBuf>,
+    /// Built-in scenario when no file is given: "quick" (coarse, seconds) or "paper"
+    /// (Tables 1, 3, 4, A1).
+    #[arg(long, default_value = DEFAULT_PRESET, value_parser = PRESETS)]
+    pub preset: String,
+}
+
+impl ScenarioArgs {
+    /// Loads and validates the scenario.
+    pub fn load(&self) -> anyhow::Result<Scenario> {
+        load_scenario(self.scenario.as_deref(), &self.preset).context("invalid scenario")
+    }
+
+    /// Where the scenario comes from, for messages.
+    pub fn describe(&self) -> String {
+        match &self.scenario {
+            Some(p) => p.display().to_string(),
+            None => format!("built-in preset {:?}", self.preset),
+        }
+    }
+}
+
+/// The scenario and the run folder its results go to.
+#[derive(Debug, Args)]
+pub struct Target {
+    #[command(flatten)]
+    pub scenario: ScenarioArgs,
+    /// Run folder (default runs/<scenario name>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Replace what this command otherwise refuses to replace (a finished design, a run
+    /// folder recorded with another scenario, an existing --output file).
+    #[arg(long)]
+    pub force: bool,
+}
+
+impl Target {
+    /// Opens the run folder with the scenario (refusing one of another scenario unless
+    /// --force).
+    pub fn open(&self) -> anyhow::Result<RunFolder> {
+        let s = self.scenario.load()?;
+        let root = self.out.clone().unwrap_or_else(|| default_root(&s));
+        Ok(RunFolder::open(s, root, self.force)?)
+    }
+}
+
+/// A pair "X1,X2" of numbers.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Pair(pub [f64; 2]);
+
+impl FromStr for Pair {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let v = List::from_str(s)?.0;
+        match v.as_slice() {
+            [a, b] => Ok(Pair([*a, *b])),
+            _ => Err(format!("expected two numbers \"X1,X2\", got {s:?}")),
+        }
+    }
+}
+
+/// A comma-separated list of numbers (the empty string is the empty list).
+#[derive(Debug, Clone, PartialEq)]
+pub struct List(pub Vec<f64>);
+
+impl FromStr for List {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        if s.trim().is_empty() {
+            return Ok(List(Vec::new()));
+        }
+        s.split(',')
+            .map(|x| x.trim().parse::<f64>().map_err(|e| format!("{x:?}: {e}")))
+            .collect::<Result<_, _>>()
+            .map(List)
+    }
+}
+
+impl fmt::Display for List {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let v: Vec<String> = self.0.iter().map(f64::to_string).collect();
+        write!(f, "{}", v.join(","))
+    }
+}
+
+/// The controllers of `--variant`: one by name, or all.
+pub fn controllers(name: &str) -> Vec<Variant> {
+    Variant::from_name(name).map_or(Variant::ALL.to_vec(), |v| vec![v])
+}

@@ -1,0 +1,103 @@
+//! Reference: issue #17 "A pipeline library, a thin CLI, and a newcomer's path that never
+//! surprises". Goal: the README's subcommand path on a fresh folder keeps every result in the
+//! one run folder of the default scenario (`runs/quick`), analyses the run's design, gives
+//! variants their own folders, refuses to replace a finished design without `--force`, refuses
+//! a parameter file of another run, and prints each error (and each cause) exactly once.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const BIN: &str = env!("CARGO_BIN_EXE_flexstage");
+
+/// Runs flexstage in `dir`; returns (success, stdout, stderr).
+fn flexstage(dir: &Path, args: &[&str]) -> (bool, String, String) {
+    let out = Command::new(BIN)
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .expect("flexstage runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn ok(dir: &Path, args: &[&str]) -> String {
+    let (success, stdout, stderr) = flexstage(dir, args);
+    assert!(success, "flexstage {args:?} failed:\n{stderr}");
+    stdout
+}
+
+fn fails(dir: &Path, args: &[&str]) -> String {
+    let (success, _, stderr) = flexstage(dir, args);
+    assert!(!success, "flexstage {args:?} should fail");
+    assert_eq!(stderr.matches("error:").count(), 1, "one error line:\n{stderr}");
+    stderr
+}
+
+fn fresh(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("flexstage-newcomer-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+#[test]
+fn errors_are_printed_once_with_their_cause_once() {
+    let dir = fresh("errors");
+    let e = fails(&dir, &["check", "missing.toml"]);
+    assert!(e.contains("cannot read scenario missing.toml"), "{e}");
+    // The OS error of the cause, once (it used to be repeated by every layer).
+    assert_eq!(e.matches("(os error 2)").count(), 1, "cause once: {e}");
+    let help = ok(&dir, &["--help"]);
+    assert!(!help.contains("\\\""), "escaped quotes in --help:\n{help}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn the_subcommands_share_one_run_folder_and_never_overwrite_silently() {
+    let dir = fresh("path");
+    let run = dir.join("runs/quick");
+    ok(&dir, &["design", "--max-iterations", "6"]);
+    assert!(run.join("design/design.json").is_file(), "design in runs/quick");
+    // A finished design is not replaced without --force.
+    let e = fails(&dir, &["design", "--max-iterations", "6"]);
+    assert!(e.contains("finished design") && e.contains("--force"), "{e}");
+
+    // analyze: the run's design by default, each analysis in its own folder.
+    let out = ok(&dir, &["analyze"]);
+    assert!(out.contains("the run's design"), "{out}");
+    assert!(run.join("analyze/workspace/deformed.vtu").is_file());
+    let out = ok(&dir, &["analyze", "--inputs", "30,-30"]);
+    assert!(out.contains("the run's design"), "{out}");
+    assert!(run.join("analyze/inputs_30_-30/deformed.vtu").is_file());
+    assert!(run.join("analyze/workspace/workspace.svg").is_file(), "kept");
+
+    // track: compensation off in its own folder, the default folder kept.
+    let quick = ["--trajectory", "circle", "--variant", "robust"];
+    let out = ok(&dir, &[&["track"][..], &quick].concat());
+    assert!(out.contains("stage.truth"), "which plant: {out}");
+    let off = ok(&dir, &[&["track", "--compensation", "off"][..], &quick].concat());
+    assert!(off.contains("compensation: off"), "{off}");
+    let main = std::fs::read_to_string(run.join("track/metrics.csv")).unwrap();
+    let other = std::fs::read_to_string(run.join("track/compensation-off/metrics.csv")).unwrap();
+    assert!(main.contains(",inverse,") && !main.contains(",off,"), "{main}");
+    assert!(other.contains(",off,"), "{other}");
+
+    // A parameter file of another run folder is refused (no silent jump between runs).
+    let foreign = dir.join("elsewhere");
+    std::fs::create_dir_all(foreign.join("reduce")).unwrap();
+    std::fs::write(foreign.join("scenario.toml"), "").unwrap();
+    std::fs::write(foreign.join("reduce/params.toml"), "").unwrap();
+    let e = fails(&dir, &["track", "--params", "elsewhere/reduce/params.toml"]);
+    assert!(e.contains("belongs to the run folder"), "{e}");
+
+    // report: the default run folder.
+    let out = ok(&dir, &["report"]);
+    assert!(out.contains("runs/quick/report.html"), "{out}");
+    // Nothing went anywhere else.
+    let runs: Vec<_> = std::fs::read_dir(dir.join("runs")).unwrap().collect();
+    assert_eq!(runs.len(), 1, "one run folder");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
