@@ -8,7 +8,6 @@ use flexstage_pipeline::names::{self, COMPENSATIONS, SCHEMES, SHAPES, UNITS, nam
 use flexstage_pipeline::{
     AnalyzeOptions, DesignOptions, DesignSource, DesignStart, ExportOptions, PeaIdOptions,
     PeaOptions, ReduceOptions, RunFolder, Simulation, StageData, StageIdOptions, TrackOptions,
-    design::GRADIENT_TOLERANCE,
 };
 
 /// The simulated actuators of `identify stage`: index 1 is the linear one.
@@ -47,7 +46,7 @@ pub fn design(a: DesignArgs) -> anyhow::Result<()> {
         let r = flexstage_pipeline::gradient_check(&a.target.scenario.load()?)?;
         println!("gradient check: {}", r.setup);
         for c in &r.checks {
-            let ok = c.relative_error <= GRADIENT_TOLERANCE;
+            let ok = flexstage_pipeline::design::passed(c);
             println!(
                 "  {:<14} relative error {:.2e} over {} variables (max |grad| {:.3e})  {}",
                 c.name,

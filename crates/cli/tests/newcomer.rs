@@ -32,7 +32,11 @@ fn ok(dir: &Path, args: &[&str]) -> String {
 fn fails(dir: &Path, args: &[&str]) -> String {
     let (success, _, stderr) = flexstage(dir, args);
     assert!(!success, "flexstage {args:?} should fail");
-    assert_eq!(stderr.matches("error:").count(), 1, "one error line:\n{stderr}");
+    assert_eq!(
+        stderr.matches("error:").count(),
+        1,
+        "one error line:\n{stderr}"
+    );
     stderr
 }
 
@@ -60,10 +64,16 @@ fn the_subcommands_share_one_run_folder_and_never_overwrite_silently() {
     let dir = fresh("path");
     let run = dir.join("runs/quick");
     ok(&dir, &["design", "--max-iterations", "6"]);
-    assert!(run.join("design/design.json").is_file(), "design in runs/quick");
+    assert!(
+        run.join("design/design.json").is_file(),
+        "design in runs/quick"
+    );
     // A finished design is not replaced without --force.
     let e = fails(&dir, &["design", "--max-iterations", "6"]);
-    assert!(e.contains("finished design") && e.contains("--force"), "{e}");
+    assert!(
+        e.contains("finished design") && e.contains("--force"),
+        "{e}"
+    );
 
     // analyze: the run's design by default, each analysis in its own folder.
     let out = ok(&dir, &["analyze"]);
@@ -72,17 +82,26 @@ fn the_subcommands_share_one_run_folder_and_never_overwrite_silently() {
     let out = ok(&dir, &["analyze", "--inputs", "30,-30"]);
     assert!(out.contains("the run's design"), "{out}");
     assert!(run.join("analyze/inputs_30_-30/deformed.vtu").is_file());
-    assert!(run.join("analyze/workspace/workspace.svg").is_file(), "kept");
+    assert!(
+        run.join("analyze/workspace/workspace.svg").is_file(),
+        "kept"
+    );
 
     // track: compensation off in its own folder, the default folder kept.
     let quick = ["--trajectory", "circle", "--variant", "robust"];
     let out = ok(&dir, &[&["track"][..], &quick].concat());
     assert!(out.contains("stage.truth"), "which plant: {out}");
-    let off = ok(&dir, &[&["track", "--compensation", "off"][..], &quick].concat());
+    let off = ok(
+        &dir,
+        &[&["track", "--compensation", "off"][..], &quick].concat(),
+    );
     assert!(off.contains("compensation: off"), "{off}");
     let main = std::fs::read_to_string(run.join("track/metrics.csv")).unwrap();
     let other = std::fs::read_to_string(run.join("track/compensation-off/metrics.csv")).unwrap();
-    assert!(main.contains(",inverse,") && !main.contains(",off,"), "{main}");
+    assert!(
+        main.contains(",inverse,") && !main.contains(",off,"),
+        "{main}"
+    );
     assert!(other.contains(",off,"), "{other}");
 
     // A parameter file of another run folder is refused (no silent jump between runs).

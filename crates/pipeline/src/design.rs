@@ -442,6 +442,11 @@ fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
 /// The gradient check's accepted relative error.
 pub const GRADIENT_TOLERANCE: f64 = 1e-5;
 
+/// Whether one response's gradient is within [`GRADIENT_TOLERANCE`] (a NaN error fails).
+pub fn passed(check: &flexstage_topopt::check::GradientCheck) -> bool {
+    check.relative_error.is_finite() && check.relative_error <= GRADIENT_TOLERANCE
+}
+
 /// The adjoint gradients against central differences, on a small problem.
 #[derive(Debug, Clone)]
 pub struct GradientReport {
@@ -454,11 +459,7 @@ pub struct GradientReport {
 impl GradientReport {
     /// `Ok` when every response is within [`GRADIENT_TOLERANCE`].
     pub fn verdict(&self) -> Result<()> {
-        let failed = self
-            .checks
-            .iter()
-            .filter(|c| !(c.relative_error <= GRADIENT_TOLERANCE))
-            .count();
+        let failed = self.checks.iter().filter(|c| !passed(c)).count();
         if failed == 0 {
             Ok(())
         } else {
