@@ -53,6 +53,17 @@ pub fn default_run() -> PathBuf {
     PathBuf::from(RUNS).join(DEFAULT_PRESET)
 }
 
+/// If the folder `root` records a scenario other than `scenario`: its name, or why it cannot
+/// be read.
+pub fn other_scenario(root: &Path, scenario: &Scenario) -> Option<String> {
+    let text = std::fs::read_to_string(root.join(layout::SCENARIO)).ok()?;
+    match Scenario::from_toml_str(&text, layout::SCENARIO) {
+        Ok(r) if r == *scenario => None,
+        Ok(r) => Some(format!("{:?}", r.name)),
+        Err(e) => Some(format!("unreadable: {e}")),
+    }
+}
+
 /// A run folder and the scenario its stages run with.
 #[derive(Debug, Clone)]
 pub struct RunFolder {
@@ -70,22 +81,11 @@ impl RunFolder {
         replace_scenario: bool,
     ) -> Result<Self> {
         let dir = RunDir::create(root.into())?;
-        if !replace_scenario {
-            if let Some(recorded) = dir.read_to_string(layout::SCENARIO) {
-                let same =
-                    Scenario::from_toml_str(&recorded, layout::SCENARIO).map(|r| r == scenario);
-                if !matches!(same, Ok(true)) {
-                    return Err(PipelineError::OtherScenario {
-                        root: dir.root().to_path_buf(),
-                        recorded: match same {
-                            Ok(_) => Scenario::from_toml_str(&recorded, "")
-                                .map(|r| format!("{:?}", r.name))
-                                .unwrap_or_default(),
-                            Err(e) => format!("unreadable: {e}"),
-                        },
-                    });
-                }
-            }
+        if !replace_scenario && let Some(recorded) = other_scenario(dir.root(), &scenario) {
+            return Err(PipelineError::OtherScenario {
+                root: dir.root().to_path_buf(),
+                recorded,
+            });
         }
         dir.write(layout::SCENARIO, scenario.to_commented_toml().as_bytes())?;
         Ok(RunFolder { scenario, dir })

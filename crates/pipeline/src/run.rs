@@ -169,7 +169,7 @@ pub fn run(
         }
         previous => {
             let had_results = previous.is_some_and(|s| !s.finished.is_empty())
-                || RunFolder::open(scenario.clone(), root, false).is_err();
+                || crate::folder::other_scenario(root, &scenario).is_some();
             if had_results {
                 progress.event(&RunEvent::StartingOver(if options.restart {
                     StartOver::Requested

@@ -92,7 +92,11 @@ fn unknown_key_is_rejected_with_its_name() {
     let text = paper_text().replace("[mesh]\n", "[mesh]\nnx = 3\n");
     let e = Scenario::from_toml_str(&text, "test.toml").unwrap_err();
     assert!(matches!(e, ScenarioError::Parse { .. }));
-    let msg = e.to_string();
+    // The parser's diagnosis is the error's source (messages do not repeat their cause).
+    let cause = std::error::Error::source(&e)
+        .expect("the TOML error")
+        .to_string();
+    let msg = format!("{e}: {cause}");
     assert!(msg.contains("nx") && msg.contains("test.toml"), "{msg}");
 }
 

@@ -1,0 +1,112 @@
+//! Reference: issue #17 (the pipeline library keeps `flexstage run` resumable) and issue #10
+//! ("running it again resumes"). Goal: on a short version of the quick scenario, `run`
+//! finishes every stage; a second call with the same scenario skips all seven; a changed
+//! scenario is announced and every stage runs again on it; `restart` does the same on request.
+//! The events come through the `Progress` trait, in order.
+
+use std::sync::Mutex;
+
+use flexstage_pipeline::folder::preset;
+use flexstage_pipeline::{
+    Progress, ReduceOptions, RunEvent, RunOptions, RunState, Scenario, Simulation, Stage,
+    StageData, StageIdOptions, StartOver, TrackOptions, run::run,
+};
+use flexstage_report::RunDir;
+
+/// Records the run events as short strings.
+#[derive(Default)]
+struct Recorder(Mutex<Vec<String>>);
+
+impl Progress for Recorder {
+    fn event(&self, e: &RunEvent) {
+        let line = match e {
+            RunEvent::StartingOver(StartOver::Requested) => "restart".to_string(),
+            RunEvent::StartingOver(StartOver::ScenarioChanged) => "changed".to_string(),
+            RunEvent::Resuming(done) => format!("resuming {}", done.len()),
+            RunEvent::Skipped(s) => format!("skip {}", s.name()),
+            RunEvent::Started(s) => format!("start {}", s.name()),
+            RunEvent::Finished { stage, .. } => format!("done {}", stage.name()),
+        };
+        self.0.lock().unwrap().push(line);
+    }
+}
+
+impl Recorder {
+    fn take(&self) -> Vec<String> {
+        std::mem::take(&mut *self.0.lock().unwrap())
+    }
+}
+
+/// Every stage, made short: 4 design iterations, no modes or validity map, 0.2 s of
+/// identification, 0.05 s of tracking.
+fn short() -> RunOptions {
+    let mut o = RunOptions::default();
+    o.design.max_iterations = Some(4);
+    o.reduce = ReduceOptions {
+        modes: 0,
+        scales: Vec::new(),
+        ..ReduceOptions::default()
+    };
+    o.pea.cycles = 2;
+    o.identify_stage = StageIdOptions {
+        data: StageData::Simulate(Simulation {
+            duration: 0.2,
+            ..Simulation::default()
+        }),
+        ..StageIdOptions::default()
+    };
+    o.track = TrackOptions {
+        duration: Some(0.05),
+        ..TrackOptions::default()
+    };
+    o
+}
+
+fn started(events: &[String]) -> usize {
+    events.iter().filter(|e| e.starts_with("start ")).count()
+}
+
+#[test]
+fn run_resumes_and_starts_over_when_the_scenario_changes() {
+    let root = std::env::temp_dir().join(format!("flexstage-run-resume-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let quick: Scenario = preset("quick").unwrap();
+    let rec = Recorder::default();
+    let options = short();
+
+    let s = run(quick.clone(), &root, &options, &rec).unwrap();
+    let ev = rec.take();
+    assert_eq!(started(&ev), 7, "{ev:?}");
+    assert!(s.report.is_file(), "report written");
+    assert!(!s.headline.is_empty(), "headline numbers");
+    let state = RunState::load(&RunDir::create(&root).unwrap()).unwrap();
+    assert_eq!(state.finished_stages(), Stage::ALL.to_vec());
+
+    run(quick.clone(), &root, &options, &rec).unwrap();
+    let ev = rec.take();
+    assert_eq!(ev[0], "resuming 7");
+    assert_eq!(ev.iter().filter(|e| e.starts_with("skip ")).count(), 7);
+    assert_eq!(started(&ev), 0, "{ev:?}");
+
+    let mut changed = quick.clone();
+    changed.simulation.seed += 1;
+    run(changed.clone(), &root, &options, &rec).unwrap();
+    let ev = rec.take();
+    assert_eq!(ev[0], "changed", "{ev:?}");
+    assert_eq!(started(&ev), 7, "{ev:?}");
+    let recorded = Scenario::load(&root.join("scenario.toml")).unwrap();
+    assert_eq!(
+        recorded, changed,
+        "the folder records the scenario the stages ran with"
+    );
+
+    let restart = RunOptions {
+        restart: true,
+        ..short()
+    };
+    run(changed, &root, &restart, &rec).unwrap();
+    let ev = rec.take();
+    assert_eq!(ev[0], "restart", "{ev:?}");
+    assert_eq!(started(&ev), 7, "{ev:?}");
+    std::fs::remove_dir_all(&root).unwrap();
+}
