@@ -75,6 +75,9 @@ fn the_subcommands_share_one_run_folder_and_never_overwrite_silently() {
         "{e}"
     );
 
+    let e = fails(&dir, &["design", "--resume", "runs/quick"]);
+    assert!(e.contains("nothing to resume"), "{e}");
+
     // analyze: the run's design by default, each analysis in its own folder.
     let out = ok(&dir, &["analyze"]);
     assert!(out.contains("the run's design"), "{out}");

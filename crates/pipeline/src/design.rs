@@ -81,7 +81,8 @@ pub enum DesignStart {
         /// Replace an earlier design.
         force: bool,
     },
-    /// Continue from the run's checkpoint ([`files::CHECKPOINT`]).
+    /// Continue from the run's checkpoint ([`files::CHECKPOINT`]); refused when the design
+    /// is finished.
     Resume,
 }
 
@@ -125,8 +126,16 @@ pub fn design(
 ) -> Result<DesignSummary> {
     options.validate()?;
     let run = folder.dir();
-    if let DesignStart::Fresh { force } = start {
-        prepare_fresh(folder, force)?;
+    match start {
+        DesignStart::Fresh { force } => prepare_fresh(folder, force)?,
+        DesignStart::Resume if run.exists(files::DESIGN) => {
+            return Err(PipelineError::Exists {
+                path: run.path(files::DESIGN),
+                what: "a finished design",
+                hint: "there is nothing to resume (--force starts a new design)".into(),
+            });
+        }
+        DesignStart::Resume => {}
     }
     let mut s = folder.scenario().clone();
     if let Some(n) = options.max_iterations {
