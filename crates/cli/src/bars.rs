@@ -17,10 +17,8 @@ pub struct Bars {
 }
 
 impl Bars {
-    fn with(&self, f: impl FnOnce(&ProgressBar)) {
-        if let Some(b) = self.bar.lock().expect("progress lock").as_ref() {
-            f(b);
-        }
+    fn with(&self, f: impl Fn(&ProgressBar)) {
+        self.bar.lock().expect("progress lock").iter().for_each(f);
     }
 }
 

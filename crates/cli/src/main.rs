@@ -4,6 +4,9 @@
 //! folder of its scenario, `runs/<scenario name>/` unless `--out` says otherwise. Errors are
 //! printed once, each cause once, with a non-zero exit status; never a backtrace.
 
+// Doc comments of the argument structs are clap's --help text ("[Hz]", "<run>"), not rustdoc.
+#![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
+
 mod args;
 mod bars;
 mod print;

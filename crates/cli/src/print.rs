@@ -16,7 +16,7 @@ pub fn wrote(dir: &Path, replaced: bool) {
     eprintln!("wrote {}{}", dir.display(), note.trim_end());
 }
 
-/// A point [m] as "(x, y)" in µm with `digits` decimals.
+/// A point (in m) as "(x, y)" in µm with `digits` decimals.
 fn um(p: [f64; 2], digits: usize) -> String {
     format!("({:.digits$}, {:.digits$})", p[0] * 1e6, p[1] * 1e6)
 }

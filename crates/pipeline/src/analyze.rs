@@ -19,7 +19,7 @@ use crate::figures::{cases_csv, polygon_svg, write_vtu};
 use crate::folder::RunFolder;
 use crate::source::{DesignSource, load_design};
 
-/// The largest |nominal stroke| accepted for an analysis [m] (1 mm, far beyond any PEA).
+/// The largest |nominal stroke| accepted for an analysis \[m\] (1 mm, far beyond any PEA).
 pub const MAX_INPUT: f64 = 1e-3;
 /// The most input pairs of one analysis.
 pub const MAX_CASES: usize = 1000;
@@ -30,7 +30,7 @@ pub struct AnalyzeOptions {
     /// The design; `None`: the run's design if it has a finished one, else the uniform start
     /// design.
     pub design: Option<DesignSource>,
-    /// Nominal strokes (x_nom1, x_nom2) [m], each |x| ≤ [`MAX_INPUT`], at most [`MAX_CASES`];
+    /// Nominal strokes (x_nom1, x_nom2) \[m\], each |x| ≤ [`MAX_INPUT`], at most [`MAX_CASES`];
     /// empty: the p_m samples of the stroke-square perimeter.
     pub inputs: Vec<[f64; 2]>,
 }
@@ -93,14 +93,14 @@ impl AnalyzeOptions {
 pub struct AnalyzeSummary {
     /// The design analysed.
     pub design: DesignSource,
-    /// Nominal strokes and outputs of each load case [m].
+    /// Nominal strokes and outputs of each load case \[m\].
     pub cases: Vec<([f64; 2], [f64; 2])>,
     /// Newton iterations over all cases.
     pub newton_iterations: usize,
-    /// Wall-clock time [s].
+    /// Wall-clock time \[s\].
     pub seconds: f64,
-    /// Workspace analysis: the polygon's area [m²] and the outputs of the corners (+a, +a)
-    /// and (+a, −a) [m].
+    /// Workspace analysis: the polygon's area \[m²\] and the outputs of the corners (+a, +a)
+    /// and (+a, −a) \[m\].
     pub workspace: Option<(f64, [[f64; 2]; 2])>,
     /// The result folder.
     pub dir: PathBuf,

@@ -95,15 +95,15 @@ pub struct DesignSummary {
     pub iterations: usize,
     /// The iteration this session resumed at, if it resumed.
     pub resumed_at: Option<usize>,
-    /// Wall-clock time of this session [s].
+    /// Wall-clock time of this session \[s\].
     pub seconds: f64,
-    /// Mean time per iteration over all sessions [s].
+    /// Mean time per iteration over all sessions \[s\].
     pub seconds_per_iteration: f64,
-    /// Workspace area of the uniform start design, final analysis [m²].
+    /// Workspace area of the uniform start design, final analysis \[m²\].
     pub area_initial: f64,
-    /// Workspace area of the design, final analysis [m²].
+    /// Workspace area of the design, final analysis \[m²\].
     pub area: f64,
-    /// Output of the compressive corner (+a, −a) of the final analysis [m].
+    /// Output of the compressive corner (+a, −a) of the final analysis \[m\].
     pub compressive_corner: [f64; 2],
     /// Fraction of design elements with 0.1 < ρ < 0.9 (of the last iteration).
     pub grey_fraction: f64,

@@ -63,7 +63,7 @@ pub struct ExportSummary {
     pub design: DesignSource,
     /// Number of closed loops (outer boundaries and holes).
     pub loops: usize,
-    /// Area enclosed by the outline [m²].
+    /// Area enclosed by the outline \[m²\].
     pub area: f64,
     /// Files written.
     pub files: Vec<PathBuf>,

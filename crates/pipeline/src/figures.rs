@@ -85,7 +85,7 @@ pub(crate) fn polygon_svg(title: &str, polys: &[(String, &[[f64; 2]])]) -> Resul
 
 const POLYGON_HEADER: [&str; 2] = ["x_out_um", "y_out_um"];
 
-/// An output polygon [m] as CSV in µm.
+/// An output polygon \[m\] as CSV in µm.
 pub(crate) fn polygon_csv(p: &[[f64; 2]]) -> String {
     let x: Vec<f64> = p.iter().map(|q| q[0] * 1e6).collect();
     let y: Vec<f64> = p.iter().map(|q| q[1] * 1e6).collect();

@@ -27,14 +27,14 @@ pub struct PeaOptions {
     /// Drive shape. Default [`WaveShape::Decaying`] (nested minor loops, rich for
     /// identification).
     pub shape: WaveShape,
-    /// Drive frequency [Hz], in (0, 10 000]. Default 1.
+    /// Drive frequency \[Hz\], in (0, 10 000]. Default 1.
     pub frequency: f64,
     /// Number of periods, in [1, 100 000]. Default 10.
     pub cycles: u32,
-    /// Standard deviation of the sensor noise on x [nm], in [0, 10 000]. Default 10 (a
+    /// Standard deviation of the sensor noise on x \[nm\], in [0, 10 000]. Default 10 (a
     /// capacitive sensor; 0 gives a noise-free record).
     pub noise_nm: f64,
-    /// Sample time [s], in (0, 0.01]; `None`: the scenario's `simulation.sample_time`.
+    /// Sample time \[s\], in (0, 0.01]; `None`: the scenario's `simulation.sample_time`.
     pub dt: Option<f64>,
     /// Noise seed; `None`: the scenario's `simulation.seed`.
     pub seed: Option<u64>,
@@ -108,11 +108,11 @@ fn scenario_pea(s: &Scenario, n: u8) -> BoucWenParams {
 pub struct PeaRecord {
     /// The options used.
     pub options: PeaOptions,
-    /// The record t [s], U [V], x [µm].
+    /// The record t \[s\], U \[V\], x \[µm\].
     pub data: PeaData,
-    /// Duration of the record [s].
+    /// Duration of the record \[s\].
     pub duration: f64,
-    /// Voltage range [V].
+    /// Voltage range \[V\].
     pub voltage_range: [f64; 2],
     /// Steady loop of a plain full-range sine at the drive frequency.
     pub steady: LoopMetrics,
@@ -210,7 +210,7 @@ pub struct PeaIdOptions {
     /// Which PEA of the scenario the record belongs to (1 or 2): the results go to
     /// `identify/pea<N>/` and are compared with its parameters. Default 1.
     pub pea: u8,
-    /// The record (CSV with columns t [s], U [V], x [µm]); `None`: the run's simulated
+    /// The record (CSV with columns t \[s\], U \[V\], x \[µm\]); `None`: the run's simulated
     /// record of that PEA ([`layout::pea::record`]).
     pub data: Option<PathBuf>,
     /// Forgetting factor λ_f of both RLS estimators, in (0, 1]. Default 1 (converges to the
@@ -256,7 +256,7 @@ impl PeaIdOptions {
 pub struct PeaEstimate {
     /// The parameters.
     pub params: BoucWenParams,
-    /// RMS of x − x_model along the record [µm].
+    /// RMS of x − x_model along the record \[µm\].
     pub rms_error: f64,
 }
 
@@ -292,7 +292,7 @@ pub struct CompensationSummary {
     pub width_before_pct: f64,
     /// Loop width behind the compensator [% of range].
     pub width_after_pct: f64,
-    /// Largest |x − x_desired| behind the compensator [µm].
+    /// Largest |x − x_desired| behind the compensator \[µm\].
     pub max_error_um: f64,
 }
 

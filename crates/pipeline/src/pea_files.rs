@@ -47,9 +47,9 @@ struct Estimates {
 #[derive(Serialize)]
 struct Method {
     params: BoucWenParams,
-    /// RMS of x − x_model along the record [µm].
+    /// RMS of x − x_model along the record \[µm\].
     rms_error_um: f64,
-    /// Relative difference to the scenario's parameters [%].
+    /// Relative difference to the scenario's parameters \[%\].
     difference_to_scenario_pct: Diff,
 }
 

@@ -54,7 +54,7 @@ pub enum RunEvent<'a> {
     Finished {
         /// The stage.
         stage: Stage,
-        /// Wall-clock time [s].
+        /// Wall-clock time \[s\].
         seconds: f64,
         /// What it produced.
         summary: &'a StageSummary,

@@ -1,7 +1,7 @@
 //! `reduce`: the reduced spring–mass model of a design (Section 3.2.1): transfer matrix α by
 //! static condensation (Eq. 23–24), the lumped stage parameters (Eq. 31–35) that `track` and
 //! the simulated plant read, modal analysis with the Assumption-2 check, and the validity map
-//! of the tangent model against nonlinear FE. The files are written by [`crate::reduce_files`].
+//! of the tangent model against nonlinear FE. The files are written by the private `reduce_files` module.
 
 use std::path::PathBuf;
 
@@ -21,7 +21,7 @@ pub struct ReduceOptions {
     /// The design; `None`: the run's design if it has a finished one, else the uniform start
     /// design.
     pub design: Option<DesignSource>,
-    /// Take the tangent at these nominal strokes [m] (each |x| ≤ 1 mm) instead of the
+    /// Take the tangent at these nominal strokes \[m\] (each |x| ≤ 1 mm) instead of the
     /// undeformed state.
     pub operating_point: Option<[f64; 2]>,
     /// Natural frequencies and mode shapes to compute, in [0, 50] (0 skips the modal

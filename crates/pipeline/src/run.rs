@@ -137,7 +137,7 @@ impl RunOptions {
 pub struct RunSummary {
     /// The run folder.
     pub root: PathBuf,
-    /// Wall-clock time of this call [s].
+    /// Wall-clock time of this call \[s\].
     pub seconds: f64,
     /// The headline numbers (the report's summary table).
     pub headline: Vec<(String, String)>,

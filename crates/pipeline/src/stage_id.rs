@@ -18,16 +18,16 @@ use crate::folder::RunFolder;
 use crate::plant::{Plant, PlantSource};
 use crate::progress::Progress;
 
-/// The longest simulated excitation [s] (bounded work: 6·10⁶ samples at 10 kHz).
+/// The longest simulated excitation \[s\] (bounded work: 6·10⁶ samples at 10 kHz).
 pub const MAX_DURATION: f64 = 600.0;
 
 /// The simulated excitation of the stage.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Simulation {
-    /// Excitation length [s], in (0, 600]. Default 4 (5 % on the stiffnesses with the default
+    /// Excitation length \[s\], in (0, 600]. Default 4 (5 % on the stiffnesses with the default
     /// sensor noise; 1 s is enough without noise).
     pub duration: f64,
-    /// Highest excitation frequency [Hz] ([`Excitation::validate`]). Default 150.
+    /// Highest excitation frequency \[Hz\] ([`Excitation::validate`]). Default 150.
     pub f_max: f64,
     /// Linear actuators (x_nom applied directly, no cross terms: the model of Eq. 36) instead
     /// of the Bouc–Wen PEAs. Default false.
@@ -52,7 +52,7 @@ impl Default for Simulation {
 pub enum StageData {
     /// Excite the run's simulated stage with a multisine and log it.
     Simulate(Simulation),
-    /// A CSV with columns t [s], x_nom1, x_nom2 [m] (or U1, U2 [V]), x_in1, x_in2, q1, q2 [m],
+    /// A CSV with columns t \[s\], x_nom1, x_nom2 \[m\] (or U1, U2 \[V\]), x_in1, x_in2, q1, q2 \[m\],
     /// uniformly sampled.
     Record(PathBuf),
 }
@@ -105,7 +105,7 @@ pub struct ParameterRow {
 }
 
 impl ParameterRow {
-    /// Relative error of the estimate against the truth [%].
+    /// Relative error of the estimate against the truth \[%\].
     pub fn error_pct(&self) -> Option<f64> {
         self.truth.map(|t| 100.0 * (self.estimate - t) / t)
     }

@@ -28,7 +28,7 @@ use crate::plant::{Plant, PlantSource, read_stage_params};
 use crate::progress::Progress;
 use crate::source::plain;
 
-/// The longest tracking run [s] (bounded work: 6·10⁶ samples at 10 kHz).
+/// The longest tracking run \[s\] (bounded work: 6·10⁶ samples at 10 kHz).
 pub const MAX_DURATION: f64 = 600.0;
 
 /// Options of `track`.
@@ -46,7 +46,7 @@ pub struct TrackOptions {
     /// Accept a `params` file from another run folder (refused by default, so that a
     /// parameter file never silently sends results to an unrelated run).
     pub allow_foreign_params: bool,
-    /// Duration of every run [s], in (0, 600]; `None`: each trajectory's own.
+    /// Duration of every run \[s\], in (0, 600]; `None`: each trajectory's own.
     pub duration: Option<f64>,
 }
 
@@ -369,7 +369,7 @@ fn write_results(
     Ok(rows)
 }
 
-/// The true output paths of a record CSV [m] (columns `true1_m`, `true2_m`).
+/// The true output paths of a record CSV \[m\] (columns `true1_m`, `true2_m`).
 pub(crate) fn read_paths(text: &str) -> Option<[Vec<f64>; 2]> {
     let mut c = read_csv_columns(text, &["true1_m", "true2_m"])?;
     let y = c.pop()?;
