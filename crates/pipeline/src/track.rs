@@ -274,7 +274,7 @@ pub fn track(
     progress.finish();
     let out = Tracking::variant(&options.conditions(folder));
     let replaced = folder.has_results(out.dir());
-    let rows = write_results(folder.dir(), &out, &jobs, records, dt)?;
+    let (rows, paths) = write_results(folder.dir(), &out, &jobs, records, dt)?;
     let merged = crate::track_files::write_metrics(
         folder.dir(),
         &out,
@@ -282,7 +282,8 @@ pub fn track(
         crate::names::compensation(options.compensation),
         &model.label(),
     )?;
-    crate::track_files::write_paths(folder.dir(), &out, &jobs_by_trajectory(&jobs), &merged)?;
+    let trajectories = jobs_by_trajectory(&jobs);
+    crate::track_files::write_paths(folder.dir(), &out, &trajectories, &merged, &paths)?;
     Ok(TrackSummary {
         plant: plant.source,
         model,
@@ -329,15 +330,20 @@ fn model_source(folder: &RunFolder, options: &TrackOptions) -> Result<ModelSourc
     })
 }
 
-/// Writes each record's time series and error figure (Figures 9–10); returns the rows.
+/// The decimated true output path [µm] of one (trajectory, controller) pair, for Figure 11.
+pub(crate) type Path2D = ((String, String), Vec<(f64, f64)>);
+
+/// Writes each record's time series and error figure (Figures 9–10); returns the rows and
+/// the decimated output paths.
 fn write_results(
     run: &RunDir,
     out: &Tracking,
     jobs: &[(Job, f64)],
     records: Vec<Result<Record>>,
     dt: f64,
-) -> Result<Vec<TrackRow>> {
+) -> Result<(Vec<TrackRow>, Vec<Path2D>)> {
     let mut rows = Vec::with_capacity(jobs.len());
+    let mut paths = Vec::with_capacity(jobs.len());
     for ((job, usage), rec) in jobs.iter().zip(records) {
         let rec = rec?;
         let (t, v) = (job.trajectory, job.controller.name());
@@ -358,6 +364,8 @@ fn write_results(
         .with(Series::line("q1 (horizontal)", err(0)))
         .with(Series::line("q2 (vertical)", err(1)));
         run.write(out.error_svg(t, v), fig.to_svg()?.as_bytes())?;
+        let key = (t.to_string(), v.to_string());
+        paths.push((key, crate::track_files::decimate(&rec.truth, 1e6)));
         let half = job.reference.half_range(job.duration, dt);
         rows.push(TrackRow {
             trajectory: t.to_string(),
@@ -366,7 +374,7 @@ fn write_results(
             usage: *usage,
         });
     }
-    Ok(rows)
+    Ok((rows, paths))
 }
 
 /// The true output paths of a record CSV \[m\] (columns `true1_m`, `true2_m`).

@@ -7,7 +7,7 @@ use flexstage_report::layout::Tracking;
 use flexstage_report::plot::{Figure, Series};
 
 use crate::error::Result;
-use crate::track::{TrackRow, read_paths};
+use crate::track::{Path2D, TrackRow, read_paths};
 
 /// The header of `metrics.csv`.
 const HEADER: &str = "trajectory,variant,compensation,model,rms1_nm,rms2_nm,rms1_pct,rms2_pct,\
@@ -79,7 +79,7 @@ pub(crate) fn write_metrics(
 }
 
 /// (x, y) points of a pair of series scaled by `scale`, at most about 4000 of them.
-fn decimate(xy: &[Vec<f64>; 2], scale: f64) -> Vec<(f64, f64)> {
+pub(crate) fn decimate(xy: &[Vec<f64>; 2], scale: f64) -> Vec<(f64, f64)> {
     let n = xy[0].len();
     let step = (n / 4000).max(1);
     (0..n)
@@ -89,12 +89,14 @@ fn decimate(xy: &[Vec<f64>; 2], scale: f64) -> Vec<(f64, f64)> {
 }
 
 /// Figure 11 for each trajectory: the reference and the true output of every controller the
-/// folder's metrics list for it (read back from their time series).
+/// folder's metrics list for it (`fresh` for those of this call, else read back from their
+/// time series).
 pub(crate) fn write_paths(
     run: &RunDir,
     out: &Tracking,
     trajectories: &[(&str, Reference, f64)],
     merged: &[(String, String)],
+    fresh: &[Path2D],
 ) -> Result<()> {
     for (name, reference, duration) in trajectories {
         let n = 4000usize;
@@ -114,14 +116,17 @@ pub(crate) fn write_paths(
         )
         .equal_aspect()
         .with(Series::line("reference", decimate(&reference_path, 1e6)));
-        for (_, controller) in merged.iter().filter(|(t, _)| t == name) {
-            let Some(paths) = run
-                .read_to_string(out.record(name, controller))
-                .and_then(|text| read_paths(&text))
-            else {
-                continue;
+        for key in merged.iter().filter(|(t, _)| t == name) {
+            let points = match fresh.iter().find(|(k, _)| k == key) {
+                Some((_, p)) => Some(p.clone()),
+                None => run
+                    .read_to_string(out.record(name, &key.1))
+                    .and_then(|text| read_paths(&text))
+                    .map(|p| decimate(&p, 1e6)),
             };
-            fig = fig.with(Series::line(controller.clone(), decimate(&paths, 1e6)));
+            if let Some(points) = points {
+                fig = fig.with(Series::line(key.1.clone(), points));
+            }
         }
         run.write(out.paths_svg(name), fig.to_svg()?.as_bytes())?;
     }
