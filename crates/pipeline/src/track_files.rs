@@ -132,3 +132,64 @@ pub(crate) fn write_paths(
     }
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flexstage_control::experiment::{Metrics, Variant};
+
+    fn row(controller: Variant, rms: f64) -> TrackRow {
+        TrackRow {
+            trajectory: "circle".into(),
+            controller,
+            metrics: Metrics {
+                rms: [rms, rms],
+                ..Metrics::default()
+            },
+            usage: 0.5,
+        }
+    }
+
+    #[test]
+    fn metrics_keep_other_rows_of_the_same_conditions() {
+        // Goal: re-running one controller updates its row in place and keeps the others;
+        // another controller model replaces the table.
+        let root = std::env::temp_dir().join(format!("flexstage-metrics-{}", std::process::id()));
+        let run = RunDir::create(&root).unwrap();
+        let out = Tracking::main();
+        let all = [row(Variant::Robust, 1e-9), row(Variant::NonRobust, 2e-9)];
+        write_metrics(&run, &out, &all, "inverse", "guess").unwrap();
+        let keys = write_metrics(
+            &run,
+            &out,
+            &[row(Variant::Robust, 3e-9)],
+            "inverse",
+            "guess",
+        )
+        .unwrap();
+        assert_eq!(
+            keys,
+            [
+                ("circle".to_string(), "robust".to_string()),
+                ("circle".to_string(), "nonrobust".to_string())
+            ]
+        );
+        let text = run.read_to_string(out.metrics()).unwrap();
+        let rms = flexstage_report::read_csv_columns(&text, &["rms1_nm"]).unwrap();
+        assert_eq!(
+            rms[0],
+            [3.0, 2.0],
+            "robust updated in place, nonrobust kept"
+        );
+        let keys = write_metrics(
+            &run,
+            &out,
+            &[row(Variant::Robust, 4e-9)],
+            "inverse",
+            "x.toml",
+        )
+        .unwrap();
+        assert_eq!(keys.len(), 1, "another model starts a new table");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+}
