@@ -20,6 +20,7 @@ pub mod image;
 pub mod layout;
 pub mod outline;
 pub mod plot;
+pub mod simplify;
 pub mod vtk;
 
 use std::fs;
