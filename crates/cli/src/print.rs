@@ -27,7 +27,7 @@ pub fn stage(s: &StageSummary) {
         StageSummary::Design(d) => design(d),
         StageSummary::Export(e) => export(e),
         StageSummary::Reduce(r) => reduce(r),
-        StageSummary::Pea(p) => pea_identification(p),
+        StageSummary::Pea(p) => p.iter().for_each(pea_identification),
         StageSummary::IdentifyStage(i) => stage_identification(i),
         StageSummary::Track(t) => track(t),
         StageSummary::Report(p) => eprintln!("wrote {}", p.display()),

@@ -1,7 +1,8 @@
 //! Reference: issue #10 "`flexstage run`, an HTML report, CAD outline export". Goal: the
 //! README's main command runs every stage on the quick preset, writes a self-contained
 //! `report.html` with every section and its figures (no network needed), the outline files,
-//! and running it again resumes (every stage skipped).
+//! and running it again resumes (every stage skipped). Issue #17: both PEAs and Table 4's
+//! gains are in the report.
 
 use std::path::PathBuf;
 use std::process::Command;
@@ -68,11 +69,15 @@ fn run_writes_a_self_contained_report_with_every_section_and_resumes() {
         !html.contains("class=\"notrun\""),
         "a stage is missing in a full run"
     );
-    // Images: embedded only, decodable SVG/PNG, and enough of them: density, workspace,
-    // convergence, validity, mode shapes, hysteresis/A2, Table 4 convergence, tracking.
-    let srcs = attribute_values(&html, "src");
-    assert!(srcs.len() >= 20, "only {} images", srcs.len());
-    for s in &srcs {
+    // Figures: embedded only (SVG inline, PNG as data URIs), and enough of them: density,
+    // workspace, convergence, validity, mode shapes, Table A1/Figure A2 for both PEAs,
+    // Table 4 convergence, tracking (Figures 9-11 and the error view).
+    assert!(
+        html.matches("<figure").count() >= 25,
+        "only {} figures",
+        html.matches("<figure").count()
+    );
+    for s in attribute_values(&html, "src") {
         assert!(
             s.starts_with("data:image/svg+xml;base64,") || s.starts_with("data:image/png;base64,"),
             "not an embedded image: {}",
@@ -83,16 +88,26 @@ fn run_writes_a_self_contained_report_with_every_section_and_resumes() {
         let start = html.find(&format!("<section id=\"{id}\">")).unwrap();
         let end = start + html[start..].find("</section>").unwrap();
         assert!(
-            html[start..end].contains("<img"),
-            "section {id} has no image"
+            html[start..end].contains("<figure"),
+            "section {id} has no figure"
         );
     }
-    // No network: no external URL in any src/href (the nav links are fragments).
+    assert!(html.contains("PEA2 estimate"), "Table A1 shows both PEAs");
+    assert!(
+        html.contains("k_e1") && html.contains("k_ε1"),
+        "Table 4 shows the gains"
+    );
+    // No network: no external URL in any src/href (the nav links are fragments); the one
+    // script (click to enlarge) loads nothing.
     for h in attribute_values(&html, "href") {
         assert!(h.starts_with('#'), "external link {h}");
     }
     assert!(!html.contains("src=\"http"), "external image");
-    assert!(!html.contains("<script"), "no scripts needed");
+    assert_eq!(html.matches("<script").count(), 1, "one inline script");
+    let script = &html[html.find("<script>").unwrap()..html.find("</script>").unwrap()];
+    for net in ["http", "fetch(", "XMLHttpRequest", "import("] {
+        assert!(!script.contains(net), "the script uses the network: {net}");
+    }
 
     // Outline export: DXF with LWPOLYLINE entities, STL with its declared triangle count.
     let dxf = std::fs::read_to_string(dir.join("export/outline.dxf")).unwrap();

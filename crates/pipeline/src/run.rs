@@ -20,9 +20,7 @@ use crate::design::{DesignOptions, DesignStart, DesignSummary, design};
 use crate::error::Result;
 use crate::export::{ExportOptions, ExportSummary, export};
 use crate::folder::RunFolder;
-use crate::pea::{
-    PeaIdOptions, PeaIdSummary, PeaOptions, identify_pea, simulate_pea, write_pea_record,
-};
+use crate::pea::{PeaIdOptions, PeaIdSummary, PeaOptions, simulate_and_identify_each};
 use crate::progress::{Progress, RunEvent, StartOver};
 use crate::reduce::{ReduceOptions, ReduceSummary, reduce};
 use crate::stage_id::{ParameterRow, StageIdOptions, StageIdSummary, identify_stage, read_table};
@@ -38,7 +36,7 @@ pub enum Stage {
     Export,
     /// Reduced model.
     Reduce,
-    /// Simulated PEA record and its Bouc–Wen identification.
+    /// Simulated records of both PEAs and their Bouc–Wen identification.
     Pea,
     /// Stage identification on the designed stage.
     IdentifyStage,
@@ -88,8 +86,8 @@ pub enum StageSummary {
     Export(ExportSummary),
     /// [`Stage::Reduce`].
     Reduce(Box<ReduceSummary>),
-    /// [`Stage::Pea`].
-    Pea(Box<PeaIdSummary>),
+    /// [`Stage::Pea`]: one summary per PEA.
+    Pea(Vec<PeaIdSummary>),
     /// [`Stage::IdentifyStage`].
     IdentifyStage(Box<StageIdSummary>),
     /// [`Stage::Track`].
@@ -109,9 +107,9 @@ pub struct RunOptions {
     pub export: ExportOptions,
     /// The reduced model.
     pub reduce: ReduceOptions,
-    /// The simulated PEA record.
+    /// The simulated PEA records (one per PEA; `pea.pea` is not used).
     pub pea: PeaOptions,
-    /// Its identification (the record and PEA come from `pea`).
+    /// Their identification (`identify_pea.pea` and `.data` are not used).
     pub identify_pea: PeaIdOptions,
     /// The stage identification.
     pub identify_stage: StageIdOptions,
@@ -236,16 +234,11 @@ fn run_stage(
         }
         Stage::Export => StageSummary::Export(export(folder, &options.export)?),
         Stage::Reduce => StageSummary::Reduce(Box::new(reduce(folder, &options.reduce, progress)?)),
-        Stage::Pea => {
-            let record = simulate_pea(folder.scenario(), &options.pea)?;
-            write_pea_record(folder, &record)?;
-            let id = PeaIdOptions {
-                pea: options.pea.pea,
-                data: None,
-                ..options.identify_pea.clone()
-            };
-            StageSummary::Pea(Box::new(identify_pea(folder, &id)?))
-        }
+        Stage::Pea => StageSummary::Pea(simulate_and_identify_each(
+            folder,
+            &options.pea,
+            &options.identify_pea,
+        )?),
         Stage::IdentifyStage => StageSummary::IdentifyStage(Box::new(identify_stage(
             folder,
             &options.identify_stage,

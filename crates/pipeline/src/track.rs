@@ -330,11 +330,11 @@ fn model_source(folder: &RunFolder, options: &TrackOptions) -> Result<ModelSourc
     })
 }
 
-/// The decimated true output path [µm] of one (trajectory, controller) pair, for Figure 11.
+/// The true output path [µm] of one (trajectory, controller) pair, for Figure 11.
 pub(crate) type Path2D = ((String, String), Vec<(f64, f64)>);
 
 /// Writes each record's time series and error figure (Figures 9–10); returns the rows and
-/// the decimated output paths.
+/// the output paths.
 fn write_results(
     run: &RunDir,
     out: &Tracking,
@@ -349,10 +349,10 @@ fn write_results(
         let (t, v) = (job.trajectory, job.controller.name());
         let csv = csv_columns(&Record::header(), &rec.columns());
         run.write(out.record(t, v), csv.as_bytes())?;
+        // Every sample: the figure draws the M4 envelope of each pixel column, which keeps
+        // the peaks that taking every k-th sample would hide.
         let err = |i: usize| -> Vec<(f64, f64)> {
-            let step = (rec.len() / 4000).max(1);
             (0..rec.len())
-                .step_by(step)
                 .map(|k| (rec.t[k], rec.error[i][k] * 1e9))
                 .collect()
         };
@@ -365,7 +365,7 @@ fn write_results(
         .with(Series::line("q2 (vertical)", err(1)));
         run.write(out.error_svg(t, v), fig.to_svg()?.as_bytes())?;
         let key = (t.to_string(), v.to_string());
-        paths.push((key, crate::track_files::decimate(&rec.truth, 1e6)));
+        paths.push((key, crate::track_files::scaled(&rec.truth, 1e6)));
         let half = job.reference.half_range(job.duration, dt);
         rows.push(TrackRow {
             trajectory: t.to_string(),

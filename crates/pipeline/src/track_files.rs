@@ -78,13 +78,13 @@ pub(crate) fn write_metrics(
     Ok(lines.iter().filter_map(|l| key(l)).collect())
 }
 
-/// (x, y) points of a pair of series scaled by `scale`, at most about 4000 of them.
-pub(crate) fn decimate(xy: &[Vec<f64>; 2], scale: f64) -> Vec<(f64, f64)> {
-    let n = xy[0].len();
-    let step = (n / 4000).max(1);
-    (0..n)
-        .step_by(step)
-        .map(|k| (xy[0][k] * scale, xy[1][k] * scale))
+/// (x, y) points of a pair of series scaled by `scale`, every sample (the figure reduces
+/// them for display without dropping extremes, [`flexstage_report::simplify`]).
+pub(crate) fn scaled(xy: &[Vec<f64>; 2], scale: f64) -> Vec<(f64, f64)> {
+    xy[0]
+        .iter()
+        .zip(&xy[1])
+        .map(|(x, y)| (x * scale, y * scale))
         .collect()
 }
 
@@ -115,14 +115,14 @@ pub(crate) fn write_paths(
             "q2 [µm]",
         )
         .equal_aspect()
-        .with(Series::line("reference", decimate(&reference_path, 1e6)));
+        .with(Series::line("reference", scaled(&reference_path, 1e6)));
         for key in merged.iter().filter(|(t, _)| t == name) {
             let points = match fresh.iter().find(|(k, _)| k == key) {
                 Some((_, p)) => Some(p.clone()),
                 None => run
                     .read_to_string(out.record(name, &key.1))
                     .and_then(|text| read_paths(&text))
-                    .map(|p| decimate(&p, 1e6)),
+                    .map(|p| scaled(&p, 1e6)),
             };
             if let Some(points) = points {
                 fig = fig.with(Series::line(key.1.clone(), points));

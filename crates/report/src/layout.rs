@@ -6,7 +6,7 @@
 //! the run folder and use `/` (they are joined with [`crate::RunDir::path`]).
 //!
 //! ```text
-//! scenario.toml  plant.toml  run_state.json  report.html
+//! scenario.toml  plant.toml  run_state.json  report.html  tilted/ (a nested run, Figure 4b)
 //! design/     design.json density.{csv,png} design.vtu cases.csv history.{csv,json}
 //!             workspace_{initial,final}.csv workspace_iterNNNNN.csv workspace{,_history}.svg
 //!             summary.json checkpoint.bin
@@ -31,6 +31,11 @@ pub const PLANT: &str = "plant.toml";
 pub const RUN_STATE: &str = "run_state.json";
 /// The self-contained HTML report.
 pub const REPORT: &str = "report.html";
+/// A run folder nested in this one that holds the tilted-output design of Figure 4 (b): its
+/// own `scenario.toml` (with `output.tilt_deg` ≠ 0) and `design/`, e.g. made by
+/// `flexstage design tilted.toml --out runs/paper/tilted`. The report shows it beside the
+/// run's own design.
+pub const TILTED: &str = "tilted";
 
 /// `design/`: the topology optimization (paper Section 2.2, Algorithm 1).
 pub mod design {

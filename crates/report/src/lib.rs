@@ -15,6 +15,7 @@
 //! [`layout`] names every file of a run folder; the pipeline writes and the HTML report
 //! reads through it.
 
+pub mod cloud;
 pub mod html;
 pub mod image;
 pub mod layout;

@@ -1,0 +1,166 @@
+//! Design sections: Figure 4 (a)/(b) (the optimized densities, normal and tilted output
+//! configuration, and their workspace polygons against the uniform start design), the
+//! workspace evolution during the optimization, and the convergence history.
+
+use super::{Builder, Width, fmt_num, num, toml_num};
+use crate::layout::{self, design as files};
+use crate::plot::{Figure, Legend, Series};
+use crate::read_csv_columns as csv_cols;
+
+/// One design shown in Figure 4: the run's own, or the nested tilted run.
+struct Shown {
+    /// Prefix of its run folder inside the report's (`""` or `"tilted/"`).
+    prefix: String,
+    /// Output tilt θ \[°\] of its scenario.
+    tilt: f64,
+}
+
+impl Shown {
+    fn rel(&self, file: &str) -> String {
+        format!("{}{file}", self.prefix)
+    }
+
+    /// "(a) normal configuration" or "(b) tilted output region, θ = …°".
+    fn label(&self) -> String {
+        if self.tilt == 0.0 {
+            "(a) normal configuration, θ = 0°".into()
+        } else {
+            format!("(b) tilted output region, θ = {}°", fmt_num(self.tilt))
+        }
+    }
+
+    fn short(&self) -> &'static str {
+        if self.tilt == 0.0 { "(a)" } else { "(b)" }
+    }
+}
+
+/// The designs of the run folder: its own and a nested tilted one, normal first.
+fn designs(b: &Builder) -> Vec<Shown> {
+    let mut out = Vec::new();
+    for prefix in [String::new(), format!("{}/", layout::TILTED)] {
+        if !b.exists(&format!("{prefix}{}", files::DENSITY_PNG)) {
+            continue;
+        }
+        let tilt = b
+            .toml(&format!("{prefix}{}", layout::SCENARIO))
+            .and_then(|t| toml_num(&t, &["output", "tilt_deg"]))
+            .unwrap_or(0.0);
+        out.push(Shown { prefix, tilt });
+    }
+    out.sort_by(|a, b| (a.tilt != 0.0).cmp(&(b.tilt != 0.0)));
+    out
+}
+
+/// Section "design": Figure 4.
+pub(super) fn design(b: &mut Builder) {
+    let shown = designs(b);
+    if shown.is_empty() {
+        b.not_run(&format!("{} missing", files::DENSITY_PNG));
+        return;
+    }
+    b.note(
+        "Optimized density (black = solid) as in the paper's Figure 4, and the workspace \
+         polygon of the output point (Eq. 4): uniform start design against the optimum. \
+         A tilted-output design (Figure 4 b) is shown when the run folder holds one in \
+         tilted/ (a run folder of its own, e.g. `flexstage design tilted.toml --out \
+         <run>/tilted`).",
+    );
+    b.grid_open();
+    for d in &shown {
+        let area = b
+            .json(&d.rel(files::SUMMARY))
+            .and_then(|s| num(&s, &["area_final_m2"]))
+            .map(|a| format!(", workspace {} µm²", fmt_num(a * 1e12)))
+            .unwrap_or_default();
+        let caption = format!("{}: density ρ{area}", d.label());
+        b.file_figure(&d.rel(files::DENSITY_PNG), &caption, Width::Half);
+    }
+    b.grid_close();
+    workspace(b, &shown);
+    for d in &shown {
+        let rel = d.rel(files::WORKSPACE_HISTORY_SVG);
+        if b.exists(&rel) {
+            let caption = format!(
+                "{}: workspace polygon during the optimization (Figure 4, evolution)",
+                d.short()
+            );
+            b.img(&rel, &caption);
+        }
+    }
+    b.other_figures(files::DIR, "Further design results");
+}
+
+/// The workspace polygons of every design against the start design, in one figure.
+fn workspace(b: &mut Builder, shown: &[Shown]) {
+    let read = |b: &Builder, rel: &str| -> Option<Vec<(f64, f64)>> {
+        let c = csv_cols(&b.text(rel)?, &["x_out_um", "y_out_um"])?;
+        Some(c[0].iter().copied().zip(c[1].iter().copied()).collect())
+    };
+    let mut fig = Figure::new(
+        "Workspace of the output point (Figure 4)",
+        "x_out [µm]",
+        "y_out [µm]",
+    )
+    .equal_aspect()
+    .with_legend(Legend::UpperRight);
+    if let Some(p) = read(b, &shown[0].rel(files::WORKSPACE_INITIAL)) {
+        fig = fig.with(Series::closed("uniform start design", p).with_color(6));
+    }
+    for (i, d) in shown.iter().enumerate() {
+        if let Some(p) = read(b, &d.rel(files::WORKSPACE_FINAL)) {
+            fig = fig.with(Series::closed(format!("{} optimized", d.short()), p).with_color(i));
+        }
+    }
+    let n = fig.series.len();
+    match fig.to_svg() {
+        Ok(svg) if n > 1 => {
+            for d in shown {
+                b.shown.push(d.rel(files::WORKSPACE_SVG));
+            }
+            let caption = "Workspace polygons: start design against the optimized design(s)";
+            b.svg(&svg, caption, Some(files::WORKSPACE_FINAL), Width::Full);
+        }
+        _ => {
+            if b.exists(files::WORKSPACE_SVG) {
+                b.img(files::WORKSPACE_SVG, "Workspace polygons, initial vs final");
+            }
+        }
+    }
+}
+
+/// Section "convergence": area growth, volume and grey fraction over the iterations.
+pub(super) fn convergence(b: &mut Builder) {
+    let Some(text) = b.text(files::HISTORY_CSV) else {
+        b.not_run(&format!("{} missing", files::HISTORY_CSV));
+        return;
+    };
+    let Some(c) = csv_cols(&text, &["iteration", "area_rel", "volume", "grey"]) else {
+        b.not_run(&format!("{} has no history columns", files::HISTORY_CSV));
+        return;
+    };
+    let pts = |k: usize| -> Vec<(f64, f64)> {
+        c[0].iter()
+            .zip(&c[k])
+            .filter(|(a, b)| a.is_finite() && b.is_finite())
+            .map(|(a, b)| (*a, *b))
+            .collect()
+    };
+    let area = Figure::new(
+        "Workspace area over the design iterations",
+        "iteration",
+        "area / initial area",
+    )
+    .with_legend(Legend::LowerRight)
+    .with(Series::line("area growth", pts(1)));
+    let fractions = Figure::new("Volume and grey fraction", "iteration", "fraction")
+        .with(Series::line("volume", pts(2)))
+        .with(Series::line("grey (0.1 < ρ < 0.9)", pts(3)));
+    for (fig, caption) in [
+        (area, "Area growth"),
+        (fractions, "Volume and grey fraction"),
+    ] {
+        if let Ok(svg) = fig.to_svg() {
+            b.svg(&svg, caption, Some(files::HISTORY_CSV), Width::Full);
+        }
+    }
+}

@@ -1,0 +1,542 @@
+//! The run report: one self-contained `report.html` that puts every result of the paper
+//! (Actuators 2022, 11(7), 179) next to the scenario that produced it: Figure 4 (a)/(b),
+//! workspace polygons, convergence, reduced model and validity map, mode shapes, Table A1
+//! and Figure A2 for both PEAs, Table 4 with the estimator and controller gains, Figures
+//! 9–11, the manufacturing outline.
+//!
+//! The report only *reads* a run folder, so it works on any run, also a partial one: a
+//! missing result is shown as "not run". Figures are embedded: SVG inline (text stays
+//! text, searchable and sharp at any zoom), PNG as `data:` URIs; the file opens offline
+//! and can be mailed around. Each figure fills the page width (at most 960 px) with text
+//! ≥ 11 px at 100 % zoom ([`crate::plot::MIN_TEXT_PX`] at its own size), and a click
+//! enlarges it to the whole window (a few lines of inline script, no network).
+//!
+//! # Adding a section
+//!
+//! A section is one [`Section`] entry in [`SECTIONS`] and one function that renders it
+//! with the [`Builder`] helpers (figures, tables, notes), in a module of its own. Results
+//! a stage writes as SVG or PNG into its folder can be shown without naming each file:
+//! [`Builder::other_figures`] embeds every figure of a folder not shown yet.
+
+mod design;
+mod page;
+mod pea;
+mod reduce;
+mod stage;
+mod tracking;
+
+use std::fmt::Write as _;
+use std::fs;
+use std::path::Path;
+
+use crate::layout::{self, Tracking};
+use crate::read_csv_columns as csv_cols;
+
+pub use reduce::mode_shape_pngs;
+
+/// One section of the report.
+pub struct Section {
+    /// Anchor id (`<section id>`).
+    pub id: &'static str,
+    /// Title (heading and navigation).
+    pub title: &'static str,
+    render: fn(&mut Builder),
+}
+
+/// The sections of the report, in order.
+pub const SECTIONS: &[Section] = &[
+    Section {
+        id: "summary",
+        title: "Summary",
+        render: summary,
+    },
+    Section {
+        id: "design",
+        title: "Design (Figure 4) and workspace",
+        render: design::design,
+    },
+    Section {
+        id: "convergence",
+        title: "Convergence history",
+        render: design::convergence,
+    },
+    Section {
+        id: "reduce",
+        title: "Reduced model and validity map",
+        render: reduce::reduce,
+    },
+    Section {
+        id: "modes",
+        title: "Mode shapes",
+        render: reduce::modes,
+    },
+    Section {
+        id: "pea",
+        title: "PEA hysteresis (Table A1, Figure A2)",
+        render: pea::pea,
+    },
+    Section {
+        id: "stage",
+        title: "Stage identification and gains (Table 4)",
+        render: stage::stage,
+    },
+    Section {
+        id: "tracking",
+        title: "Tracking (Figures 9-11)",
+        render: tracking::tracking,
+    },
+    Section {
+        id: "export",
+        title: "Manufacturing outline",
+        render: export,
+    },
+];
+
+/// Encodes bytes as standard base64 (with padding).
+pub fn base64(bytes: &[u8]) -> String {
+    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            *chunk.get(1).unwrap_or(&0),
+            *chunk.get(2).unwrap_or(&0),
+        ];
+        let n = (b[0] as u32) << 16 | (b[1] as u32) << 8 | b[2] as u32;
+        for k in 0..4 {
+            if k <= chunk.len() {
+                out.push(T[(n >> (18 - 6 * k) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// Escapes text for HTML.
+fn esc(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// How wide a figure is shown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Width {
+    /// The page width, at most 960 px (plots with text).
+    Full,
+    /// Half the page width in a two-column grid (pictures without text: densities, mode
+    /// shapes).
+    Half,
+}
+
+/// Builds the HTML while reading the run folder.
+pub struct Builder<'a> {
+    root: &'a Path,
+    html: String,
+    /// Run folder files already embedded (so [`Builder::other_figures`] skips them).
+    shown: Vec<String>,
+}
+
+impl<'a> Builder<'a> {
+    fn new(root: &'a Path) -> Self {
+        Builder {
+            root,
+            html: String::with_capacity(1 << 20),
+            shown: Vec::new(),
+        }
+    }
+
+    fn read(&self, rel: &str) -> Option<Vec<u8>> {
+        fs::read(self.root.join(rel)).ok()
+    }
+
+    fn text(&self, rel: &str) -> Option<String> {
+        fs::read_to_string(self.root.join(rel)).ok()
+    }
+
+    fn exists(&self, rel: &str) -> bool {
+        self.root.join(rel).is_file()
+    }
+
+    fn json(&self, rel: &str) -> Option<serde_json::Value> {
+        serde_json::from_str(&self.text(rel)?).ok()
+    }
+
+    fn toml(&self, rel: &str) -> Option<toml::Table> {
+        self.text(rel)?.parse().ok()
+    }
+
+    /// Opens a figure: `<figure>` with the width class.
+    fn figure_open(&mut self, width: Width) {
+        let class = match width {
+            Width::Full => "fig",
+            Width::Half => "fig half",
+        };
+        let _ = write!(self.html, "<figure class=\"{class}\" tabindex=\"0\">");
+    }
+
+    fn figure_close(&mut self, caption: &str, source: Option<&str>) {
+        let _ = write!(self.html, "<figcaption>{}", esc(caption));
+        if let Some(src) = source {
+            let _ = write!(self.html, " <span class=\"src\">{}</span>", esc(src));
+        }
+        self.html.push_str("</figcaption></figure>\n");
+    }
+
+    /// Embeds an SVG document: inline when it is a plain drawing, else as an image (an SVG
+    /// in an `<img>` cannot run scripts).
+    fn svg(&mut self, svg: &str, caption: &str, source: Option<&str>, width: Width) {
+        self.figure_open(width);
+        match page::inline_svg(svg) {
+            Some(inline) => self.html.push_str(&inline),
+            None => {
+                let _ = write!(
+                    self.html,
+                    "<img alt=\"{}\" src=\"data:image/svg+xml;base64,{}\"/>",
+                    esc(caption),
+                    base64(svg.as_bytes())
+                );
+            }
+        }
+        self.figure_close(caption, source);
+    }
+
+    /// Embeds a PNG, scaled with sharp pixels.
+    fn png(&mut self, bytes: &[u8], caption: &str, source: Option<&str>, width: Width) {
+        self.figure_open(width);
+        let _ = write!(
+            self.html,
+            "<img class=\"px\" alt=\"{}\" src=\"data:image/png;base64,{}\"/>",
+            esc(caption),
+            base64(bytes)
+        );
+        self.figure_close(caption, source);
+    }
+
+    /// Embeds an SVG or PNG file of the run at full width, or notes it as missing.
+    fn img(&mut self, rel: &str, caption: &str) -> bool {
+        self.file_figure(rel, caption, Width::Full)
+    }
+
+    /// Embeds an SVG or PNG file of the run, or notes it as missing.
+    fn file_figure(&mut self, rel: &str, caption: &str, width: Width) -> bool {
+        let Some(bytes) = self.read(rel) else {
+            self.not_run(&format!("{rel} missing"));
+            return false;
+        };
+        self.shown.push(rel.to_string());
+        if rel.ends_with(".png") {
+            self.png(&bytes, caption, Some(rel), width);
+        } else {
+            self.svg(&String::from_utf8_lossy(&bytes), caption, Some(rel), width);
+        }
+        true
+    }
+
+    /// Embeds every SVG and PNG of the run folder `dir` not shown yet, in name order, under
+    /// a short heading: the place where new results of a stage appear before they get a
+    /// section of their own.
+    pub fn other_figures(&mut self, dir: &str, heading: &str) {
+        let Ok(entries) = fs::read_dir(self.root.join(dir)) else {
+            return;
+        };
+        let mut rels: Vec<String> = entries
+            .filter_map(|e| e.ok())
+            .map(|e| e.file_name().to_string_lossy().into_owned())
+            .filter(|n| n.ends_with(".svg") || n.ends_with(".png"))
+            .map(|n| format!("{dir}/{n}"))
+            .filter(|rel| !self.shown.contains(rel))
+            .collect();
+        if rels.is_empty() {
+            return;
+        }
+        rels.sort();
+        let _ = writeln!(self.html, "<h3>{}</h3>", esc(heading));
+        for rel in rels {
+            let width = if rel.ends_with(".png") {
+                Width::Half
+            } else {
+                Width::Full
+            };
+            self.file_figure(&rel, &rel, width);
+        }
+    }
+
+    fn not_run(&mut self, why: &str) {
+        let _ = writeln!(
+            self.html,
+            "<p class=\"notrun\">not run <span>({})</span></p>",
+            esc(why)
+        );
+    }
+
+    fn note(&mut self, text: &str) {
+        let _ = writeln!(self.html, "<p class=\"note\">{}</p>", esc(text));
+    }
+
+    fn h3(&mut self, text: &str) {
+        let _ = writeln!(self.html, "<h3>{}</h3>", esc(text));
+    }
+
+    fn grid_open(&mut self) {
+        self.html.push_str("<div class=\"grid\">");
+    }
+
+    fn grid_close(&mut self) {
+        self.html.push_str("</div>\n");
+    }
+
+    fn table(&mut self, header: &[String], rows: &[Vec<String>]) {
+        self.html.push_str("<table><thead><tr>");
+        for h in header {
+            let _ = write!(self.html, "<th>{}</th>", esc(h));
+        }
+        self.html.push_str("</tr></thead><tbody>\n");
+        for r in rows {
+            self.html.push_str("<tr>");
+            for c in r {
+                let _ = write!(self.html, "<td>{}</td>", esc(c));
+            }
+            self.html.push_str("</tr>\n");
+        }
+        self.html.push_str("</tbody></table>\n");
+    }
+
+    /// A CSV file of the run as a table, numbers shortened to 4 significant digits.
+    fn csv_table(&mut self, rel: &str, keep: impl Fn(&str) -> bool) -> bool {
+        let Some(text) = self.text(rel) else {
+            self.not_run(&format!("{rel} missing"));
+            return false;
+        };
+        let mut lines = text.lines().filter(|l| !l.trim().is_empty());
+        let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+        let cols: Vec<usize> = (0..header.len()).filter(|&i| keep(header[i])).collect();
+        let rows: Vec<Vec<String>> = lines
+            .map(|l| {
+                let cells: Vec<&str> = l.split(',').collect();
+                cols.iter()
+                    .map(|&i| short(cells.get(i).copied().unwrap_or("")))
+                    .collect()
+            })
+            .collect();
+        let head: Vec<String> = cols.iter().map(|&i| header[i].to_string()).collect();
+        self.table(&head, &rows);
+        true
+    }
+
+    fn kv(&mut self, rows: &[(String, String)]) {
+        self.html.push_str("<table class=\"kv\"><tbody>\n");
+        for (k, v) in rows {
+            let _ = writeln!(self.html, "<tr><th>{}</th><td>{}</td></tr>", esc(k), esc(v));
+        }
+        self.html.push_str("</tbody></table>\n");
+    }
+}
+
+/// Shortens a numeric cell to 4 significant digits; other text is kept.
+fn short(cell: &str) -> String {
+    match cell.parse::<f64>() {
+        Ok(v) if cell.contains('.') || cell.contains('e') || v.abs() >= 1e5 => fmt_num(v),
+        _ => cell.to_string(),
+    }
+}
+
+/// Formats a number with 4 significant digits.
+pub fn fmt_num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let a = v.abs();
+    if (1e-3..1e5).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
+    } else {
+        format!("{v:.3e}")
+    }
+}
+
+/// A number inside a JSON value, by a path of keys and array indices.
+fn num(v: &serde_json::Value, path: &[&str]) -> Option<f64> {
+    let mut cur = v;
+    for p in path {
+        cur = match p.parse::<usize>() {
+            Ok(i) => cur.get(i)?,
+            Err(_) => cur.get(p)?,
+        };
+    }
+    cur.as_f64()
+}
+
+/// A number inside a TOML table, by a path of keys (integers read as numbers).
+fn toml_num(t: &toml::Table, path: &[&str]) -> Option<f64> {
+    let (last, head) = path.split_last()?;
+    let mut cur = t;
+    for p in head {
+        cur = cur.get(*p)?.as_table()?;
+    }
+    let v = cur.get(*last)?;
+    v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
+}
+
+/// Builds `report.html` for the run folder `root` and returns the HTML text (the caller
+/// writes it, e.g. to `root/report.html`).
+pub fn build_report(root: &Path) -> String {
+    let mut b = Builder::new(root);
+    let scenario_name = b
+        .toml(layout::SCENARIO)
+        .and_then(|t| t.get("name").and_then(|n| n.as_str()).map(str::to_string))
+        .unwrap_or_else(|| "unknown".into());
+    page::head(&mut b.html, &scenario_name, &root.display().to_string());
+    for s in SECTIONS {
+        let _ = writeln!(
+            b.html,
+            "<section id=\"{}\">\n<h2>{}</h2>",
+            s.id,
+            esc(s.title)
+        );
+        (s.render)(&mut b);
+        b.html.push_str("</section>\n");
+    }
+    page::tail(&mut b.html);
+    b.html
+}
+
+/// The headline numbers of a run folder: workspace area and growth, α, first natural
+/// frequency, identification error and tracking RMS per controller (what `flexstage run`
+/// prints at the end and the report's summary table shows).
+pub fn summary_rows(root: &Path) -> Vec<(String, String)> {
+    let b = &Builder::new(root);
+    let mut rows: Vec<(String, String)> = Vec::new();
+    if let Some(d) = b.json(layout::design::SUMMARY) {
+        if let (Some(a0), Some(a1), Some(g)) = (
+            num(&d, &["area_initial_m2"]),
+            num(&d, &["area_final_m2"]),
+            num(&d, &["area_growth"]),
+        ) {
+            rows.push((
+                "workspace area (initial → final)".into(),
+                format!(
+                    "{} µm² → {} µm² (×{})",
+                    fmt_num(a0 * 1e12),
+                    fmt_num(a1 * 1e12),
+                    fmt_num(g)
+                ),
+            ));
+        }
+        if let Some(it) = num(&d, &["iterations"]) {
+            rows.push((
+                "design iterations".into(),
+                format!(
+                    "{it} in {} s ({})",
+                    fmt_num(num(&d, &["seconds"]).unwrap_or(f64::NAN)),
+                    d.get("stop").and_then(|s| s.as_str()).unwrap_or("?")
+                ),
+            ));
+        }
+    }
+    if let Some(r) = b.json(layout::reduce::SUMMARY_JSON) {
+        if let Some(a) = num(&r, &["alpha_scalar"]) {
+            rows.push(("α (Eq. 27)".into(), fmt_num(a)));
+        }
+        if let Some(f) = num(&r, &["modal", "frequencies_hz", "0"]) {
+            rows.push((
+                "first natural frequency".into(),
+                format!("{} Hz", fmt_num(f)),
+            ));
+        }
+    }
+    if let Some(text) = b.text(layout::stage::TABLE)
+        && let Some(c) = csv_cols(&text, &["error_pct"])
+    {
+        let worst = c[0]
+            .iter()
+            .filter(|v| v.is_finite())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
+        rows.push((
+            "stage identification, largest error vs truth".into(),
+            format!("{} %", fmt_num(worst)),
+        ));
+    }
+    if let Some(text) = b.text(&Tracking::main().metrics()) {
+        for r in tracking::metric_rows(&text) {
+            rows.push((
+                format!("tracking RMS {} / {}", r.trajectory, r.controller),
+                format!("{} / {} nm", short(&r.rms[0]), short(&r.rms[1])),
+            ));
+        }
+    }
+    rows
+}
+
+fn summary(b: &mut Builder) {
+    let rows = summary_rows(b.root);
+    if rows.is_empty() {
+        b.not_run("no stage results in this folder");
+    } else {
+        b.kv(&rows);
+    }
+}
+
+fn export(b: &mut Builder) {
+    use layout::export::SVG;
+    if b.exists(SVG) {
+        b.note(
+            "ρ = 0.5 iso-contour for wire cutting (Section 4.1): export/outline.dxf, \
+             outline.svg and outline.stl (extruded by t).",
+        );
+        b.img(SVG, "Manufacturing outline");
+    } else {
+        b.not_run(&format!("{SVG} missing"));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn base64_matches_rfc4648_vectors() {
+        // Reference: RFC 4648 section 10 test vectors.
+        for (i, o) in [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ] {
+            assert_eq!(base64(i.as_bytes()), o);
+        }
+    }
+
+    #[test]
+    fn empty_run_folder_gives_every_section_as_not_run() {
+        // Goal: the report works on a partial run: missing results are "not run", not errors.
+        let dir = std::env::temp_dir().join(format!("flexstage-html-empty-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let html = build_report(&dir);
+        for s in SECTIONS {
+            assert!(
+                html.contains(&format!("<section id=\"{}\">", s.id)),
+                "{}",
+                s.id
+            );
+        }
+        assert!(html.matches("class=\"notrun\"").count() >= SECTIONS.len());
+        assert!(!html.contains("<img") && !html.contains("<figure"));
+        fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn numbers_are_shortened_to_four_digits() {
+        assert_eq!(fmt_num(0.0123456), "0.01235");
+        assert_eq!(fmt_num(12345.6), "12346");
+        assert_eq!(fmt_num(1.5e-6), "1.500e-6");
+        assert_eq!(short("42"), "42");
+        assert_eq!(short("robust"), "robust");
+    }
+}
