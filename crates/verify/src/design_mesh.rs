@@ -43,7 +43,6 @@ fn corner_stress(problem: &Problem, rho: &[f64], corners: &[[f64; 2]]) -> Result
         von_mises: 0.0,
         at: [0.0; 2],
         case: [0.0; 2],
-        unaveraged: 0.0,
     };
     let mut vm = vec![0.0; mesh.n_elements()];
     for &x in corners {
@@ -70,7 +69,6 @@ fn corner_stress(problem: &Problem, rho: &[f64], corners: &[[f64; 2]]) -> Result
                     von_mises: v,
                     at: mesh.element_centroid(e),
                     case: x,
-                    unaveraged: v,
                 };
             }
         }

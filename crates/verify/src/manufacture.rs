@@ -107,13 +107,37 @@ fn find(parent: &mut [usize], mut i: usize) -> usize {
     i
 }
 
+/// A narrow place: the narrowest disc of a cluster, and whether the cluster is only the apex
+/// of a sharp corner (see [`narrow_places`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Narrow {
+    width: Width,
+    corner: bool,
+}
+
+/// Distance along loop `k` between two of its samples (the shorter way round).
+fn along(b: &Boundary, i: usize, j: usize) -> f64 {
+    let k = b.loop_of[i];
+    if b.loop_of[j] != k {
+        return f64::INFINITY;
+    }
+    let d = (b.arc[i] - b.arc[j]).abs();
+    d.min(b.length[k] - d)
+}
+
 /// Narrow places of one side: clusters of samples whose spanning disc is narrower than
-/// `limit`, each as (width, centre), narrowest first; and the narrowest spanning disc overall.
+/// `limit`, narrowest first; and the narrowest spanning disc overall.
+///
+/// A cluster is only the **apex of a sharp corner** (a wedge the wire rounds off, or the
+/// tip of a pointed feature) when its narrowest disc touches both flanks of the corner within
+/// `2·limit` of each other along the outline and the whole cluster lies within `4·limit` of
+/// that apex along the outline (wedges sharper than about 14° or longer narrow runs are
+/// slots or ligaments).
 fn narrow_places(
     b: &Boundary,
     balls: &[crate::feature::Ball],
     limit: f64,
-) -> (Vec<Width>, Option<Width>) {
+) -> (Vec<Narrow>, Option<Width>) {
     let n = b.len();
     let narrow: Vec<bool> = balls
         .iter()
@@ -135,22 +159,32 @@ fn narrow_places(
             join(j, &mut parent);
         }
     }
-    let mut best: std::collections::BTreeMap<usize, usize> = Default::default();
+    let mut members: std::collections::BTreeMap<usize, Vec<usize>> = Default::default();
     for i in (0..n).filter(|&i| narrow[i]) {
         let r = find(&mut parent, i);
-        let e = best.entry(r).or_insert(i);
-        if balls[i].radius < balls[*e].radius {
-            *e = i;
-        }
+        members.entry(r).or_default().push(i);
     }
-    let mut places: Vec<Width> = best
+    let mut places: Vec<Narrow> = members
         .values()
-        .map(|&i| Width {
-            width: 2.0 * balls[i].radius,
-            at: balls[i].center,
+        .map(|m| {
+            let &i = m
+                .iter()
+                .min_by(|&&x, &&y| balls[x].radius.total_cmp(&balls[y].radius))
+                .expect("non-empty cluster");
+            let apex = balls[i]
+                .contact
+                .is_some_and(|j| along(b, i, j) <= 2.0 * limit);
+            let corner = apex && m.iter().all(|&x| along(b, i, x) <= 4.0 * limit);
+            Narrow {
+                width: Width {
+                    width: 2.0 * balls[i].radius,
+                    at: balls[i].center,
+                },
+                corner,
+            }
         })
         .collect();
-    places.sort_by(|a, c| a.width.total_cmp(&c.width));
+    places.sort_by(|a, c| a.width.width.total_cmp(&c.width.width));
     let min = balls
         .iter()
         .filter(|s| s.is_across())
@@ -194,8 +228,10 @@ pub fn check(
     }
     let (thin, min_ligament) = narrow_places(b, &balls.solid, limits.min_ligament);
     let (narrow, min_gap) = narrow_places(b, &balls.void, limits.min_gap);
-    let listed = |places: &[Width], kind, what: &str, limit: f64, findings: &mut Vec<Finding>| {
-        for w in places.iter().take(MAX_LISTED) {
+    let listed = |places: &[Narrow], kind, what: &str, limit: f64, findings: &mut Vec<Finding>| {
+        let errors: Vec<&Narrow> = places.iter().filter(|p| !p.corner).collect();
+        for w in errors.iter().take(MAX_LISTED) {
+            let w = w.width;
             findings.push(Finding {
                 kind,
                 severity: Severity::Error,
@@ -210,13 +246,29 @@ pub fn check(
                 ),
             });
         }
-        if places.len() > MAX_LISTED {
+        if errors.len() > MAX_LISTED {
             findings.push(Finding {
                 kind,
                 severity: Severity::Error,
-                at_mm: mm(places[MAX_LISTED].at),
-                size: places[MAX_LISTED].width * 1e3,
-                message: format!("… and {} more {what}s", places.len() - MAX_LISTED),
+                at_mm: mm(errors[MAX_LISTED].width.at),
+                size: errors[MAX_LISTED].width.width * 1e3,
+                message: format!("… and {} more {what}s", errors.len() - MAX_LISTED),
+            });
+        }
+        for w in places.iter().filter(|p| p.corner).take(MAX_LISTED) {
+            let w = w.width;
+            findings.push(Finding {
+                kind,
+                severity: Severity::Note,
+                at_mm: mm(w.at),
+                size: w.width * 1e3,
+                message: format!(
+                    "sharp corner at ({:.2}, {:.2}) mm: narrower than {:.3} mm ({what}) only at \
+                     its apex; the cut rounds it",
+                    w.at[0] * 1e3,
+                    w.at[1] * 1e3,
+                    limit * 1e3
+                ),
             });
         }
     };

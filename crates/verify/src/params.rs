@@ -67,6 +67,9 @@ pub struct VerifyParams {
     pub plate_masses: bool,
     /// Also analyse the design mesh (Q4) for the side-by-side comparison. Default true.
     pub compare_design_mesh: bool,
+    /// Re-check the peak stress on a mesh of half the element size everywhere (the verdict
+    /// uses the larger value). Default true.
+    pub refine_check: bool,
 }
 
 impl Default for VerifyParams {
@@ -89,6 +92,7 @@ impl Default for VerifyParams {
             modes: 3,
             plate_masses: true,
             compare_design_mesh: true,
+            refine_check: true,
         }
     }
 }

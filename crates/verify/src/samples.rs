@@ -81,17 +81,16 @@ pub fn howland_kt_gross(d: f64, w: f64) -> f64 {
 }
 
 /// A hand-made bridge-type amplifier on the scenario's design grid: input blocks at the two
-/// PEA ports, an output block at the top centre, two inclined beams (4.8 % of the domain width
-/// thick... 0.08 w) joining them. Returns the scenario, the densities (fem order, smooth
-/// `tanh` edges of one element) and the exported outline (ρ = 0.5 contour, 10 Taubin
-/// passes, refined to 0.05 mm chords).
+/// PEA ports, an output block at the top centre, two inclined beams (0.08 × the domain width
+/// thick) joining them. Returns the scenario, the densities (fem order, nearly binary like a
+/// projected design: `tanh` edges 0.05 elements wide) and the exported outline (ρ = 0.5
+/// contour, 10 Taubin passes, refined to 0.05 mm chords).
 pub fn bridge_design(preset: Preset) -> (Scenario, Vec<f64>, Vec<Vec<[f64; 2]>>) {
-    let s = Scenario::preset(preset);
-    bridge_on(s)
+    bridge_on(Scenario::preset(preset), 0.05)
 }
 
-/// [`bridge_design`] on a given scenario's grid.
-pub fn bridge_on(s: Scenario) -> (Scenario, Vec<f64>, Vec<Vec<[f64; 2]>>) {
+/// [`bridge_design`] on a given scenario's grid with `tanh` edges `edge` elements wide.
+pub fn bridge_on(s: Scenario, edge: f64) -> (Scenario, Vec<f64>, Vec<Vec<[f64; 2]>>) {
     let (l, w) = (s.mesh.length, s.mesh.width);
     let (nl, nw) = (s.mesh.nl, s.mesh.nw);
     let (dx, dy) = (l / nl as f64, w / nw as f64);
@@ -120,7 +119,7 @@ pub fn bridge_on(s: Scenario) -> (Scenario, Vec<f64>, Vec<Vec<[f64; 2]>>) {
         }
         d
     };
-    let width = 0.5 * dx.max(dy);
+    let width = edge * dx.max(dy);
     let mut rho = vec![0.0; nl * nw];
     for i in 0..nl {
         for j in 0..nw {
