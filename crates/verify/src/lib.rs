@@ -59,4 +59,4 @@ pub use manufacture::{Finding, FindingKind, Manufacturability, Severity};
 pub use params::{
     AL6061_T6_FATIGUE_STRENGTH, AL6061_T6_YIELD_STRENGTH, DEFAULT_SAFETY_FACTOR, VerifyParams,
 };
-pub use verify::{BodyFitted, StressPeak, Transfer, Verdict, Verification, verify};
+pub use verify::{BodyFitted, StressPeak, Transfer, Verdict, Verification, verify, write_files};

@@ -97,9 +97,11 @@ pub fn stiffness(x: &Corners, m: &PlaneStress) -> [[f64; 12]; 12] {
             }
         }
     }
-    for i in 0..12 {
-        for j in 0..i {
-            k[i][j] = k[j][i];
+    // Mirror the upper triangle.
+    for i in 1..12 {
+        let (upper, lower) = k.split_at_mut(i);
+        for (j, row) in upper.iter().enumerate() {
+            lower[0][j] = row[i];
         }
     }
     k
@@ -202,9 +204,9 @@ mod tests {
         // Reference: K is symmetric and K r = 0 for the translations and the rotation.
         let k = stiffness(&X, &MAT);
         let scale = k[0][0].abs();
-        for i in 0..12 {
-            for j in 0..12 {
-                assert!((k[i][j] - k[j][i]).abs() < 1e-12 * scale);
+        for (i, row) in k.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                assert!((v - k[j][i]).abs() < 1e-12 * scale);
             }
         }
         let nodes = node_coords();

@@ -147,13 +147,16 @@ struct PortSpec {
     mass: f64,
 }
 
+/// A support of the design mesh: its node's point [m] and the components it fixes.
+type Support = ([f64; 2], [bool; 2]);
+
 /// Ports and direct supports from the two problems' boundary conditions.
 fn port_specs(
     s: &Scenario,
     stress: &Problem,
     reduced: &Problem,
     plate_masses: bool,
-) -> (Vec<PortSpec>, Vec<([f64; 2], [bool; 2])>) {
+) -> (Vec<PortSpec>, Vec<Support>) {
     let mesh = stress.mesh();
     let springs = |p: &Problem, node: usize| {
         let mut k = [0.0; 2];
@@ -199,7 +202,7 @@ fn port_specs(
             mass,
         });
     }
-    let mut supports: Vec<([f64; 2], [bool; 2])> = Vec::new();
+    let mut supports: Vec<Support> = Vec::new();
     let mut nodes: Vec<usize> = stress.model.bcs().fixed.iter().map(|d| d / 2).collect();
     nodes.sort_unstable();
     nodes.dedup();
@@ -276,9 +279,11 @@ fn prepare(
     let kept = Geometry::new(kept_loops)?;
     let spacing = (0.1 * p.min_ligament.min(p.min_gap)).clamp(p.min_element, 0.1e-3);
     let boundary = Boundary::sample(&kept, spacing);
-    let r_cap = (2.5 * p.start_hole_diameter)
-        .max(sizing.max_element * sizing.elements_across)
-        .max(5e-3);
+    // Discs larger than every width that matters (the limits, the start hole, the element
+    // size times the elements across) need not be measured: they are capped.
+    let r_cap = 0.75
+        * (p.min_ligament.max(p.min_gap).max(p.start_hole_diameter))
+            .max(sizing.max_element * sizing.elements_across);
     let balls = medial_balls(&boundary, r_cap);
     let limits = Limits {
         min_ligament: p.min_ligament,
@@ -614,7 +619,7 @@ fn build_model(
     scenario: &Scenario,
     tri: TriMesh,
     specs: &[PortSpec],
-    supports: &[([f64; 2], [bool; 2])],
+    supports: &[Support],
     port_radius: f64,
     h_design: f64,
 ) -> Result<FeModel> {
@@ -777,4 +782,21 @@ impl Verification {
     pub fn to_vtu(&self) -> String {
         crate::vtu::to_vtu(&self.mesh, &self.displacement, &self.nodal_von_mises)
     }
+}
+
+/// Writes `export/verification.json` (every value, SI units), `export/verification.txt` (the
+/// summary lines) and `export/body_fitted.vtu` (mesh, displacement and von Mises stress at
+/// the worst stroke corner) into the run folder, atomically.
+pub fn write_files(
+    v: &Verification,
+    run: &flexstage_report::RunDir,
+) -> flexstage_report::Result<Vec<std::path::PathBuf>> {
+    let json = serde_json::to_string_pretty(v).expect("the verification serializes");
+    let mut text = v.summary_lines().join("\n");
+    text.push('\n');
+    Ok(vec![
+        run.write("export/verification.json", json.as_bytes())?,
+        run.write("export/verification.txt", text.as_bytes())?,
+        run.write("export/body_fitted.vtu", v.to_vtu().as_bytes())?,
+    ])
 }
