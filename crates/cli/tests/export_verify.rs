@@ -9,7 +9,14 @@ const BIN: &str = env!("CARGO_BIN_EXE_flexstage");
 
 fn export(dir: &Path, extra: &[&str]) -> (Output, String) {
     let out = Command::new(BIN)
-        .args(["export", "--preset", "quick", "--design", "uniform:1", "--out"])
+        .args([
+            "export",
+            "--preset",
+            "quick",
+            "--design",
+            "uniform:1",
+            "--out",
+        ])
         .arg(dir)
         .args(extra)
         .output()
@@ -25,18 +32,38 @@ fn export_prints_the_verdict_and_require_safe_sets_the_exit_status() {
     // A solid block at the quick preset's stroke: tens of MPa at the PEA contact patches.
     let (out, text) = export(&dir, &["--fatigue-strength-mpa", "1", "--require-safe"]);
     assert_eq!(out.status.code(), Some(2), "{text}");
-    assert!(text.lines().last().unwrap().starts_with("verdict: NOT safe"), "{text}");
-    assert!(text.contains("body-fitted mesh:") && text.contains("design mesh ("), "{text}");
-    for f in ["outline.dxf", "verification.json", "verification.txt", "body_fitted.vtu"] {
+    assert!(
+        text.lines()
+            .last()
+            .unwrap()
+            .starts_with("verdict: NOT safe"),
+        "{text}"
+    );
+    assert!(
+        text.contains("body-fitted mesh:") && text.contains("design mesh ("),
+        "{text}"
+    );
+    for f in [
+        "outline.dxf",
+        "verification.json",
+        "verification.txt",
+        "body_fitted.vtu",
+    ] {
         assert!(dir.join("export").join(f).is_file(), "{f} missing");
     }
     // Without --require-safe the verdict is printed and the command succeeds.
     let (out, text) = export(&dir, &["--fatigue-strength-mpa", "1"]);
-    assert!(out.status.success() && text.contains("verdict: NOT safe"), "{text}");
+    assert!(
+        out.status.success() && text.contains("verdict: NOT safe"),
+        "{text}"
+    );
     // A generous allowable: safe, status 0 with --require-safe.
     let (out, text) = export(&dir, &["--fatigue-strength-mpa", "5000", "--require-safe"]);
     assert!(out.status.success(), "{text}");
-    assert!(text.lines().last().unwrap().starts_with("verdict: safe"), "{text}");
+    assert!(
+        text.lines().last().unwrap().starts_with("verdict: safe"),
+        "{text}"
+    );
     // --no-verify: the outline only.
     let (out, text) = export(&dir, &["--no-verify"]);
     assert!(out.status.success() && !text.contains("verdict"), "{text}");
