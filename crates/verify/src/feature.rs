@@ -300,16 +300,7 @@ pub fn medial_balls(b: &Boundary, r_cap: f64) -> Balls {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn circle(c: [f64; 2], r: f64, n: usize, ccw: bool) -> Vec<[f64; 2]> {
-        (0..n)
-            .map(|k| {
-                let t = 2.0 * std::f64::consts::PI * k as f64 / n as f64;
-                let t = if ccw { t } else { -t };
-                [c[0] + r * t.cos(), c[1] + r * t.sin()]
-            })
-            .collect()
-    }
+    use crate::samples::circle;
 
     #[test]
     fn annulus_width_and_hole_diameter_from_the_shrinking_ball() {
