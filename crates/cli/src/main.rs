@@ -127,15 +127,22 @@ Examples:
     )]
     Track(stages::TrackArgs),
     /// Manufacturing outline of a design (Section 4.1): the ρ = 0.5 iso-contour as DXF and
-    /// SVG closed polylines, and a binary STL extruded by the thickness t.
+    /// SVG closed polylines, and a binary STL extruded by the thickness t; then its
+    /// verification: body-fitted stress, α and first frequency beside the design mesh's,
+    /// manufacturability findings and the verdict.
     #[command(
-        after_help = "Writes <run>/export/outline.dxf (R2000 LWPOLYLINE), outline.svg \
-and outline.stl.
+        after_help = "Writes <run>/export/outline.dxf (R2000 LWPOLYLINE), outline.svg, \
+outline.stl, verification.json, verification.txt and body_fitted.vtu (ParaView). The last \
+line printed is the verdict: \"safe\" only when the peak von Mises stress of the body-fitted \
+model (re-checked on a mesh of half the size) is within fatigue strength / safety factor and \
+no manufacturability error remains; otherwise \"NOT safe\" with the reasons. With \
+--require-safe a design that is not verified safe exits with status 2.
 
 Examples:
   flexstage export                    # the design of runs/quick, millimetres
   flexstage export --units m
-  flexstage export --smoothing 0      # the raw marching-squares polygon"
+  flexstage export --smoothing 0      # the raw marching-squares polygon
+  flexstage export --safety-factor 2 --require-safe   # gate a script on the verdict"
     )]
     Export(stages::ExportArgs),
     /// The whole scheme on one scenario: design, outline export, reduce, PEA and stage

@@ -97,6 +97,13 @@ pub fn export(s: &ExportSummary) {
     for f in &s.files {
         wrote(f, s.replaced);
     }
+    if let Some(v) = &s.verification {
+        for line in v.summary_lines() {
+            println!("{line}");
+        }
+    } else if let Some(e) = &s.verify_error {
+        println!("verdict: NOT safe: the outline could not be verified: {e}");
+    }
 }
 
 pub fn reduce(s: &ReduceSummary) {

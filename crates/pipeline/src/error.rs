@@ -123,6 +123,9 @@ pub enum PipelineError {
     /// Density images.
     #[error(transparent)]
     Image(#[from] flexstage_report::image::ImageError),
+    /// Verification of the exported outline.
+    #[error(transparent)]
+    Verify(#[from] flexstage_verify::VerifyError),
 }
 
 /// Result alias of this crate.

@@ -76,3 +76,4 @@ pub use flexstage_control::{actuator::Compensation, experiment::Variant};
 pub use flexstage_piezo::WaveShape;
 pub use flexstage_report::outline::Unit;
 pub use flexstage_scenario::Scenario;
+pub use flexstage_verify::{Verification, VerifyParams};
