@@ -6,7 +6,8 @@
 use std::io::Read;
 
 use flexstage_control::actuator::preload;
-use flexstage_piezo::{BoucWen, BoucWenParams, MICROMETRE, NumericCsv, PiezoError};
+use flexstage_numerics::records::{NumericCsv, RecordError};
+use flexstage_piezo::{BoucWen, BoucWenParams, MICROMETRE};
 
 use crate::error::{IdentifyError, Result, data_error};
 
@@ -120,21 +121,7 @@ impl StageRecord {
     /// ignored, `#` comment lines skipped). Errors name the file, 1-based line and column.
     /// Returns the columns and the input as found; see [`StageRecord::from_input`].
     pub fn read_csv(reader: impl Read, origin: &str) -> Result<(Vec<f64>, Input, Columns)> {
-        // The shared reader reports bad lines as PiezoError::Csv; keep this crate's variant.
-        let csv_err = |e: PiezoError| match e {
-            PiezoError::Csv {
-                origin,
-                line,
-                reason,
-            } => IdentifyError::Csv {
-                origin,
-                line,
-                reason,
-            },
-            other => other.into(),
-        };
-        let table = NumericCsv::open(reader, origin).map_err(csv_err)?;
-        let expected = "t, x_nom1, x_nom2 (or U1, U2), x_in1, x_in2, q1, q2";
+        let table = NumericCsv::open(reader, origin)?;
         let nominal = table.position("x_nom1").is_some() || table.position("x_nom2").is_some();
         let input_names = if nominal || table.position("U1").is_none() {
             ["x_nom1", "x_nom2"]
@@ -150,20 +137,12 @@ impl StageRecord {
             "q1",
             "q2",
         ];
-        let mut cols = [0usize; 7];
-        for (c, name) in cols.iter_mut().zip(names) {
-            *c = table
-                .position(name)
-                .ok_or_else(|| IdentifyError::MissingColumn {
-                    origin: origin.to_string(),
-                    column: name.to_string(),
-                    found: table.found(),
-                    expected: expected.into(),
-                })?;
-        }
+        let cols = table.require(
+            &names,
+            "t, x_nom1, x_nom2 (or U1, U2), x_in1, x_in2, q1, q2",
+        )?;
         let data: [Vec<f64>; 7] = table
-            .read(&cols, &names)
-            .map_err(csv_err)?
+            .read(&cols, &names)?
             .try_into()
             .expect("one vector per requested column");
         let [t, i1, i2, x1, x2, q1, q2] = data;
@@ -216,11 +195,7 @@ impl StageRecord {
         let (t, input, columns) = StageRecord::read_csv(reader, origin)?;
         StageRecord::from_input(t, input, columns, hysteresis, bias_voltage, tolerance).map_err(
             |e| match e {
-                IdentifyError::Data { reason, .. } => IdentifyError::Csv {
-                    origin: origin.to_string(),
-                    line: 0,
-                    reason,
-                },
+                IdentifyError::Data(e) => RecordError::whole(origin, e).into(),
                 other => other,
             },
         )
