@@ -69,7 +69,11 @@ impl<const P: usize> SpdFactor<P> {
         });
         let chol = Cholesky::new(m)?;
         let l = chol.l_dirty();
-        if (0..P).any(|j| !(l[(j, j)] * l[(j, j)] > SPD_MIN_PIVOT)) {
+        let pivot_ok = |j: usize| {
+            let pivot = l[(j, j)] * l[(j, j)];
+            pivot.is_finite() && pivot > SPD_MIN_PIVOT
+        };
+        if !(0..P).all(pivot_ok) {
             return None;
         }
         Some(SpdFactor { chol, scale })

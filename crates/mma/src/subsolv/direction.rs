@@ -40,22 +40,10 @@ impl SubSolver {
                 need_h,
             }),
         };
-        let stride = self.stride;
-        let lslot = self.lslot;
         let f = |(c, ((nd, st), (a, ln))): ChunkItem<'_, &mut [f64]>| {
             dispatch_m!(m, direction_chunk, &ctx, c, nd, st, a, ln)
         };
-        self.nodes
-            .par_chunks(CHUNK * stride)
-            .zip(self.state.par_chunks_mut(CHUNK * NSTATE))
-            .zip(
-                self.acc
-                    .par_chunks_mut(self.slot)
-                    .zip(self.lanes.par_chunks_mut(lslot)),
-            )
-            .enumerate()
-            .with_min_len(min_len(self.parallel))
-            .for_each(f);
+        for_each_chunk!(self, par_chunks_mut, f);
         self.pending = 0.0;
         let r = reduced_len(m);
         self.acc

@@ -88,22 +88,10 @@ impl SubSolver {
             eps_b: 0.1 * eps_a,
             need_h,
         };
-        let stride = self.stride;
-        let lslot = self.lslot;
         let f = |(c, ((nd, st), (a, ln))): ChunkItem<'_, &[f64]>| {
             dispatch_m!(self.m, eval_chunk, &ctx, c, nd, st, a, ln)
         };
-        self.nodes
-            .par_chunks(CHUNK * stride)
-            .zip(self.state.par_chunks(CHUNK * NSTATE))
-            .zip(
-                self.acc
-                    .par_chunks_mut(self.slot)
-                    .zip(self.lanes.par_chunks_mut(lslot)),
-            )
-            .enumerate()
-            .with_min_len(min_len(self.parallel))
-            .for_each(f);
+        for_each_chunk!(self, par_chunks, f);
         self.reduce_eval(eps_a)
     }
 

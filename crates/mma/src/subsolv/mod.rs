@@ -46,14 +46,6 @@
 //! * [`line_search`]: the backtracking line search on the residual norm;
 //! * [`terms`]: the per-variable formulas shared by the passes.
 
-mod direction;
-mod evaluate;
-mod line_search;
-mod newton;
-mod residual;
-mod small;
-mod terms;
-
 use rayon::prelude::*;
 
 use crate::lanes::{CHUNK, V, min_len};
@@ -65,6 +57,35 @@ const MAX_NEWTON_PER_LEVEL: usize = 200;
 
 /// One chunk of a pass: its index, node block, state block (`S`), slot and lane scratch.
 type ChunkItem<'x, S> = (usize, ((&'x [f64], S), (&'x mut [f64], &'x mut [V])));
+
+/// Runs `$kernel` on every chunk of a pass over the [`SubSolver`] `$s`, with rayon when
+/// `$s.parallel`; `$state` is `par_chunks` (the pass reads the state) or `par_chunks_mut`
+/// (it writes it). Each chunk gets a [`ChunkItem`] and writes only its own slot, which the
+/// caller reduces in order afterwards. A macro rather than a method, so that the kernel's
+/// context can borrow the other fields of `$s` (λ, Δλ).
+macro_rules! for_each_chunk {
+    ($s:expr, $state:ident, $kernel:expr) => {
+        $s.nodes
+            .par_chunks(CHUNK * $s.stride)
+            .zip($s.state.$state(CHUNK * NSTATE))
+            .zip(
+                $s.acc
+                    .par_chunks_mut($s.slot)
+                    .zip($s.lanes.par_chunks_mut($s.lslot)),
+            )
+            .enumerate()
+            .with_min_len(min_len($s.parallel))
+            .for_each($kernel)
+    };
+}
+
+mod direction;
+mod evaluate;
+mod line_search;
+mod newton;
+mod residual;
+mod small;
+mod terms;
 
 /// Result of one subproblem solve.
 #[derive(Clone, Copy, Debug)]
