@@ -6,11 +6,11 @@
 use multiversion::multiversion;
 use rayon::prelude::*;
 
-use super::evaluate::{EvalAcc, EvalCtx, StaticAcc, eval_block, plam_qlam, point, reduced_len};
-use super::terms::{step, terms};
+use super::evaluate::{EvalAcc, EvalCtx, StaticAcc, block_terms, eval_block, point, reduced_len};
+use super::terms::step;
 use super::{ChunkItem, SubSolver};
 use crate::lanes::{CHUNK, DYN, LANES, Nodes, Real, V, chunk_len, min_len};
-use crate::subproblem::{ALFA, BETA, DETA, DX, DXSI, ETA, LOW, NSTATE, PQ, UPP, X, XSI};
+use crate::subproblem::{DETA, DX, DXSI, ETA, NSTATE, PQ, X, XSI};
 
 impl SubSolver {
     /// Direction pass of the (m+1)×(m+1) branch: moves the base point to the current point,
@@ -80,14 +80,7 @@ fn direction_block<const MASK: bool>(
     acc: &mut EvalAcc<'_>,
 ) {
     let (x, xsi, eta) = point(st, o, ctx.steg_p);
-    let (low, upp, alfa, beta) = (
-        nd.get(LOW, o),
-        nd.get(UPP, o),
-        nd.get(ALFA, o),
-        nd.get(BETA, o),
-    );
-    let (plam, qlam) = plam_qlam(nd, m, ctx.lam, o);
-    let t = terms(low, upp, alfa, beta, plam, qlam, x, xsi, eta);
+    let t = block_terms(nd, m, ctx.lam, o, (x, xsi, eta));
     let mut rhs = t.dpsidx + V::splat(ctx.eps) * t.e;
     let dlam = &ctx.dlam[..m];
     for i in 0..m {

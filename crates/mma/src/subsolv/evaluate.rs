@@ -6,7 +6,7 @@
 use multiversion::multiversion;
 use rayon::prelude::*;
 
-use super::terms::terms;
+use super::terms::{Terms, terms};
 use super::{ChunkItem, SubSolver};
 use crate::lanes::{CHUNK, DYN, LANES, MAX_STATIC_M, Nodes, Real, V, chunk_len, min_len};
 use crate::subproblem::{ALFA, BETA, DETA, DX, DXSI, ETA, LOW, NSTATE, P0, PQ, Q0, UPP, X, XSI};
@@ -232,10 +232,29 @@ impl<'s> EvalAcc<'s> {
     }
 }
 
+/// [`Terms`] of a block at `(x, ξ, η)` with the multipliers `lam`.
+#[inline(always)]
+pub(super) fn block_terms(
+    nd: Nodes<'_>,
+    m: usize,
+    lam: &[f64],
+    o: usize,
+    (x, xsi, eta): (V, V, V),
+) -> Terms<V> {
+    let (low, upp, alfa, beta) = (
+        nd.get(LOW, o),
+        nd.get(UPP, o),
+        nd.get(ALFA, o),
+        nd.get(BETA, o),
+    );
+    let (plam, qlam) = plam_qlam(nd, m, lam, o);
+    terms(low, upp, alfa, beta, plam, qlam, x, xsi, eta)
+}
+
 /// `p₀ + λᵀP` and `q₀ + λᵀQ` of a block.
 #[inline(always)]
 #[allow(clippy::needless_range_loop)]
-pub(super) fn plam_qlam(nd: Nodes<'_>, m: usize, lam: &[f64], o: usize) -> (V, V) {
+fn plam_qlam(nd: Nodes<'_>, m: usize, lam: &[f64], o: usize) -> (V, V) {
     let mut plam = nd.get(P0, o);
     let mut qlam = nd.get(Q0, o);
     let lam = &lam[..m];
@@ -259,14 +278,8 @@ pub(super) fn eval_block<const MASK: bool>(
     (x, xsi, eta): (V, V, V),
     acc: &mut EvalAcc<'_>,
 ) {
-    let (low, upp, alfa, beta) = (
-        nd.get(LOW, o),
-        nd.get(UPP, o),
-        nd.get(ALFA, o),
-        nd.get(BETA, o),
-    );
-    let (plam, qlam) = plam_qlam(nd, m, ctx.lam, o);
-    let t = terms(low, upp, alfa, beta, plam, qlam, x, xsi, eta);
+    let t = block_terms(nd, m, ctx.lam, o, (x, xsi, eta));
+    let (alfa, beta) = (nd.get(ALFA, o), nd.get(BETA, o));
     let rex = (t.dpsidx - xsi + eta).keep::<MASK>(valid, 0.0);
     let cx = xsi * (x - alfa);
     let ce = eta * (beta - x);
