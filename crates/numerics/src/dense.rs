@@ -8,19 +8,21 @@
 //! * [`SpdFactor`]: the Cholesky factor of a symmetric positive definite matrix after
 //!   symmetric diagonal equilibration, with a rank test relative to the diagonal, for
 //!   normal equations whose columns differ in scale by many orders of magnitude (the summed
-//!   Bouc–Wen regression of `flexstage-piezo`); [`solve_spd`] for one right-hand side.
+//!   Bouc–Wen regression of `flexstage-piezo`); [`solve_spd`] for one right-hand side. It is
+//!   written out on arrays, not on nalgebra: it sits in a 10 kHz loop where that measured
+//!   faster (its docs).
 //! * [`symmetric_eigen`]: eigenvalues and eigenvectors of a small symmetric matrix (the
 //!   Lanczos tridiagonal matrix of `flexstage-reduce`'s modal analysis);
 //! * [`dot`]: the dot product of two slices (available without the `dense` feature).
 //!
 //! All work on `[f64; P]` arrays or row-major slices at the boundary, so that callers keep
-//! their plain-array data layout, and nothing allocates for fixed `P`.
+//! their plain-array data layout; nothing but [`symmetric_eigen`] allocates.
 
 #[cfg(feature = "dense")]
 pub use nalgebra;
 
 #[cfg(feature = "dense")]
-use nalgebra::{Cholesky, Const, DMatrix, SMatrix, SVector};
+use nalgebra::DMatrix;
 
 /// `Σ aᵢ bᵢ` over the common length, summed in order.
 #[inline]
@@ -28,67 +30,93 @@ pub fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-#[cfg(feature = "dense")]
 /// The equilibrated Cholesky factor of a symmetric positive definite matrix A:
 /// D A D = L Lᵀ with D = diag(A)^{-1/2}, so A⁻¹ b = D (L Lᵀ)⁻¹ D b. Columns of very
 /// different scale then do not matter. No allocation.
-#[derive(Debug, Clone)]
+///
+/// Written out on `[f64; P]` arrays rather than on nalgebra's `Cholesky`: it runs twice per
+/// sample in the parallel RLS of `flexstage-piezo` (a 5 × 5 factor and two solves), where the
+/// unrolled loops measured 140 ns against 190 ns for nalgebra's (fastest of 3 divan runs;
+/// see `docs/DECISIONS.md`, Numerics).
+#[derive(Debug, Clone, Copy)]
 pub struct SpdFactor<const P: usize> {
-    chol: Cholesky<f64, Const<P>>,
+    /// Lower Cholesky factor of D A D.
+    l: [[f64; P]; P],
     /// D = diag(A)^{-1/2}.
-    scale: SVector<f64, P>,
+    s: [f64; P],
 }
 
-#[cfg(feature = "dense")]
 /// Smallest accepted pivot of the equilibrated factorization (unit diagonal): a smaller one
 /// means that a column is, to this relative precision, a combination of the others.
 pub const SPD_MIN_PIVOT: f64 = 1e-13;
 
-#[cfg(feature = "dense")]
 impl<const P: usize> SpdFactor<P> {
     /// Factors A (only its lower triangle is read); `None` when A is not numerically positive
     /// definite: a non-positive or non-finite diagonal, or an equilibrated pivot below
     /// [`SPD_MIN_PIVOT`].
     #[inline]
     pub fn new(a: &[[f64; P]; P]) -> Option<Self> {
-        let mut scale = SVector::<f64, P>::zeros();
+        let mut s = [0.0; P];
         for i in 0..P {
-            let d = a[i][i];
-            if d.is_nan() || d <= 0.0 || !d.is_finite() {
+            if a[i][i].is_nan() || a[i][i] <= 0.0 || !a[i][i].is_finite() {
                 return None;
             }
-            scale[i] = d.sqrt().recip();
+            s[i] = a[i][i].sqrt().recip();
         }
-        // Unit diagonal exactly; the off-diagonal entries scaled.
-        let m = SMatrix::<f64, P, P>::from_fn(|i, j| {
-            if i == j {
-                1.0
-            } else {
-                a[i][j] * scale[i] * scale[j]
+        let mut l = [[0.0; P]; P];
+        for j in 0..P {
+            let mut d: f64 = 1.0;
+            for k in 0..j {
+                d -= l[j][k] * l[j][k];
             }
-        });
-        let chol = Cholesky::new(m)?;
-        let l = chol.l_dirty();
-        let pivot_ok = |j: usize| {
-            let pivot = l[(j, j)] * l[(j, j)];
-            pivot.is_finite() && pivot > SPD_MIN_PIVOT
-        };
-        if !(0..P).all(pivot_ok) {
-            return None;
+            if d.is_nan() || d <= SPD_MIN_PIVOT {
+                return None;
+            }
+            let d = d.sqrt();
+            l[j][j] = d;
+            let inv = d.recip();
+            for i in j + 1..P {
+                let mut v = a[i][j] * s[i] * s[j];
+                for k in 0..j {
+                    v -= l[i][k] * l[j][k];
+                }
+                l[i][j] = v * inv;
+            }
         }
-        Some(SpdFactor { chol, scale })
+        Some(SpdFactor { l, s })
     }
 
     /// Solves A x = b.
     #[inline]
     pub fn solve(&self, b: &[f64; P]) -> [f64; P] {
-        let mut x = SVector::<f64, P>::from_fn(|i, _| b[i] * self.scale[i]);
-        self.chol.solve_mut(&mut x);
-        std::array::from_fn(|i| x[i] * self.scale[i])
+        let sb: [f64; P] = std::array::from_fn(|i| b[i] * self.s[i]);
+        let z = cholesky_solve(&self.l, &sb);
+        std::array::from_fn(|i| z[i] * self.s[i])
     }
 }
 
-#[cfg(feature = "dense")]
+/// Solves L Lᵀ x = b with L lower triangular (forward, then back substitution).
+#[inline]
+fn cholesky_solve<const P: usize>(l: &[[f64; P]; P], b: &[f64; P]) -> [f64; P] {
+    let mut y = [0.0; P];
+    for i in 0..P {
+        let mut v = b[i];
+        for k in 0..i {
+            v -= l[i][k] * y[k];
+        }
+        y[i] = v / l[i][i];
+    }
+    let mut x = [0.0; P];
+    for i in (0..P).rev() {
+        let mut v = y[i];
+        for k in i + 1..P {
+            v -= l[k][i] * x[k];
+        }
+        x[i] = v / l[i][i];
+    }
+    x
+}
+
 /// Solves the symmetric positive definite system A x = b through [`SpdFactor`]; `None` when
 /// A is not numerically positive definite.
 pub fn solve_spd<const P: usize>(a: &[[f64; P]; P], b: &[f64; P]) -> Option<[f64; P]> {
@@ -126,7 +154,7 @@ pub fn symmetric_eigen(a: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
     (eig.eigenvalues.iter().copied().collect(), v)
 }
 
-#[cfg(all(test, feature = "dense"))]
+#[cfg(test)]
 mod tests {
     use super::*;
 
@@ -160,6 +188,7 @@ mod tests {
     /// Reference: the path-graph Laplacian tridiag(−1, 2, −1) of order n, whose eigenvalues are
     /// 2 − 2 cos(kπ/(n+1)), k = 1..n, with eigenvectors sin(jkπ/(n+1)). Goal: eigenvalues to
     /// 1e-13 and A v = λ v for every returned pair.
+    #[cfg(feature = "dense")]
     #[test]
     fn symmetric_eigen_matches_the_path_laplacian() {
         let n = 12;

@@ -14,9 +14,10 @@
 //! * [`rls`] (feature `dense`): recursive least squares with forgetting in square-root form,
 //!   its information form and the batch least squares they reproduce, generic over the
 //!   number of parameters.
-//! * [`dense`]: small dense linear algebra (feature `dense`). The workspace's one library for
-//!   it is nalgebra (re-exported as [`dense::nalgebra`]); this module adds the equilibrated
-//!   SPD solve and the symmetric eigen-decomposition the stage crates need.
+//! * [`dense`]: small dense linear algebra. The workspace's one library for it is nalgebra
+//!   (feature `dense`, re-exported as [`dense::nalgebra`]); this module adds the equilibrated
+//!   SPD solve of the 10 kHz loops (written out on arrays, measured faster there) and the
+//!   symmetric eigen-decomposition the stage crates need.
 //! * [`samples`]: problems with known answers.
 //!
 //! Both features (`noise`: ChaCha8; `dense`: nalgebra) are on by default; a crate that only
