@@ -6,10 +6,11 @@
 use std::io::Read;
 
 use flexstage_control::actuator::preload;
+use flexstage_numerics::DataError;
 use flexstage_numerics::records::{NumericCsv, RecordError};
 use flexstage_piezo::{BoucWen, BoucWenParams, MICROMETRE};
 
-use crate::error::{IdentifyError, Result, data_error};
+use crate::error::{IdentifyError, Result};
 
 /// Fewest samples [`StageRecord::new`] accepts: two for the two-step delays of Eq. (54)
 /// plus enough equations for the 16 regression parameters several times over.
@@ -70,26 +71,29 @@ impl StageRecord {
         }
         for (name, c) in &cols {
             if c.len() != n {
-                return Err(data_error(
+                return Err(DataError::new(
                     "stage record",
                     format!("column {name} has {} samples, t has {n}", c.len()),
-                ));
+                )
+                .into());
             }
             if let Some(k) = c.iter().position(|v| !v.is_finite()) {
-                return Err(data_error(
+                return Err(DataError::new(
                     "stage record",
                     format!("{name}[{k}] = {} is not a finite number", c[k]),
-                ));
+                )
+                .into());
             }
         }
         if n < MIN_SAMPLES {
-            return Err(data_error(
+            return Err(DataError::new(
                 "stage record",
                 format!(
                     "too few samples: {n}, need at least {MIN_SAMPLES} (and about 2 s at 10 kHz, \
                      20 000 samples, for 1 % stiffness estimates)"
                 ),
-            ));
+            )
+            .into());
         }
         check_uniform(&t, tolerance)?;
         Ok(StageRecord {
@@ -254,11 +258,11 @@ pub fn voltage_to_x_nom(t: &[f64], u: &[f64], p: &BoucWenParams, bias_voltage: f
 pub fn check_uniform(t: &[f64], tolerance: f64) -> Result<()> {
     let n = t.len();
     if n < 2 {
-        return Err(data_error("stage record", "need at least 2 time samples"));
+        return Err(DataError::new("stage record", "need at least 2 time samples").into());
     }
     let ts = (t[n - 1] - t[0]) / (n - 1) as f64;
     if ts.is_nan() || ts <= 0.0 {
-        return Err(data_error(
+        return Err(DataError::new(
             "stage record",
             format!(
                 "time must increase: t[0] = {}, t[{}] = {}",
@@ -266,12 +270,13 @@ pub fn check_uniform(t: &[f64], tolerance: f64) -> Result<()> {
                 n - 1,
                 t[n - 1]
             ),
-        ));
+        )
+        .into());
     }
     for k in 1..n {
         let dt = t[k] - t[k - 1];
         if (dt - ts).abs() > tolerance * ts {
-            return Err(data_error(
+            return Err(DataError::new(
                 "stage record",
                 format!(
                     "non-uniform sampling: step t[{k}] − t[{}] = {dt:e} s differs from the mean \
@@ -280,7 +285,8 @@ pub fn check_uniform(t: &[f64], tolerance: f64) -> Result<()> {
                     k - 1,
                     tolerance * 100.0
                 ),
-            ));
+            )
+            .into());
         }
     }
     Ok(())

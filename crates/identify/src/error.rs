@@ -50,8 +50,3 @@ pub enum IdentifyError {
 pub type Result<T> = std::result::Result<T, IdentifyError>;
 
 flexstage_numerics::range_checks!(IdentifyError);
-
-/// A [`IdentifyError::Data`] error.
-pub(crate) fn data_error(what: &str, reason: impl Into<String>) -> IdentifyError {
-    DataError::new(what, reason).into()
-}

@@ -14,6 +14,7 @@
 //! second-difference signal grows as d² while the noise does not; the central-difference
 //! error grows as (ωdT_s)²/12. The prefilter is then the anti-aliasing filter.
 
+use flexstage_numerics::DataError;
 use flexstage_numerics::rls::{Rls, RlsParams};
 use flexstage_scenario::StageParams;
 use nalgebra::{DMatrix, SymmetricEigen};
@@ -198,7 +199,7 @@ impl StageIdentifier {
         params.validate()?;
         guess
             .validate("guess")
-            .map_err(|e| crate::error::data_error("initial guess", e.to_string()))?;
+            .map_err(|e| DataError::new("initial guess", e.to_string()))?;
         check(
             "sample_time",
             sample_time,

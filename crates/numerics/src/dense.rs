@@ -18,6 +18,9 @@
 //! All work on `[f64; P]` arrays or row-major slices at the boundary, so that callers keep
 //! their plain-array data layout; nothing but [`symmetric_eigen`] allocates.
 
+// Small dense matrix code reads best with explicit indices.
+#![allow(clippy::needless_range_loop)]
+
 #[cfg(feature = "dense")]
 pub use nalgebra;
 

@@ -2,10 +2,11 @@
 
 use std::io::Read;
 
+use flexstage_numerics::DataError;
 pub use flexstage_numerics::records::NumericCsv;
 use flexstage_numerics::records::RecordError;
 
-use crate::error::{PiezoError, Result, data_error};
+use crate::error::{PiezoError, Result};
 
 /// The columns of a PEA record, in the order of [`PeaData::new`].
 const COLUMNS: [&str; 3] = ["t", "U", "x"];
@@ -25,7 +26,7 @@ impl PeaData {
     /// Checks and wraps the three columns.
     pub fn new(t: Vec<f64>, u: Vec<f64>, x: Vec<f64>) -> Result<Self> {
         if t.len() != u.len() || t.len() != x.len() {
-            return Err(data_error(
+            return Err(DataError::new(
                 "pea data",
                 format!(
                     "columns t, U, x have different lengths {}, {}, {}",
@@ -33,24 +34,27 @@ impl PeaData {
                     u.len(),
                     x.len()
                 ),
-            ));
+            )
+            .into());
         }
         if t.len() < 3 {
-            return Err(data_error(
+            return Err(DataError::new(
                 "pea data",
                 format!("need at least 3 samples, got {}", t.len()),
-            ));
+            )
+            .into());
         }
         for (name, col) in [("t", &t), ("U", &u), ("x", &x)] {
             if let Some(k) = col.iter().position(|v| !v.is_finite()) {
-                return Err(data_error(
+                return Err(DataError::new(
                     "pea data",
                     format!("{name}[{k}] = {} is not a finite number", col[k]),
-                ));
+                )
+                .into());
             }
         }
         if let Some(k) = (1..t.len()).find(|&k| t[k] <= t[k - 1]) {
-            return Err(data_error(
+            return Err(DataError::new(
                 "pea data",
                 format!(
                     "time must increase strictly: t[{k}] = {} after t[{}] = {}",
@@ -58,7 +62,8 @@ impl PeaData {
                     k - 1,
                     t[k - 1]
                 ),
-            ));
+            )
+            .into());
         }
         Ok(PeaData { t, u, x })
     }

@@ -34,8 +34,3 @@ impl From<flexstage_numerics::Error> for PiezoError {
 pub type Result<T> = std::result::Result<T, PiezoError>;
 
 flexstage_numerics::range_checks!(PiezoError);
-
-/// A [`PiezoError::Data`] error.
-pub(crate) fn data_error(what: &str, reason: impl Into<String>) -> PiezoError {
-    DataError::new(what, reason).into()
-}

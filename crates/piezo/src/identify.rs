@@ -89,14 +89,13 @@
 //! is then minimized over the scalar d_p by a grid search and golden section. It needs no
 //! initial guess and is the cross-check of the recursive estimates.
 
+use flexstage_numerics::dense::SpdFactor;
+use flexstage_numerics::rls::{WeightedMoments, batch_least_squares};
+use flexstage_numerics::{DataError, RangeError};
 use serde::{Deserialize, Serialize};
 
 use crate::data::PeaData;
-use flexstage_numerics::RangeError;
-use flexstage_numerics::dense::SpdFactor;
-use flexstage_numerics::rls::{WeightedMoments, batch_least_squares};
-
-use crate::error::{Result, check, data_error};
+use crate::error::{Result, check};
 use crate::hysteresis::line_fit;
 use crate::model::{BoucWenParams, sgn};
 
@@ -457,13 +456,14 @@ pub fn identify(data: &PeaData, params: &IdentifyParams) -> Result<Identificatio
     }
     if params.initial.d_p == 0.0 {
         if slope.is_nan() || slope <= 0.0 {
-            return Err(data_error(
+            return Err(DataError::new(
                 "identification",
                 format!(
                     "x does not increase with U (slope {slope:e} µm/V): check the columns and \
                      units (x in µm, U in V)"
                 ),
-            ));
+            )
+            .into());
         }
         params.initial.d_p = slope;
         params.initial.a_bw = 0.0;
@@ -575,13 +575,14 @@ fn projected(
 pub fn fit_batch(data: &PeaData) -> Result<BatchFit> {
     let (_, slope) = line_fit(data.u(), data.x());
     if slope.is_nan() || slope <= 0.0 {
-        return Err(data_error(
+        return Err(DataError::new(
             "batch fit",
             format!(
                 "x does not increase with U (slope {slope:e} µm/V): check the columns and units \
                  (x in µm, U in V)"
             ),
-        ));
+        )
+        .into());
     }
     let mut phis = Vec::with_capacity(data.len());
     let mut ys = Vec::with_capacity(data.len());
