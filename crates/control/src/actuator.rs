@@ -17,6 +17,8 @@
 
 use flexstage_piezo::{BoucWenParams, CompensatorParams, InverseCompensator, MICROMETRE, advance};
 
+use flexstage_numerics::RangeError;
+
 use crate::error::{Result, check, positive};
 
 /// How x_nom becomes a voltage.
@@ -49,12 +51,9 @@ impl ActuatorParams {
     /// Checks the fields.
     pub fn validate(&self) -> Result<()> {
         for p in &self.hysteresis {
-            p.validate()
-                .map_err(|e| crate::error::ControlError::OutOfRange {
-                    field: "hysteresis".into(),
-                    value: e.to_string(),
-                    expected: "valid Bouc–Wen parameters".into(),
-                })?;
+            p.validate().map_err(|e| {
+                RangeError::new("hysteresis", e.to_string(), "valid Bouc–Wen parameters")
+            })?;
         }
         let [lo, hi] = self.voltage_range;
         check("hysteresis.voltage_min", lo, lo.is_finite(), "finite [V]")?;
@@ -113,11 +112,7 @@ impl Actuator {
         };
         let make = |p: BoucWenParams| {
             let mut c = InverseCompensator::new(p, settings).map_err(|e| {
-                crate::error::ControlError::OutOfRange {
-                    field: "hysteresis".into(),
-                    value: e.to_string(),
-                    expected: "valid compensator settings".into(),
-                }
+                RangeError::new("hysteresis", e.to_string(), "valid compensator settings")
             })?;
             let (u, h, _) = preload(&p, params.bias_voltage);
             c.set_state(u, h);

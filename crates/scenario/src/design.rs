@@ -128,14 +128,14 @@ impl Selector {
             if mesh.contains(p) {
                 Ok(())
             } else {
-                Err(ScenarioError::OutOfRange {
+                Err(ScenarioError::OutOfRange(crate::RangeError {
                     field: format!("{field}.{what}"),
                     value: format!("[{:e}, {:e}]", p[0], p[1]),
                     expected: format!(
                         "a point inside the domain [0, {}] x [0, {}] m",
                         mesh.length, mesh.width
                     ),
-                })
+                }))
             }
         };
         match self {
@@ -403,12 +403,12 @@ impl Optimization {
         )?;
         count("optimization.samples", self.samples, 4, 4000)?;
         if self.samples % 4 != 0 {
-            return Err(ScenarioError::OutOfRange {
+            return Err(ScenarioError::OutOfRange(crate::RangeError {
                 field: "optimization.samples".into(),
                 value: self.samples.to_string(),
                 expected: "a multiple of 4 (the samples walk the four sides of the stroke square)"
                     .into(),
-            });
+            }));
         }
         check(
             "optimization.initial_density",

@@ -29,7 +29,7 @@ pub use design::{
     Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Material, Mesh, ObjectiveKind,
     Optimization, Output, Projection, Region, RegionKind, Selector, Support,
 };
-pub use error::{Result, ScenarioError};
+pub use error::{RangeError, Result, ScenarioError};
 pub use stage::{
     BoucWen, Controller, Hysteresis, Sensors, Simulation, Stage, StageParams, Trajectory,
 };
@@ -288,18 +288,7 @@ impl Scenario {
 
     /// Checks every group and the relations between them.
     pub fn validate(&self) -> Result<()> {
-        if self.name.is_empty()
-            || !self
-                .name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
-        {
-            return Err(ScenarioError::OutOfRange {
-                field: "name".into(),
-                value: format!("{:?}", self.name),
-                expected: "a non-empty name of letters, digits, '-' and '_'".into(),
-            });
-        }
+        error::file_name("name", &self.name)?;
         self.mesh.validate()?;
         self.material.validate()?;
         self.actuators.validate(&self.mesh)?;

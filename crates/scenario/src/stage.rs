@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Result, ScenarioError, check, count, non_negative, positive};
+use crate::error::{Result, check, count, file_name, non_negative, positive};
 
 /// Bouc–Wen hysteresis of one PEA, Eq. (18) with n = 1, in the paper's units (x in µm, U in V,
 /// t in s), as identified in Table A1.
@@ -390,21 +390,7 @@ impl Trajectory {
 
     /// Checks every field; `field` is the TOML path of this entry.
     pub fn validate(&self, field: &str) -> Result<()> {
-        let name_ok = |name: &str| {
-            if !name.is_empty()
-                && name
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
-            {
-                Ok(())
-            } else {
-                Err(ScenarioError::OutOfRange {
-                    field: format!("{field}.name"),
-                    value: format!("{name:?}"),
-                    expected: "a non-empty name of letters, digits, '-' and '_'".into(),
-                })
-            }
-        };
+        let name_ok = |name: &str| file_name(&format!("{field}.name"), name);
         match self {
             Trajectory::Lissajous {
                 name,

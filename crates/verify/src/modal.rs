@@ -1,9 +1,9 @@
 //! Lowest natural frequencies of the body-fitted model, `K φ = ω² M φ`, by shift-invert
 //! Lanczos (σ = 0) in the `M` inner product with full reorthogonalization; the small
-//! tridiagonal problem is solved by `flexstage_reduce::jacobi_eigen`. This is the algorithm of
+//! tridiagonal problem is solved by `flexstage_numerics::dense::symmetric_eigen`. This is the algorithm of
 //! `flexstage-reduce`'s modal analysis, whose API is tied to the Q4 design model.
 
-use flexstage_reduce::jacobi_eigen;
+use flexstage_numerics::dense::symmetric_eigen;
 
 use crate::error::{Result, VerifyError};
 use crate::fe::{Cholesky, SymCsc};
@@ -80,7 +80,7 @@ pub fn lowest_frequencies(
                     t[(i + 1) * steps + i] = betas[i];
                 }
             }
-            let (theta, s) = jacobi_eigen(&t, steps);
+            let (theta, s) = symmetric_eigen(&t, steps);
             let mut order: Vec<usize> = (0..steps).collect();
             order.sort_by(|&x, &y| theta[y].total_cmp(&theta[x]));
             converged = order[..nev]
