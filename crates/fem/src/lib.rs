@@ -74,17 +74,19 @@ pub mod model;
 pub mod newton;
 pub mod samples;
 pub mod solver;
+pub mod stress;
 
 pub use element::{ElementCoefficients, ElementGeometry, ElementKernel};
 pub use error::{IterationRecord, NewtonError, ParamError, SolverError};
 pub use material::{AdditiveYeoh, Kinematics, Material, YeohUpdate};
 pub use mesh::{Edge, Mesh, Passive};
 pub use model::{
-    AssemblyWorkspace, BoundaryConditions, Component, Design, DofMap, Model, SparseMatrix,
-    SparsityPattern, Spring, pea_force,
+    AssemblyWorkspace, BoundaryConditions, Component, Design, DofMap, LinkSpring, Model,
+    SparseMatrix, SparsityPattern, Spring, pea_force,
 };
 pub use newton::{LinearStrategy, NewtonParams, NewtonReport, NewtonWorkspace};
 pub use solver::{
     BlockPcgWorkspace, ColumnOutcome, Factor, FactorKind, PcgParams, PcgReport, PcgWorkspace,
     SolveWorkspace, SymbolicFactor, pcg, pcg_block,
 };
+pub use stress::STRESS_POINTS;
