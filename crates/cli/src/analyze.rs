@@ -11,7 +11,7 @@ use flexstage_report::{
     plot::{Figure, Series},
     vtk::{PointField, QuadMesh},
 };
-use flexstage_topopt::{AnalysisParams, Evaluator, Problem, Response, shoelace};
+use flexstage_topopt::{AnalysisParams, CaseResults, Evaluator, Problem, shoelace};
 
 use crate::build;
 use crate::scenario_args::ScenarioArgs;
@@ -71,7 +71,7 @@ pub fn write_vtu(
 }
 
 /// Per-case table (µm and J).
-pub fn cases_csv(problem: &Problem, r: &Response) -> String {
+pub fn cases_csv(problem: &Problem, r: &CaseResults) -> String {
     let col = |f: &dyn Fn(usize) -> f64| (0..r.outputs.len()).map(f).collect::<Vec<f64>>();
     let x1 = col(&|k| problem.cases[k][0] * 1e6);
     let x2 = col(&|k| problem.cases[k].get(1).copied().unwrap_or(0.0) * 1e6);
@@ -130,7 +130,7 @@ pub fn run(args: AnalyzeArgs) -> anyhow::Result<()> {
     let rho = build::load_design(&args.design, &problem)?;
     let run = crate::run_dir::open_run(args.out, &s)?;
     let t = std::time::Instant::now();
-    let mut ev = Evaluator::new(&problem, 0.0, AnalysisParams::default())?;
+    let mut ev = Evaluator::new(&problem, AnalysisParams::default())?;
     let r = ev
         .solve_cases(&rho, None)
         .context("nonlinear analysis failed")?;

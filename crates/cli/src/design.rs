@@ -8,9 +8,11 @@ use clap::Args;
 use flexstage_fem::AdditiveYeoh;
 use flexstage_report::{RunDir, csv_columns};
 use flexstage_scenario::Scenario;
+use flexstage_topopt::check::{CheckSetup, check_gradients};
+use flexstage_topopt::summary::final_analysis;
 use flexstage_topopt::{
-    AnalysisParams, DesignFile, Evaluator, IterationRecord, Optimizer, OptimizerParams, Problem,
-    Projection, check::check_gradients, density_csv, perimeter_walk, shoelace,
+    AnalysisParams, DesignFile, DesignSpace, Evaluator, IterationRecord, Optimizer,
+    OptimizerParams, Problem, density_csv, perimeter_walk, shoelace,
 };
 
 use crate::analyze::{cases_csv, polygon_svg, write_vtu};
@@ -48,45 +50,46 @@ fn gradient_check(s: &Scenario) -> anyhow::Result<()> {
     let mut s = s.clone();
     s.mesh.nl = 16;
     s.mesh.nw = 8;
+    s.regions.clear();
     s.optimization.samples = 8;
     s.actuators.stroke_amplitude = 3e-4;
     s.actuators.max_stroke = s.actuators.max_stroke.max(1e-3);
     let problem = Problem::from_scenario(&s, None)?;
+    let params = OptimizerParams::from_scenario(&s);
     let ne = problem.mesh().n_elements();
     let e0 = s.material.youngs_modulus;
     let yeoh = AdditiveYeoh::uniform(ne, 1e-6 * e0, 1e-3 * e0);
-    let n = problem.design_elements().len();
+    let n = DesignSpace::new(problem.mesh(), problem.mirror_symmetry)?.n();
     let x: Vec<f64> = (0..n)
         .map(|j| 0.3 + 0.6 * (0.5 + 0.5 * (j as f64 * 0.77).sin()))
         .collect();
-    let proj = Projection {
-        beta: 2.0,
+    let setup = CheckSetup {
+        filter_radius: params.effective_filter_radius(),
+        robust: params.thresholds(),
         eta: 0.5,
+        beta: 2.0,
     };
     println!(
         "gradient check: {} x {} mesh, p_m = {}, strokes ±{} µm, nonlinear, additive material on, \
-         filter {} elements, projection β = 2; central differences h = 1e-6",
+         filter {:.2} elements, projection β = 2{}; central differences h = 1e-6",
         s.mesh.nl,
         s.mesh.nw,
         s.optimization.samples,
         s.actuators.stroke_amplitude * 1e6,
-        s.optimization.filter_radius
+        setup.filter_radius,
+        if setup.robust.is_some() {
+            ", eroded/blueprint/dilated designs"
+        } else {
+            ""
+        }
     );
-    let checks = check_gradients(
-        &problem,
-        s.optimization.filter_radius,
-        proj,
-        Some(&yeoh),
-        &x,
-        10,
-        1e-6,
-    )?;
+    let checks = check_gradients(&problem, &setup, Some(&yeoh), &x, 10, 1e-6)?;
     let mut ok = true;
     for c in &checks {
         let pass = c.relative_error <= 1e-5;
         ok &= pass;
         println!(
-            "  {:<14} relative error {:.2e} over {} variables (max |grad| {:.3e})  {}",
+            "  {:<26} relative error {:.2e} over {} variables (max |grad| {:.3e})  {}",
             c.name,
             c.relative_error,
             c.checked,
@@ -98,6 +101,19 @@ fn gradient_check(s: &Scenario) -> anyhow::Result<()> {
         bail!("gradient check failed");
     }
     Ok(())
+}
+
+/// The lowest natural frequency of the design: the mechanism held by the PEA springs, without
+/// the optimizer's output load or plate masses (flexstage-reduce's modal analysis).
+fn first_frequency(s: &Scenario, rho: &[f64]) -> anyhow::Result<f64> {
+    let problem = flexstage_reduce::reduction_problem(s, false)?;
+    let params = flexstage_reduce::ModalParams {
+        modes: 1,
+        ..flexstage_reduce::ModalParams::default()
+    };
+    let modes =
+        flexstage_reduce::modal_analysis(&problem.model, rho, s.material.density, &[], &params)?;
+    Ok(modes.frequencies[0])
 }
 
 /// A named history column.
@@ -199,6 +215,7 @@ pub fn run(args: DesignArgs) -> anyhow::Result<()> {
     bar.set_position(opt.iteration() as u64);
     let t0 = std::time::Instant::now();
     let (ck_every, snap_every) = (args.checkpoint_every, args.snapshot_every);
+    let input_square = (2.0 * s.actuators.stroke_amplitude).powi(2);
     let stop = opt.run(|o, rec| {
         bar.set_position(rec.iteration as u64 + 1);
         let g: Vec<String> = names
@@ -207,9 +224,9 @@ pub fn run(args: DesignArgs) -> anyhow::Result<()> {
             .map(|(n, v)| format!("{n} {v:+.3}"))
             .collect();
         bar.set_message(format!(
-            "J {:.3e} m² ({:.2}x)  {}  grey {:.2}  β {}",
-            rec.area,
-            rec.area / o.history()[0].area,
+            "J {:.0} µm² ({:.2} × input square)  {}  grey {:.2}  β {}",
+            rec.area * 1e12,
+            rec.area / input_square,
             g.join(" "),
             rec.grey,
             rec.beta
@@ -228,7 +245,7 @@ pub fn run(args: DesignArgs) -> anyhow::Result<()> {
             let (_, ev) = o.last().expect("evaluated");
             run.write(
                 format!("design/workspace_iter{:05}.csv", rec.iteration),
-                polygon_csv(&ev.response.outputs).as_bytes(),
+                polygon_csv(&ev.blueprint().response.outputs).as_bytes(),
             )
             .map_err(|e| io(e.into()))?;
         }
@@ -251,20 +268,20 @@ pub fn run(args: DesignArgs) -> anyhow::Result<()> {
     let mesh = problem.mesh();
     let (nl, nw) = (mesh.nl, mesh.nw);
 
-    // Final analysis: nonlinear, no additive material, the workspace samples.
-    let mut fin = build::analysis_problem(&s)?;
-    fin.cases = perimeter_walk(s.optimization.samples, s.actuators.stroke_amplitude);
-    let mut ev = Evaluator::new(&fin, 0.0, AnalysisParams::default())?;
+    // Final analysis: nonlinear, no additive material, the workspace samples, every
+    // realization; α, θ, area, mass, stress, minimum sizes.
+    let mut fin = final_analysis(&s, dens, opt.params().robust).context("final analysis")?;
+    fin.summary.first_frequency_hz = Some(first_frequency(&s, &rho).context("modal analysis")?);
+    let r = fin.response.clone();
+    let mut initial = build::analysis_problem(&s)?;
+    initial.cases = perimeter_walk(s.optimization.samples, s.actuators.stroke_amplitude);
+    let mut ev = Evaluator::new(&initial, AnalysisParams::default())?;
     let mut rho0 = vec![s.optimization.initial_density; rho.len()];
     mesh.apply_passive(&mut rho0, problem.rho_min);
     let r0 = ev
         .solve_cases(&rho0, None)
         .context("final analysis of the initial design")?;
-    let mut ev = Evaluator::new(&fin, 0.0, AnalysisParams::default())?;
-    let r = ev
-        .solve_cases(&rho, None)
-        .context("final analysis of the design")?;
-    let (a0, a1) = (shoelace(&r0.outputs), shoelace(&r.outputs));
+    let (a0, a1) = (shoelace(&r0.outputs), fin.summary.area);
     let design_els = problem.design_elements();
     let grey = design_els
         .iter()
@@ -281,6 +298,7 @@ pub fn run(args: DesignArgs) -> anyhow::Result<()> {
         area_initial: a0,
         area: a1,
         grey_fraction: grey,
+        summary: Some(fin.summary.clone()),
     };
     run.write("design/design.json", file.to_json().as_bytes())?;
     run.write(
@@ -294,11 +312,11 @@ pub fn run(args: DesignArgs) -> anyhow::Result<()> {
     write_vtu(
         &run,
         "design/design.vtu",
-        &fin,
+        &initial,
         &rho,
-        &ev.cases[fin.differential_corners().0].u,
+        &fin.corner_displacement,
     )?;
-    run.write("design/cases.csv", cases_csv(&fin, &r).as_bytes())?;
+    run.write("design/cases.csv", cases_csv(&initial, &r).as_bytes())?;
     run.write(
         "design/workspace_final.csv",
         polygon_csv(&r.outputs).as_bytes(),
@@ -353,9 +371,9 @@ pub fn run(args: DesignArgs) -> anyhow::Result<()> {
         "iterations": iters,
         "seconds": secs,
         "seconds_per_iteration": h.iter().map(|r| r.time).sum::<f64>() / iters as f64,
+        "design": fin.summary,
         "area_initial_m2": a0,
         "area_final_m2": a1,
-        "area_growth": a1 / a0,
         "grey_fraction": grey,
         "volume": h.last().map(|r| r.volume),
         "constraints": names.iter().zip(&h.last().unwrap().constraints).map(|(n, v)| (n.to_string(), *v)).collect::<std::collections::BTreeMap<_, _>>(),
@@ -369,20 +387,9 @@ pub fn run(args: DesignArgs) -> anyhow::Result<()> {
         "{stop:?} after {iters} iterations in {secs:.1} s ({:.3} s/iteration)",
         h.iter().map(|r| r.time).sum::<f64>() / iters as f64
     );
-    println!(
-        "workspace area (nonlinear, no additive material): initial {:.4} µm², final {:.4} µm², growth {:.2}x",
-        a0 * 1e12,
-        a1 * 1e12,
-        a1 / a0
-    );
-    let (kc, _) = fin.differential_corners();
-    println!(
-        "compressive corner (+a,-a): u_out = ({:.3}, {:.3}) µm; grey fraction {:.3}, volume {:.3}",
-        r.outputs[kc][0] * 1e6,
-        r.outputs[kc][1] * 1e6,
-        grey,
-        h.last().unwrap().volume
-    );
+    for line in fin.summary.lines() {
+        println!("{line}");
+    }
     eprintln!("wrote {}", run.path("design").display());
     Ok(())
 }

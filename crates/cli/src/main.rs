@@ -48,7 +48,7 @@ enum Command {
         #[arg(default_value = "scenario.toml")]
         path: PathBuf,
         /// Built-in scenario: "paper" (Tables 1, 3, 4, A1) or "quick" (coarse and fast).
-        #[arg(long, default_value = "paper", value_parser = ["paper", "quick"])]
+        #[arg(long, default_value = "paper", value_parser = flexstage_scenario::Preset::NAMES)]
         preset: String,
         /// Overwrite an existing file.
         #[arg(long)]
@@ -194,8 +194,9 @@ fn run(cli: Cli) -> anyhow::Result<()> {
 }
 
 fn init(path: &std::path::Path, preset: &str, force: bool) -> anyhow::Result<()> {
-    let preset = flexstage_scenario::Preset::from_name(preset)
-        .ok_or_else(|| anyhow::anyhow!("unknown preset {preset:?}: expected paper or quick"))?;
+    let preset = flexstage_scenario::Preset::from_name(preset).ok_or_else(|| {
+        anyhow::anyhow!("unknown preset {preset:?}: expected paper, quick or fine")
+    })?;
     let text = flexstage_scenario::Scenario::preset(preset).to_commented_toml();
     if path.as_os_str() == "-" {
         print!("{text}");

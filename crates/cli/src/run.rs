@@ -37,7 +37,7 @@ pub struct RunArgs {
     pub scenario: Option<PathBuf>,
     /// Built-in scenario when no file is given: "quick" (coarse, about 10 s) or "paper"
     /// (Tables 1, 3, 4, A1).
-    #[arg(long, default_value = "quick", value_parser = ["paper", "quick"])]
+    #[arg(long, default_value = "quick", value_parser = flexstage_scenario::Preset::NAMES)]
     pub preset: String,
     /// Run folder (default runs/<scenario name>).
     #[arg(long)]

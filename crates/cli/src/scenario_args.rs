@@ -11,8 +11,8 @@ use flexstage_scenario::{Preset, Scenario};
 pub struct ScenarioArgs {
     /// Scenario file (TOML). Without it, the built-in preset is used.
     pub scenario: Option<PathBuf>,
-    /// Built-in scenario when no file is given: "paper" or "quick".
-    #[arg(long, default_value = "paper", value_parser = ["paper", "quick"])]
+    /// Built-in scenario when no file is given: "paper", "quick" or "fine".
+    #[arg(long, default_value = "paper", value_parser = flexstage_scenario::Preset::NAMES)]
     pub preset: String,
 }
 

@@ -759,7 +759,7 @@ impl Model {
                     r[d[k]] += re[k];
                 }
             }
-            self.add_spring_forces(u, r);
+            self.add_spring_forces(u, 1.0, r);
         }
         if let Some(kt) = tangent {
             assert!(
@@ -790,14 +790,14 @@ impl Model {
         }
     }
 
-    /// Adds the spring forces `K_s u` (grounded springs and link springs, the only linear
-    /// part of `R` that is not strain energy) to the full vector `out`.
-    pub fn add_spring_forces(&self, u: &[f64], out: &mut [f64]) {
+    /// Adds `scale · K_s u`, the spring forces (grounded springs and link springs, the only
+    /// part of `R` that is not strain energy), to the full vector `out`.
+    pub fn add_spring_forces(&self, u: &[f64], scale: f64, out: &mut [f64]) {
         for s in &self.bcs.springs {
-            out[s.dof] += s.stiffness * u[s.dof];
+            out[s.dof] += scale * s.stiffness * u[s.dof];
         }
         for l in &self.bcs.links {
-            let f = l.stiffness * l.elongation(u);
+            let f = scale * l.stiffness * l.elongation(u);
             for &(d, c) in &l.terms {
                 out[d] += f * c;
             }

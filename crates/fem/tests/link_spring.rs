@@ -99,7 +99,7 @@ fn link_tangent_matches_central_differences() {
     assert!(worst < 1e-9, "{worst:e}");
     // The link forces are part of R and of add_spring_forces.
     let mut f = model.zero_vector();
-    model.add_spring_forces(&u, &mut f);
+    model.add_spring_forces(&u, 1.0, &mut f);
     let g = u[2 * o] - 0.5 * (u[2 * a] + u[2 * b]);
     assert!((f[2 * o] - 4e6 * g).abs() <= 1e-9 * (4e6 * g).abs());
 }
