@@ -229,24 +229,41 @@ pub fn member_sizes(f: &Field, refine: usize) -> (Option<Measured>, Option<Measu
     let (sx, sy) = (f.h.0 / refine as f64, f.h.1 / refine as f64);
     let solid: Vec<bool> = v.iter().map(|&r| r >= 0.5).collect();
     let point = |x: usize, y: usize| [(x as f64 + 0.5) * sx, (y as f64 + 0.5) * sy];
-    let thinnest = min_local_thickness(&solid, |_| true, nx, ny).map(|(t, p)| Measured {
-        size: t * step,
-        at: point(p % nx, p / nx),
-    });
-    // Void with a one-point frame of void around the domain (the outside is void); only the
-    // domain's points count.
-    let (px, py) = (nx + 2, ny + 2);
-    let mut void = vec![true; px * py];
-    for y in 0..ny {
-        for x in 0..nx {
-            void[(y + 1) * px + x + 1] = !solid[y * nx + x];
+    // A frame of `pad` points around the domain; only the domain's points count. For the solid
+    // the frame continues the edge (a member cut by the domain's edge is not thin there); for
+    // the void the frame is void (the outside is air, a slot may open to it).
+    let pad = 2 * refine;
+    let (px, py) = (nx + 2 * pad, ny + 2 * pad);
+    let inner = |p: usize| {
+        let (x, y) = (
+            (p % px) as isize - pad as isize,
+            (p / px) as isize - pad as isize,
+        );
+        (x, y)
+    };
+    let in_domain = |p: usize| {
+        let (x, y) = inner(p);
+        (0..nx as isize).contains(&x) && (0..ny as isize).contains(&y)
+    };
+    let clamped = |p: usize| {
+        let (x, y) = inner(p);
+        let (x, y) = (
+            x.clamp(0, nx as isize - 1) as usize,
+            y.clamp(0, ny as isize - 1) as usize,
+        );
+        solid[y * nx + x]
+    };
+    let framed_solid: Vec<bool> = (0..px * py).map(clamped).collect();
+    let framed_void: Vec<bool> = (0..px * py).map(|p| !in_domain(p) || !clamped(p)).collect();
+    let measured = |(t, p): (f64, usize)| {
+        let (x, y) = inner(p);
+        Measured {
+            size: t * step,
+            at: point(x as usize, y as usize),
         }
-    }
-    let in_domain = |p: usize| (1..=nx).contains(&(p % px)) && (1..=ny).contains(&(p / px));
-    let gap = min_local_thickness(&void, in_domain, px, py).map(|(t, p)| Measured {
-        size: t * step,
-        at: point(p % px - 1, p / px - 1),
-    });
+    };
+    let thinnest = min_local_thickness(&framed_solid, in_domain, px, py).map(measured);
+    let gap = min_local_thickness(&framed_void, in_domain, px, py).map(measured);
     (thinnest, gap)
 }
 
