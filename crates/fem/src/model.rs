@@ -564,6 +564,13 @@ impl AssemblyWorkspace {
             re: vec![[0.0; 8]; n_elements],
         }
     }
+
+    /// The element internal forces `r_e` of the last [`Model::assemble`] with this workspace
+    /// (springs excluded), element order. With the additive material off, `r_e` is linear in
+    /// the element modulus, so `∂r_e/∂ρ_e = (E'(ρ_e)/E(ρ_e)) r_e`.
+    pub fn element_residuals(&self) -> &[[f64; 8]] {
+        &self.re
+    }
 }
 
 /// Minimum number of elements per rayon task.

@@ -31,6 +31,10 @@ fn main() {
     let iters: usize = args.get(2).and_then(|v| v.parse().ok()).unwrap_or(8);
     let inverter = name == "inverter";
     let mut s = Scenario::preset(Preset::from_name(name).unwrap_or(Preset::Paper));
+    // PROFILE_NO_ADDITIVE=1: without the additive material.
+    if std::env::var_os("PROFILE_NO_ADDITIVE").is_some() {
+        s.optimization.additive.enabled = false;
+    }
     // PROFILE_SAMPLES=n: fewer load cases (e.g. for callgrind).
     if let Some(n) = std::env::var("PROFILE_SAMPLES")
         .ok()

@@ -151,13 +151,15 @@ pub(crate) fn solve_group(
         })
         .collect();
     let mut best = vec![f64::INFINITY; m];
-    // Whether the slot's tangent was assembled at the case's final state (first sweep).
+    // Whether the slot's tangent (of the first sweep) may serve the adjoint: at the final
+    // state, or at the prediction when `exact_tangent` is off.
     let mut fresh = vec![false; m];
     for (j, (cs, slot)) in cases.iter_mut().zip(gws.slots.iter_mut()).enumerate() {
         if let Some(p) = sh.predictor {
             p.predict(&problem.cases[first + j], &mut cs.u);
         }
         slot.u0.copy_from_slice(&cs.u);
+        slot.re_valid = false;
         slot.aa.reset();
         dofs.gather(&cs.u, &mut slot.aa.x);
     }
@@ -179,7 +181,9 @@ pub(crate) fn solve_group(
             let rel = col.iter().map(|x| x * x).sum::<f64>().sqrt() / pnorm[j];
             if rel <= tol {
                 st[j] = Status::Done;
-                fresh[j] = sweep == 0;
+                slot.re.copy_from_slice(gws.assembly.element_residuals());
+                slot.re_valid = true;
+                fresh[j] = sh.linear_tangent.is_none() && (sweep == 0 || !params.exact_tangent);
                 col.fill(0.0);
             } else if !rel.is_finite()
                 || rel > 10.0 * best[j]

@@ -54,6 +54,12 @@ pub struct AnalysisParams {
     /// Start every case from the quadratic load-path prediction ([`predictor`]) instead of its
     /// warm start.
     pub predictor: bool,
+    /// Adjoints with the tangent at the converged state (true), or, for a case that converged
+    /// in the lock-step sweeps, with the tangent assembled in the first sweep at the predicted
+    /// state (false). The two differ by the prediction error (≈ the strain squared, relative),
+    /// so the gradients by far less than the adjoint tolerance, and a case that needs a sweep
+    /// saves a tangent assembly. Gradient checks use true.
+    pub exact_tangent: bool,
 }
 
 impl Default for AnalysisParams {
@@ -84,6 +90,7 @@ impl Default for AnalysisParams {
                 max_iter: 8,
             }),
             predictor: true,
+            exact_tangent: false,
         }
     }
 }
@@ -102,6 +109,7 @@ impl AnalysisParams {
                 rel_tol: 1e-12,
                 max_iter: 200,
             }),
+            exact_tangent: true,
             ..Self::default()
         }
     }

@@ -69,6 +69,10 @@ pub(crate) struct Slot {
     pub u0: Vec<f64>,
     /// Anderson history of the lock-step sweeps.
     pub aa: Anderson,
+    /// Element internal forces `r_e` at the converged state (valid when `re_valid`), for the
+    /// adjoint contraction `λ_eᵀ ∂r_e/∂ρ_e = (E'/E) λ_eᵀ r_e` without the additive material.
+    pub re: Vec<[f64; 8]>,
+    pub re_valid: bool,
 }
 
 /// Buffers of one group of load cases solved in lock-step (one rayon task).
@@ -100,6 +104,8 @@ impl GroupWorkspace {
                     r: model.zero_vector(),
                     u0: model.zero_vector(),
                     aa: Anderson::new(nf),
+                    re: vec![[0.0; 8]; model.mesh().n_elements()],
+                    re_valid: false,
                 })
                 .collect(),
             rhs: vec![0.0; nf * cols],
