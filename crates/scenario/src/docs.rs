@@ -244,7 +244,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.additive.enabled",
-        "Use the additive material during optimization.",
+        "Use the additive material during optimization. Default false: at the paper's stroke (strains ≈ 1e-3) it changes neither the topology nor the area (DECISIONS.md); turn it on for large-stroke designs.",
     ),
     (
         "optimization.additive.initial_coefficient",

@@ -188,7 +188,7 @@ impl Scenario {
                     eta: 0.5,
                 },
                 additive: Additive {
-                    enabled: true,
+                    enabled: false,
                     initial_coefficient: 1e-5,
                     strain_threshold: 0.5,
                 },

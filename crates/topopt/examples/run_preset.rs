@@ -31,7 +31,7 @@ fn main() {
     let stop = opt
         .run(|_, r| {
             println!(
-                "{:4} J={:.0}µm² e/d={:?}/{:?} g={:?} V={:.3} σ={:?}MPa grey={:.3} ch={:.3e} kkt={:?} β={} newton={}/{} t={:.3}s",
+                "{:4} J={:.0}µm² e/d={:?}/{:?} g={:?} V={:.3} σ={:?}MPa grey={:.3} ch={:.3e}/{:.1e} kkt={:?} β={} newton={}/{} t={:.3}s",
                 r.iteration,
                 r.area * 1e12,
                 r.area_eroded.map(|a| (a * 1e12).round()),
@@ -41,6 +41,7 @@ fn main() {
                 r.stress.map(|v| (v / 1e5).round() / 10.0),
                 r.grey,
                 r.change,
+                r.mean_change,
                 r.kkt.map(|v| (v * 1e4).round() / 1e4),
                 r.beta,
                 r.newton_total,

@@ -20,10 +20,13 @@
 //! design). With it (Wang, Lazarov & Sigmund 2011, §5; DECISIONS.md "Robust formulation"), the
 //! worst case `min_r Φ_r` over the eroded, blueprint and dilated realizations is maximized in the
 //! **bound formulation**: one more MMA variable ξ ∈ [0, 1], the bound `τ = T·ξ` (units of |Φ⁰|),
-//! `f0 = −s_obj·τ` and one constraint `τ − Φ_r/|Φ⁰| ≤ 0` per realization. `T` is fixed at the
-//! first iteration large enough for any physical optimum (a workspace 20 times the input
-//! square, or an output 20 times the stroke). The volume bound acts on the dilated design, with
-//! its target `V*_d = V*·V_d/V_b` refreshed every `volume_update_interval` iterations so that the
+//! `f0 = −s_obj·τ` and one constraint `τ − Φ_r/|Φ⁰| ≤ 0` per realization. `T` keeps ξ in the
+//! middle of its range: whenever ξ leaves [0.2, 0.8] (the worst case grows ~50-fold from the
+//! uniform start), the bound variable is rescaled to ξ = ½ with `T ← τ/½`, together with MMA's
+//! history of ξ (previous iterates, asymptotes, bound multipliers), so the MMA approximation is
+//! the same and only the variable's unit changes. A variable pinned near its bound, or one
+//! whose unit dwarfs the densities', makes MMA oscillate. The volume bound acts on the dilated design, with
+//! its target `V*_d = V*·V_d/V_b` refreshed every `update_interval` iterations so that the
 //! blueprint meets `V*`; the fatigue stress acts on the eroded design, the strain energy, input
 //! strokes and tilt on the blueprint.
 //!
@@ -36,8 +39,10 @@
 //! and of the input strokes, one per load case each.
 //!
 //! The stress constraint is `c·Σ_S − 1 ≤ 0` with the p-norm `Σ_S` of [`crate::stress`] and Le et
-//! al.'s adaptive normalization `c_{k+1} = α·max s_k/Σ_S,k + (1 − α)·c_k` (SMO 41 (2010), Eq. 14),
-//! held constant within an iteration (so its gradient is `c·∇Σ_S`). The tilt constraint is the
+//! al.'s adaptive normalization `c ← α·max s/Σ_S + (1 − α)·c` (SMO 41 (2010), Eq. 14), updated
+//! with the volume target every `update_interval` iterations and constant in between (so the
+//! gradient is `c·∇Σ_S` and MMA sees a fixed function; updating every iteration made the
+//! stress and the design oscillate by ±10 %). The tilt constraint is the
 //! scale-invariant `((D·n)² − tan²τ (D·d)²) / (tan²τ |D|²)` with the *current* |D| (an earlier
 //! version divided by the initial |D⁰|², which grows by the workspace growth factor squared and
 //! left θ = 20° at 15° after 25 iterations).
@@ -57,7 +62,10 @@
 //! objective Φ (the worst case with the robust formulation) varies by at most
 //! `stagnation_tolerance · |Φ_k|`, every update moved the densities by a mean |Δx| below
 //! `change_tolerance`, the constraints are satisfied (every scaled gᵢ ≤ `kkt_tolerance`) and
-//! KKT < `kkt_tolerance`. W = 0 disables it.
+//! KKT < `kkt_tolerance`. W = 0 disables it. With the robust formulation the KKT condition is
+//! dropped from the stagnation test: the multipliers of the three realizations' bound
+//! constraints, whose objectives differ by about a percent, do not settle, and the residual
+//! with the last subproblem's multipliers stays of order one at a stationary design.
 //!
 //! [`Optimizer::checkpoint`] captures everything the future of the run depends on (design,
 //! MMA history, β, c2, the stress normalization, the volume target, the warm starts of every
@@ -77,7 +85,7 @@ pub use params::{AdditiveParams, OptimizerParams, ProjectionSchedule};
 
 use crate::error::{Result, TopoptError};
 use crate::filter::Projection;
-use crate::problem::{Objective, Problem};
+use crate::problem::Problem;
 use crate::realization::{Densities, DesignEvaluator, Evaluation, Realization};
 use crate::responses::{PerResponse, ResponseKind};
 
@@ -458,18 +466,10 @@ impl<'p> Optimizer<'p> {
             let phi0 = bp.values[ResponseKind::Objective]
                 .abs()
                 .max(f64::MIN_POSITIVE);
+            // The bound starts at the worst case with ξ = ½ (a feasible start).
+            let worst = (self.worst(ev) / phi0).max(f64::MIN_POSITIVE);
             let bound = if self.params.robust.is_some() {
-                // τ up to a workspace 20 times the input square (or 20 times the stroke).
-                let a = problem
-                    .cases
-                    .iter()
-                    .flatten()
-                    .fold(0.0f64, |m, v| m.max(v.abs()));
-                let physical = match problem.objective {
-                    Objective::Workspace { .. } => (2.0 * a).powi(2),
-                    Objective::Displacement { .. } => a,
-                };
-                (20.0 * physical / phi0).max(100.0)
+                2.0 * worst
             } else {
                 0.0
             };
@@ -479,12 +479,12 @@ impl<'p> Optimizer<'p> {
                 tilt: d2.max(f64::MIN_POSITIVE),
                 bound,
             });
-            // The bound starts at the worst case (a feasible start).
             if bound > 0.0 {
-                let worst = self.worst(ev) / phi0;
                 let n = self.evaluator.n();
-                self.x[n] = (worst / bound).clamp(0.0, 1.0);
+                self.x[n] = 0.5;
             }
+        } else {
+            self.rescale_bound();
         }
         if problem.stress.is_some() && self.stress_norm.is_none() {
             self.stress_norm = Some(stress_ratio(ev.get(Realization::Eroded).unwrap_or(bp)));
@@ -496,6 +496,31 @@ impl<'p> Optimizer<'p> {
         ) {
             self.volume_target = Some(volume_target(vf, d, bp));
         }
+    }
+
+    /// Rescales the bound variable to ξ = ½ when it left [0.2, 0.8] (module docs).
+    fn rescale_bound(&mut self) {
+        let n = self.evaluator.n();
+        let Some(sc) = self.scales.as_mut().filter(|s| s.bound > 0.0) else {
+            return;
+        };
+        let xi = self.x[n];
+        if (0.2..=0.8).contains(&xi) || xi <= 0.0 {
+            return;
+        }
+        // ξ' = f ξ with T' = T / f.
+        let f = 0.5 / xi;
+        sc.bound /= f;
+        self.x[n] = 0.5;
+        let mut st = self.mma.state();
+        for v in [&mut st.xold1, &mut st.xold2, &mut st.low, &mut st.upp] {
+            v[n] *= f;
+        }
+        st.xsi[n] /= f;
+        st.eta[n] /= f;
+        self.mma
+            .restore(&st)
+            .expect("a rescaled state of the same dimensions");
     }
 
     /// The worst objective over the realizations (the blueprint's without robustness).
@@ -640,9 +665,14 @@ impl<'p> Optimizer<'p> {
             None => true,
         };
         let kkt_ok = kkt.is_some_and(|v| v < self.params.kkt_tolerance);
+        // With the bound formulation the multipliers of the realizations' constraints, whose
+        // objectives differ by about a percent, do not settle and the KKT residual with the
+        // last subproblem's multipliers stays O(1) at a stationary design: stagnation then
+        // rests on the objective, the densities and feasibility (module docs).
+        let kkt_stagnation = kkt_ok || self.params.robust.is_some();
         if k > 0 && beta_done && kkt_ok && self.last_change < self.params.change_tolerance {
             Some(StopReason::Converged)
-        } else if beta_done && kkt_ok && self.stagnated(rec) {
+        } else if beta_done && kkt_stagnation && self.stagnated(rec) {
             Some(StopReason::Stagnated)
         } else if k >= self.params.max_iterations {
             Some(StopReason::MaxIterations)
@@ -682,15 +712,16 @@ impl<'p> Optimizer<'p> {
                 self.beta = (2.0 * self.beta).min(p.beta_max);
             }
         }
-        // Adaptive stress normalization (Le et al. 2010, Eq. 14).
+        // Every `update_interval` iterations: the adaptive stress normalization (Le et al.
+        // 2010, Eq. 14) and the volume target of the dilated design (Wang et al. 2011, §5).
+        // Between updates the constraint functions stay fixed, which MMA's history needs.
         let bp = ev.blueprint();
-        if let Some(c) = self.stress_norm.as_mut() {
-            let a = self.params.stress_normalization_damping;
-            let ratio = stress_ratio(ev.get(Realization::Eroded).unwrap_or(bp));
-            *c = a * ratio + (1.0 - a) * *c;
-        }
-        // Volume target of the dilated design (Wang et al. 2011, §5).
-        if (k + 1) % self.params.volume_update_interval == 0 {
+        if (k + 1) % self.params.update_interval == 0 {
+            if let Some(c) = self.stress_norm.as_mut() {
+                let a = self.params.stress_normalization_damping;
+                let ratio = stress_ratio(ev.get(Realization::Eroded).unwrap_or(bp));
+                *c = a * ratio + (1.0 - a) * *c;
+            }
             if let (Some(vf), Some(d)) = (
                 self.evaluator.problem.volume_fraction,
                 ev.get(Realization::Dilated),

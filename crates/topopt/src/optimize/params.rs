@@ -51,9 +51,10 @@ pub struct OptimizerParams {
     /// Robust formulation: the filter radius and thresholds of the minimum sizes (None = the
     /// blueprint alone).
     pub robust: Option<LengthScale>,
-    /// Iterations between updates of the dilated design's volume bound so that the blueprint
-    /// meets the volume fraction (Wang, Lazarov & Sigmund 2011, §5: 20), in [1, 10000].
-    pub volume_update_interval: usize,
+    /// Iterations between updates of the dilated design's volume bound (so that the blueprint
+    /// meets the volume fraction; Wang, Lazarov & Sigmund 2011, §5: 20) and of the adaptive
+    /// stress normalization, in [1, 10000].
+    pub update_interval: usize,
     /// Damping α of the adaptive stress normalization `c ← α·max s/Σ_S + (1 − α)·c` (Le et al.
     /// 2010, Eq. 14: 0.5), in (0, 1].
     pub stress_normalization_damping: f64,
@@ -222,9 +223,9 @@ impl OptimizerParams {
             "(0, 1)",
         )?;
         check_range(
-            "OptimizerParams::volume_update_interval",
-            self.volume_update_interval as f64,
-            (1..=10_000).contains(&self.volume_update_interval),
+            "OptimizerParams::update_interval",
+            self.update_interval as f64,
+            (1..=10_000).contains(&self.update_interval),
             "[1, 10000]",
         )?;
         check_range(
@@ -253,7 +254,7 @@ impl Default for OptimizerParams {
             stagnation_tolerance: 1e-5,
             projection: None,
             robust: None,
-            volume_update_interval: 20,
+            update_interval: 20,
             stress_normalization_damping: 0.5,
             additive: None,
             objective_scale: 1.0,
