@@ -20,12 +20,13 @@
 //! design). With it (Wang, Lazarov & Sigmund 2011, §5; DECISIONS.md "Robust formulation"), the
 //! worst case `min_r Φ_r` over the eroded, blueprint and dilated realizations is maximized in the
 //! **bound formulation**: one more MMA variable ξ ∈ [0, 1], the bound `τ = T·ξ` (units of |Φ⁰|),
-//! `f0 = −s_obj·τ` and one constraint `τ − Φ_r/|Φ⁰| ≤ 0` per realization. `T` keeps ξ in the
-//! middle of its range: whenever ξ leaves [0.2, 0.8] (the worst case grows ~50-fold from the
-//! uniform start), the bound variable is rescaled to ξ = ½ with `T ← τ/½`, together with MMA's
-//! history of ξ (previous iterates, asymptotes, bound multipliers), so the MMA approximation is
-//! the same and only the variable's unit changes. A variable pinned near its bound, or one
-//! whose unit dwarfs the densities', makes MMA oscillate. The volume bound acts on the dilated design, with
+//! `f0 = −s_obj·τ` and one constraint `τ − Φ_r/|Φ⁰| ≤ 0` per realization. Before every MMA
+//! update the bound is set to its optimum for the current densities, the worst case
+//! `τ = min_r Φ_r/|Φ⁰|`, in the unit `T = 2τ` (ξ = ½), and MMA's history of ξ (previous
+//! iterates, asymptotes, bound multipliers) is expressed in that unit. The worst realization's
+//! constraint is then active at the start of every subproblem, so the densities always see its
+//! gradient; a bound left behind by the move limit (the worst case grows ~50-fold from the
+//! uniform start) would leave them without any objective gradient. The volume bound acts on the dilated design, with
 //! its target `V*_d = V*·V_d/V_b` refreshed every `update_interval` iterations so that the
 //! blueprint meets `V*`; the fatigue stress acts on the eroded design, the strain energy, input
 //! strokes and tilt on the blueprint.
@@ -484,7 +485,8 @@ impl<'p> Optimizer<'p> {
                 self.x[n] = 0.5;
             }
         } else {
-            self.rescale_bound();
+            let worst = self.worst(ev) / self.scales.map_or(1.0, |s| s.objective);
+            self.reset_bound(worst);
         }
         if problem.stress.is_some() && self.stress_norm.is_none() {
             self.stress_norm = Some(stress_ratio(ev.get(Realization::Eroded).unwrap_or(bp)));
@@ -498,26 +500,34 @@ impl<'p> Optimizer<'p> {
         }
     }
 
-    /// Rescales the bound variable to ξ = ½ when it left [0.2, 0.8] (module docs).
-    fn rescale_bound(&mut self) {
+    /// Sets the bound to the worst case of the current design, τ = min_r Φ_r/|Φ⁰| (its optimum
+    /// for the current densities), in the unit `T = 2τ` that puts ξ = ½, and expresses MMA's
+    /// history of ξ in the new unit (module docs).
+    fn reset_bound(&mut self, worst: f64) {
         let n = self.evaluator.n();
         let Some(sc) = self.scales.as_mut().filter(|s| s.bound > 0.0) else {
             return;
         };
-        let xi = self.x[n];
-        if (0.2..=0.8).contains(&xi) || xi <= 0.0 {
+        let t_new = 2.0 * worst.max(f64::MIN_POSITIVE);
+        // Old ξ values in the new unit: ξ' = ξ·T/T'.
+        let f = sc.bound / t_new;
+        sc.bound = t_new;
+        self.x[n] = 0.5;
+        if self.mma.iteration() == 0 {
             return;
         }
-        // ξ' = f ξ with T' = T / f.
-        let f = 0.5 / xi;
-        sc.bound /= f;
-        self.x[n] = 0.5;
         let mut st = self.mma.state();
         for v in [&mut st.xold1, &mut st.xold2, &mut st.low, &mut st.upp] {
             v[n] *= f;
         }
         st.xsi[n] /= f;
         st.eta[n] /= f;
+        // The reset value must lie between the asymptotes; otherwise restart them there.
+        if !(st.low[n] < 0.5 && 0.5 < st.upp[n]) {
+            let d = self.params.mma.asyinit;
+            (st.low[n], st.upp[n]) = (0.5 - d, 0.5 + d);
+            (st.xold1[n], st.xold2[n]) = (0.5, 0.5);
+        }
         self.mma
             .restore(&st)
             .expect("a rescaled state of the same dimensions");
