@@ -32,8 +32,9 @@ pub(crate) type GroupCoefficients<'a> = PerResponse<Option<&'a [CaseCoefficients
 /// `μ_d = K⁻¹ e_d` for the DOFs of the output, inputs and springs (module docs).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct AdjointBasis {
-    /// `(d, μ_d)` with full vectors.
+    /// `(d, μ_d)` with full vectors (storage reused between designs).
     columns: Vec<(usize, Vec<f64>)>,
+    block: Vec<f64>,
 }
 
 impl AdjointBasis {
@@ -55,20 +56,19 @@ impl AdjointBasis {
         ds.dedup();
         ds.retain(|&d| !dofs.is_fixed(d));
         let nf = dofs.n_free();
-        let mut block = vec![0.0; nf * ds.len()];
+        let block = &mut self.block;
+        block.clear();
+        block.resize(nf * ds.len(), 0.0);
         for (c, &d) in ds.iter().enumerate() {
             block[c * nf + dofs.reduced(d).expect("free")] = 1.0;
         }
-        k.solve_columns_in_place(&mut block, ds.len(), sws)?;
-        self.columns = ds
-            .iter()
-            .enumerate()
-            .map(|(c, &d)| {
-                let mut mu = model.zero_vector();
-                dofs.scatter(&block[c * nf..(c + 1) * nf], &mut mu);
-                (d, mu)
-            })
-            .collect();
+        k.solve_columns_in_place(block, ds.len(), sws)?;
+        self.columns.resize_with(ds.len(), || (0, Vec::new()));
+        for (c, (&d, (dd, mu))) in ds.iter().zip(self.columns.iter_mut()).enumerate() {
+            *dd = d;
+            mu.resize(model.n_dofs(), 0.0);
+            dofs.scatter(&block[c * nf..(c + 1) * nf], mu);
+        }
         Ok(())
     }
 
@@ -154,8 +154,7 @@ pub(crate) fn group_gradients(
     // Right-hand sides, one column per (case, active response), case-major.
     let mut cols: Vec<(usize, ResponseKind)> =
         Vec::with_capacity(ResponseKind::FE.len() * cases.len());
-    let mut b = model.zero_vector();
-    let (mut guess, mut scratch) = (model.zero_vector(), model.zero_vector());
+    let [b, guess, scratch] = &mut gws.full;
     for (j, cs) in cases.iter_mut().enumerate() {
         cs.adjoint_iterations = 0;
         for q in ResponseKind::FE {
@@ -169,15 +168,15 @@ pub(crate) fn group_gradients(
             // Initial guess (module docs); pcg_block rescales it optimally.
             let x0 = &mut gws.sol[col * nf..(col + 1) * nf];
             if c.extra.is_none() {
-                basis.guess(problem, c, &cs.u, &mut scratch, &mut guess);
-                dofs.gather(&guess, x0);
+                basis.guess(problem, c, &cs.u, scratch, guess);
+                dofs.gather(guess, x0);
             } else if cs.lambdas[q].is_empty() {
                 x0.fill(0.0);
             } else {
                 dofs.gather(&cs.lambdas[q], x0);
             }
-            right_hand_side(problem, c, &cs.u, &gws.slots[j].r, &mut b);
-            dofs.gather(&b, &mut gws.rhs[col * nf..(col + 1) * nf]);
+            right_hand_side(problem, c, &cs.u, &gws.slots[j].r, b);
+            dofs.gather(b, &mut gws.rhs[col * nf..(col + 1) * nf]);
             cols.push((j, q));
         }
     }

@@ -183,6 +183,8 @@ pub struct Evaluator<'p> {
     assembly: AssemblyWorkspace,
     predictor: predictor::Predictor,
     basis: adjoint::AdjointBasis,
+    /// The zero displacement (the preconditioner's state).
+    zero: Vec<f64>,
     id: u64,
     own: Option<Workspace>,
 }
@@ -226,6 +228,7 @@ impl<'p> Evaluator<'p> {
             assembly: model.new_workspace(),
             predictor: predictor::Predictor::default(),
             basis: adjoint::AdjointBasis::default(),
+            zero: Vec::new(),
             id: NEXT_ID.fetch_add(1, Ordering::Relaxed),
             own: None,
         })
@@ -260,8 +263,14 @@ impl<'p> Evaluator<'p> {
         design.validate(model.mesh().n_elements())?;
         // Shared preconditioner: K(ρ) at u = 0, refreshed once per design iteration.
         let t0 = Instant::now();
-        let zero = model.zero_vector();
-        model.assemble(&design, &zero, None, Some(&mut self.k0), &mut self.assembly);
+        self.zero.resize(model.n_dofs(), 0.0);
+        model.assemble(
+            &design,
+            &self.zero,
+            None,
+            Some(&mut self.k0),
+            &mut self.assembly,
+        );
         self.precond.factorize(&self.k0)?;
         if self.params.predictor {
             self.predictor.build(

@@ -23,7 +23,8 @@ use flexstage_fem::{AssemblyWorkspace, Design, Factor, SolveWorkspace};
 use crate::error::Result;
 use crate::problem::Problem;
 
-/// The predictor's vectors for one design (module docs).
+/// The predictor's vectors for one design (module docs), and the buffers that build them
+/// (kept between designs, so a build allocates nothing after the first).
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Predictor {
     /// Reference stroke `a_i` of each input (the largest |x_nom,i| of the cases).
@@ -32,6 +33,24 @@ pub(crate) struct Predictor {
     linear: Vec<Vec<f64>>,
     /// `w_ij` for `i ≤ j` (full vectors), row-major over the upper triangle.
     quadratic: Vec<Vec<f64>>,
+    /// Column-major solve block (reduced vectors).
+    block: Vec<f64>,
+    /// `Q(u_i)` (full vectors).
+    q_ii: Vec<Vec<f64>>,
+    /// Full-vector scratch: residual, ±state, cross term.
+    r: Vec<f64>,
+    tmp: Vec<f64>,
+    q: Vec<f64>,
+    cross: Vec<f64>,
+}
+
+/// Resizes a list of full vectors to `count` vectors of length `len` (reusing storage).
+fn shape(v: &mut Vec<Vec<f64>>, count: usize, len: usize) {
+    v.resize_with(count, Vec::new);
+    for x in v.iter_mut() {
+        x.clear();
+        x.resize(len, 0.0);
+    }
 }
 
 impl Predictor {
@@ -51,68 +70,71 @@ impl Predictor {
         self.scale = (0..ni)
             .map(|i| problem.cases.iter().fold(0.0f64, |m, c| m.max(c[i].abs())))
             .collect();
-        // Linear part: K [u_1 … u_ni] = [P_1 … P_ni], one multi-column solve.
-        let mut block = vec![0.0; nf * ni];
-        for (i, port) in problem.inputs.iter().enumerate() {
-            let mut p = model.zero_vector();
-            p[port.dof] = flexstage_fem::pea_force(port.stiffness, self.scale[i]);
-            dofs.gather(&p, &mut block[i * nf..(i + 1) * nf]);
+        let npairs = ni * (ni + 1) / 2;
+        self.block.clear();
+        self.block.resize(nf * ni.max(npairs), 0.0);
+        for v in [&mut self.r, &mut self.tmp, &mut self.q, &mut self.cross] {
+            v.clear();
+            v.resize(nd, 0.0);
         }
-        k.solve_columns_in_place(&mut block, ni, sws)?;
-        self.linear = (0..ni)
-            .map(|i| {
-                let mut u = vec![0.0; nd];
-                dofs.scatter(&block[i * nf..(i + 1) * nf], &mut u);
-                u
-            })
-            .collect();
+        // Linear part: K [u_1 … u_ni] = [P_1 … P_ni], one multi-column solve.
+        for (i, port) in problem.inputs.iter().enumerate() {
+            self.r.fill(0.0);
+            self.r[port.dof] = flexstage_fem::pea_force(port.stiffness, self.scale[i]);
+            dofs.gather(&self.r, &mut self.block[i * nf..(i + 1) * nf]);
+        }
+        k.solve_columns_in_place(&mut self.block[..nf * ni], ni, sws)?;
+        shape(&mut self.linear, ni, nd);
+        for (i, u) in self.linear.iter_mut().enumerate() {
+            dofs.scatter(&self.block[i * nf..(i + 1) * nf], u);
+        }
         // Quadratic part: Q(a) = ½(R(a) + R(−a)).
-        let (mut r, mut tmp) = (vec![0.0; nd], vec![0.0; nd]);
-        let mut even = |a: &[f64], out: &mut Vec<f64>| {
-            out.clear();
-            out.resize(nd, 0.0);
-            model.residual(design, a, &mut r, assembly);
-            out.copy_from_slice(&r);
+        let Self { r, tmp, .. } = self;
+        let mut even = |a: &[f64], out: &mut [f64]| {
+            model.residual(design, a, r, assembly);
+            out.copy_from_slice(r);
             tmp.iter_mut().zip(a).for_each(|(t, v)| *t = -v);
-            model.residual(design, &tmp, &mut r, assembly);
+            model.residual(design, tmp, r, assembly);
             out.iter_mut()
-                .zip(&r)
+                .zip(r.iter())
                 .for_each(|(o, v)| *o = 0.5 * (*o + v));
         };
-        let mut q_ii = vec![Vec::new(); ni];
-        for (i, q) in q_ii.iter_mut().enumerate() {
-            even(&self.linear[i], q);
+        shape(&mut self.q_ii, ni, nd);
+        for (q, u) in self.q_ii.iter_mut().zip(&self.linear) {
+            even(u, q);
         }
-        let pairs: Vec<(usize, usize)> =
-            (0..ni).flat_map(|i| (i..ni).map(move |j| (i, j))).collect();
-        let mut block = vec![0.0; nf * pairs.len()];
-        let mut q = Vec::new();
-        for (c, &(i, j)) in pairs.iter().enumerate() {
-            if i == j {
-                q.clone_from(&q_ii[i]);
-            } else {
-                let sum: Vec<f64> = self.linear[i]
-                    .iter()
-                    .zip(&self.linear[j])
-                    .map(|(a, b)| a + b)
-                    .collect();
-                even(&sum, &mut q);
-                for ((v, a), b) in q.iter_mut().zip(&q_ii[i]).zip(&q_ii[j]) {
-                    *v -= a + b;
+        let mut c = 0;
+        for i in 0..ni {
+            for j in i..ni {
+                if i == j {
+                    self.q.copy_from_slice(&self.q_ii[i]);
+                } else {
+                    // Q(u_i + u_j) − Q(u_i) − Q(u_j), with the sum in `q` meanwhile.
+                    for ((s, a), b) in self.q.iter_mut().zip(&self.linear[i]).zip(&self.linear[j]) {
+                        *s = a + b;
+                    }
+                    even(&self.q, &mut self.cross);
+                    for (((v, x), a), b) in self
+                        .q
+                        .iter_mut()
+                        .zip(&self.cross)
+                        .zip(&self.q_ii[i])
+                        .zip(&self.q_ii[j])
+                    {
+                        *v = x - a - b;
+                    }
                 }
+                let col = &mut self.block[c * nf..(c + 1) * nf];
+                dofs.gather(&self.q, col);
+                col.iter_mut().for_each(|v| *v = -*v);
+                c += 1;
             }
-            let col = &mut block[c * nf..(c + 1) * nf];
-            dofs.gather(&q, col);
-            col.iter_mut().for_each(|v| *v = -*v);
         }
-        k.solve_columns_in_place(&mut block, pairs.len(), sws)?;
-        self.quadratic = (0..pairs.len())
-            .map(|c| {
-                let mut w = vec![0.0; nd];
-                dofs.scatter(&block[c * nf..(c + 1) * nf], &mut w);
-                w
-            })
-            .collect();
+        k.solve_columns_in_place(&mut self.block[..nf * npairs], npairs, sws)?;
+        shape(&mut self.quadratic, npairs, nd);
+        for (c, w) in self.quadratic.iter_mut().enumerate() {
+            dofs.scatter(&self.block[c * nf..(c + 1) * nf], w);
+        }
         Ok(())
     }
 

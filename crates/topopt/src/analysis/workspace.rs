@@ -91,6 +91,8 @@ pub(crate) struct GroupWorkspace {
     pub newton: NewtonWorkspace,
     /// `dQ/dρ` contributions of the group's cases, per response.
     pub grads: PerResponse<Vec<f64>>,
+    /// Full-vector scratch of the adjoints (right-hand side, guess, spring forces).
+    pub full: [Vec<f64>; 3],
 }
 
 impl GroupWorkspace {
@@ -116,6 +118,7 @@ impl GroupWorkspace {
             assembly: model.new_workspace(),
             newton: NewtonWorkspace::new(model, symbolic.clone()),
             grads: PerResponse::default(),
+            full: std::array::from_fn(|_| model.zero_vector()),
         }
     }
 }
