@@ -207,7 +207,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.stagnation_tolerance",
-        "Largest relative objective variation over the stagnation window, in (0, 1).",
+        "Largest relative objective variation over the stagnation window, in (0, 1). Default 1e-3 (the robust worst case wobbles by a few 1e-4 at a stationary design).",
     ),
     (
         "optimization.mirror_symmetry",

@@ -78,7 +78,7 @@ pub enum Preset {
     /// iterations.
     Paper,
     /// A coarse, fast variant for first contact and tests: 48 × 24 mesh (2.5 mm elements),
-    /// p_m = 16, up to 120 iterations, faster β continuation.
+    /// p_m = 16, up to 100 iterations, β doubled every 10 iterations.
     Quick,
     /// The paper's domain at twice the resolution, 240 × 120 (0.5 mm elements), so that
     /// hinges of about a millimetre span several elements; p_m = 40.
@@ -177,14 +177,14 @@ impl Scenario {
                 tilt_tolerance_deg: 1.0,
                 kkt_tolerance: 1e-3,
                 stagnation_window: 20,
-                stagnation_tolerance: 1e-5,
+                stagnation_tolerance: 1e-3,
                 mirror_symmetry: true,
                 robust: true,
                 stress_constraint: true,
                 projection: Projection {
                     enabled: true,
                     beta_max: 16.0,
-                    interval: 40,
+                    interval: 30,
                     eta: 0.5,
                 },
                 additive: Additive {
@@ -291,8 +291,8 @@ impl Scenario {
                 s.mesh.nl = 48;
                 s.mesh.nw = 24;
                 s.optimization.samples = 16;
-                s.optimization.max_iterations = 120;
-                s.optimization.projection.interval = 15;
+                s.optimization.max_iterations = 100;
+                s.optimization.projection.interval = 10;
                 s.regions = port_patches(&s, 2);
                 s
             }

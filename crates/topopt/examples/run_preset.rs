@@ -12,6 +12,13 @@ fn main() {
     if let Some(n) = args.get(2) {
         s.optimization.max_iterations = n.parse().expect("max iterations");
     }
+    // RUN_BETA_MAX=b: another final β (experiments).
+    if let Some(b) = std::env::var("RUN_BETA_MAX")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        s.optimization.projection.beta_max = b;
+    }
     let problem = Problem::from_scenario(&s, None).expect("problem");
     let params = OptimizerParams::from_scenario(&s);
     if let Some(l) = params.robust {
