@@ -126,7 +126,7 @@ pub fn analyze(folder: &RunFolder, options: &AnalyzeOptions) -> Result<AnalyzeSu
     let replaced = folder.has_results(out.dir());
     let run = folder.dir();
     let t = Instant::now();
-    let mut ev = Evaluator::new(&problem, 0.0, AnalysisParams::default())?;
+    let mut ev = Evaluator::new(&problem, AnalysisParams::default())?;
     let r = ev.solve_cases(&rho, None)?;
     let seconds = t.elapsed().as_secs_f64();
     run.write(out.cases(), cases_csv(&problem, &r).as_bytes())?;

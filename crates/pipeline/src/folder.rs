@@ -19,7 +19,7 @@ use crate::error::{PipelineError, Result};
 pub const DEFAULT_PRESET: &str = "quick";
 
 /// The names of the built-in scenarios.
-pub const PRESETS: [&str; 2] = ["quick", "paper"];
+pub const PRESETS: [&str; 3] = ["quick", "paper", "fine"];
 
 /// The parent of the default run folders.
 pub const RUNS: &str = "runs";

@@ -163,15 +163,15 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.initial_density",
-        "Initial uniform density, in (ρ_min, 1]. Paper silent: 0.5.",
+        "Initial uniform density, in (ρ_min, 1]. Paper silent; default equal to volume_fraction (a feasible start).",
     ),
     (
         "optimization.filter_radius",
-        "Density-filter radius in element sizes, in [0, 20]; 0 = off. Paper silent; DECISIONS.md asks for a filter.",
+        "Density-filter radius in element sizes, in [0, 20]; 0 = off. Paper silent; DECISIONS.md asks for a filter. With robust = true, the smallest radius: the minimum sizes of [limits] may enlarge it.",
     ),
     (
         "optimization.volume_fraction",
-        "Volume-fraction upper bound, in (0, 1]; 1 = no volume constraint (the paper has none).",
+        "Volume-fraction upper bound of the design domain, in (0, 1]; 1 = none (the paper states none). Default 0.235: the paper's stage weighs 46 g (Table 4), 23.5 % of the 195 g solid domain.",
     ),
     (
         "optimization.change_tolerance",
@@ -187,19 +187,15 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.output_spring",
-        "Output-port stiffness [N/m], ≥ 0: grounded springs on both output DOFs (the stage load, Table 4's K_qo), either objective; 0 = none. Default 1e7: without it the workspace optimum moves the output through void hinges (α ≈ 13, zero output stiffness); with it α ≈ 0.95 (paper 1.012) at 36 MPa peak stress.",
+        "Stiffness [N/m] of the load the output drives, ≥ 0; 0 = none. Acts on u_oy and on u_ox − ½(u_in1 + u_in2), the motion relative to the moving frame of Eq. 22. Default 4e6, the paper's measured output stiffness (Table 4, K_qo): the design must transmit force, not only motion.",
     ),
     (
         "optimization.strain_energy_limit",
-        "Strain-energy bound Σ0 [J], ≥ 0 (Eq. 5); 0 = strain_energy_factor × Σ(initial design).",
-    ),
-    (
-        "optimization.strain_energy_factor",
-        "Σ0 relative to the initial design's largest per-sample strain energy, > 0. Default 2 (a coarse upper bound).",
+        "Strain-energy bound Σ0 [J] of Eq. 5, ≥ 0; 0 = derived from the allowable stress, Σ0 = (1 − ν) σ_a² V* / E0: the most energy the material volume V* stores without exceeding σ_a = fatigue_strength / safety_factor (DECISIONS.md).",
     ),
     (
         "optimization.tilt_tolerance_deg",
-        "Max angle [deg] between the differential output and the tilted axis θ, in (0, 45]; used when tilt_deg ≠ 0.",
+        "Max angle [deg] between the differential output and the tilted axis θ, in (0, 45]; used when tilt_deg ≠ 0. Default 1.",
     ),
     (
         "optimization.kkt_tolerance",
@@ -211,7 +207,19 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.stagnation_tolerance",
-        "Largest relative objective variation over the stagnation window, in (0, 1).",
+        "Largest relative objective variation over the stagnation window, in (0, 1). Default 1e-3 (the robust worst case wobbles by a few 1e-4 at a stationary design).",
+    ),
+    (
+        "optimization.mirror_symmetry",
+        "Mirror symmetry about x = l/2: one design variable per element pair, so the design is symmetric by construction. Needs a symmetric problem and tilt_deg = 0. Default true.",
+    ),
+    (
+        "optimization.robust",
+        "Robust formulation (Wang, Lazarov & Sigmund 2011): maximize the worst workspace of the eroded, intermediate and dilated designs; thresholds and filter radius come from limits.min_hinge_thickness and limits.min_slot_width (DECISIONS.md). Default true.",
+    ),
+    (
+        "optimization.stress_constraint",
+        "Fatigue stress constraint: aggregated von Mises stress of the (eroded) design at the four Table 2 extreme inputs ≤ fatigue_strength / safety_factor / mesh_stress_factor (DECISIONS.md). Default true.",
     ),
     (
         "optimization.projection",
@@ -236,7 +244,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.additive.enabled",
-        "Use the additive material during optimization.",
+        "Use the additive material during optimization. Default false: at the paper's stroke (strains ≈ 1e-3) it changes neither the topology nor the area (DECISIONS.md); turn it on for large-stroke designs.",
     ),
     (
         "optimization.additive.initial_coefficient",
@@ -245,6 +253,34 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     (
         "optimization.additive.strain_threshold",
         "Von Mises strain threshold ε* of the c2 update (Eq. A3), > 0. Table 3: 0.5.",
+    ),
+    (
+        "limits",
+        "What the built stage must withstand and what the workshop can make (DECISIONS.md). Defaults: aluminium 6061-T6, wire EDM.",
+    ),
+    (
+        "limits.fatigue_strength",
+        "Fatigue strength [Pa], > 0: fully reversed stress amplitude survived for the design life. Al 6061-T6: 96.5e6 (5e8 cycles, R. R. Moore; ASM Handbook Vol. 2).",
+    ),
+    (
+        "limits.yield_strength",
+        "Tensile yield strength [Pa], ≥ fatigue_strength. Al 6061-T6: 276e6 (ASM Handbook Vol. 2).",
+    ),
+    (
+        "limits.safety_factor",
+        "Safety factor on the fatigue strength, in [1, 10]; allowable stress = fatigue_strength / safety_factor. Default 1.5.",
+    ),
+    (
+        "limits.mesh_stress_factor",
+        "How much the design mesh under-estimates hinge peak stress, in [1, 10]: the optimizer keeps the design-mesh stress ≤ allowable / this. Default 2 (measured 2-3x); the body-fitted re-analysis checks it.",
+    ),
+    (
+        "limits.min_hinge_thickness",
+        "Smallest solid member (hinge) thickness [m], in (0, 0.1]. Default 0.5 mm. Sets the robust formulation's erosion threshold and filter radius.",
+    ),
+    (
+        "limits.min_slot_width",
+        "Smallest void (slot) width [m], in (0, 0.1], e.g. the wire-EDM kerf. Default 0.4 mm. Sets the dilation threshold.",
     ),
     (
         "hysteresis",

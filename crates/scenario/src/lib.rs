@@ -26,8 +26,8 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 pub use design::{
-    Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Material, Mesh, ObjectiveKind,
-    Optimization, Output, Projection, Region, RegionKind, Selector, Support,
+    Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Limits, Material, Mesh,
+    ObjectiveKind, Optimization, Output, Projection, Region, RegionKind, Selector, Support,
 };
 pub use error::{RangeError, Result, ScenarioError};
 pub use stage::{
@@ -50,6 +50,9 @@ pub struct Scenario {
     pub output: Output,
     /// Optimization settings.
     pub optimization: Optimization,
+    /// Fatigue strength, safety factor and the smallest hinge and slot.
+    #[serde(default)]
+    pub limits: Limits,
     /// Piezo hysteresis and amplifier.
     pub hysteresis: Hysteresis,
     /// Reduced stage model: guess and truth.
@@ -74,17 +77,24 @@ pub enum Preset {
     /// The paper's settings (Tables 1, 3, 4, A1): 120 × 60 mesh, p_m = 40, up to 1000
     /// iterations.
     Paper,
-    /// A coarse, fast variant for first contact and tests: 48 × 24 mesh, p_m = 16, up to 80
-    /// iterations, β doubled every 15 iterations.
+    /// A coarse, fast variant for first contact and tests: 48 × 24 mesh (2.5 mm elements),
+    /// p_m = 16, up to 100 iterations, β doubled every 10 iterations.
     Quick,
+    /// The paper's domain at twice the resolution, 240 × 120 (0.5 mm elements), so that
+    /// hinges of about a millimetre span several elements; p_m = 40.
+    Fine,
 }
 
 impl Preset {
-    /// Parses a preset name ("paper" or "quick").
+    /// The names [`Preset::from_name`] accepts.
+    pub const NAMES: [&'static str; 3] = ["paper", "quick", "fine"];
+
+    /// Parses a preset name ("paper", "quick" or "fine").
     pub fn from_name(name: &str) -> Option<Preset> {
         match name {
             "paper" => Some(Preset::Paper),
             "quick" => Some(Preset::Quick),
+            "fine" => Some(Preset::Fine),
             _ => None,
         }
     }
@@ -156,31 +166,34 @@ impl Scenario {
                 rho_min: 1e-6,
                 max_iterations: 1000,
                 samples: 40,
-                initial_density: 0.5,
-                filter_radius: 1.5,
-                volume_fraction: 1.0,
+                initial_density: 0.235,
+                filter_radius: 2.0,
+                volume_fraction: 0.235,
                 change_tolerance: 1e-3,
                 kinematics: KinematicsKind::Nonlinear,
                 objective: ObjectiveKind::Workspace,
-                output_spring: 1e7,
+                output_spring: 4e6,
                 strain_energy_limit: 0.0,
-                strain_energy_factor: 2.0,
-                tilt_tolerance_deg: 2.0,
+                tilt_tolerance_deg: 1.0,
                 kkt_tolerance: 1e-3,
                 stagnation_window: 20,
-                stagnation_tolerance: 1e-5,
+                stagnation_tolerance: 1e-3,
+                mirror_symmetry: true,
+                robust: true,
+                stress_constraint: true,
                 projection: Projection {
                     enabled: true,
                     beta_max: 16.0,
-                    interval: 40,
+                    interval: 30,
                     eta: 0.5,
                 },
                 additive: Additive {
-                    enabled: true,
+                    enabled: false,
                     initial_coefficient: 1e-5,
                     strain_threshold: 0.5,
                 },
             },
+            limits: Limits::default(),
             hysteresis: Hysteresis {
                 voltage_min: 0.0,
                 voltage_max: 1000.0,
@@ -278,9 +291,17 @@ impl Scenario {
                 s.mesh.nl = 48;
                 s.mesh.nw = 24;
                 s.optimization.samples = 16;
-                s.optimization.max_iterations = 80;
-                s.optimization.projection.interval = 15;
+                s.optimization.max_iterations = 100;
+                s.optimization.projection.interval = 10;
                 s.regions = port_patches(&s, 2);
+                s
+            }
+            Preset::Fine => {
+                let mut s = Scenario::paper();
+                s.name = "fine".into();
+                s.mesh.nl = 240;
+                s.mesh.nw = 120;
+                s.regions = port_patches(&s, 6);
                 s
             }
         }
@@ -296,6 +317,17 @@ impl Scenario {
         design::validate_supports(&self.supports, &self.mesh)?;
         design::validate_regions(&self.regions, &self.mesh)?;
         self.optimization.validate()?;
+        self.limits.validate()?;
+        if self.optimization.mirror_symmetry && self.output.tilt_deg != 0.0 {
+            return Err(ScenarioError::Inconsistent {
+                fields: "optimization.mirror_symmetry, output.tilt_deg".into(),
+                reason: format!(
+                    "a tilted output (tilt_deg = {}) is not mirror-symmetric: set \
+                     optimization.mirror_symmetry = false",
+                    self.output.tilt_deg
+                ),
+            });
+        }
         self.hysteresis.validate()?;
         self.stage.validate()?;
         self.controller.validate()?;
@@ -344,22 +376,26 @@ impl Scenario {
     }
 }
 
-/// Solid patches of `n × n` elements at the two input ports and the output port (DECISIONS.md).
+/// Solid patches at the two input ports and the output port (DECISIONS.md): `n` elements deep
+/// from the edge, and along the edge the elements whose centroids lie within `n/2 + 1/4`
+/// element sizes of the port (the quarter element keeps centroids off the box edges, so the
+/// selection does not depend on rounding and stays mirror-symmetric).
 fn port_patches(s: &Scenario, n: usize) -> Vec<Region> {
     let (dx, dy) = s.mesh.element_size();
     let (l, w) = (s.mesh.length, s.mesh.width);
-    let (hx, hy) = (n as f64 * dx, 0.5 * n as f64 * dy);
+    let nf = n as f64;
+    // Depth: centroids at (k + ½)·d, k < n, all at least ½ d inside the box.
+    let (deep_x, deep_y) = (nf * dx, nf * dy);
+    // Along the edge: half-widths with the quarter-element margin.
+    let (half_x, half_y) = ((0.5 * nf + 0.25) * dx, (0.5 * nf + 0.25) * dy);
     let solid = |min: [f64; 2], max: [f64; 2]| Region {
         kind: RegionKind::Solid,
         at: Selector::Box { min, max },
     };
     vec![
-        solid([0.0, 0.5 * w - hy], [hx, 0.5 * w + hy]),
-        solid([l - hx, 0.5 * w - hy], [l, 0.5 * w + hy]),
-        solid(
-            [0.5 * l - 0.5 * n as f64 * dx, w - n as f64 * dy],
-            [0.5 * l + 0.5 * n as f64 * dx, w],
-        ),
+        solid([0.0, 0.5 * w - half_y], [deep_x, 0.5 * w + half_y]),
+        solid([l - deep_x, 0.5 * w - half_y], [l, 0.5 * w + half_y]),
+        solid([0.5 * l - half_x, w - deep_y], [0.5 * l + half_x, w]),
     ]
 }
 
@@ -369,7 +405,7 @@ mod tests {
 
     #[test]
     fn every_key_has_a_comment() {
-        for preset in [Preset::Paper, Preset::Quick] {
+        for preset in [Preset::Paper, Preset::Quick, Preset::Fine] {
             let text = Scenario::preset(preset).to_commented_toml();
             let lines: Vec<&str> = text.lines().collect();
             for (i, line) in lines.iter().enumerate() {
