@@ -19,6 +19,7 @@
 mod design;
 mod docs;
 mod error;
+mod rig;
 mod stage;
 
 use std::path::Path;
@@ -30,6 +31,7 @@ pub use design::{
     Optimization, Output, Projection, Region, RegionKind, Selector, Support,
 };
 pub use error::{Result, ScenarioError};
+pub use rig::{Amplifier, Creep, FloorVibration, Rig, SensorDynamics, Twin};
 pub use stage::{
     BoucWen, Controller, Hysteresis, Sensors, Simulation, Stage, StageParams, Trajectory,
 };
@@ -60,12 +62,23 @@ pub struct Scenario {
     pub sensors: Sensors,
     /// Timing of the simulated experiment.
     pub simulation: Simulation,
+    /// The loop around the simulated stage, as on a rig (delay, amplifiers, PEA truth and
+    /// creep, sensor dynamics and noise, floor vibration).
+    #[serde(default = "default_rig")]
+    pub rig: Rig,
+    /// How the digital twin is built from the design.
+    #[serde(default)]
+    pub twin: Twin,
     /// Supports.
     pub supports: Vec<Support>,
     /// Passive regions.
     pub regions: Vec<Region>,
     /// Reference trajectories.
     pub trajectories: Vec<Trajectory>,
+}
+
+fn default_rig() -> Rig {
+    Rig::realistic(&Scenario::paper().hysteresis)
 }
 
 /// Built-in scenarios.
@@ -128,6 +141,24 @@ impl Scenario {
             ..guess.clone()
         };
         let damping_ratio = 0.02;
+        let hysteresis = Hysteresis {
+            voltage_min: 0.0,
+            voltage_max: 1000.0,
+            pea1: BoucWen {
+                d_p: 6.2e-2,
+                a_bw: 1.2e-2,
+                b_bw: 1.9e-3,
+                gamma_bw: 1.6e-3,
+                delta_bw: 5.015e-4,
+            },
+            pea2: BoucWen {
+                d_p: 6.5e-2,
+                a_bw: 2.5e-2,
+                b_bw: 1.8e-3,
+                gamma_bw: 5.3e-3,
+                delta_bw: 1.973e-4,
+            },
+        };
         let mut scenario = Scenario {
             name: "paper".into(),
             regions: Vec::new(),
@@ -181,24 +212,9 @@ impl Scenario {
                     strain_threshold: 0.5,
                 },
             },
-            hysteresis: Hysteresis {
-                voltage_min: 0.0,
-                voltage_max: 1000.0,
-                pea1: BoucWen {
-                    d_p: 6.2e-2,
-                    a_bw: 1.2e-2,
-                    b_bw: 1.9e-3,
-                    gamma_bw: 1.6e-3,
-                    delta_bw: 5.015e-4,
-                },
-                pea2: BoucWen {
-                    d_p: 6.5e-2,
-                    a_bw: 2.5e-2,
-                    b_bw: 1.8e-3,
-                    gamma_bw: 5.3e-3,
-                    delta_bw: 1.973e-4,
-                },
-            },
+            rig: Rig::realistic(&hysteresis),
+            twin: Twin::default(),
+            hysteresis,
             stage: Stage {
                 damping_ratio,
                 guess: guess.with_damping_ratio(damping_ratio),
@@ -312,6 +328,8 @@ impl Scenario {
         self.controller.validate()?;
         self.sensors.validate()?;
         self.simulation.validate()?;
+        self.rig.validate()?;
+        self.twin.validate()?;
         for (i, t) in self.trajectories.iter().enumerate() {
             t.validate(&format!("trajectories[{i}]"))?;
         }

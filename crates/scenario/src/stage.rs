@@ -23,7 +23,7 @@ pub struct BoucWen {
 }
 
 impl BoucWen {
-    fn validate(&self, field: &str) -> Result<()> {
+    pub(crate) fn validate(&self, field: &str) -> Result<()> {
         positive(&format!("{field}.d_p"), self.d_p)?;
         check(&format!("{field}.a_bw"), self.a_bw, true, "a finite number")?;
         non_negative(&format!("{field}.b_bw"), self.b_bw)?;
