@@ -234,7 +234,9 @@ impl Scenario {
                 a_bound: [1e-6, 1e-6],
                 boundary_layer: [1e-4, 1e-8],
                 observer_velocity: false,
-                stroke: 30e-6,
+                // What 0–1000 V delivers around the 500 V bias with Table A1 (PEA1: +30.5/−24.9
+                // µm, flexstage-control `deliverable_stroke`), not the ±30 µm of Section 4.1.
+                stroke: 24e-6,
                 pid: [0.0, 300.0, 0.0],
             },
             sensors: Sensors {
@@ -261,20 +263,20 @@ impl Scenario {
                 Trajectory::Lissajous {
                     name: "lissajous-3".into(),
                     ratio: 3.0,
-                    amplitude: [10e-6, 20e-6],
+                    amplitude: [8e-6, 16e-6],
                     frequency: 2.0,
                     duration: 1.0,
                 },
                 Trajectory::Lissajous {
                     name: "lissajous-2".into(),
                     ratio: 2.0,
-                    amplitude: [10e-6, 20e-6],
+                    amplitude: [8e-6, 16e-6],
                     frequency: 2.0,
                     duration: 1.0,
                 },
                 Trajectory::Circle {
                     name: "circle".into(),
-                    radius: 10e-6,
+                    radius: 8e-6,
                     frequency: 2.0,
                     duration: 1.0,
                 },

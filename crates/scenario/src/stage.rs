@@ -258,7 +258,7 @@ fn default_boundary_layer() -> [f64; 2] {
 }
 
 fn default_stroke() -> f64 {
-    30e-6
+    24e-6
 }
 
 fn default_pid() -> [f64; 3] {

@@ -46,6 +46,9 @@ fn realistic_rig_has_every_effect_on_and_the_ideal_one_none() {
     i.validate().unwrap();
 }
 
+/// An edit of the paper scenario.
+type Edit = Box<dyn Fn(&mut Scenario)>;
+
 fn error_with(edit: impl Fn(&mut Scenario)) -> String {
     let mut s = Scenario::paper();
     edit(&mut s);
@@ -58,7 +61,7 @@ fn error_with(edit: impl Fn(&mut Scenario)) -> String {
 
 #[test]
 fn bad_rig_and_twin_values_name_the_field() {
-    let cases: Vec<(Box<dyn Fn(&mut Scenario)>, &str)> = vec![
+    let cases: Vec<(Edit, &str)> = vec![
         (Box::new(|s| s.rig.delay = 3), "rig.delay"),
         (
             Box::new(|s| s.rig.amplifier.bandwidth = -1.0),
