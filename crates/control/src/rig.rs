@@ -432,6 +432,10 @@ struct Rig {
     amp_decay: f64,
     sensor_decay: f64,
     sensor_ramp: f64,
+    /// x_nom at the substep boundaries of the current sample (preallocated).
+    path: Vec<[f64; 2]>,
+    /// The amplifier voltage at the substep boundaries (preallocated).
+    u_path: Vec<f64>,
 }
 
 impl Rig {
@@ -498,6 +502,8 @@ impl Rig {
             amp_decay,
             sensor_decay,
             sensor_ramp,
+            path: vec![[0.0; 2]; params.substeps + 1],
+            u_path: vec![0.0; params.substeps + 1],
             params,
         })
     }
@@ -516,11 +522,10 @@ impl Rig {
     /// Amplifier output after one substep towards `target` (module docs); returns the new
     /// voltage and whether it ramped (false: an ideal jump at the substep start).
     #[inline]
-    fn amplify(&self, i: usize, target: f64, h: f64) -> (f64, bool) {
+    fn amplify(&self, u0: f64, target: f64, h: f64) -> (f64, bool) {
         let a = &self.params.amplifier;
         let [lo, hi] = self.params.voltage_range;
         let target = target.clamp(lo, hi);
-        let u0 = self.voltage[i];
         let mut u1 = target + (u0 - target) * self.amp_decay;
         let rate = a.max_rate();
         let ramped = a.bandwidth > 0.0 || rate.is_finite();
@@ -547,28 +552,48 @@ impl Rig {
         g * c
     }
 
-    /// One substep of the actuators: returns x_nom at the start and at the end.
-    #[inline]
-    fn actuate(&mut self, target: ([f64; 2], [f64; 2]), h: f64) -> [[f64; 2]; 2] {
-        let x0 = self.x_nom;
+    /// The actuators over one sample: x_nom at every substep boundary into `self.path`
+    /// (`path[0]` = now). The amplifier's voltage is followed substep by substep; within a
+    /// sample it moves monotonically towards its target (first-order response, rate limit),
+    /// and the rate-independent part of Bouc–Wen depends only on the voltage path, not its
+    /// timing, so one exact Bouc–Wen step over the sample gives the end state and x_nom in
+    /// between is interpolated in U along the branch (error ≈ h''(U)·ΔU²/8: picometres for
+    /// the voltage steps of a sample). An ideal amplifier jumps at the start of the sample.
+    fn actuate(&mut self, target: ([f64; 2], [f64; 2]), h: f64) {
+        let n = self.params.substeps;
         if self.params.actuator == PlantActuator::Ideal {
             self.x_nom = target.1;
-            return [self.x_nom, self.x_nom];
+            self.path.iter_mut().for_each(|p| *p = target.1);
+            return;
         }
+        let t = self.params.sample_time;
+        let x_start = self.x_nom;
         let mut jump = false;
         for i in 0..2 {
-            let (u1, ramped) = self.amplify(i, target.0[i], h);
-            jump |= !ramped;
-            let x_pea = self.pea[i].step(u1, if ramped { h } else { 0.0 });
-            self.voltage[i] = u1;
-            let dx = (x_pea - self.x_bias[i]) * MICROMETRE;
-            let c = self.creep(i, dx);
-            self.x_nom[i] = dx + c;
-        }
-        if jump {
-            [self.x_nom, self.x_nom]
-        } else {
-            [x0, self.x_nom]
+            let u_start = self.voltage[i];
+            let mut u = u_start;
+            for k in 1..=n {
+                let (u1, ramped) = self.amplify(u, target.0[i], h);
+                jump |= !ramped;
+                u = u1;
+                self.u_path[k] = u1;
+            }
+            let x_bw0 = self.pea[i].x();
+            let x_bw1 = self.pea[i].step(u, if jump { 0.0 } else { t });
+            self.voltage[i] = u;
+            let du = u - u_start;
+            for k in 1..=n {
+                let xb = if du != 0.0 && !jump {
+                    x_bw0 + (x_bw1 - x_bw0) * (self.u_path[k] - u_start) / du
+                } else {
+                    x_bw1
+                };
+                let dx = (xb - self.x_bias[i]) * MICROMETRE;
+                let c = self.creep(i, dx);
+                self.path[k][i] = dx + c;
+            }
+            self.path[0][i] = if jump { self.path[1][i] } else { x_start[i] };
+            self.x_nom[i] = self.path[n][i];
         }
     }
 
@@ -650,22 +675,24 @@ impl<M: Mechanics> RigPlant<M> {
         self.rig.floor.advance();
         let f1 = self.rig.floor.value();
         let filtered = self.rig.params.sensor.bandwidth > 0.0;
+        let mut q0 = if filtered {
+            self.mechanics.output()
+        } else {
+            [0.0; 2]
+        };
+        self.rig.actuate(target, h);
         for k in 0..n {
-            let x = self.rig.actuate(target, h);
+            let x = [self.rig.path[k], self.rig.path[k + 1]];
             let (s0, s1) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
             let floor = [
                 [f0[0] + s0 * (f1[0] - f0[0]), f0[1] + s0 * (f1[1] - f0[1])],
                 [f0[0] + s1 * (f1[0] - f0[0]), f0[1] + s1 * (f1[1] - f0[1])],
             ];
-            let q0 = if filtered {
-                self.mechanics.output()
-            } else {
-                [0.0; 2]
-            };
             self.mechanics.advance(x, floor);
             if filtered {
                 let q1 = self.mechanics.output();
                 self.rig.sense(q0, q1);
+                q0 = q1;
             }
         }
     }
