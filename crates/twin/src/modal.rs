@@ -46,6 +46,8 @@ pub struct ModalStage {
     pub modes: Vec<Mode>,
     /// The damping used.
     pub damping: RayleighDamping,
+    /// Mode shapes in the reduced coordinates (column k = mode k, `φᵀ M_r φ = 1`).
+    pub shapes: DMatrix<f64>,
 }
 
 impl ModalStage {
@@ -67,7 +69,9 @@ impl ModalStage {
         let mut order: Vec<usize> = (0..n).collect();
         order.sort_by(|&i, &j| eig.eigenvalues[i].total_cmp(&eig.eigenvalues[j]));
         let mut modes = Vec::with_capacity(n);
-        for &k in &order {
+        let mut sorted = DMatrix::zeros(n, n);
+        for (c, &k) in order.iter().enumerate() {
+            sorted.set_column(c, &shapes.column(k));
             let w2 = eig.eigenvalues[k];
             if w2.is_nan() || w2 <= 0.0 {
                 return Err(TwinError::Reduced(format!(
@@ -86,7 +90,11 @@ impl ModalStage {
                 plates: [phi[0], phi[1]],
             });
         }
-        Ok(ModalStage { modes, damping })
+        Ok(ModalStage {
+            modes,
+            damping,
+            shapes: sorted,
+        })
     }
 
     /// Static gain x_nom → q (2 × 2), `Σ_k out_k in_kᵀ / ω_k²`.

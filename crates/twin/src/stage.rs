@@ -20,6 +20,10 @@ struct Modes {
     output: [Vec<f64>; 2],
     plates: [Vec<f64>; 2],
     omega2: Vec<f64>,
+    /// 1/ω² (quasi-static modal compliance).
+    compliance: Vec<f64>,
+    /// ∂(ω²)/∂x_in per mode (zeros for the linear twin).
+    stiffening: [Vec<f64>; 2],
 }
 
 /// The twin's mechanics for substeps of `h` (module docs).
@@ -32,9 +36,18 @@ pub struct TwinStage {
     nonlinear: Option<NonlinearMap>,
 }
 
-/// One substep of every mode: `s₊ = Φ s + Γ p₀ + Λ (p₁ − p₀)` with `p = in·u`.
+/// One substep of every mode: `s₊ = Φ s + Γ p₀ + Λ (p₁ − p₀)` with `p = in·u` minus the
+/// operating-point stiffening `(s·x_in)(η − p₀/ω²)` held over the substep
+/// ([`crate::nonlinear`]).
 #[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"))]
-fn advance_modes(m: &Modes, eta: &mut [f64], rate: &mut [f64], u0: [f64; 4], u1: [f64; 4]) {
+fn advance_modes(
+    m: &Modes,
+    eta: &mut [f64],
+    rate: &mut [f64],
+    u0: [f64; 4],
+    u1: [f64; 4],
+    x_in: [f64; 2],
+) {
     let n = eta.len();
     let [i0, i1, i2, i3] = [
         &m.input[0][..n],
@@ -54,9 +67,17 @@ fn advance_modes(m: &Modes, eta: &mut [f64], rate: &mut [f64], u0: [f64; 4], u1:
         &m.lambda[0][..n],
         &m.lambda[1][..n],
     ];
+    let [s0, s1, c] = [
+        &m.stiffening[0][..n],
+        &m.stiffening[1][..n],
+        &m.compliance[..n],
+    ];
     for k in 0..n {
-        let p0 = i0[k] * u0[0] + i1[k] * u0[1] + i2[k] * u0[2] + i3[k] * u0[3];
-        let p1 = i0[k] * u1[0] + i1[k] * u1[1] + i2[k] * u1[2] + i3[k] * u1[3];
+        let mut p0 = i0[k] * u0[0] + i1[k] * u0[1] + i2[k] * u0[2] + i3[k] * u0[3];
+        let mut p1 = i0[k] * u1[0] + i1[k] * u1[1] + i2[k] * u1[2] + i3[k] * u1[3];
+        let g = (s0[k] * x_in[0] + s1[k] * x_in[1]) * (eta[k] - p0 * c[k]);
+        p0 -= g;
+        p1 -= g;
         let dp = p1 - p0;
         let (e, v) = (eta[k], rate[k]);
         eta[k] = a00[k] * e + a01[k] * v + g0[k] * p0 + l0[k] * dp;
@@ -107,10 +128,18 @@ impl TwinStage {
                 m.output[i].push(mode.output[i]);
                 m.plates[i].push(mode.plates[i]);
             }
-            m.omega2
-                .push((std::f64::consts::TAU * mode.frequency).powi(2));
+            let w2 = (std::f64::consts::TAU * mode.frequency).powi(2);
+            m.omega2.push(w2);
+            m.compliance.push(1.0 / w2);
         }
         let n = modal.modes.len();
+        m.stiffening = [vec![0.0; n], vec![0.0; n]];
+        if let Some(nl) = &nonlinear {
+            for (k, s) in nl.stiffening.iter().enumerate().take(n) {
+                m.stiffening[0][k] = s[0];
+                m.stiffening[1][k] = s[1];
+            }
+        }
         TwinStage {
             h,
             modes: m,
@@ -166,7 +195,12 @@ impl Mechanics for TwinStage {
     fn advance(&mut self, x_nom: [[f64; 2]; 2], floor: [[f64; 2]; 2]) {
         let u0 = [x_nom[0][0], x_nom[0][1], floor[0][0], floor[0][1]];
         let u1 = [x_nom[1][0], x_nom[1][1], floor[1][0], floor[1][1]];
-        advance_modes(&self.modes, &mut self.eta, &mut self.rate, u0, u1);
+        let x_in = if self.nonlinear.is_some() {
+            self.inputs()
+        } else {
+            [0.0; 2]
+        };
+        advance_modes(&self.modes, &mut self.eta, &mut self.rate, u0, u1, x_in);
     }
 
     #[inline]

@@ -131,7 +131,13 @@ impl Twin {
         )?;
         let modal = ModalStage::new(&reduction, fe.k_pea, damping)?;
         let nonlinear = if params.nonlinear {
-            Some(fit(&fe, params.fit_amplitude, params.fit_points)?)
+            Some(fit(
+                &fe,
+                &reduction,
+                &modal,
+                params.fit_amplitude,
+                params.fit_points,
+            )?)
         } else {
             None
         };

@@ -7,7 +7,9 @@
 //! * the full nonlinear transient (Total Lagrangian, Newmark average acceleration, Newton per
 //!   step) under a step and a 200 Hz sine at the PEA inputs over 20 ms: the output within 1 %
 //!   of its range on both axes (issue #15),
-//! * the nonlinear FE statics at points off the fit grid (the polynomial correction),
+//! * the nonlinear FE statics at points off the fit grid (the polynomial correction), and the
+//!   modes of the FE tangent at an operating point (first-order eigenvalue perturbation: the
+//!   twin's stiffening term),
 //! * the closed-form energy of an undamped free vibration (conserved to 1e-6; the exact modal
 //!   discretization conserves it to round-off),
 //! * its own frequency response (the Bode data) against a simulated steady-state sine.
@@ -132,6 +134,67 @@ fn nonlinear_map_reproduces_nonlinear_statics_off_the_grid() {
                 "{miss:e} vs {effect:e}"
             );
         }
+    }
+}
+
+#[test]
+fn stiffening_predicts_the_tangent_modes_at_an_operating_point() {
+    use flexstage_fem::{NewtonParams, NewtonWorkspace, SymbolicFactor, newton};
+    let t = twin();
+    let fe = &t.fe;
+    let model = &fe.model;
+    let dofs = model.dofs();
+    let nl = t.nonlinear.as_ref().unwrap();
+    let x = [20e-6, -15e-6];
+    let mut ws = NewtonWorkspace::new(model, SymbolicFactor::for_model(model).unwrap());
+    let mut u = model.zero_vector();
+    newton::solve(
+        model,
+        &fe.design(),
+        &fe.pea_load(x),
+        &mut u,
+        &NewtonParams::default(),
+        &mut ws,
+        None,
+    )
+    .unwrap();
+    // The reduced tangent at the deformed state and its modes.
+    let n = dofs.n_free();
+    let basis: Vec<Vec<f64>> = t
+        .reduction
+        .basis
+        .iter()
+        .map(|v| {
+            let mut r = vec![0.0; n];
+            dofs.gather(v, &mut r);
+            r
+        })
+        .collect();
+    let r = basis.len();
+    let mut k = nalgebra::DMatrix::zeros(r, r);
+    let mut kv = vec![0.0; n];
+    for j in 0..r {
+        ws.tangent.matvec(&basis[j], &mut kv);
+        for i in 0..r {
+            k[(i, j)] = basis[i].iter().zip(&kv).map(|(a, b)| a * b).sum::<f64>();
+        }
+    }
+    let mut cb = t.reduction.clone();
+    cb.stiffness = 0.5 * (&k + k.transpose());
+    let tangent = ModalStage::new(&cb, fe.k_pea, RayleighDamping::none()).unwrap();
+    let x_in = [u[fe.interface[0]], u[fe.interface[1]]];
+    for kk in 0..4 {
+        let w0 = (std::f64::consts::TAU * t.modal.modes[kk].frequency).powi(2);
+        let wt = (std::f64::consts::TAU * tangent.modes[kk].frequency).powi(2);
+        let s = nl.stiffening[kk];
+        let predicted = s[0] * x_in[0] + s[1] * x_in[1];
+        println!(
+            "mode {}: ω² shift at the operating point {:+.3e} (tangent) vs {:+.3e} (twin)",
+            kk + 1,
+            (wt - w0) / w0,
+            predicted / w0
+        );
+        assert!((wt - w0 - predicted).abs() <= 0.1 * (wt - w0).abs() + 1e-7 * w0);
     }
 }
 
