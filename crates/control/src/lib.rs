@@ -20,8 +20,12 @@
 //!   ([`plant::LumpedStage`]) and the lumped plant in its minimal loop ([`plant::Plant`]); the
 //!   finite-element twin of the designed stage is `flexstage-twin`;
 //! * [`trajectory`]: Lissajous curves of any ratio, circle, steps and ramps with a smooth
-//!   start; the designed workspace;
-//! * [`experiment`]: one run of a variant on the plant, its time series and metrics;
+//!   start; the designed workspace; [`trajectory::feasibility`]: a reference is refused if it
+//!   reaches the Nyquist frequency or needs more stroke, voltage or amplifier current than the
+//!   rig has;
+//! * [`experiment`]: one run of a variant on a plant ([`experiment::experiment_on`] takes any
+//!   [`rig::StagePlant`]: the lumped model in the rig, [`experiment::Setup::lumped_plant`], or
+//!   the twin of `flexstage-twin`), its time series and metrics;
 //! * [`analysis`]: closed-loop poles of the sampled loop on the nominal linear model;
 //! * [`linalg`]: `expm`, `c2d` (ZOH), `lyap`, `dlyap`, `poles` in python-control style;
 //! * [`samples`]: problems with known answers.

@@ -9,11 +9,10 @@
 //! Writes `OUT_DIR/{validity.json, modes.csv, bode.csv, bode_magnitude.svg, bode_phase.svg}`
 //! and prints the summary.
 
-use flexstage_control::model::StageModel;
 use flexstage_reduce::{ReduceParams, reduce, reduction_problem};
 use flexstage_scenario::{Preset, Scenario};
 use flexstage_topopt::DesignFile;
-use flexstage_twin::report::{Bode, modes_table, validity_lines};
+use flexstage_twin::report::{bode_for, modes_table, validity_lines};
 use flexstage_twin::{Twin, ValidationParams, validate};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -65,8 +64,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..ReduceParams::default()
     };
     let reduced = reduce(&scenario, &problem, &design.rho, &params)?;
-    let lumped = StageModel::with_coupling(&reduced.params, 0.0)?;
-    let bode = Bode::new(&twin, &lumped, 10.0, 50_000.0, 400)?;
+    let bode = bode_for(&twin, &reduced.params)?;
     std::fs::write(out.join("bode.csv"), bode.csv())?;
     let [mag, phase] = bode.svg()?;
     std::fs::write(out.join("bode_magnitude.svg"), mag)?;

@@ -74,6 +74,13 @@ pub fn lumped_response(model: &StageModel, f: f64) -> Result<[[(f64, f64); 2]; 2
     Ok([0, 1].map(|i| [0, 1].map(|j| (x[(i, j)].re, x[(i, j)].im))))
 }
 
+/// The Bode data of the twin beside the lumped model with parameters `lumped` (e.g. the
+/// design's `reduce/params.toml`, no cross terms), 10 Hz to 50 kHz, 400 points.
+pub fn bode_for(twin: &Twin, lumped: &flexstage_scenario::StageParams) -> Result<Bode> {
+    let model = StageModel::new(lumped)?;
+    Bode::new(twin, &model, 10.0, 50_000.0, 400)
+}
+
 /// Bode data of the twin and the lumped model.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Bode {
