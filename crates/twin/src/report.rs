@@ -163,11 +163,17 @@ impl Bode {
     /// The magnitude and phase figures (SVG) of the two axes, twin beside lumped.
     pub fn svg(&self) -> Result<[String; 2]> {
         let lf: Vec<f64> = self.frequency.iter().map(|f| f.log10()).collect();
+        // Phases unwrapped along the frequency axis (no ±360° jumps in the figure).
         let series = |g: &[[[(f64, f64); 2]; 2]], axis: usize, phase: bool| -> Vec<(f64, f64)> {
+            let mut last: Option<f64> = None;
             g.iter()
                 .zip(&lf)
                 .map(|(g, &x)| {
-                    let (m, p) = mag_phase(axes(g)[axis]);
+                    let (m, mut p) = mag_phase(axes(g)[axis]);
+                    if let Some(l) = last {
+                        p += 360.0 * ((l - p) / 360.0).round();
+                    }
+                    last = Some(p);
                     (x, if phase { p } else { m })
                 })
                 .collect()
