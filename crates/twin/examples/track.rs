@@ -96,32 +96,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
         for variant in Variant::ALL {
             for plant in ["twin", "lumped", "ideal"] {
-                let rec = match plant {
-                    "twin" => {
-                        let mut p = twin.plant(&setup.rig)?;
-                        experiment_on(
-                            &setup,
-                            variant,
-                            Compensation::Inverse,
-                            reference,
-                            duration,
-                            &mut p as &mut dyn StagePlant,
-                            |_| {},
-                        )?
-                    }
-                    "lumped" => {
-                        let mut p = setup.lumped_plant()?;
-                        experiment_on(
-                            &setup,
-                            variant,
-                            Compensation::Inverse,
-                            reference,
-                            duration,
-                            &mut p as &mut dyn StagePlant,
-                            |_| {},
-                        )?
-                    }
-                    _ => experiment(&setup, variant, Compensation::Inverse, reference, duration)?,
+                let rec = if plant == "ideal" {
+                    experiment(&setup, variant, Compensation::Inverse, reference, duration)?
+                } else {
+                    let mut p: Box<dyn StagePlant> = if plant == "twin" {
+                        Box::new(twin.plant(&setup.rig)?)
+                    } else {
+                        Box::new(setup.lumped_plant()?)
+                    };
+                    let c = Compensation::Inverse;
+                    experiment_on(&setup, variant, c, reference, duration, p.as_mut(), |_| {})?
                 };
                 let m = rec.metrics(half);
                 let diverged = !m.rms[0].is_finite() || m.max[0] > 1e-4 || m.max[1] > 1e-4;

@@ -44,6 +44,12 @@ pub struct CraigBampton {
 }
 
 impl CraigBampton {
+    /// `Tᵀ A T` for a symmetric matrix `a` in the model's pattern (e.g. a tangent at a
+    /// deformed state), symmetrized against round-off.
+    pub fn project(&self, model: &Model, a: &flexstage_fem::SparseMatrix) -> DMatrix<f64> {
+        project(model, &self.basis, a)
+    }
+
     /// Order of the reduced model.
     pub fn order(&self) -> usize {
         self.mass.nrows()
@@ -70,6 +76,30 @@ fn clamped_model(fe: &StageFe) -> Result<Model> {
         Kinematics::Linear,
         bcs,
     )?)
+}
+
+/// `Tᵀ A T` for the basis `basis` (full vectors) and a symmetric matrix in the model's pattern.
+fn project(model: &Model, basis: &[Vec<f64>], a: &flexstage_fem::SparseMatrix) -> DMatrix<f64> {
+    let dofs = model.dofs();
+    let n = dofs.n_free();
+    let t: Vec<Vec<f64>> = basis
+        .iter()
+        .map(|v| {
+            let mut red = vec![0.0; n];
+            dofs.gather(v, &mut red);
+            red
+        })
+        .collect();
+    let r = t.len();
+    let mut at = vec![0.0; n];
+    let mut out = DMatrix::zeros(r, r);
+    for j in 0..r {
+        a.matvec(&t[j], &mut at);
+        for i in 0..r {
+            out[(i, j)] = t[i].iter().zip(&at).map(|(x, y)| x * y).sum::<f64>();
+        }
+    }
+    0.5 * (&out + out.transpose())
 }
 
 /// Reduces `fe` with `modes` fixed-interface modes (1–50).
@@ -128,30 +158,9 @@ pub fn craig_bampton(fe: &StageFe, modes: usize) -> Result<CraigBampton> {
     }
     basis.extend(fixed.shapes.iter().cloned());
     let r = basis.len();
-    // Reduced matrices.
-    let t: Vec<Vec<f64>> = basis
-        .iter()
-        .map(|v| {
-            let mut red = vec![0.0; n];
-            dofs.gather(v, &mut red);
-            red
-        })
-        .collect();
-    let (mut kt, mut mt) = (vec![0.0; n], vec![0.0; n]);
-    let mut mass = DMatrix::zeros(r, r);
-    let mut stiffness = DMatrix::zeros(r, r);
+    let mass = project(model, &basis, &m);
+    let stiffness = project(model, &basis, &k);
     let dot = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| x * y).sum::<f64>();
-    for j in 0..r {
-        k.matvec(&t[j], &mut kt);
-        m.matvec(&t[j], &mut mt);
-        for i in 0..r {
-            stiffness[(i, j)] = dot(&t[i], &kt);
-            mass[(i, j)] = dot(&t[i], &mt);
-        }
-    }
-    // Exact symmetry (round-off).
-    let mass = 0.5 * (&mass + mass.transpose());
-    let stiffness = 0.5 * (&stiffness + stiffness.transpose());
     let mut floor = [DVector::zeros(r), DVector::zeros(r)];
     for (d, f) in floor.iter_mut().enumerate() {
         let mr = fe.rigid_body_load(d)?;

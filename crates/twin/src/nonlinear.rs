@@ -166,20 +166,10 @@ pub fn stiffening(
     factor.allow_indefinite = false;
     factor.factorize(&fe.stiffness())?;
     let mut sws = factor.new_solve_workspace();
-    let t: Vec<Vec<f64>> = cb
-        .basis
-        .iter()
-        .map(|v| {
-            let mut r = vec![0.0; n];
-            dofs.gather(v, &mut r);
-            r
-        })
-        .collect();
-    let r = t.len();
+    let r = cb.order();
     let mut kt = model.new_matrix();
     let mut aws = model.new_workspace();
     let mut tmp = vec![0.0; n];
-    let mut ktv = vec![0.0; n];
     let [i1, i2, _, _] = fe.interface;
     // Modal stiffness shifts and input displacements at x_nom = ±A e_j.
     let mut shift = [[vec![0.0; r], vec![0.0; r]], [vec![0.0; r], vec![0.0; r]]];
@@ -192,14 +182,7 @@ pub fn stiffening(
             factor.solve_full(dofs, &fe.pea_load(x), &mut u, &mut tmp, &mut sws)?;
             x_in[j][s] = [u[i1], u[i2]];
             model.assemble(&fe.design(), &u, None, Some(&mut kt), &mut aws);
-            let mut kr = nalgebra::DMatrix::zeros(r, r);
-            for b in 0..r {
-                kt.matvec(&t[b], &mut ktv);
-                for a in 0..r {
-                    kr[(a, b)] = t[a].iter().zip(&ktv).map(|(p, q)| p * q).sum::<f64>();
-                }
-            }
-            let dk = 0.5 * (&kr + kr.transpose()) - &cb.stiffness;
+            let dk = cb.project(model, &kt) - &cb.stiffness;
             for k in 0..r {
                 let phi = modal.shapes.column(k);
                 shift[j][s][k] = phi.dot(&(&dk * phi));

@@ -143,7 +143,6 @@ fn stiffening_predicts_the_tangent_modes_at_an_operating_point() {
     let t = twin();
     let fe = &t.fe;
     let model = &fe.model;
-    let dofs = model.dofs();
     let nl = t.nonlinear.as_ref().unwrap();
     let x = [20e-6, -15e-6];
     let mut ws = NewtonWorkspace::new(model, SymbolicFactor::for_model(model).unwrap());
@@ -159,28 +158,8 @@ fn stiffening_predicts_the_tangent_modes_at_an_operating_point() {
     )
     .unwrap();
     // The reduced tangent at the deformed state and its modes.
-    let n = dofs.n_free();
-    let basis: Vec<Vec<f64>> = t
-        .reduction
-        .basis
-        .iter()
-        .map(|v| {
-            let mut r = vec![0.0; n];
-            dofs.gather(v, &mut r);
-            r
-        })
-        .collect();
-    let r = basis.len();
-    let mut k = nalgebra::DMatrix::zeros(r, r);
-    let mut kv = vec![0.0; n];
-    for j in 0..r {
-        ws.tangent.matvec(&basis[j], &mut kv);
-        for i in 0..r {
-            k[(i, j)] = basis[i].iter().zip(&kv).map(|(a, b)| a * b).sum::<f64>();
-        }
-    }
     let mut cb = t.reduction.clone();
-    cb.stiffness = 0.5 * (&k + k.transpose());
+    cb.stiffness = t.reduction.project(model, &ws.tangent);
     let tangent = ModalStage::new(&cb, fe.k_pea, RayleighDamping::none()).unwrap();
     let x_in = [u[fe.interface[0]], u[fe.interface[1]]];
     for kk in 0..4 {
