@@ -237,3 +237,21 @@ fn lumped_response_at_low_frequency_is_its_static_gain() {
         }
     }
 }
+
+#[test]
+fn default_trajectories_fit_the_twin_and_the_rig() {
+    // Issue #15: at the defaults no trajectory saturates the amplifiers.
+    let t = twin();
+    let (s, _) = samples::quick_rhombus().unwrap();
+    let setup = flexstage_control::experiment::Setup::from_scenario(&s);
+    for tr in &s.trajectories {
+        let (r, d) = flexstage_control::trajectory::Reference::from_scenario(tr);
+        let f = setup.check_reference(&r, d, Some(t.dc_gain())).unwrap();
+        println!(
+            "{}: {:.0} % of the deliverable stroke",
+            tr.name(),
+            100.0 * f.stroke_usage
+        );
+        assert!(f.stroke_usage < 0.8 && f.peak_current < 0.1);
+    }
+}
