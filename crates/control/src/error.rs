@@ -23,6 +23,14 @@ pub enum ControlError {
         /// The offending eigenvalue or margin.
         detail: String,
     },
+    /// A reference the rig cannot follow (frequency, amplifier range or current, stroke).
+    #[error("{what}: {detail}")]
+    Infeasible {
+        /// What is exceeded.
+        what: String,
+        /// By how much, and what to change.
+        detail: String,
+    },
     /// Matrices of incompatible sizes.
     #[error("{what}: dimension mismatch ({detail})")]
     Dimension {

@@ -36,6 +36,13 @@
 //! preconditioner of other states/load cases. [`newton::solve`] is an incremental
 //! Newton–Raphson solver with cutback, line search and typed errors.
 //!
+//! ## Dynamics
+//!
+//! [`mass`] assembles the consistent mass matrix in the tangent's own pattern, and
+//! [`transient`] integrates `M ü + C u̇ + R(u) = P(t)` with Newmark's average-acceleration rule
+//! or HHT-α, Newton iterations on the Total Lagrangian residual per step and Rayleigh damping:
+//! the full-model reference of the digital twin (`flexstage-twin`).
+//!
 //! ## Example
 //!
 //! ```
@@ -72,6 +79,7 @@
 
 pub mod element;
 pub mod error;
+pub mod mass;
 pub mod material;
 pub mod mesh;
 pub mod model;
@@ -79,9 +87,11 @@ pub mod newton;
 pub mod samples;
 pub mod solver;
 pub mod stress;
+pub mod transient;
 
 pub use element::{ElementCoefficients, ElementGeometry, ElementKernel};
 pub use error::{IterationRecord, NewtonError, ParamError, SolverError};
+pub use mass::{DofMass, consistent_mass, rigid_body_load};
 pub use material::{AdditiveYeoh, Kinematics, Material, YeohUpdate};
 pub use mesh::{Edge, Mesh, Passive};
 pub use model::{
@@ -94,3 +104,6 @@ pub use solver::{
     SolveWorkspace, SymbolicFactor, pcg, pcg_block,
 };
 pub use stress::STRESS_POINTS;
+pub use transient::{
+    RayleighDamping, Transient, TransientError, TransientParams, TransientStats, newmark_frequency,
+};

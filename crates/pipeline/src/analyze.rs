@@ -116,6 +116,8 @@ pub fn analyze(folder: &RunFolder, options: &AnalyzeOptions) -> Result<AnalyzeSu
     let workspace = options.inputs.is_empty();
     if !workspace {
         problem.cases = options.inputs.iter().map(|p| p.to_vec()).collect();
+        // The stress constraint's case indexes belong to the optimizer's load cases.
+        problem.stress = None;
     }
     let design = options
         .design

@@ -19,6 +19,7 @@
 mod design;
 mod docs;
 mod error;
+mod rig;
 mod stage;
 
 use std::path::Path;
@@ -30,6 +31,7 @@ pub use design::{
     ObjectiveKind, Optimization, Output, Projection, Region, RegionKind, Selector, Support,
 };
 pub use error::{RangeError, Result, ScenarioError};
+pub use rig::{Amplifier, Creep, FloorVibration, Rig, SensorDynamics, Twin};
 pub use stage::{
     BoucWen, Controller, Hysteresis, Sensors, Simulation, Stage, StageParams, Trajectory,
 };
@@ -63,12 +65,23 @@ pub struct Scenario {
     pub sensors: Sensors,
     /// Timing of the simulated experiment.
     pub simulation: Simulation,
+    /// The loop around the simulated stage, as on a rig (delay, amplifiers, PEA truth and
+    /// creep, sensor dynamics and noise, floor vibration).
+    #[serde(default = "default_rig")]
+    pub rig: Rig,
+    /// How the digital twin is built from the design.
+    #[serde(default)]
+    pub twin: Twin,
     /// Supports.
     pub supports: Vec<Support>,
     /// Passive regions.
     pub regions: Vec<Region>,
     /// Reference trajectories.
     pub trajectories: Vec<Trajectory>,
+}
+
+fn default_rig() -> Rig {
+    Rig::realistic(&Scenario::paper().hysteresis)
 }
 
 /// Built-in scenarios.
@@ -138,6 +151,24 @@ impl Scenario {
             ..guess.clone()
         };
         let damping_ratio = 0.02;
+        let hysteresis = Hysteresis {
+            voltage_min: 0.0,
+            voltage_max: 1000.0,
+            pea1: BoucWen {
+                d_p: 6.2e-2,
+                a_bw: 1.2e-2,
+                b_bw: 1.9e-3,
+                gamma_bw: 1.6e-3,
+                delta_bw: 5.015e-4,
+            },
+            pea2: BoucWen {
+                d_p: 6.5e-2,
+                a_bw: 2.5e-2,
+                b_bw: 1.8e-3,
+                gamma_bw: 5.3e-3,
+                delta_bw: 1.973e-4,
+            },
+        };
         let mut scenario = Scenario {
             name: "paper".into(),
             regions: Vec::new(),
@@ -194,24 +225,9 @@ impl Scenario {
                 },
             },
             limits: Limits::default(),
-            hysteresis: Hysteresis {
-                voltage_min: 0.0,
-                voltage_max: 1000.0,
-                pea1: BoucWen {
-                    d_p: 6.2e-2,
-                    a_bw: 1.2e-2,
-                    b_bw: 1.9e-3,
-                    gamma_bw: 1.6e-3,
-                    delta_bw: 5.015e-4,
-                },
-                pea2: BoucWen {
-                    d_p: 6.5e-2,
-                    a_bw: 2.5e-2,
-                    b_bw: 1.8e-3,
-                    gamma_bw: 5.3e-3,
-                    delta_bw: 1.973e-4,
-                },
-            },
+            rig: Rig::realistic(&hysteresis),
+            twin: Twin::default(),
+            hysteresis,
             stage: Stage {
                 damping_ratio,
                 guess: guess.with_damping_ratio(damping_ratio),
@@ -231,7 +247,9 @@ impl Scenario {
                 a_bound: [1e-6, 1e-6],
                 boundary_layer: [1e-4, 1e-8],
                 observer_velocity: false,
-                stroke: 30e-6,
+                // What 0–1000 V delivers around the 500 V bias with Table A1 (PEA1: +30.5/−24.9
+                // µm, flexstage-control `deliverable_stroke`), not the ±30 µm of Section 4.1.
+                stroke: 24e-6,
                 pid: [0.0, 300.0, 0.0],
             },
             sensors: Sensors {
@@ -258,20 +276,20 @@ impl Scenario {
                 Trajectory::Lissajous {
                     name: "lissajous-3".into(),
                     ratio: 3.0,
-                    amplitude: [10e-6, 20e-6],
+                    amplitude: [8e-6, 16e-6],
                     frequency: 2.0,
                     duration: 1.0,
                 },
                 Trajectory::Lissajous {
                     name: "lissajous-2".into(),
                     ratio: 2.0,
-                    amplitude: [10e-6, 20e-6],
+                    amplitude: [8e-6, 16e-6],
                     frequency: 2.0,
                     duration: 1.0,
                 },
                 Trajectory::Circle {
                     name: "circle".into(),
-                    radius: 10e-6,
+                    radius: 8e-6,
                     frequency: 2.0,
                     duration: 1.0,
                 },
@@ -333,6 +351,8 @@ impl Scenario {
         self.controller.validate()?;
         self.sensors.validate()?;
         self.simulation.validate()?;
+        self.rig.validate()?;
+        self.twin.validate()?;
         for (i, t) in self.trajectories.iter().enumerate() {
             t.validate(&format!("trajectories[{i}]"))?;
         }

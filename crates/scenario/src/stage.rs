@@ -23,7 +23,7 @@ pub struct BoucWen {
 }
 
 impl BoucWen {
-    fn validate(&self, field: &str) -> Result<()> {
+    pub(crate) fn validate(&self, field: &str) -> Result<()> {
         positive(&format!("{field}.d_p"), self.d_p)?;
         check(&format!("{field}.a_bw"), self.a_bw, true, "a finite number")?;
         non_negative(&format!("{field}.b_bw"), self.b_bw)?;
@@ -258,7 +258,7 @@ fn default_boundary_layer() -> [f64; 2] {
 }
 
 fn default_stroke() -> f64 {
-    30e-6
+    24e-6
 }
 
 fn default_pid() -> [f64; 3] {
