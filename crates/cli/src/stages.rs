@@ -44,10 +44,10 @@ pub struct DesignArgs {
 pub fn design(a: DesignArgs) -> anyhow::Result<()> {
     if a.check_gradients {
         let r = flexstage_pipeline::gradient_check(&a.target.scenario.load()?)?;
-        println!("gradient check: {}", r.setup);
+        outln!("gradient check: {}", r.setup);
         for c in &r.checks {
             let ok = flexstage_pipeline::design::passed(c);
-            println!(
+            outln!(
                 "  {:<14} relative error {:.2e} over {} variables (max |grad| {:.3e})  {}",
                 c.name,
                 c.relative_error,
@@ -60,7 +60,10 @@ pub fn design(a: DesignArgs) -> anyhow::Result<()> {
     }
     let force = a.target.force;
     let (folder, start) = match &a.resume {
-        Some(dir) => (RunFolder::existing(dir)?, DesignStart::Resume),
+        Some(dir) => (
+            crate::args::opened(RunFolder::existing(dir)?),
+            DesignStart::Resume,
+        ),
         None => (a.target.open()?, DesignStart::Fresh { force }),
     };
     let options = DesignOptions {
@@ -244,7 +247,7 @@ pub fn pea(PeaCommand::Simulate(a): PeaCommand) -> anyhow::Result<()> {
         let r = flexstage_pipeline::simulate_pea(&a.target.scenario.load()?, &options)?;
         print::pea_record(&r);
         flexstage_pipeline::write_pea_csv(path, &r, a.target.force)?;
-        eprintln!("wrote {}", path.display());
+        errln!("wrote {}", path.display());
         return Ok(());
     }
     let folder = a.target.open()?;
