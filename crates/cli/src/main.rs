@@ -185,8 +185,8 @@ fn main() -> ExitCode {
         (Ok(()), None) => ExitCode::SUCCESS,
         (Ok(()), Some(e)) => {
             errln!(
-                "error: cannot write standard output ({e}); the command finished and wrote \
-                 its files"
+                "error: cannot write standard output ({e}); printing stopped there, the command \
+                 itself ran to its end"
             );
             ExitCode::FAILURE
         }
