@@ -45,10 +45,10 @@ pub struct DesignArgs {
 pub fn design(a: DesignArgs) -> anyhow::Result<()> {
     if a.check_gradients {
         let r = flexstage_pipeline::gradient_check(&a.target.scenario.load()?)?;
-        println!("gradient check: {}", r.setup);
+        outln!("gradient check: {}", r.setup);
         for c in &r.checks {
             let ok = flexstage_pipeline::design::passed(c);
-            println!(
+            outln!(
                 "  {:<14} relative error {:.2e} over {} variables (max |grad| {:.3e})  {}",
                 c.name,
                 c.relative_error,
@@ -61,7 +61,10 @@ pub fn design(a: DesignArgs) -> anyhow::Result<()> {
     }
     let force = a.target.force;
     let (folder, start) = match &a.resume {
-        Some(dir) => (RunFolder::existing(dir)?, DesignStart::Resume),
+        Some(dir) => (
+            crate::args::opened(RunFolder::existing(dir)?),
+            DesignStart::Resume,
+        ),
         None => (a.target.open()?, DesignStart::Fresh { force }),
     };
     let options = DesignOptions {
@@ -166,7 +169,7 @@ pub fn export(a: ExportArgs) -> anyhow::Result<()> {
     let summary = flexstage_pipeline::export(&folder, &options)?;
     print::export(&summary);
     if a.require_safe && options.verify.is_some() && !summary.safe() {
-        eprintln!("--require-safe: the design is not verified safe");
+        errln!("--require-safe: the design is not verified safe");
         std::process::exit(2);
     }
     Ok(())
@@ -285,7 +288,7 @@ pub fn pea(PeaCommand::Simulate(a): PeaCommand) -> anyhow::Result<()> {
         let r = flexstage_pipeline::simulate_pea(&a.target.scenario.load()?, &options)?;
         print::pea_record(&r);
         flexstage_pipeline::write_pea_csv(path, &r, a.target.force)?;
-        eprintln!("wrote {}", path.display());
+        errln!("wrote {}", path.display());
         return Ok(());
     }
     let folder = a.target.open()?;

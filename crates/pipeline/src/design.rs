@@ -153,7 +153,8 @@ pub fn design(
                 path: path.clone(),
                 source,
             })?;
-            let o = Optimizer::resume(&problem, params, &bytes)?;
+            let payload = crate::envelope::payload_for(&path, &bytes, folder.scenario())?;
+            let o = Optimizer::resume(&problem, params, payload)?;
             progress.note(&format!(
                 "resuming {} at iteration {}",
                 folder.root().display(),
@@ -166,7 +167,7 @@ pub fn design(
     let t0 = Instant::now();
     let stop = optimize(
         &mut opt,
-        run,
+        folder,
         options,
         s.optimization.max_iterations,
         (2.0 * s.actuators.stroke_amplitude).powi(2),
@@ -210,12 +211,13 @@ fn prepare_fresh(folder: &RunFolder, force: bool) -> Result<()> {
 /// Algorithm 1's loop with progress, polygon snapshots and checkpoints.
 fn optimize(
     opt: &mut Optimizer,
-    run: &RunDir,
+    folder: &RunFolder,
     options: &DesignOptions,
     max_iterations: usize,
     input_square: f64,
     progress: &dyn Progress,
 ) -> Result<StopReason> {
+    let run = folder.dir();
     let names = opt.constraint_names();
     progress.start("design", max_iterations as u64 + 1);
     progress.set_position(opt.iteration() as u64);
@@ -241,7 +243,9 @@ fn optimize(
             break stop;
         }
         if opt.iteration() % options.checkpoint_every == 0 {
-            run.write(files::CHECKPOINT, &opt.checkpoint())?;
+            // Sealed with the scenario's hash and a CRC (crate::envelope).
+            let sealed = crate::envelope::seal(folder.scenario(), &opt.checkpoint());
+            run.write(files::CHECKPOINT, &sealed)?;
             run.write(
                 files::HISTORY_CSV,
                 history_csv(&names, opt.history()).as_bytes(),

@@ -6,7 +6,7 @@
 //! the run folder and use `/` (they are joined with [`crate::RunDir::path`]).
 //!
 //! ```text
-//! scenario.toml  plant.toml  run_state.json  report.html
+//! scenario.toml  plant.toml  run_state.json  report.html  run.lock (while a command runs)
 //! design/     design.json density.{csv,png} design.vtu cases.csv history.{csv,json}
 //!             workspace_{initial,final}.csv workspace_iterNNNNN.csv workspace{,_history}.svg
 //!             summary.json checkpoint.bin
@@ -31,6 +31,9 @@ pub const PLANT: &str = "plant.toml";
 pub const RUN_STATE: &str = "run_state.json";
 /// The self-contained HTML report.
 pub const REPORT: &str = "report.html";
+/// The lock of the run folder: exists while a flexstage command works in the folder, and
+/// names its process (PID, host, start time, command).
+pub const LOCK: &str = "run.lock";
 
 /// `design/`: the topology optimization (paper Section 2.2, Algorithm 1).
 pub mod design {
