@@ -57,8 +57,16 @@ impl Target {
     pub fn open(&self) -> anyhow::Result<RunFolder> {
         let s = self.scenario.load()?;
         let root = self.out.clone().unwrap_or_else(|| default_root(&s));
-        Ok(RunFolder::open(s, root, self.force)?)
+        Ok(opened(RunFolder::open(s, root, self.force)?))
     }
+}
+
+/// Shows what opening the folder did (a stale lock taken over, temporaries removed).
+pub fn opened(folder: RunFolder) -> RunFolder {
+    for line in folder.notices() {
+        errln!("note: {line}");
+    }
+    folder
 }
 
 /// A pair "X1,X2" of numbers.

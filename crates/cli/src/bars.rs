@@ -55,36 +55,31 @@ impl Progress for Bars {
 
     fn note(&self, line: &str) {
         match self.bar.lock().expect("progress lock").as_ref() {
-            Some(b) => b.println(line),
-            None => eprintln!("{line}"),
+            // A hidden bar (standard error not a terminal) would drop the line.
+            Some(b) if !b.is_hidden() => b.println(line),
+            _ => errln!("{line}"),
         }
     }
 
     fn event(&self, event: &RunEvent) {
         let n = Stage::ALL.len();
         match event {
-            RunEvent::StartingOver(why) => eprintln!(
-                "{}: starting over",
-                match why {
-                    StartOver::Requested => "--restart",
-                    StartOver::ScenarioChanged => "the scenario changed",
-                }
-            ),
+            RunEvent::StartingOver(StartOver::Requested) => errln!("--restart: starting over"),
             RunEvent::Resuming(done) => {
                 let names: Vec<&str> = done.iter().map(|s| s.name()).collect();
-                eprintln!("resuming: finished {}", names.join(", "));
+                errln!("resuming: finished {}", names.join(", "));
             }
             RunEvent::Skipped(s) => {
-                eprintln!("[{}/{n}] {}: done earlier, skipped", s.number(), s.name())
+                errln!("[{}/{n}] {}: done earlier, skipped", s.number(), s.name())
             }
-            RunEvent::Started(s) => eprintln!("[{}/{n}] {} ...", s.number(), s.name()),
+            RunEvent::Started(s) => errln!("[{}/{n}] {} ...", s.number(), s.name()),
             RunEvent::Finished {
                 stage,
                 seconds,
                 summary,
             } => {
                 print::stage(summary);
-                eprintln!(
+                errln!(
                     "[{}/{n}] {}: done in {seconds:.1} s",
                     stage.number(),
                     stage.name()

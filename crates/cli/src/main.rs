@@ -7,6 +7,8 @@
 // Doc comments of the argument structs are clap's --help text ("[Hz]", "<run>"), not rustdoc.
 #![allow(rustdoc::broken_intra_doc_links, rustdoc::invalid_html_tags)]
 
+#[macro_use]
+mod out;
 mod args;
 mod bars;
 mod print;
@@ -17,7 +19,7 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 use flexstage_pipeline::{
-    DEFAULT_PRESET, PRESETS, RunOptions, Scenario, default_root, default_run,
+    DEFAULT_PRESET, PRESETS, RunFolder, RunOptions, Scenario, default_root, default_run,
 };
 
 use args::ScenarioArgs;
@@ -127,15 +129,22 @@ Examples:
     )]
     Track(stages::TrackArgs),
     /// Manufacturing outline of a design (Section 4.1): the ρ = 0.5 iso-contour as DXF and
-    /// SVG closed polylines, and a binary STL extruded by the thickness t.
+    /// SVG closed polylines, and a binary STL extruded by the thickness t; then its
+    /// verification: body-fitted stress, α and first frequency beside the design mesh's,
+    /// manufacturability findings and the verdict.
     #[command(
-        after_help = "Writes <run>/export/outline.dxf (R2000 LWPOLYLINE), outline.svg \
-and outline.stl.
+        after_help = "Writes <run>/export/outline.dxf (R2000 LWPOLYLINE), outline.svg, \
+outline.stl, verification.json, verification.txt and body_fitted.vtu (ParaView). The last \
+line printed is the verdict: \"safe\" only when the peak von Mises stress of the body-fitted \
+model (re-checked on a mesh of half the size) is within fatigue strength / safety factor and \
+no manufacturability error remains; otherwise \"NOT safe\" with the reasons. With \
+--require-safe a design that is not verified safe exits with status 2.
 
 Examples:
   flexstage export                    # the design of runs/quick, millimetres
   flexstage export --units m
-  flexstage export --smoothing 0      # the raw marching-squares polygon"
+  flexstage export --smoothing 0      # the raw marching-squares polygon
+  flexstage export --safety-factor 2 --require-safe   # gate a script on the verdict"
     )]
     Export(stages::ExportArgs),
     /// The whole scheme on one scenario: design, outline export, reduce, PEA and stage
@@ -176,10 +185,20 @@ struct RunArgs {
 }
 
 fn main() -> ExitCode {
-    match dispatch(Cli::parse().command) {
-        Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("error: {e:#}");
+    let result = dispatch(Cli::parse().command);
+    // A reader that went away (`| head`) ends the printing, never the command.
+    let stdout_failure = out::finish();
+    match (result, stdout_failure) {
+        (Ok(()), None) => ExitCode::SUCCESS,
+        (Ok(()), Some(e)) => {
+            errln!(
+                "error: cannot write standard output ({e}); printing stopped there, the command \
+                 itself ran to its end"
+            );
+            ExitCode::FAILURE
+        }
+        (Err(e), _) => {
+            errln!("error: {e:#}");
             ExitCode::FAILURE
         }
     }
@@ -203,9 +222,10 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Run(a) => run(a),
         Command::Report { run } => {
             anyhow::ensure!(run.is_dir(), "{} is not a run folder", run.display());
-            println!(
+            let folder = args::opened(RunFolder::existing(&run)?);
+            outln!(
                 "report: {}",
-                flexstage_pipeline::write_report(&run)?.display()
+                flexstage_pipeline::write_report(&folder)?.display()
             );
             Ok(())
         }
@@ -215,7 +235,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
 fn init(path: &std::path::Path, name: &str, force: bool) -> anyhow::Result<()> {
     let text = flexstage_pipeline::folder::preset(name)?.to_commented_toml();
     if path.as_os_str() == "-" {
-        print!("{text}");
+        out!("{text}");
         return Ok(());
     }
     if path.exists() && !force {
@@ -223,14 +243,14 @@ fn init(path: &std::path::Path, name: &str, force: bool) -> anyhow::Result<()> {
         return Err(flexstage_report::ReportError::Exists { path }.into());
     }
     flexstage_report::write_atomic(path, text.as_bytes())?;
-    eprintln!("wrote {}", path.display());
+    errln!("wrote {}", path.display());
     Ok(())
 }
 
 fn check(scenario: &ScenarioArgs) -> anyhow::Result<()> {
     let s: Scenario = scenario.load()?;
-    println!("{}: valid", scenario.describe());
-    println!(
+    outln!("{}: valid", scenario.describe());
+    outln!(
         "  mesh {} x {} elements over {} x {} mm, p_m = {} samples, up to {} iterations",
         s.mesh.nl,
         s.mesh.nw,
@@ -239,7 +259,7 @@ fn check(scenario: &ScenarioArgs) -> anyhow::Result<()> {
         s.optimization.samples,
         s.optimization.max_iterations
     );
-    println!(
+    outln!(
         "  {} supports, {} passive regions, {} trajectories; run folder {}",
         s.supports.len(),
         s.regions.len(),

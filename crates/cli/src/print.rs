@@ -13,7 +13,7 @@ use flexstage_report::html::fmt_num;
 /// "wrote DIR", noting replaced results.
 pub fn wrote(dir: &Path, replaced: bool) {
     let note = [" ", " (replacing its earlier results)"][replaced as usize];
-    eprintln!("wrote {}{}", dir.display(), note.trim_end());
+    errln!("wrote {}{}", dir.display(), note.trim_end());
 }
 
 /// A point (in m) as "(x, y)" in µm with `digits` decimals.
@@ -30,28 +30,26 @@ pub fn stage(s: &StageSummary) {
         StageSummary::Pea(p) => p.iter().for_each(pea_identification),
         StageSummary::IdentifyStage(i) => stage_identification(i),
         StageSummary::Track(t) => track(t),
-        StageSummary::Report(p) => eprintln!("wrote {}", p.display()),
+        StageSummary::Report(p) => errln!("wrote {}", p.display()),
     }
 }
 
 pub fn design(s: &DesignSummary) {
     if let Some(k) = s.resumed_at {
-        println!("resumed at iteration {k}");
+        outln!("resumed at iteration {k}");
     }
-    println!(
+    outln!(
         "{:?} after {} iterations in {:.1} s ({:.3} s/iteration)",
-        s.stop, s.iterations, s.seconds, s.seconds_per_iteration
+        s.stop,
+        s.iterations,
+        s.seconds,
+        s.seconds_per_iteration
     );
-    println!(
-        "workspace area (nonlinear, no additive material): initial {:.4} µm², final {:.4} µm², \
-         growth {:.2}x",
-        s.area_initial * 1e12,
-        s.area * 1e12,
-        s.area / s.area_initial
-    );
-    println!(
-        "compressive corner (+a,-a): u_out = {} µm; grey fraction {:.3}, volume {:.3}",
-        um(s.compressive_corner, 3),
+    for line in s.design.lines() {
+        outln!("{line}");
+    }
+    outln!(
+        "grey fraction {:.3}, volume {:.3}",
         s.grey_fraction,
         s.volume
     );
@@ -59,7 +57,7 @@ pub fn design(s: &DesignSummary) {
 }
 
 pub fn analyze(s: &AnalyzeSummary) {
-    println!(
+    outln!(
         "analyzed {} load case(s) of {} in {:.2} s ({} Newton iterations)",
         s.cases.len(),
         s.design,
@@ -68,19 +66,19 @@ pub fn analyze(s: &AnalyzeSummary) {
     );
     match s.workspace {
         Some((area, corners)) => {
-            println!(
+            outln!(
                 "  workspace polygon of {} samples: area {:.6e} m² = {:.3} µm²",
                 s.cases.len(),
                 area,
                 area * 1e12
             );
             for (name, o) in ["(+a,+a)", "(+a,-a)"].iter().zip(corners) {
-                println!("  corner {name}: u_out = {} µm", um(o, 4));
+                outln!("  corner {name}: u_out = {} µm", um(o, 4));
             }
         }
         None => {
             for (x, o) in &s.cases {
-                println!("  x_nom = {} µm  ->  u_out = {} µm", um(*x, 2), um(*o, 4));
+                outln!("  x_nom = {} µm  ->  u_out = {} µm", um(*x, 2), um(*o, 4));
             }
         }
     }
@@ -88,7 +86,7 @@ pub fn analyze(s: &AnalyzeSummary) {
 }
 
 pub fn export(s: &ExportSummary) {
-    println!(
+    outln!(
         "outline of {}: {} closed loop(s), {:.2} mm² of material",
         s.design,
         s.loops,
@@ -97,24 +95,34 @@ pub fn export(s: &ExportSummary) {
     for f in &s.files {
         wrote(f, s.replaced);
     }
+    if let Some(v) = &s.verification {
+        for line in v.summary_lines() {
+            outln!("{line}");
+        }
+    } else if let Some(e) = &s.verify_error {
+        outln!("verdict: NOT safe: the outline could not be verified: {e}");
+    }
 }
 
 pub fn reduce(s: &ReduceSummary) {
     let r = &s.reduction;
     let c = &r.condensation;
     let a = c.alpha;
-    println!("reduced {}", s.design);
-    println!(
+    outln!("reduced {}", s.design);
+    outln!(
         "alpha (moving frame, Eq. 24) = [[{:+.5}, {:+.5}], [{:+.5}, {:+.5}]]",
-        a[0][0], a[0][1], a[1][0], a[1][1]
+        a[0][0],
+        a[0][1],
+        a[1][0],
+        a[1][1]
     );
-    println!(
+    outln!(
         "  scalar alpha (Eq. 27) = {:.5}, tilt theta = {:.3} deg, |A(theta) - alpha| = {:.1e}",
         c.alpha_scalar(),
         c.theta().to_degrees(),
         c.a_theta_residual()
     );
-    println!(
+    outln!(
         "K_qo1 = {:.4e} N/m, K_qo2 = {:.4e} N/m, M = {:.4} kg (volume fraction {:.3})",
         c.k_qo1(),
         c.k_qo2(),
@@ -123,14 +131,14 @@ pub fn reduce(s: &ReduceSummary) {
     );
     if let Some(m) = &r.modes {
         let f: Vec<String> = m.frequencies.iter().map(|f| format!("{f:.0}")).collect();
-        println!("natural frequencies [Hz]: {}", f.join(", "));
+        outln!("natural frequencies [Hz]: {}", f.join(", "));
     }
     if let Some(a2) = &r.assumption2 {
-        println!("{}", a2.statement());
+        outln!("{}", a2.statement());
     }
     if let Some(v) = &r.validity {
         for s in &v.scales {
-            println!(
+            outln!(
                 "  stroke {:>5.1} um: reduced vs nonlinear FE max {:.3} % (rms {:.3} %), linear \
                  FE {:.3} %",
                 s.amplitude * 1e6,
@@ -140,7 +148,7 @@ pub fn reduce(s: &ReduceSummary) {
             );
         }
         let ok = v.max_error_within_stroke() <= 0.02;
-        println!(
+        outln!(
             "validity: {} within the stroke (max {:.3} %); tangent model within 2 % up to {:.0} % \
              stroke",
             if ok {
@@ -157,7 +165,7 @@ pub fn reduce(s: &ReduceSummary) {
 
 pub fn pea_record(r: &PeaRecord) {
     let m = &r.steady;
-    println!(
+    outln!(
         "pea{}: {} samples over {} s; steady {} V sine loop at {} Hz: stroke {:.2} µm, width \
          {:.2} % of range, max deviation from linear {:.2} %",
         r.options.pea,
@@ -172,7 +180,7 @@ pub fn pea_record(r: &PeaRecord) {
 }
 
 pub fn pea_identification(s: &PeaIdSummary) {
-    println!(
+    outln!(
         "{}: {} samples, hysteresis {:.1} % of range",
         s.data.display(),
         s.samples,
@@ -180,7 +188,7 @@ pub fn pea_identification(s: &PeaIdSummary) {
     );
     for (name, e) in [("parallel RLS", &s.online), ("batch LS", &s.batch)] {
         let p = &e.params;
-        println!(
+        outln!(
             "  {name:<13} d_p = {:.4e}  A_bw = {:.4e}  B_bw = {:.4e}  Γ_bw = {:.4e}  δ_bw = \
              {:.4e}  (rms {:.2} nm)",
             p.d_p,
@@ -191,11 +199,13 @@ pub fn pea_identification(s: &PeaIdSummary) {
             e.rms_error * 1e3
         );
     }
-    println!("recommended: {}", s.recommended);
+    outln!("recommended: {}", s.recommended);
     let c = &s.compensation;
-    println!(
+    outln!(
         "compensation: loop width {:.2} % → {:.3} % of the range, max error {:.3} µm",
-        c.width_before_pct, c.width_after_pct, c.max_error_um
+        c.width_before_pct,
+        c.width_after_pct,
+        c.max_error_um
     );
     wrote(&s.dir, s.replaced);
 }
@@ -203,16 +213,19 @@ pub fn pea_identification(s: &PeaIdSummary) {
 pub fn stage_identification(s: &StageIdSummary) {
     let id = &s.identification;
     if let Some(p) = &s.plant {
-        println!("simulated stage: {p}");
+        outln!("simulated stage: {p}");
     }
-    println!(
+    outln!(
         "{} samples at T_s = {} s (regression at {} s), {} updates",
-        s.samples, id.sample_time, id.regression_time, id.updates
+        s.samples,
+        id.sample_time,
+        id.regression_time,
+        id.updates
     );
-    println!("param           guess     estimate        truth   error %  unit");
+    outln!("param           guess     estimate        truth   error %  unit");
     for r in &s.rows {
         let dash = || "-".to_string();
-        println!(
+        outln!(
             "{:<8} {:>12.4e} {:>12.4e} {:>12} {:>9}  {}",
             r.name,
             r.guess,
@@ -225,31 +238,35 @@ pub fn stage_identification(s: &StageIdSummary) {
         );
     }
     let kc = id.raw.coupling;
-    println!(
+    outln!(
         "k_c (cross terms, rows q_o1/q_o2): {:.3e} / {:.3e} N/m",
-        kc[0], kc[1]
+        kc[0],
+        kc[1]
     );
     let c = id.conditioning;
-    println!(
+    outln!(
         "condition numbers (q_o1, q_o2, x_in1, x_in2): {:.3e}, {:.3e}, {:.3e}, {:.3e}",
-        c[0], c[1], c[2], c[3]
+        c[0],
+        c[1],
+        c[2],
+        c[3]
     );
     for w in &id.warnings {
-        eprintln!("warning: {w}");
+        errln!("warning: {w}");
     }
     wrote(&s.dir, s.replaced);
-    eprintln!("  (the controller's model of `flexstage track` in this run folder)");
+    errln!("  (the controller's model of `flexstage track` in this run folder)");
 }
 
 const TRACK_HEADER: &str = "trajectory     variant       RMS q1/q2 [nm]   RMS [% range]    \
 max q1/q2 [nm]   max [% range] settle[s] peak [V]   sat";
 
 pub fn track(s: &TrackSummary) {
-    println!("plant: {}; controller's model: {}", s.plant, s.model);
-    println!("{TRACK_HEADER}");
+    outln!("plant: {}; controller's model: {}", s.plant, s.model);
+    outln!("{TRACK_HEADER}");
     for r in &s.rows {
         let m = &r.metrics;
-        println!(
+        outln!(
             "{:<14} {:<10} {:>8.1}/{:<8.1} {:>7.3}/{:<7.3} {:>8.1}/{:<8.1} {:>7.3}/{:<7.3} {:>9.4} \
              {:>8.0} {:>5}",
             r.trajectory,
@@ -267,7 +284,7 @@ pub fn track(s: &TrackSummary) {
             m.saturated
         );
     }
-    println!(
+    outln!(
         "(hysteresis compensation: {}; errors against the true output)",
         flexstage_pipeline::names::compensation(s.compensation)
     );
@@ -275,19 +292,19 @@ pub fn track(s: &TrackSummary) {
 }
 
 pub fn run(s: &RunSummary) {
-    println!(
+    outln!(
         "\n== flexstage run: {} ({:.1} s)",
         s.root.display(),
         s.seconds
     );
     for (k, v) in &s.headline {
-        println!("  {k:<48} {v}");
+        outln!("  {k:<48} {v}");
     }
     if !s.identified.is_empty() {
-        println!("  identified stage parameters (estimate vs truth):");
+        outln!("  identified stage parameters (estimate vs truth):");
     }
     for r in s.identified.iter().filter(|r| r.truth.is_some()) {
-        println!(
+        outln!(
             "    {:<8} {:>12} vs {:>12} {:<6} ({:>6} %)",
             r.name,
             fmt_num(r.estimate),
@@ -296,5 +313,5 @@ pub fn run(s: &RunSummary) {
             r.error_pct().map(fmt_num).unwrap_or_default()
         );
     }
-    println!("report: {}", s.report.display());
+    outln!("report: {}", s.report.display());
 }

@@ -8,6 +8,7 @@ use flexstage_pipeline::names::{self, COMPENSATIONS, SCHEMES, SHAPES, UNITS, nam
 use flexstage_pipeline::{
     AnalyzeOptions, DesignOptions, DesignSource, DesignStart, ExportOptions, PeaIdOptions,
     PeaOptions, ReduceOptions, RunFolder, Simulation, StageData, StageIdOptions, TrackOptions,
+    VerifyParams,
 };
 
 /// The simulated actuators of `identify stage`: index 1 is the linear one.
@@ -44,10 +45,10 @@ pub struct DesignArgs {
 pub fn design(a: DesignArgs) -> anyhow::Result<()> {
     if a.check_gradients {
         let r = flexstage_pipeline::gradient_check(&a.target.scenario.load()?)?;
-        println!("gradient check: {}", r.setup);
+        outln!("gradient check: {}", r.setup);
         for c in &r.checks {
             let ok = flexstage_pipeline::design::passed(c);
-            println!(
+            outln!(
                 "  {:<14} relative error {:.2e} over {} variables (max |grad| {:.3e})  {}",
                 c.name,
                 c.relative_error,
@@ -60,7 +61,10 @@ pub fn design(a: DesignArgs) -> anyhow::Result<()> {
     }
     let force = a.target.force;
     let (folder, start) = match &a.resume {
-        Some(dir) => (RunFolder::existing(dir)?, DesignStart::Resume),
+        Some(dir) => (
+            crate::args::opened(RunFolder::existing(dir)?),
+            DesignStart::Resume,
+        ),
         None => (a.target.open()?, DesignStart::Fresh { force }),
     };
     let options = DesignOptions {
@@ -117,17 +121,57 @@ pub struct ExportArgs {
     /// Taubin smoothing passes (0: the raw marching-squares polygon).
     #[arg(long, default_value_t = ExportOptions::default().smoothing)]
     pub smoothing: usize,
+    /// Longest chord [mm] of the exported curve (Catmull–Rom through the smoothed contour;
+    /// 0: the polygon itself).
+    #[arg(long, default_value_t = ExportOptions::default().max_chord * 1e3)]
+    pub max_chord_mm: f64,
+    /// Skip the verification (body-fitted re-analysis and manufacturability checks).
+    #[arg(long)]
+    pub no_verify: bool,
+    /// Exit with status 2 when the verdict is "NOT safe" (files are written either way).
+    #[arg(long)]
+    pub require_safe: bool,
+    /// Fatigue strength of the material [MPa] (Al 6061-T6: 96.5).
+    #[arg(long, default_value_t = VerifyParams::default().fatigue_strength * 1e-6)]
+    pub fatigue_strength_mpa: f64,
+    /// Safety factor: allowable stress = fatigue strength / safety factor.
+    #[arg(long, default_value_t = VerifyParams::default().safety_factor)]
+    pub safety_factor: f64,
+    /// Minimum hinge (ligament) thickness [mm].
+    #[arg(long, default_value_t = VerifyParams::default().min_ligament * 1e3)]
+    pub min_ligament_mm: f64,
+    /// Minimum slot width [mm] (the wire-EDM kerf).
+    #[arg(long, default_value_t = VerifyParams::default().min_gap * 1e3)]
+    pub min_gap_mm: f64,
+    /// Wire-EDM start-hole diameter [mm].
+    #[arg(long, default_value_t = VerifyParams::default().start_hole_diameter * 1e3)]
+    pub start_hole_mm: f64,
 }
 
 pub fn export(a: ExportArgs) -> anyhow::Result<()> {
     let folder = a.target.open()?;
+    let verify = (!a.no_verify).then(|| VerifyParams {
+        fatigue_strength: a.fatigue_strength_mpa * 1e6,
+        safety_factor: a.safety_factor,
+        min_ligament: a.min_ligament_mm * 1e-3,
+        min_gap: a.min_gap_mm * 1e-3,
+        start_hole_diameter: a.start_hole_mm * 1e-3,
+        ..VerifyParams::default()
+    });
     let options = ExportOptions {
         design: a.design.map_or(Ok(DesignSource::Run), |d| d.parse())?,
         unit: parse(&UNITS, &a.units).expect("clap checks --units"),
         level: a.level,
         smoothing: a.smoothing,
+        max_chord: a.max_chord_mm * 1e-3,
+        verify,
     };
-    print::export(&flexstage_pipeline::export(&folder, &options)?);
+    let summary = flexstage_pipeline::export(&folder, &options)?;
+    print::export(&summary);
+    if a.require_safe && options.verify.is_some() && !summary.safe() {
+        errln!("--require-safe: the design is not verified safe");
+        std::process::exit(2);
+    }
     Ok(())
 }
 
@@ -244,7 +288,7 @@ pub fn pea(PeaCommand::Simulate(a): PeaCommand) -> anyhow::Result<()> {
         let r = flexstage_pipeline::simulate_pea(&a.target.scenario.load()?, &options)?;
         print::pea_record(&r);
         flexstage_pipeline::write_pea_csv(path, &r, a.target.force)?;
-        eprintln!("wrote {}", path.display());
+        errln!("wrote {}", path.display());
         return Ok(());
     }
     let folder = a.target.open()?;

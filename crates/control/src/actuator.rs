@@ -17,6 +17,8 @@
 
 use flexstage_piezo::{BoucWenParams, CompensatorParams, InverseCompensator, MICROMETRE, advance};
 
+use flexstage_numerics::RangeError;
+
 use crate::error::{Result, check, positive};
 
 /// How x_nom becomes a voltage.
@@ -49,12 +51,9 @@ impl ActuatorParams {
     /// Checks the fields.
     pub fn validate(&self) -> Result<()> {
         for p in &self.hysteresis {
-            p.validate()
-                .map_err(|e| crate::error::ControlError::OutOfRange {
-                    field: "hysteresis".into(),
-                    value: e.to_string(),
-                    expected: "valid Bouc–Wen parameters".into(),
-                })?;
+            p.validate().map_err(|e| {
+                RangeError::new("hysteresis", e.to_string(), "valid Bouc–Wen parameters")
+            })?;
         }
         let [lo, hi] = self.voltage_range;
         check("hysteresis.voltage_min", lo, lo.is_finite(), "finite [V]")?;
@@ -74,6 +73,24 @@ impl ActuatorParams {
 pub fn preload(p: &BoucWenParams, u_b: f64) -> (f64, f64, f64) {
     let h = advance(p, 0.0, 0.0, u_b, 1.0);
     (u_b, h, p.d_p * u_b - h)
+}
+
+/// The nominal stroke the amplifier range delivers around the preloaded bias: `[up, down]`
+/// [m], the largest x_nom above and below x_bias that the PEA reaches on its major loop
+/// (bias → U_max → U_min → U_max → U_min with ramps of `ramp` seconds per half range; the
+/// smaller of the two visits of each end). With Table A1 and 0–1000 V this is less than the
+/// ±30 µm nominal stroke of Section 4.1.
+pub fn deliverable_stroke(p: &BoucWenParams, range: [f64; 2], bias: f64, ramp: f64) -> [f64; 2] {
+    let (u, h, x_bias) = preload(p, bias);
+    let mut pea = flexstage_piezo::BoucWen::with_state(*p, u, h);
+    let up1 = pea.step(range[1], ramp);
+    let down1 = pea.step(range[0], 2.0 * ramp);
+    let up2 = pea.step(range[1], 2.0 * ramp);
+    let down2 = pea.step(range[0], 2.0 * ramp);
+    [
+        (up1.min(up2) - x_bias) * MICROMETRE,
+        (x_bias - down1.max(down2)) * MICROMETRE,
+    ]
 }
 
 /// Mean slope κ [µm/V] of the virgin curve over the amplifier range.
@@ -113,11 +130,7 @@ impl Actuator {
         };
         let make = |p: BoucWenParams| {
             let mut c = InverseCompensator::new(p, settings).map_err(|e| {
-                crate::error::ControlError::OutOfRange {
-                    field: "hysteresis".into(),
-                    value: e.to_string(),
-                    expected: "valid compensator settings".into(),
-                }
+                RangeError::new("hysteresis", e.to_string(), "valid compensator settings")
             })?;
             let (u, h, _) = preload(&p, params.bias_voltage);
             c.set_state(u, h);

@@ -68,6 +68,7 @@
 use nalgebra::{Matrix2, Vector2};
 
 use crate::error::{ControlError, Result, check, non_negative, positive};
+use crate::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
 use crate::model::{Matrix8, StageModel};
 use crate::trajectory::RefSample;
 
@@ -198,15 +199,16 @@ impl Law {
     fn n(&self, eta: &[f64; 6], xi_dot: &[f64; 2], delta: &[f64; 2]) -> [f64; 2] {
         let b = &self.b;
         let mut out = [0.0; 2];
+        let ([q1, q2], [v1, v2], [w1, w2]) = (Q_O, Q_O_DOT, X_IN_DOT);
         for (i, o) in out.iter_mut().enumerate() {
-            let r = 4 + i;
+            let r = Q_O_DOT[i];
             *o = delta[i]
-                + b[(r, 0)] * eta[0]
-                + b[(r, 1)] * eta[1]
-                + b[(r, 4)] * eta[4]
-                + b[(r, 5)] * eta[5]
-                + b[(r, 6)] * xi_dot[0]
-                + b[(r, 7)] * xi_dot[1];
+                + b[(r, q1)] * eta[q1]
+                + b[(r, q2)] * eta[q2]
+                + b[(r, v1)] * eta[v1]
+                + b[(r, v2)] * eta[v2]
+                + b[(r, w1)] * xi_dot[0]
+                + b[(r, w2)] * xi_dot[1];
         }
         out
     }
@@ -215,7 +217,11 @@ impl Law {
     /// kept as feedforward (the mechanism's own stiffness and damping act on the error).
     #[inline]
     fn n_d(&self, r: &RefSample, xi_dot: &[f64; 2], delta: &[f64; 2]) -> [f64; 2] {
-        let eta_d = [r.q[0], r.q[1], 0.0, 0.0, r.dq[0], r.dq[1]];
+        let mut eta_d = [0.0; 6];
+        for i in 0..2 {
+            eta_d[Q_O[i]] = r.q[i];
+            eta_d[Q_O_DOT[i]] = r.dq[i];
+        }
         self.n(&eta_d, xi_dot, delta)
     }
 
@@ -223,12 +229,12 @@ impl Law {
     #[inline]
     fn n_d_dot(&self, r: &RefSample) -> [f64; 2] {
         let b = &self.b;
-        [0, 1].map(|i| {
-            let row = 4 + i;
-            b[(row, 0)] * r.dq[0]
-                + b[(row, 1)] * r.dq[1]
-                + b[(row, 4)] * r.ddq[0]
-                + b[(row, 5)] * r.ddq[1]
+        let ([q1, q2], [v1, v2]) = (Q_O, Q_O_DOT);
+        Q_O_DOT.map(|row| {
+            b[(row, q1)] * r.dq[0]
+                + b[(row, q2)] * r.dq[1]
+                + b[(row, v1)] * r.ddq[0]
+                + b[(row, v2)] * r.ddq[1]
         })
     }
 
@@ -237,8 +243,18 @@ impl Law {
     pub fn eta_dot(&self, eta: &[f64; 6], xi_dot: &[f64; 2], delta: &[f64; 2]) -> [f64; 6] {
         let n = self.n(eta, xi_dot, delta);
         let b = &self.b;
-        let acc = |i: usize| n[i] + b[(4 + i, 2)] * eta[2] + b[(4 + i, 3)] * eta[3];
-        [eta[4], eta[5], xi_dot[0], xi_dot[1], acc(0), acc(1)]
+        let [x1, x2] = X_IN;
+        let acc = |i: usize| {
+            let row = Q_O_DOT[i];
+            n[i] + b[(row, x1)] * eta[x1] + b[(row, x2)] * eta[x2]
+        };
+        let mut out = [0.0; 6];
+        for i in 0..2 {
+            out[Q_O[i]] = eta[Q_O_DOT[i]];
+            out[X_IN[i]] = xi_dot[i];
+            out[Q_O_DOT[i]] = acc(i);
+        }
+        out
     }
 
     /// Step 1: s, Z and a at (η, ξ̇, reference).
@@ -257,8 +273,8 @@ impl Law {
         let mut z = [0.0; 2];
         let mut rhs = Vector2::zeros();
         for i in 0..2 {
-            let e = eta[i] - r.q[i];
-            let ed = eta[4 + i] - r.dq[i];
+            let e = eta[Q_O[i]] - r.q[i];
+            let ed = eta[Q_O_DOT[i]] - r.dq[i];
             s[i] = ed + p.error_gain[i] * e;
             z[i] = r.ddq[i] - p.error_gain[i] * ed - n[i];
             // a_m (A24) + a_s (A25, with the sign fixed).
@@ -287,8 +303,8 @@ impl Law {
         let mut z_dot = [0.0; 2];
         let mut rhs = Vector2::zeros();
         for i in 0..2 {
-            let qdd = eta_dot[4 + i];
-            let ed = eta[4 + i] - r.dq[i];
+            let qdd = eta_dot[Q_O_DOT[i]];
+            let ed = eta[Q_O_DOT[i]] - r.dq[i];
             let edd = qdd - r.ddq[i];
             s_dot[i] = edd + p.error_gain[i] * ed;
             let n_dot = n_d_dot[i];
@@ -299,7 +315,7 @@ impl Law {
         }
         let a_dot = self.g_inv * rhs;
         let mut out = LawOutput {
-            eps: [eta[0] - r.q[0], eta[1] - r.q[1]],
+            eps: [0, 1].map(|i| eta[Q_O[i]] - r.q[i]),
             s,
             s_dot,
             z,
@@ -309,7 +325,7 @@ impl Law {
             ..LawOutput::default()
         };
         for i in 0..2 {
-            let ea = eta[2 + i] - a[i];
+            let ea = eta[X_IN[i]] - a[i];
             out.eps_a[i] = ea;
             let v_m = a_dot[i] - p.feedback_gain[i] * ea;
             let v_s = robust * (-ea - p.a_bound[i] * sigma(ea, p.boundary_layer[1]));

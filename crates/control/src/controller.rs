@@ -34,7 +34,8 @@ use crate::actuator::{Actuator, ActuatorParams};
 use crate::backstepping::{Law, LawOutput, LawParams};
 use crate::error::{Result, check};
 use crate::model::StageModel;
-use crate::observer::{FILTER_LEN, KFilter, ObserverDesign, ObserverParams, Vector10};
+use crate::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
+use crate::observer::{DISTURBANCE, FILTER_LEN, KFilter, ObserverDesign, ObserverParams, Vector10};
 use crate::trajectory::{RefSample, Reference};
 
 /// One sample of controller output.
@@ -214,8 +215,8 @@ impl BacksteppingController {
         let mut x = Vector10::zeros();
         x.fixed_rows_mut::<8>(0).copy_from_slice(&z);
         self.filter.reset(x);
-        self.xi_d = [z[2], z[3]];
-        self.y_prev = [z[0], z[1]];
+        self.xi_d = X_IN.map(|i| z[i]);
+        self.y_prev = Q_O.map(|i| z[i]);
         self.have_prev = true;
     }
 
@@ -238,15 +239,22 @@ impl StageControl for BacksteppingController {
             Velocity::FiniteDifference if self.have_prev => {
                 [(y[0] - self.y_prev[0]) / t, (y[1] - self.y_prev[1]) / t]
             }
-            _ => [zh[4], zh[5]],
+            _ => Q_O_DOT.map(|i| zh[i]),
         };
         // η̂ = [z1, z2, ẑ3, ẑ4, q̇1, q̇2] and ξ̂̇ = [ẑ7, ẑ8] (Section 3.2.2, after Eq. 44).
         let (xi, xi_dot) = match self.inner {
-            Inner::Estimate => ([zh[2], zh[3]], [zh[6], zh[7]]),
+            Inner::Estimate => (X_IN.map(|i| zh[i]), X_IN_DOT.map(|i| zh[i])),
             Inner::Command => (self.xi_d, self.v_prev),
         };
-        let eta = [y[0], y[1], xi[0], xi[1], q_dot[0], q_dot[1]];
-        let law = self.law.evaluate(&eta, &xi_dot, &[zh[8], zh[9]], &r);
+        let mut eta = [0.0; 6];
+        for i in 0..2 {
+            eta[Q_O[i]] = y[i];
+            eta[X_IN[i]] = xi[i];
+            eta[Q_O_DOT[i]] = q_dot[i];
+        }
+        let law = self
+            .law
+            .evaluate(&eta, &xi_dot, &DISTURBANCE.map(|i| zh[i]), &r);
         let v = law.v;
         let v_dot = if self.have_prev {
             [(v[0] - self.v_prev[0]) / t, (v[1] - self.v_prev[1]) / t]
@@ -255,19 +263,20 @@ impl StageControl for BacksteppingController {
         };
         // Input transformation (44*), with ξ_d at mid-sample.
         let b = &self.model.b;
+        let ([q1, q2], [x1, x2], [v1, v2], [w1, w2]) = (Q_O, X_IN, Q_O_DOT, X_IN_DOT);
         let mut rhs = Vector2::zeros();
         for i in 0..2 {
-            let row = 6 + i;
+            let row = X_IN_DOT[i];
             let xi_mid = [self.xi_d[0] + 0.5 * t * v[0], self.xi_d[1] + 0.5 * t * v[1]];
             rhs[i] = v_dot[i]
-                - (b[(row, 0)] * y[0]
-                    + b[(row, 1)] * y[1]
-                    + b[(row, 4)] * q_dot[0]
-                    + b[(row, 5)] * q_dot[1]
-                    + b[(row, 2)] * xi_mid[0]
-                    + b[(row, 3)] * xi_mid[1]
-                    + b[(row, 6)] * v[0]
-                    + b[(row, 7)] * v[1]);
+                - (b[(row, q1)] * y[0]
+                    + b[(row, q2)] * y[1]
+                    + b[(row, v1)] * q_dot[0]
+                    + b[(row, v2)] * q_dot[1]
+                    + b[(row, x1)] * xi_mid[0]
+                    + b[(row, x2)] * xi_mid[1]
+                    + b[(row, w1)] * v[0]
+                    + b[(row, w2)] * v[1]);
         }
         let u = self.d_inv * rhs;
         let mut u = [u[0], u[1]];
@@ -290,7 +299,7 @@ impl StageControl for BacksteppingController {
         self.filter.step(y, cmd.x_nom);
         if !finite {
             let z = self.filter.estimate();
-            self.xi_d = [z[2], z[3]];
+            self.xi_d = X_IN.map(|i| z[i]);
             self.v_prev = [0.0; 2];
         } else {
             if !cmd.saturated {

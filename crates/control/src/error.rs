@@ -1,18 +1,14 @@
 //! Typed errors of the control crate.
 
+use flexstage_numerics::RangeError;
+
 /// Everything that can go wrong when building models, observers and controllers.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ControlError {
-    /// A parameter lies outside its accepted range.
-    #[error("{field} = {value} is out of range: expected {expected}")]
-    OutOfRange {
-        /// Name of the parameter (its TOML path when it comes from the scenario).
-        field: String,
-        /// The value found, formatted.
-        value: String,
-        /// The accepted range in words.
-        expected: String,
-    },
+    /// A parameter lies outside its accepted range (named by its TOML path when it comes
+    /// from the scenario).
+    #[error(transparent)]
+    OutOfRange(#[from] RangeError),
     /// A matrix that must be invertible is singular (or numerically so).
     #[error("{what} is singular")]
     Singular {
@@ -25,6 +21,14 @@ pub enum ControlError {
         /// Which matrix.
         what: String,
         /// The offending eigenvalue or margin.
+        detail: String,
+    },
+    /// A reference the rig cannot follow (frequency, amplifier range or current, stroke).
+    #[error("{what}: {detail}")]
+    Infeasible {
+        /// What is exceeded.
+        what: String,
+        /// By how much, and what to change.
         detail: String,
     },
     /// Matrices of incompatible sizes.
@@ -40,25 +44,4 @@ pub enum ControlError {
 /// Result alias of this crate.
 pub type Result<T> = std::result::Result<T, ControlError>;
 
-/// `ok && value.is_finite()`, or an [`ControlError::OutOfRange`].
-pub(crate) fn check(field: &str, value: f64, ok: bool, expected: &str) -> Result<()> {
-    if ok && value.is_finite() {
-        Ok(())
-    } else {
-        Err(ControlError::OutOfRange {
-            field: field.to_string(),
-            value: format!("{value:e}"),
-            expected: expected.to_string(),
-        })
-    }
-}
-
-/// `value` is finite and > 0.
-pub(crate) fn positive(field: &str, value: f64) -> Result<()> {
-    check(field, value, value > 0.0, "a finite number > 0")
-}
-
-/// `value` is finite and ≥ 0.
-pub(crate) fn non_negative(field: &str, value: f64) -> Result<()> {
-    check(field, value, value >= 0.0, "a finite number ≥ 0")
-}
+flexstage_numerics::range_checks!(ControlError);

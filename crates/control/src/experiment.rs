@@ -1,5 +1,12 @@
-//! The simulated tracking experiment (Section 4, Figures 9–11): a controller variant, the
+//! The simulated tracking experiment (Section 4, Figures 9–11): a controller variant, a
 //! plant and a reference, run sample by sample, with the time series and the metrics.
+//!
+//! The runner takes any [`StagePlant`]: the lumped plant in its minimal loop
+//! ([`experiment`], the controller's ideal-loop tests), the lumped plant in the scenario's
+//! rig ([`Setup::lumped_plant`]) or the finite-element twin of the designed stage
+//! (`flexstage-twin`), through [`experiment_on`]. Before a run, [`Setup::check_reference`]
+//! refuses references the rig cannot follow (above the Nyquist frequency, beyond the
+//! amplifier range, the amplifier current or the controller's stroke).
 
 use flexstage_piezo::BoucWenParams;
 use flexstage_scenario::Scenario;
@@ -12,8 +19,9 @@ use crate::controller::{
 };
 use crate::error::Result;
 use crate::observer::ObserverParams;
-use crate::plant::{Plant, PlantActuator, PlantParams};
-use crate::trajectory::{Reference, Workspace};
+use crate::plant::{LumpedStage, Plant, PlantActuator, PlantParams};
+use crate::rig::{RigParams, RigPlant, StagePlant};
+use crate::trajectory::{Feasibility, Reference, Workspace, feasibility};
 
 /// The controller variants compared.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -52,8 +60,10 @@ pub struct Setup {
     pub controller: ControllerParams,
     /// PID baseline gains.
     pub pid: PidParams,
-    /// The plant.
+    /// The lumped plant (truth parameters, cross terms) in its minimal loop.
     pub plant: PlantParams,
+    /// The loop of the scenario's rig (`[rig]`), for [`Setup::lumped_plant`] and the twin.
+    pub rig: RigParams,
 }
 
 impl Setup {
@@ -118,7 +128,42 @@ impl Setup {
                 substeps: s.simulation.substeps,
                 actuator: PlantActuator::Hysteretic,
             },
+            rig: RigParams::from_scenario(s),
         }
+    }
+
+    /// The lumped plant (truth parameters and cross terms of [`Setup::plant`]) inside the
+    /// scenario's rig ([`Setup::rig`]): delay, amplifier limits, the rig's own PEAs with creep,
+    /// sensor dynamics and noise, floor vibration.
+    pub fn lumped_plant(&self) -> Result<RigPlant<LumpedStage>> {
+        let mech = LumpedStage::new(&self.plant.truth, self.plant.coupling, self.rig.substep())?;
+        RigPlant::new(self.rig.clone(), mech)
+    }
+
+    /// Whether `reference` over `duration` seconds can be followed on this rig, with the
+    /// static gain `dc_gain` (x_nom → q) of the plant it will run on (`None`: the controller
+    /// model's). Errors name what is exceeded and by how much ([`feasibility`]).
+    pub fn check_reference(
+        &self,
+        reference: &Reference,
+        duration: f64,
+        dc_gain: Option<[[f64; 2]; 2]>,
+    ) -> Result<Feasibility> {
+        let gain = match dc_gain {
+            Some(g) => g,
+            None => {
+                let g = crate::model::StageModel::new(&self.controller.model)?.dc_gain()?;
+                [[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]]
+            }
+        };
+        feasibility(
+            reference,
+            duration,
+            self.controller.observer.sample_time,
+            gain,
+            &self.controller.actuator,
+            &self.rig.amplifier,
+        )
     }
 
     /// The designed workspace of the controller's model: the image of |x_nom,i| ≤ stroke.
@@ -311,7 +356,7 @@ impl Metrics {
 /// the record (once, up front).
 pub fn run(
     controller: &mut dyn StageControl,
-    plant: &mut Plant,
+    plant: &mut dyn StagePlant,
     duration: f64,
     sample_time: f64,
     mut progress: impl FnMut(usize),
@@ -360,7 +405,8 @@ pub fn run(
     rec
 }
 
-/// One experiment: variant, compensation, reference and duration on the setup's plant.
+/// One experiment: variant, compensation, reference and duration on the setup's lumped
+/// plant in its minimal loop ([`Setup::plant`]: the controller's ideal-loop conditions).
 pub fn experiment(
     setup: &Setup,
     variant: Variant,
@@ -387,6 +433,29 @@ pub fn experiment_with_progress(
     Ok(run(
         c.as_mut(),
         &mut plant,
+        duration,
+        setup.controller.observer.sample_time,
+        progress,
+    ))
+}
+
+/// One experiment on a given plant (e.g. [`Setup::lumped_plant`] or the twin of
+/// `flexstage-twin`), from the plant's current state. `progress` is called with the number of
+/// samples done since the last call, every 1000 samples.
+pub fn experiment_on(
+    setup: &Setup,
+    variant: Variant,
+    compensation: Compensation,
+    reference: Reference,
+    duration: f64,
+    plant: &mut dyn StagePlant,
+    progress: impl FnMut(usize),
+) -> Result<Record> {
+    crate::error::positive("duration", duration)?;
+    let mut c = setup.controller(variant, compensation, reference)?;
+    Ok(run(
+        c.as_mut(),
+        plant,
         duration,
         setup.controller.observer.sample_time,
         progress,

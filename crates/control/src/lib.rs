@@ -12,11 +12,20 @@
 //!   controller (robust or not) and the PID + inverse-hysteresis feedforward baseline;
 //! * [`actuator`]: preload, inverse hysteresis compensation (inside the loop, Figure 7),
 //!   amplifier range;
-//! * [`plant`]: the simulated stage (digital twin): truth parameters, cross terms of
-//!   Eq. (30), Bouc–Wen PEAs, sensor noise and quantization, continuous time with substeps;
+//! * [`rig`]: the loop around a simulated stage as on a rig, in composable parts (delay,
+//!   amplifier bandwidth / slew / current limit, the plant's own Bouc–Wen PEAs with creep,
+//!   floor vibration, sensor bandwidth, white + 1/f noise, quantization); the [`rig::Mechanics`]
+//!   trait for what sits inside and the [`rig::StagePlant`] trait the experiment runner drives;
+//! * [`plant`]: the lumped mechanics of Eq. (36) with the cross terms of Eq. (30)
+//!   ([`plant::LumpedStage`]) and the lumped plant in its minimal loop ([`plant::Plant`]); the
+//!   finite-element twin of the designed stage is `flexstage-twin`;
 //! * [`trajectory`]: Lissajous curves of any ratio, circle, steps and ramps with a smooth
-//!   start; the designed workspace;
-//! * [`experiment`]: one run of a variant on the plant, its time series and metrics;
+//!   start; the designed workspace; [`trajectory::feasibility`]: a reference is refused if it
+//!   reaches the Nyquist frequency or needs more stroke, voltage or amplifier current than the
+//!   rig has;
+//! * [`experiment`]: one run of a variant on a plant ([`experiment::experiment_on`] takes any
+//!   [`rig::StagePlant`]: the lumped model in the rig, [`experiment::Setup::lumped_plant`], or
+//!   the twin of `flexstage-twin`), its time series and metrics;
 //! * [`analysis`]: closed-loop poles of the sampled loop on the nominal linear model;
 //! * [`linalg`]: `expm`, `c2d` (ZOH), `lyap`, `dlyap`, `poles` in python-control style;
 //! * [`samples`]: problems with known answers.
@@ -94,6 +103,7 @@ pub mod linalg;
 pub mod model;
 pub mod observer;
 pub mod plant;
+pub mod rig;
 pub mod samples;
 pub mod trajectory;
 

@@ -7,6 +7,8 @@
 
 use nalgebra::{Complex, DMatrix};
 
+use flexstage_numerics::RangeError;
+
 use crate::error::{ControlError, Result};
 
 /// The matrix exponential e^A (scaling and squaring with a Padé approximant, nalgebra's
@@ -31,11 +33,7 @@ pub fn c2d(a: &DMatrix<f64>, b: &DMatrix<f64>, t: f64) -> Result<(DMatrix<f64>, 
         });
     }
     if !(t > 0.0 && t.is_finite()) {
-        return Err(ControlError::OutOfRange {
-            field: "sample time".into(),
-            value: format!("{t:e}"),
-            expected: "a finite number > 0".into(),
-        });
+        return Err(RangeError::number("sample time", t, "a finite number > 0").into());
     }
     let m = b.ncols();
     let mut aug = DMatrix::zeros(n + m, n + m);

@@ -30,6 +30,20 @@
 use flexstage_scenario::StageParams;
 use nalgebra::{DMatrix, Matrix2, SMatrix, SVector};
 
+/// Where the components of the state z are (module docs). The first six are also the
+/// backstepping state η = [q_o, ξ, q̇_o] with ξ = x_in (Section 3.2.2), and a state's index
+/// is the row of B that gives its derivative.
+pub mod state {
+    /// Output displacements q_o1, q_o2.
+    pub const Q_O: [usize; 2] = [0, 1];
+    /// Input-plate displacements x_in1, x_in2 (ξ of the backstepping law).
+    pub const X_IN: [usize; 2] = [2, 3];
+    /// Output velocities q̇_o1, q̇_o2.
+    pub const Q_O_DOT: [usize; 2] = [4, 5];
+    /// Input-plate velocities ẋ_in1, ẋ_in2.
+    pub const X_IN_DOT: [usize; 2] = [6, 7];
+}
+
 use crate::error::{ControlError, Result, check, non_negative, positive};
 
 /// 8 × 8 matrix.

@@ -48,6 +48,8 @@ use nalgebra::{SMatrix, SVector};
 
 /// Size of the observer state: z (8) and the input disturbance d (2).
 pub const NX: usize = 10;
+/// Where the input disturbance d is in the observer state (after z).
+pub const DISTURBANCE: [usize; 2] = [8, 9];
 /// 10 × 10 matrix.
 pub type Matrix10 = SMatrix<f64, NX, NX>;
 /// 10 × 2 matrix.

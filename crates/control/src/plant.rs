@@ -1,37 +1,32 @@
-//! The simulated stage (digital twin): richer than the controller's model.
+//! The lumped simulated stage: the 8-state model of Eq. (36) with the truth parameters and
+//! the cross terms of Eq. (30), inside the loop effects of [`crate::rig`].
 //!
-//! * Mechanics: Eq. (36) with the **truth** parameters (Table 4 estimates) and the cross
-//!   terms of Eq. (30) (a coupling spring k_c between the output directions).
-//! * Actuators: PEA i pushes its input plate with K_pea,i (x_nom,i − x_in,i) (Eq. 2–3, rows
-//!   7–8 of B and D), where x_nom,i = x_pea,i − x_bias,i comes from the Bouc–Wen model of the
-//!   applied voltage (flexstage-piezo), preloaded to the bias voltage (Section 4.1).
-//! * Amplifiers: the voltage is clamped to the range and held over the sample (ZOH), or
-//!   follows the command with a first-order lag when a bandwidth is set.
-//! * Sensors: Gaussian noise plus quantization to the sensor resolution (Section 4.1).
-//! * Time: continuous. Each sample is split into `substeps`; on each substep the mechanics
-//!   are advanced with the exact exponential (x_nom constant at its substep mean) and the
-//!   Bouc–Wen state with its exact integrator, so the ≈ 12 kHz PEA mode is resolved even
-//!   though the controller samples at 10 kHz (DECISIONS.md).
+//! * [`LumpedStage`] is the [`Mechanics`]: Eq. (36) (truth parameters, a coupling spring k_c
+//!   between the output directions) advanced per substep with the exact exponential, x_nom
+//!   held at its substep mean; the floor acceleration acts on every mass (relative
+//!   coordinates).
+//! * [`Plant`] is the lumped stage in the minimal loop of [`PlantParams`]: amplifier range and
+//!   optional first-order lag, the Bouc–Wen PEAs, white sensor noise and quantization, no
+//!   delay. It is the plant of the identification experiment and of the controller's
+//!   ideal-loop tests. The same mechanics in a realistic rig is
+//!   `RigPlant::new(rig, LumpedStage::new(..))` ([`crate::experiment::Setup::lumped_plant`]).
+//! * Time: continuous. Each sample is split into `substeps` so that the ≈ 12 kHz PEA mode is
+//!   resolved although the controller samples at 10 kHz (DECISIONS.md).
 
-use flexstage_piezo::{BoucWen, BoucWenParams, GaussianNoise, MICROMETRE};
+use flexstage_piezo::BoucWenParams;
 use flexstage_scenario::StageParams;
 
-use crate::actuator::preload;
 use crate::controller::Command;
 use crate::error::{Result, check, non_negative, positive};
 use crate::linalg::c2d;
 use crate::model::{Matrix8, Matrix8x2, StageModel, Vector8, from_dyn};
+pub use crate::rig::PlantActuator;
+use crate::rig::{
+    AmplifierParams, CreepParams, FloorParams, Mechanics, RigParams, RigPlant, SensorParams,
+    StagePlant,
+};
 
-/// How the plant's actuators are driven.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum PlantActuator {
-    /// Voltages through the Bouc–Wen PEAs (the full plant).
-    Hysteretic,
-    /// The command's x_nom directly (the linear plant of Eq. 36).
-    Ideal,
-}
-
-/// Settings of the simulated plant.
+/// Settings of the lumped plant in its minimal loop.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlantParams {
     /// True mechanical parameters.
@@ -78,145 +73,192 @@ impl PlantParams {
             "an integer ≥ 1",
         )
     }
+
+    /// The minimal loop of these settings as [`RigParams`]: no delay, the amplifier lag of
+    /// `amplifier_bandwidth` without rate limits, ideal sensor dynamics with white noise,
+    /// no creep, no floor vibration.
+    pub fn rig(&self) -> RigParams {
+        RigParams {
+            delay: 0,
+            actuator: self.actuator,
+            amplifier: AmplifierParams {
+                bandwidth: self.amplifier_bandwidth,
+                ..AmplifierParams::ideal()
+            },
+            hysteresis: self.hysteresis,
+            creep: CreepParams { factor: 0.0 },
+            voltage_range: self.voltage_range,
+            bias_voltage: self.bias_voltage,
+            floor: FloorParams {
+                velocity_rms: 0.0,
+                bands: [8.0, 80.0],
+            },
+            sensor: SensorParams::ideal(),
+            resolution: self.resolution,
+            noise_std: self.noise_std,
+            seed: self.seed,
+            sample_time: self.sample_time,
+            substeps: self.substeps,
+        }
+    }
 }
 
-/// The simulated stage. No allocation per sample.
+/// Eq. (36) with cross terms as [`Mechanics`] (module docs). No allocation per substep.
 #[derive(Debug, Clone)]
-pub struct Plant {
-    params: PlantParams,
+pub struct LumpedStage {
     model: StageModel,
     phi: Matrix8,
     gamma: Matrix8x2,
+    gamma_floor: Matrix8x2,
     z: Vector8,
-    pea: [BoucWen; 2],
-    x_bias: [f64; 2],
-    voltage: [f64; 2],
-    x_nom: [f64; 2],
-    noise: [GaussianNoise; 2],
+    h: f64,
 }
 
-impl Plant {
-    /// A plant at rest at the bias (z = 0, x_nom = 0).
-    pub fn new(params: PlantParams) -> Result<Plant> {
-        params.validate()?;
-        let model = StageModel::with_coupling(&params.truth, params.coupling)?;
-        let dt = params.sample_time / params.substeps as f64;
-        let (phi, gamma) = c2d(&model.b_dyn(), &model.input_dyn(), dt)?;
-        let mut pea = [
-            BoucWen::new(params.hysteresis[0]),
-            BoucWen::new(params.hysteresis[1]),
-        ];
-        let mut x_bias = [0.0; 2];
-        for i in 0..2 {
-            let (u, h, x) = preload(&params.hysteresis[i], params.bias_voltage);
-            pea[i].set_state(u, h);
-            x_bias[i] = x;
-        }
-        let noise = [
-            GaussianNoise::new(
-                params.noise_std[0],
-                params.seed.wrapping_mul(2).wrapping_add(1),
-            ),
-            GaussianNoise::new(
-                params.noise_std[1],
-                params.seed.wrapping_mul(2).wrapping_add(2),
-            ),
-        ];
-        Ok(Plant {
-            voltage: [params.bias_voltage; 2],
+impl LumpedStage {
+    /// The stage with parameters `truth` and coupling spring `k_c` [N/m], discretized for
+    /// substeps of `h` seconds, at rest.
+    pub fn new(truth: &StageParams, k_c: f64, h: f64) -> Result<LumpedStage> {
+        let model = StageModel::with_coupling(truth, k_c)?;
+        let (phi, gamma) = c2d(&model.b_dyn(), &model.input_dyn(), h)?;
+        // Base acceleration a_g in relative coordinates: −a_g on every mass (q̈_o1, q̈_o2,
+        // ẍ_in1, ẍ_in2 along x, x, y… as the DOFs point).
+        let mut bf = nalgebra::DMatrix::zeros(8, 2);
+        bf[(4, 0)] = -1.0;
+        bf[(5, 1)] = -1.0;
+        bf[(6, 0)] = -1.0;
+        bf[(7, 0)] = -1.0;
+        let (_, gamma_floor) = c2d(&model.b_dyn(), &bf, h)?;
+        Ok(LumpedStage {
             model,
             phi: from_dyn(&phi),
             gamma: from_dyn(&gamma),
+            gamma_floor: from_dyn(&gamma_floor),
             z: Vector8::zeros(),
-            pea,
-            x_bias,
-            x_nom: [0.0; 2],
-            noise,
-            params,
+            h,
         })
     }
 
-    /// The plant's model (truth + coupling).
+    /// The model (truth + coupling).
     pub fn model(&self) -> &StageModel {
         &self.model
     }
 
-    /// The true state z [SI].
+    /// The state z [SI].
     pub fn state(&self) -> [f64; 8] {
         let mut s = [0.0; 8];
         s.copy_from_slice(self.z.as_slice());
         s
     }
 
-    /// Sets the true state z.
+    /// Sets the state z.
     pub fn set_state(&mut self, z: [f64; 8]) {
         self.z = Vector8::from_column_slice(&z);
+    }
+}
+
+impl Mechanics for LumpedStage {
+    fn substep_time(&self) -> f64 {
+        self.h
+    }
+
+    #[inline]
+    fn advance(&mut self, x_nom: [[f64; 2]; 2], floor: [[f64; 2]; 2]) {
+        let u = nalgebra::Vector2::new(
+            0.5 * (x_nom[0][0] + x_nom[1][0]),
+            0.5 * (x_nom[0][1] + x_nom[1][1]),
+        );
+        self.z = self.phi * self.z + self.gamma * u;
+        let f = [
+            0.5 * (floor[0][0] + floor[1][0]),
+            0.5 * (floor[0][1] + floor[1][1]),
+        ];
+        if f != [0.0; 2] {
+            self.z += self.gamma_floor * nalgebra::Vector2::new(f[0], f[1]);
+        }
+    }
+
+    fn output(&self) -> [f64; 2] {
+        [self.z[0], self.z[1]]
+    }
+
+    fn inputs(&self) -> [f64; 2] {
+        [self.z[2], self.z[3]]
+    }
+}
+
+/// The lumped stage in the minimal loop of [`PlantParams`] (module docs). No allocation per
+/// sample.
+#[derive(Debug, Clone)]
+pub struct Plant {
+    inner: RigPlant<LumpedStage>,
+}
+
+impl Plant {
+    /// A plant at rest at the bias (z = 0, x_nom = 0).
+    pub fn new(params: PlantParams) -> Result<Plant> {
+        params.validate()?;
+        let rig = params.rig();
+        let mech = LumpedStage::new(&params.truth, params.coupling, rig.substep())?;
+        Ok(Plant {
+            inner: RigPlant::new(rig, mech)?,
+        })
+    }
+
+    /// The plant's model (truth + coupling).
+    pub fn model(&self) -> &StageModel {
+        self.inner.mechanics().model()
+    }
+
+    /// The true state z [SI].
+    pub fn state(&self) -> [f64; 8] {
+        self.inner.mechanics().state()
+    }
+
+    /// Sets the true state z.
+    pub fn set_state(&mut self, z: [f64; 8]) {
+        self.inner.mechanics_mut().set_state(z);
     }
 
     /// The true output q_o [m].
     pub fn output(&self) -> [f64; 2] {
-        [self.z[0], self.z[1]]
+        self.inner.output()
     }
 
     /// The actuators' current x_nom [m].
     pub fn x_nom(&self) -> [f64; 2] {
-        self.x_nom
+        self.inner.x_nom()
     }
 
     /// Samples the sensors: q_o + noise, quantized.
     pub fn measure(&mut self) -> [f64; 2] {
-        let mut y = [0.0; 2];
-        for (i, yi) in y.iter_mut().enumerate() {
-            let v = self.z[i] + self.noise[i].sample();
-            let r = self.params.resolution[i];
-            *yi = if r > 0.0 { (v / r).round() * r } else { v };
-        }
-        y
+        self.inner.measure()
     }
 
     /// Advances one sample with the command held (ZOH).
     pub fn apply(&mut self, cmd: &Command) {
-        let n = self.params.substeps;
-        let dt = self.params.sample_time / n as f64;
-        let [lo, hi] = self.params.voltage_range;
-        match self.params.actuator {
-            PlantActuator::Ideal => {
-                self.x_nom = cmd.x_nom;
-                let u = nalgebra::Vector2::new(cmd.x_nom[0], cmd.x_nom[1]);
-                for _ in 0..n {
-                    self.z = self.phi * self.z + self.gamma * u;
-                }
-            }
-            PlantActuator::Hysteretic => {
-                let target = [cmd.voltage[0].clamp(lo, hi), cmd.voltage[1].clamp(lo, hi)];
-                let bw = self.params.amplifier_bandwidth;
-                let decay = if bw > 0.0 {
-                    (-std::f64::consts::TAU * bw * dt).exp()
-                } else {
-                    0.0
-                };
-                for _ in 0..n {
-                    let mut u = nalgebra::Vector2::zeros();
-                    for i in 0..2 {
-                        let x0 = self.x_nom[i];
-                        let v1 = target[i] + (self.voltage[i] - target[i]) * decay;
-                        // Ideal amplifier: a jump at the start of the sample (Δt = 0);
-                        // otherwise a ramp over the substep.
-                        let ramp = if bw > 0.0 { dt } else { 0.0 };
-                        let x_pea = self.pea[i].step(v1, ramp);
-                        self.voltage[i] = v1;
-                        let x1 = (x_pea - self.x_bias[i]) * MICROMETRE;
-                        self.x_nom[i] = x1;
-                        u[i] = if bw > 0.0 { 0.5 * (x0 + x1) } else { x1 };
-                    }
-                    self.z = self.phi * self.z + self.gamma * u;
-                }
-            }
-        }
+        self.inner.step(cmd);
     }
 
     /// The voltages currently applied [V].
     pub fn voltage(&self) -> [f64; 2] {
-        self.voltage
+        self.inner.voltage()
+    }
+}
+
+impl StagePlant for Plant {
+    fn measure(&mut self) -> [f64; 2] {
+        self.inner.measure()
+    }
+    fn output(&self) -> [f64; 2] {
+        self.inner.output()
+    }
+    fn apply(&mut self, cmd: &Command) {
+        self.inner.step(cmd);
+    }
+    fn voltage(&self) -> [f64; 2] {
+        self.inner.voltage()
+    }
+    fn x_nom(&self) -> [f64; 2] {
+        self.inner.x_nom()
     }
 }

@@ -118,9 +118,11 @@ pub struct ElementKernel {
 
 /// Kinematic quantities at a Gauss point.
 #[derive(Clone, Copy)]
-struct GpKin {
-    f: [[f64; 2]; 2],
-    e: [f64; 3],
+pub(crate) struct GpKin {
+    /// Deformation gradient F (identity for small strain).
+    pub(crate) f: [[f64; 2]; 2],
+    /// Green–Lagrange (or small) strain, Voigt `[E11, E22, 2E12]`.
+    pub(crate) e: [f64; 3],
 }
 
 #[inline(always)]
@@ -148,7 +150,7 @@ impl ElementKernel {
     }
 
     #[inline(always)]
-    fn kin(&self, g: usize, u: &[f64; 8]) -> GpKin {
+    pub(crate) fn kin(&self, g: usize, u: &[f64; 8]) -> GpKin {
         let dn = &self.geometry.dndx[g];
         let mut h = [[0.0; 2]; 2];
         for a in 0..4 {
@@ -175,7 +177,7 @@ impl ElementKernel {
 
     /// Strain-displacement matrix `B(u)` (3×8) at Gauss point `g` for deformation gradient `f`.
     #[inline(always)]
-    fn bmat(&self, g: usize, f: &[[f64; 2]; 2]) -> [[f64; 8]; 3] {
+    pub(crate) fn bmat(&self, g: usize, f: &[[f64; 2]; 2]) -> [[f64; 8]; 3] {
         let dn = &self.geometry.dndx[g];
         let mut b = [[0.0; 8]; 3];
         for a in 0..4 {

@@ -36,6 +36,14 @@ pub enum ParamError {
         /// Exclusive upper bound.
         bound: usize,
     },
+    /// An index that must appear once appears twice.
+    #[error("`{what}` lists index {index} twice")]
+    Duplicate {
+        /// What was passed (e.g. `"LinkSpring::terms"`).
+        what: &'static str,
+        /// The repeated index.
+        index: usize,
+    },
     /// A non-finite value (NaN or infinity) was supplied.
     #[error("`{what}` contains a non-finite value at position {index}")]
     NonFinite {

@@ -17,10 +17,14 @@
 //!   stress-free-reference correction, see the type docs), `S̃ = 2∂Ψ̃/∂C` (Eq. (A4)), and the
 //!   `c2` update of Eq. (A3) ([`AdditiveYeoh::update_c2`]).
 //! * **Residual** (Eq. (A5)–(A6)): `R(u, ρ) = ∪_e ∫ Bᵀ(u)(S + S̃) dV + K_s u` with grounded
-//!   springs `K_s` (PEA model, Eq. (2)–(3)); equilibrium `R(u, ρ) = P` (Eq. (6), (A7)).
+//!   springs (PEA model, Eq. (2)–(3)) and link springs on combinations of DOFs (a load acting
+//!   relative to a moving frame) in `K_s`; equilibrium `R(u, ρ) = P` (Eq. (6), (A7)).
 //!   The tangent `K_T = ∂R/∂u` is the exact consistent linearization (material + geometric
 //!   stiffness), so the adjoint method gives exact gradients; `∂R/∂ρ_e` includes the additive
 //!   term's `(1 − ρ^p)` factor (cf. the approximations of Eq. (14)–(16)).
+//!
+//! * **Stress recovery** ([`stress`]): the von Mises value of the solid stress `E0 D̂ E(u)` at
+//!   the Gauss points, with its gradient, for stress-constrained design.
 //!
 //! ## Linear algebra and solvers
 //!
@@ -31,6 +35,13 @@
 //! tangents), per-thread [`SolveWorkspace`]s, and [`pcg`] to reuse one factor as the
 //! preconditioner of other states/load cases. [`newton::solve`] is an incremental
 //! Newton–Raphson solver with cutback, line search and typed errors.
+//!
+//! ## Dynamics
+//!
+//! [`mass`] assembles the consistent mass matrix in the tangent's own pattern, and
+//! [`transient`] integrates `M ü + C u̇ + R(u) = P(t)` with Newmark's average-acceleration rule
+//! or HHT-α, Newton iterations on the Total Lagrangian residual per step and Rayleigh damping:
+//! the full-model reference of the digital twin (`flexstage-twin`).
 //!
 //! ## Example
 //!
@@ -68,23 +79,31 @@
 
 pub mod element;
 pub mod error;
+pub mod mass;
 pub mod material;
 pub mod mesh;
 pub mod model;
 pub mod newton;
 pub mod samples;
 pub mod solver;
+pub mod stress;
+pub mod transient;
 
 pub use element::{ElementCoefficients, ElementGeometry, ElementKernel};
 pub use error::{IterationRecord, NewtonError, ParamError, SolverError};
+pub use mass::{DofMass, consistent_mass, rigid_body_load};
 pub use material::{AdditiveYeoh, Kinematics, Material, YeohUpdate};
 pub use mesh::{Edge, Mesh, Passive};
 pub use model::{
-    AssemblyWorkspace, BoundaryConditions, Component, Design, DofMap, Model, SparseMatrix,
-    SparsityPattern, Spring, pea_force,
+    AssemblyWorkspace, BoundaryConditions, Component, Design, DofMap, LinkSpring, Model,
+    SparseMatrix, SparsityPattern, Spring, pea_force,
 };
 pub use newton::{LinearStrategy, NewtonParams, NewtonReport, NewtonWorkspace};
 pub use solver::{
     BlockPcgWorkspace, ColumnOutcome, Factor, FactorKind, PcgParams, PcgReport, PcgWorkspace,
     SolveWorkspace, SymbolicFactor, pcg, pcg_block,
+};
+pub use stress::STRESS_POINTS;
+pub use transient::{
+    RayleighDamping, Transient, TransientError, TransientParams, TransientStats, newmark_frequency,
 };

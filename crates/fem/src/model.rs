@@ -15,6 +15,11 @@
 //! This is the PEA model of paper Eq. (2)–(3): a spring `K_pea` to ground plus the external force
 //! `K_pea·x_nom` at the input node (see [`pea_force`]).
 //!
+//! A [`LinkSpring`] acts on a linear combination of DOFs, `g = Σ cᵢ u_{dᵢ}`, with the energy
+//! `½ k g²`: it adds `k g cᵢ` to `R` at each `dᵢ` and `k cᵢ cⱼ` to the tangent. flexstage uses it
+//! for a load that acts relative to a moving frame, e.g. the output load on the deformation
+//! `u_ox − ½(u_in1 + u_in2)` of Eq. (22).
+//!
 //! Equilibrium is `R(u, ρ) = P` (paper Eq. (A7); Eq. (10) writes `ℜ = P − R`).
 
 use std::sync::Arc;
@@ -47,6 +52,23 @@ pub struct Spring {
     pub stiffness: f64,
 }
 
+/// A linear spring on a combination of DOFs: energy `½ k (Σᵢ cᵢ u_{dᵢ})²` (module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinkSpring {
+    /// `(full DOF dᵢ, coefficient cᵢ)`; a DOF may appear once.
+    pub terms: Vec<(usize, f64)>,
+    /// Stiffness k, N/m (≥ 0).
+    pub stiffness: f64,
+}
+
+impl LinkSpring {
+    /// `g = Σ cᵢ u_{dᵢ}` (the spring's elongation).
+    #[inline]
+    pub fn elongation(&self, u: &[f64]) -> f64 {
+        self.terms.iter().map(|&(d, c)| c * u[d]).sum()
+    }
+}
+
 /// Supports and grounded springs. Loads are per load case and passed as vectors.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct BoundaryConditions {
@@ -54,6 +76,8 @@ pub struct BoundaryConditions {
     pub fixed: Vec<usize>,
     /// Grounded springs. Several springs on the same DOF add up.
     pub springs: Vec<Spring>,
+    /// Springs on combinations of DOFs ([`LinkSpring`]).
+    pub links: Vec<LinkSpring>,
 }
 
 impl BoundaryConditions {
@@ -84,6 +108,14 @@ impl BoundaryConditions {
     /// Add a grounded spring on `dof`.
     pub fn add_spring(&mut self, dof: usize, stiffness: f64) -> &mut Self {
         self.springs.push(Spring { dof, stiffness });
+        self
+    }
+    /// Add a spring of stiffness `k` on `Σ cᵢ u_{dᵢ}` (`terms` = `(dᵢ, cᵢ)`).
+    pub fn add_link(&mut self, terms: &[(usize, f64)], stiffness: f64) -> &mut Self {
+        self.links.push(LinkSpring {
+            terms: terms.to_vec(),
+            stiffness,
+        });
         self
     }
 }
@@ -191,10 +223,12 @@ pub struct SparsityPattern {
     elem_slots: Vec<[u32; ELEM_PACKED]>,
     /// CSC slot of each diagonal entry.
     diag_slots: Vec<usize>,
+    /// Per link spring: `(term i, term j, slot)` for the free pairs with `i ≤ j` in reduced order.
+    link_slots: Vec<Vec<(u16, u16, u32)>>,
 }
 
 impl SparsityPattern {
-    fn build(mesh: &Mesh, dofs: &DofMap) -> Self {
+    fn build(mesh: &Mesh, dofs: &DofMap, links: &[LinkSpring]) -> Self {
         let n = dofs.n_free();
         let ne = mesh.n_elements();
         let mut pairs: Vec<(u32, u32)> = Vec::with_capacity(ne * ELEM_PACKED + n);
@@ -213,6 +247,27 @@ impl SparsityPattern {
                     pairs.push((col as u32, row as u32));
                 }
             }
+        }
+        let link_pairs = |l: &LinkSpring| {
+            let free: Vec<(usize, usize)> = (l.terms.iter().enumerate())
+                .filter_map(|(i, &(d, _))| dofs.reduced(d).map(|r| (i, r)))
+                .collect();
+            let mut out = Vec::new();
+            for &(i, a) in &free {
+                for &(j, b) in &free {
+                    if a <= b {
+                        out.push((i, j, a, b));
+                    }
+                }
+            }
+            out
+        };
+        for l in links {
+            pairs.extend(
+                link_pairs(l)
+                    .iter()
+                    .map(|&(_, _, a, b)| (a as u32, b as u32)),
+            );
         }
         pairs.par_sort_unstable();
         pairs.dedup();
@@ -245,12 +300,21 @@ impl SparsityPattern {
             })
             .collect();
         let diag_slots = (0..n).map(|c| find(c, c) as usize).collect();
+        let link_slots = links
+            .iter()
+            .map(|l| {
+                (link_pairs(l).into_iter())
+                    .map(|(i, j, a, b)| (i as u16, j as u16, find(a, b)))
+                    .collect()
+            })
+            .collect();
         Self {
             n,
             col_ptr,
             row_idx,
             elem_slots,
             diag_slots,
+            link_slots,
         }
     }
     /// Order of the reduced system.
@@ -500,6 +564,13 @@ impl AssemblyWorkspace {
             re: vec![[0.0; 8]; n_elements],
         }
     }
+
+    /// The element internal forces `r_e` of the last [`Model::assemble`] with this workspace
+    /// (springs excluded), element order. With the additive material off, `r_e` is linear in
+    /// the element modulus, so `∂r_e/∂ρ_e = (E'(ρ_e)/E(ρ_e)) r_e`.
+    pub fn element_residuals(&self) -> &[[f64; 8]] {
+        &self.re
+    }
 }
 
 /// Minimum number of elements per rayon task.
@@ -542,8 +613,39 @@ impl Model {
                 "[0, ∞) N/m",
             )?;
         }
+        for l in &bcs.links {
+            for (i, &(d, c)) in l.terms.iter().enumerate() {
+                if d >= nd {
+                    return Err(ParamError::Index {
+                        what: "link spring dof",
+                        index: d,
+                        bound: nd,
+                    });
+                }
+                check_range(
+                    "LinkSpring::terms",
+                    c,
+                    f64::MIN,
+                    f64::MAX,
+                    "a finite number",
+                )?;
+                if l.terms[..i].iter().any(|&(e, _)| e == d) {
+                    return Err(ParamError::Duplicate {
+                        what: "LinkSpring::terms",
+                        index: d,
+                    });
+                }
+            }
+            check_range(
+                "LinkSpring::stiffness",
+                l.stiffness,
+                0.0,
+                f64::MAX,
+                "[0, ∞) N/m",
+            )?;
+        }
         let dofs = DofMap::new(nd, &bcs.fixed)?;
-        let pattern = Arc::new(SparsityPattern::build(&mesh, &dofs));
+        let pattern = Arc::new(SparsityPattern::build(&mesh, &dofs, &bcs.links));
         let kernel =
             ElementKernel::new(&material, kinematics, mesh.dx(), mesh.dy(), mesh.thickness);
         Ok(Self {
@@ -664,9 +766,7 @@ impl Model {
                     r[d[k]] += re[k];
                 }
             }
-            for s in &self.bcs.springs {
-                r[s.dof] += s.stiffness * u[s.dof];
-            }
+            self.add_spring_forces(u, 1.0, r);
         }
         if let Some(kt) = tangent {
             assert!(
@@ -687,6 +787,26 @@ impl Model {
                 if let Some(i) = self.dofs.reduced(s.dof) {
                     vals[self.pattern.diag_slots[i]] += s.stiffness;
                 }
+            }
+            for (l, slots) in self.bcs.links.iter().zip(&self.pattern.link_slots) {
+                for &(i, j, s) in slots {
+                    let (ci, cj) = (l.terms[i as usize].1, l.terms[j as usize].1);
+                    vals[s as usize] += l.stiffness * ci * cj;
+                }
+            }
+        }
+    }
+
+    /// Adds `scale · K_s u`, the spring forces (grounded springs and link springs, the only
+    /// part of `R` that is not strain energy), to the full vector `out`.
+    pub fn add_spring_forces(&self, u: &[f64], scale: f64, out: &mut [f64]) {
+        for s in &self.bcs.springs {
+            out[s.dof] += scale * s.stiffness * u[s.dof];
+        }
+        for l in &self.bcs.links {
+            let f = scale * l.stiffness * l.elongation(u);
+            for &(d, c) in &l.terms {
+                out[d] += f * c;
             }
         }
     }

@@ -6,9 +6,11 @@
 use std::io::Read;
 
 use flexstage_control::actuator::preload;
-use flexstage_piezo::{BoucWen, BoucWenParams, MICROMETRE, NumericCsv, PiezoError};
+use flexstage_numerics::DataError;
+use flexstage_numerics::records::{NumericCsv, RecordError};
+use flexstage_piezo::{BoucWen, BoucWenParams, MICROMETRE};
 
-use crate::error::{IdentifyError, Result, data_error};
+use crate::error::{IdentifyError, Result};
 
 /// Fewest samples [`StageRecord::new`] accepts: two for the two-step delays of Eq. (54)
 /// plus enough equations for the 16 regression parameters several times over.
@@ -69,26 +71,29 @@ impl StageRecord {
         }
         for (name, c) in &cols {
             if c.len() != n {
-                return Err(data_error(
+                return Err(DataError::new(
                     "stage record",
                     format!("column {name} has {} samples, t has {n}", c.len()),
-                ));
+                )
+                .into());
             }
             if let Some(k) = c.iter().position(|v| !v.is_finite()) {
-                return Err(data_error(
+                return Err(DataError::new(
                     "stage record",
                     format!("{name}[{k}] = {} is not a finite number", c[k]),
-                ));
+                )
+                .into());
             }
         }
         if n < MIN_SAMPLES {
-            return Err(data_error(
+            return Err(DataError::new(
                 "stage record",
                 format!(
                     "too few samples: {n}, need at least {MIN_SAMPLES} (and about 2 s at 10 kHz, \
                      20 000 samples, for 1 % stiffness estimates)"
                 ),
-            ));
+            )
+            .into());
         }
         check_uniform(&t, tolerance)?;
         Ok(StageRecord {
@@ -120,21 +125,7 @@ impl StageRecord {
     /// ignored, `#` comment lines skipped). Errors name the file, 1-based line and column.
     /// Returns the columns and the input as found; see [`StageRecord::from_input`].
     pub fn read_csv(reader: impl Read, origin: &str) -> Result<(Vec<f64>, Input, Columns)> {
-        // The shared reader reports bad lines as PiezoError::Csv; keep this crate's variant.
-        let csv_err = |e: PiezoError| match e {
-            PiezoError::Csv {
-                origin,
-                line,
-                reason,
-            } => IdentifyError::Csv {
-                origin,
-                line,
-                reason,
-            },
-            other => other.into(),
-        };
-        let table = NumericCsv::open(reader, origin).map_err(csv_err)?;
-        let expected = "t, x_nom1, x_nom2 (or U1, U2), x_in1, x_in2, q1, q2";
+        let table = NumericCsv::open(reader, origin)?;
         let nominal = table.position("x_nom1").is_some() || table.position("x_nom2").is_some();
         let input_names = if nominal || table.position("U1").is_none() {
             ["x_nom1", "x_nom2"]
@@ -150,20 +141,12 @@ impl StageRecord {
             "q1",
             "q2",
         ];
-        let mut cols = [0usize; 7];
-        for (c, name) in cols.iter_mut().zip(names) {
-            *c = table
-                .position(name)
-                .ok_or_else(|| IdentifyError::MissingColumn {
-                    origin: origin.to_string(),
-                    column: name.to_string(),
-                    found: table.found(),
-                    expected: expected.into(),
-                })?;
-        }
+        let cols = table.require(
+            &names,
+            "t, x_nom1, x_nom2 (or U1, U2), x_in1, x_in2, q1, q2",
+        )?;
         let data: [Vec<f64>; 7] = table
-            .read(&cols, &names)
-            .map_err(csv_err)?
+            .read(&cols, &names)?
             .try_into()
             .expect("one vector per requested column");
         let [t, i1, i2, x1, x2, q1, q2] = data;
@@ -216,11 +199,7 @@ impl StageRecord {
         let (t, input, columns) = StageRecord::read_csv(reader, origin)?;
         StageRecord::from_input(t, input, columns, hysteresis, bias_voltage, tolerance).map_err(
             |e| match e {
-                IdentifyError::Data { reason, .. } => IdentifyError::Csv {
-                    origin: origin.to_string(),
-                    line: 0,
-                    reason,
-                },
+                IdentifyError::Data(e) => RecordError::whole(origin, e).into(),
                 other => other,
             },
         )
@@ -279,11 +258,11 @@ pub fn voltage_to_x_nom(t: &[f64], u: &[f64], p: &BoucWenParams, bias_voltage: f
 pub fn check_uniform(t: &[f64], tolerance: f64) -> Result<()> {
     let n = t.len();
     if n < 2 {
-        return Err(data_error("stage record", "need at least 2 time samples"));
+        return Err(DataError::new("stage record", "need at least 2 time samples").into());
     }
     let ts = (t[n - 1] - t[0]) / (n - 1) as f64;
     if ts.is_nan() || ts <= 0.0 {
-        return Err(data_error(
+        return Err(DataError::new(
             "stage record",
             format!(
                 "time must increase: t[0] = {}, t[{}] = {}",
@@ -291,12 +270,13 @@ pub fn check_uniform(t: &[f64], tolerance: f64) -> Result<()> {
                 n - 1,
                 t[n - 1]
             ),
-        ));
+        )
+        .into());
     }
     for k in 1..n {
         let dt = t[k] - t[k - 1];
         if (dt - ts).abs() > tolerance * ts {
-            return Err(data_error(
+            return Err(DataError::new(
                 "stage record",
                 format!(
                     "non-uniform sampling: step t[{k}] − t[{}] = {dt:e} s differs from the mean \
@@ -305,7 +285,8 @@ pub fn check_uniform(t: &[f64], tolerance: f64) -> Result<()> {
                     k - 1,
                     tolerance * 100.0
                 ),
-            ));
+            )
+            .into());
         }
     }
     Ok(())

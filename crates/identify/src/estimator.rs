@@ -14,14 +14,16 @@
 //! second-difference signal grows as d² while the noise does not; the central-difference
 //! error grows as (ωdT_s)²/12. The prefilter is then the anti-aliasing filter.
 
-use flexstage_piezo::{Rls, RlsParams};
+use flexstage_numerics::DataError;
+use flexstage_numerics::rls::{Rls, RlsParams};
 use flexstage_scenario::StageParams;
 use nalgebra::{DMatrix, SymmetricEigen};
 
 use crate::data::StageRecord;
 use crate::error::{IdentifyError, Result, check};
 use crate::regression::{
-    OUTPUT_REGRESSORS, PLATE_REGRESSORS, Physical, Rows, Scheme, Theta, Window, physical, rows,
+    OUT_KC, OUTPUT_REGRESSORS, PLATE_REGRESSORS, Physical, Rows, Scheme, Theta, Window, physical,
+    rows,
 };
 
 /// Positions are scaled to µm inside the estimator so that the regressors are O(1) and the
@@ -197,7 +199,7 @@ impl StageIdentifier {
         params.validate()?;
         guess
             .validate("guess")
-            .map_err(|e| crate::error::data_error("initial guess", e.to_string()))?;
+            .map_err(|e| DataError::new("initial guess", e.to_string()))?;
         check(
             "sample_time",
             sample_time,
@@ -288,7 +290,7 @@ impl StageIdentifier {
         for i in 0..2 {
             let (mut phi, y) = r.output[i];
             if !self.coupling {
-                phi[2] = 0.0;
+                phi[OUT_KC] = 0.0;
             }
             self.output[i].update(&phi, y);
             accumulate(&mut self.info_output[i], &phi);

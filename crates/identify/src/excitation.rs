@@ -22,7 +22,7 @@
 
 use flexstage_control::controller::Command;
 use flexstage_control::plant::{Plant, PlantActuator, PlantParams};
-use flexstage_piezo::GaussianNoise;
+use flexstage_numerics::noise::GaussianNoise;
 
 use crate::data::StageRecord;
 use crate::error::{Result, check};

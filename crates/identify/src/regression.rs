@@ -64,6 +64,22 @@ use flexstage_scenario::StageParams;
 
 /// Names of the output-row regressors (q_o1 and q_o2 rows).
 pub const OUTPUT_REGRESSORS: [&str; 3] = ["A0 x_in - q_o", "Δ(A0 x_in - q_o)", "-q_o(other axis)"];
+/// Columns of the output rows (θ, φ): stiffness, damping, cross-axis coupling.
+pub const OUT_K: usize = 0;
+/// Damping column of the output rows.
+pub const OUT_C: usize = 1;
+/// Coupling (k_c) column of the output rows.
+pub const OUT_KC: usize = 2;
+/// Columns of the plate rows (θ, φ): K_pea, K_in, K_qo1, C_in, C_qo1.
+pub const PLATE_K_PEA: usize = 0;
+/// K_in column of the plate rows.
+pub const PLATE_K_IN: usize = 1;
+/// K_qo1 column of the plate rows.
+pub const PLATE_K_QO1: usize = 2;
+/// C_in column of the plate rows.
+pub const PLATE_C_IN: usize = 3;
+/// C_qo1 column of the plate rows.
+pub const PLATE_C_QO1: usize = 4;
 /// Names of the input-plate regressors.
 pub const PLATE_REGRESSORS: [&str; 5] = [
     "x_nom - x_in",
@@ -248,28 +264,36 @@ pub fn physical(
 ) -> Physical {
     let m = known.mass;
     let (s2, s1) = (ts * ts, 0.5 * ts);
-    let k_qo1 = theta.output1[0] * m / (2.0 * s2);
-    let c_qo1 = theta.output1[1] * m / (2.0 * s1);
-    let k_qo2 = theta.output2[0] * m / s2;
-    let c_qo2 = theta.output2[1] * m / s1;
-    let coupling = [theta.output1[2] * m / s2, theta.output2[2] * m / s2];
+    let k_qo1 = theta.output1[OUT_K] * m / (2.0 * s2);
+    let c_qo1 = theta.output1[OUT_C] * m / (2.0 * s1);
+    let k_qo2 = theta.output2[OUT_K] * m / s2;
+    let c_qo2 = theta.output2[OUT_C] * m / s1;
+    let coupling = [
+        theta.output1[OUT_KC] * m / s2,
+        theta.output2[OUT_KC] * m / s2,
+    ];
+    let (k, c) = (PLATE_K_QO1, PLATE_C_QO1);
     let plate = |a: &[f64; 5], p: &[[f64; 5]; 5], m_in: f64| {
         // Equality constraints θ₃ = T_s²K_qo1/m_in, θ₅ = (T_s/2)C_qo1/m_in:
         // θ_c = θ − P E (EᵀPE)⁻¹ (Eᵀθ − c), E = [e₃, e₅].
-        let r = [a[2] - s2 * k_qo1 / m_in, a[4] - s1 * c_qo1 / m_in];
-        let g = [[p[2][2], p[2][4]], [p[4][2], p[4][4]]];
+        let r = [a[k] - s2 * k_qo1 / m_in, a[c] - s1 * c_qo1 / m_in];
+        let g = [[p[k][k], p[k][c]], [p[c][k], p[c][c]]];
         let det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
-        let mut c = *a;
+        let mut th = *a;
         if det > 0.0 {
             let w = [
                 (g[1][1] * r[0] - g[0][1] * r[1]) / det,
                 (g[0][0] * r[1] - g[1][0] * r[0]) / det,
             ];
             for j in 0..5 {
-                c[j] = a[j] - p[j][2] * w[0] - p[j][4] * w[1];
+                th[j] = a[j] - p[j][k] * w[0] - p[j][c] * w[1];
             }
         }
-        (c[0] * m_in / s2, c[1] * m_in / s2, c[3] * m_in / s1)
+        (
+            th[PLATE_K_PEA] * m_in / s2,
+            th[PLATE_K_IN] * m_in / s2,
+            th[PLATE_C_IN] * m_in / s1,
+        )
     };
     let (k_pea1, k_in1, c_in1) = plate(&theta.plate[0], &plate_cov[0], known.m_in1);
     let (k_pea2, k_in2, c_in2) = plate(&theta.plate[1], &plate_cov[1], known.m_in2);
@@ -289,8 +313,8 @@ pub fn physical(
         },
         coupling,
         plate_k_qo1: [
-            theta.plate[0][2] * known.m_in1 / s2,
-            theta.plate[1][2] * known.m_in2 / s2,
+            theta.plate[0][PLATE_K_QO1] * known.m_in1 / s2,
+            theta.plate[1][PLATE_K_QO1] * known.m_in2 / s2,
         ],
     }
 }
@@ -298,15 +322,17 @@ pub fn physical(
 /// θ in the paper's form, Eq. (55), diagonals only: [T_s²M⁻¹K (2), (T_s/2)M⁻¹C (2),
 /// T_s²M_in⁻¹K_in (2, lumped as in Eq. 35), (T_s/2)M_in⁻¹C_in (2, lumped)].
 pub fn paper_theta(theta: &Theta) -> [f64; 8] {
+    let lumped_k = |a: &[f64; 5]| a[PLATE_K_PEA] + a[PLATE_K_IN] + a[PLATE_K_QO1];
+    let lumped_c = |a: &[f64; 5]| a[PLATE_C_IN] + a[PLATE_C_QO1];
     let p = &theta.plate;
     [
-        theta.output1[0],
-        theta.output2[0],
-        theta.output1[1],
-        theta.output2[1],
-        p[0][0] + p[0][1] + p[0][2],
-        p[1][0] + p[1][1] + p[1][2],
-        p[0][3] + p[0][4],
-        p[1][3] + p[1][4],
+        theta.output1[OUT_K],
+        theta.output2[OUT_K],
+        theta.output1[OUT_C],
+        theta.output2[OUT_C],
+        lumped_k(&p[0]),
+        lumped_k(&p[1]),
+        lumped_c(&p[0]),
+        lumped_c(&p[1]),
     ]
 }

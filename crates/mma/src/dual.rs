@@ -65,7 +65,7 @@ use rayon::prelude::*;
 
 use crate::dense::solve_in_place;
 use crate::lanes::{CHUNK, DYN, LANES, MAX_STATIC_M, Nodes, Real, V, chunk_len, min_len};
-use crate::subsolv::{ALFA, BETA, LOW, SubConsts, UPP};
+use crate::subproblem::{ALFA, BETA, LOW, SubConsts, UPP};
 
 /// Newton steps after which the dual solver gives up.
 const MAX_STEPS: usize = 100;

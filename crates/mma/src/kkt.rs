@@ -1,7 +1,7 @@
 //! KKT residual of the original problem (`kktcheck` of Svanberg's MMA distribution).
 
 use crate::error::MmaError;
-use crate::mma::check_finite;
+use crate::input::{check_finite, check_len};
 use crate::params::MmaParams;
 
 /// Multipliers of an MMA subproblem, borrowed from [`crate::Mma::multipliers`].
@@ -78,26 +78,20 @@ pub fn kkt_residual(
 ) -> Result<KktResidual, MmaError> {
     let n = problem.x.len();
     let m = problem.f.len();
-    let lens: [(&'static str, usize, usize); 10] = [
-        ("xmin", problem.xmin.len(), n),
-        ("xmax", problem.xmax.len(), n),
-        ("df0dx", problem.df0dx.len(), n),
-        ("dfdx", problem.dfdx.len(), m * n),
-        ("lam", mult.lam.len(), m),
-        ("y", mult.y.len(), m),
-        ("mu", mult.mu.len(), m),
-        ("s", mult.s.len(), m),
-        ("xsi", mult.xsi.len(), n),
-        ("eta", mult.eta.len(), n),
+    let lens: [(&'static str, &[f64], usize); 10] = [
+        ("xmin", problem.xmin, n),
+        ("xmax", problem.xmax, n),
+        ("df0dx", problem.df0dx, n),
+        ("dfdx", problem.dfdx, m * n),
+        ("lam", mult.lam, m),
+        ("y", mult.y, m),
+        ("mu", mult.mu, m),
+        ("s", mult.s, m),
+        ("xsi", mult.xsi, n),
+        ("eta", mult.eta, n),
     ];
-    for (name, got, expected) in lens {
-        if got != expected {
-            return Err(MmaError::DimensionMismatch {
-                name,
-                expected,
-                got,
-            });
-        }
+    for (name, slice, expected) in lens {
+        check_len(name, slice, expected)?;
     }
     check_finite("df0dx", problem.df0dx, false)?;
     check_finite("f", problem.f, false)?;

@@ -98,11 +98,13 @@ mod lanes;
 mod dense;
 mod dual;
 mod error;
+mod input;
 mod kkt;
 mod mma;
 mod params;
 pub mod samples;
 mod solve;
+mod subproblem;
 mod subsolv;
 
 pub use error::{MmaError, ParamError};

@@ -5,12 +5,12 @@ use rayon::prelude::*;
 
 use crate::dual::{DualData, DualSolver, SubMultipliers, WarmStart, pq};
 use crate::error::MmaError;
+use crate::input::{all_ok, check_finite, check_len};
 use crate::kkt::{KktProblem, KktResidual, Multipliers, kkt_residual};
 use crate::lanes::{CHUNK, min_len};
 use crate::params::{MmaParams, Subsolver};
-use crate::subsolv::{
-    ALFA, BETA, ETA, LOW, NSTATE, P0, PQ, Q0, SubConsts, SubSolver, UPP, X, XSI, idx,
-};
+use crate::subproblem::{ALFA, BETA, ETA, LOW, NSTATE, P0, PQ, Q0, SubConsts, UPP, X, XSI, idx};
+use crate::subsolv::SubSolver;
 
 /// What one [`Mma::update`] did.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -101,47 +101,6 @@ pub struct Mma {
     raa: Vec<f64>,
     xsi: Vec<f64>,
     eta: Vec<f64>,
-}
-
-fn check_len(name: &'static str, s: &[f64], expected: usize) -> Result<(), MmaError> {
-    if s.len() == expected {
-        Ok(())
-    } else {
-        Err(MmaError::DimensionMismatch {
-            name,
-            expected,
-            got: s.len(),
-        })
-    }
-}
-
-/// Values per job of the parallel input checks.
-const CHECK_BLOCK: usize = 16 * CHUNK;
-
-/// Whether `ok(i)` holds for all `i < len`: a branch-free (vectorizable) scan per block, the
-/// blocks spread over threads when `parallel`.
-fn all_ok(len: usize, parallel: bool, ok: impl Fn(usize) -> bool + Sync) -> bool {
-    let block = |start: usize| (start..(start + CHECK_BLOCK).min(len)).fold(true, |a, i| a & ok(i));
-    if parallel {
-        (0..len.div_ceil(CHECK_BLOCK))
-            .into_par_iter()
-            .all(|b| block(b * CHECK_BLOCK))
-    } else {
-        (0..len).step_by(CHECK_BLOCK).all(block)
-    }
-}
-
-pub(crate) fn check_finite(name: &'static str, s: &[f64], parallel: bool) -> Result<(), MmaError> {
-    if all_ok(s.len(), parallel, |i| s[i].is_finite()) {
-        return Ok(());
-    }
-    // Only on failure: the first offending index.
-    let index = s.iter().position(|v| !v.is_finite()).unwrap_or(0);
-    Err(MmaError::NonFinite {
-        name,
-        index,
-        value: s[index],
-    })
 }
 
 impl Mma {

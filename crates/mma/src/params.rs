@@ -1,5 +1,7 @@
 //! Tunable constants of MMA, with Svanberg's defaults.
 
+use flexstage_numerics::validate::Interval;
+
 use crate::error::ParamError;
 
 /// Parameters of MMA.
@@ -118,36 +120,21 @@ impl Default for MmaParams {
     }
 }
 
-/// Which end of an interval is open.
-#[derive(Clone, Copy)]
-enum End {
-    Open,
-    Closed,
-}
-
+/// `Ok` when `value` lies in `range` (NaN and ±∞ never do), else
+/// [`ParamError::OutOfRange`] with `text`, the accepted range as documented.
 fn check(
     field: &'static str,
     value: f64,
-    lo: (f64, End),
-    hi: (f64, End),
-    range: &'static str,
+    range: Interval,
+    text: &'static str,
 ) -> Result<(), ParamError> {
-    let above = match lo.1 {
-        End::Open => value > lo.0,
-        End::Closed => value >= lo.0,
-    };
-    let below = match hi.1 {
-        End::Open => value < hi.0,
-        End::Closed => value <= hi.0,
-    };
-    // NaN fails both comparisons.
-    if above && below {
+    if range.contains(value) {
         Ok(())
     } else {
         Err(ParamError::OutOfRange {
             field,
             value,
-            range,
+            range: text,
         })
     }
 }
@@ -159,42 +146,28 @@ impl MmaParams {
     /// [`ParamError::OutOfRange`] naming the first offending field and its accepted range, or
     /// [`ParamError::Inconsistent`] when `asymin >= asymax`.
     pub fn validate(&self) -> Result<(), ParamError> {
-        use End::{Closed, Open};
+        let large = Interval::open_closed(0.0, 1e6);
+        let cost = Interval::closed(0.0, 1e12);
         check(
             "asyinit",
             self.asyinit,
-            (0.0, Open),
-            (10.0, Closed),
+            Interval::open_closed(0.0, 10.0),
             "(0, 10]",
         )?;
         check(
             "asyincr",
             self.asyincr,
-            (1.0, Closed),
-            (10.0, Closed),
+            Interval::closed(1.0, 10.0),
             "[1, 10]",
         )?;
         check(
             "asydecr",
             self.asydecr,
-            (0.0, Open),
-            (1.0, Closed),
+            Interval::open_closed(0.0, 1.0),
             "(0, 1]",
         )?;
-        check(
-            "asymin",
-            self.asymin,
-            (0.0, Open),
-            (1e6, Closed),
-            "(0, asymax)",
-        )?;
-        check(
-            "asymax",
-            self.asymax,
-            (0.0, Open),
-            (1e6, Closed),
-            "(asymin, 1e6]",
-        )?;
+        check("asymin", self.asymin, large, "(0, asymax)")?;
+        check("asymax", self.asymax, large, "(asymin, 1e6]")?;
         if self.asymin >= self.asymax {
             return Err(ParamError::Inconsistent {
                 field: "asymin",
@@ -204,24 +177,22 @@ impl MmaParams {
                 reason: "asymin must be smaller than asymax",
             });
         }
-        check("albefa", self.albefa, (0.0, Open), (1.0, Open), "(0, 1)")?;
+        check("albefa", self.albefa, Interval::open(0.0, 1.0), "(0, 1)")?;
         check(
             "move_limit",
             self.move_limit,
-            (0.0, Open),
-            (1.0, Closed),
+            Interval::open_closed(0.0, 1.0),
             "(0, 1]",
         )?;
-        check("raa0", self.raa0, (0.0, Open), (1.0, Closed), "(0, 1]")?;
-        check("a0", self.a0, (0.0, Open), (1e12, Closed), "(0, 1e12]")?;
-        check("a", self.a, (0.0, Closed), (1e12, Closed), "[0, 1e12]")?;
-        check("c", self.c, (0.0, Closed), (1e12, Closed), "[0, 1e12]")?;
-        check("d", self.d, (0.0, Closed), (1e12, Closed), "[0, 1e12]")?;
+        check("raa0", self.raa0, Interval::open_closed(0.0, 1.0), "(0, 1]")?;
+        check("a0", self.a0, Interval::open_closed(0.0, 1e12), "(0, 1e12]")?;
+        check("a", self.a, cost, "[0, 1e12]")?;
+        check("c", self.c, cost, "[0, 1e12]")?;
+        check("d", self.d, cost, "[0, 1e12]")?;
         check(
             "subproblem_tolerance",
             self.subproblem_tolerance,
-            (1e-15, Closed),
-            (1e-2, Closed),
+            Interval::closed(1e-15, 1e-2),
             "[1e-15, 1e-2]",
         )?;
         Ok(())

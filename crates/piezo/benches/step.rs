@@ -1,12 +1,11 @@
 //! Per-step costs for the 10 kHz loop: one model step, one model + compensation step, one
-//! RLS update (1, 4 and 8 parameters), one parallel-RLS sample (summed regression, moments
-//! update and two 5×5 solves). Budgets (issue #7): model + compensation ≤ 200 ns, RLS update
-//! and parallel-RLS sample ≤ 300 ns; none allocates.
+//! parallel-RLS sample (summed regression, moments update and two 5×5 solves). Budgets
+//! (issue #7): model + compensation ≤ 200 ns, parallel-RLS sample ≤ 300 ns; none allocates.
+//! The generic RLS update is benchmarked in `flexstage-numerics`.
 
 use divan::{Bencher, black_box};
 use flexstage_piezo::{
     BoucWen, BoucWenParams, CompensatorParams, IdentifyParams, InverseCompensator, ParallelRls,
-    Rls, RlsParams,
 };
 
 fn main() {
@@ -41,24 +40,6 @@ fn model_plus_compensation_step(b: Bencher) {
         k = (k + 1) & 4095;
         let u = comp.step(black_box(xd[k]), DT).u;
         black_box(pea.step(u, DT))
-    });
-}
-
-#[divan::bench(consts = [1, 4, 8])]
-fn rls_update<const P: usize>(b: Bencher) {
-    let params = RlsParams {
-        forgetting: 0.999,
-        ..RlsParams::default()
-    };
-    let mut rls = Rls::<P>::new(params, [0.0; P]).unwrap();
-    let mut k = 0u64;
-    b.bench_local(|| {
-        k += 1;
-        let mut phi = [0.0; P];
-        for (i, v) in phi.iter_mut().enumerate() {
-            *v = ((k + i as u64 * 7) % 13) as f64 - 6.0;
-        }
-        black_box(rls.update(black_box(&phi), black_box(k as f64 * 1e-3)))
     });
 }
 

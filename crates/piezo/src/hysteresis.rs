@@ -1,8 +1,9 @@
 //! Voltage waveforms, steady-state hysteresis loops and loop metrics.
 
+use flexstage_numerics::DataError;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Result, check, data_error};
+use crate::error::{Result, check};
 use crate::model::{BoucWen, BoucWenParams};
 
 /// Shape of a periodic drive between `low` and `high`.
@@ -132,23 +133,24 @@ pub struct LoopMetrics {
 /// output ≈ a + b·input over all samples.
 pub fn loop_metrics(input: &[f64], output: &[f64]) -> Result<LoopMetrics> {
     if input.len() != output.len() || input.len() < 3 {
-        return Err(data_error(
+        return Err(DataError::new(
             "loop",
             format!(
                 "need equal-length input and output with ≥ 3 samples, got {} and {}",
                 input.len(),
                 output.len()
             ),
-        ));
+        )
+        .into());
     }
     if input.iter().chain(output).any(|v| !v.is_finite()) {
-        return Err(data_error("loop", "non-finite sample"));
+        return Err(DataError::new("loop", "non-finite sample").into());
     }
     let (imin, imax) = min_max(input);
     let (omin, omax) = min_max(output);
     let range = omax - omin;
     if imax <= imin || range <= 0.0 {
-        return Err(data_error("loop", "input or output is constant"));
+        return Err(DataError::new("loop", "input or output is constant").into());
     }
     const GRID: usize = 512;
     let mut lo = vec![f64::INFINITY; GRID + 1];
@@ -305,11 +307,12 @@ pub fn steady_state_loop(
         }
         prev.clone_from(&output);
     }
-    Err(data_error(
+    Err(DataError::new(
         "steady_state_loop",
         format!(
             "the loop did not repeat within {} periods (tolerance {:e})",
             settings.max_periods, settings.tolerance
         ),
-    ))
+    )
+    .into())
 }

@@ -89,13 +89,15 @@
 //! is then minimized over the scalar d_p by a grid search and golden section. It needs no
 //! initial guess and is the cross-check of the recursive estimates.
 
+use flexstage_numerics::dense::SpdFactor;
+use flexstage_numerics::rls::{WeightedMoments, batch_least_squares};
+use flexstage_numerics::{DataError, RangeError};
 use serde::{Deserialize, Serialize};
 
 use crate::data::PeaData;
-use crate::error::{Result, check, data_error};
+use crate::error::{Result, check};
 use crate::hysteresis::line_fit;
 use crate::model::{BoucWenParams, sgn};
-use crate::rls::{SpdFactor, WeightedMoments, batch_least_squares};
 
 /// Settings of the parallel RLS identification (Algorithm A1).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -169,11 +171,12 @@ impl IdentifyParams {
             check(name, v, true, "a finite number")?;
         }
         if !(self.dp_bounds.0 >= 0.0 && self.dp_bounds.1 > self.dp_bounds.0) {
-            return Err(crate::PiezoError::OutOfRange {
-                field: "dp_bounds".into(),
-                value: format!("{:?}", self.dp_bounds),
-                expected: "0 ≤ lower < upper [µm/V]".into(),
-            });
+            return Err(RangeError::new(
+                "dp_bounds",
+                format!("{:?}", self.dp_bounds),
+                "0 ≤ lower < upper [µm/V]",
+            )
+            .into());
         }
         check(
             "passes",
@@ -222,6 +225,14 @@ const V_SGU: usize = 4;
 const V_SGX: usize = 5;
 const V_SD: usize = 6;
 const V_X: usize = 7;
+
+/// Index of the unknowns θ = [x_0, α, B_bw, Γ_bw, δ_bw] of the summed regression (module
+/// docs), in the θ estimator and in the batch fit.
+const TH_X0: usize = 0;
+const TH_ALPHA: usize = 1;
+const TH_B: usize = 2;
+const TH_GAMMA: usize = 3;
+const TH_DELTA: usize = 4;
 
 /// Largest change of d̂_p per sample, relative (a trust region on the Gauss–Newton step of the
 /// d_p estimator: while the record is still short the step can be wild, module docs).
@@ -309,7 +320,7 @@ impl ParallelRls {
     /// The estimated offset x_0 of the current record [µm] (x at its first sample, without
     /// the sensor noise).
     pub fn offset(&self) -> f64 {
-        self.theta[0]
+        self.theta[TH_X0]
     }
 
     /// The hysteretic state h = d̂_p U − x [µm] at the last sample.
@@ -445,13 +456,14 @@ pub fn identify(data: &PeaData, params: &IdentifyParams) -> Result<Identificatio
     }
     if params.initial.d_p == 0.0 {
         if slope.is_nan() || slope <= 0.0 {
-            return Err(data_error(
+            return Err(DataError::new(
                 "identification",
                 format!(
                     "x does not increase with U (slope {slope:e} µm/V): check the columns and \
                      units (x in µm, U in V)"
                 ),
-            ));
+            )
+            .into());
         }
         params.initial.d_p = slope;
         params.initial.a_bw = 0.0;
@@ -521,17 +533,18 @@ fn regression(data: &PeaData, d_p: f64, phis: &mut Vec<[f64; 5]>, ys: &mut Vec<f
     phis.clear();
     ys.clear();
     let (t, u, x) = (data.t(), data.u(), data.x());
-    let mut c = [1.0, 0.0, 0.0, 0.0, 0.0];
+    let mut c = [0.0; 5];
+    c[TH_X0] = 1.0;
     phis.push(c);
     ys.push(x[0]);
     for k in 1..data.len() {
         let du = u[k] - u[k - 1];
         let u_mean = 0.5 * (u[k] + u[k - 1]);
         let h_mean = d_p * u_mean - 0.5 * (x[k] + x[k - 1]);
-        c[1] += du;
-        c[2] += du.abs() * h_mean;
-        c[3] += du * h_mean.abs();
-        c[4] -= (t[k] - t[k - 1]) * u_mean * sgn(du);
+        c[TH_ALPHA] += du;
+        c[TH_B] += du.abs() * h_mean;
+        c[TH_GAMMA] += du * h_mean.abs();
+        c[TH_DELTA] -= (t[k] - t[k - 1]) * u_mean * sgn(du);
         phis.push(c);
         ys.push(x[k]);
     }
@@ -562,13 +575,14 @@ fn projected(
 pub fn fit_batch(data: &PeaData) -> Result<BatchFit> {
     let (_, slope) = line_fit(data.u(), data.x());
     if slope.is_nan() || slope <= 0.0 {
-        return Err(data_error(
+        return Err(DataError::new(
             "batch fit",
             format!(
                 "x does not increase with U (slope {slope:e} µm/V): check the columns and units \
                  (x in µm, U in V)"
             ),
-        ));
+        )
+        .into());
     }
     let mut phis = Vec::with_capacity(data.len());
     let mut ys = Vec::with_capacity(data.len());
@@ -612,10 +626,10 @@ pub fn fit_batch(data: &PeaData) -> Result<BatchFit> {
     let (theta, r) = projected(data, d_p, &mut phis, &mut ys)?;
     let estimate = BoucWenParams {
         d_p,
-        a_bw: d_p - theta[1],
-        b_bw: theta[2],
-        gamma_bw: theta[3],
-        delta_bw: theta[4],
+        a_bw: d_p - theta[TH_ALPHA],
+        b_bw: theta[TH_B],
+        gamma_bw: theta[TH_GAMMA],
+        delta_bw: theta[TH_DELTA],
     };
     Ok(BatchFit {
         estimate,

@@ -6,12 +6,12 @@
 //!   voltage-driven integrator ([`advance`], [`BoucWen`]), steady-state loops and loop
 //!   metrics ([`hysteresis`]);
 //! * [`compensate`]: the inverse multiplicative compensation of Eq. (19)–(21), Figure 5;
-//! * [`rls`]: recursive least squares with forgetting, Eq. (A9)–(A11), generic over the number
-//!   of parameters (square-root form), its information form ([`WeightedMoments`]), and the
-//!   batch least squares they reproduce;
 //! * [`identify`]: the parallel RLS of Algorithm A1 (A8, A12) on the summed regression, and a
-//!   batch fit of the same model;
-//! * [`data`], [`synth`]: records (t, U, x) from CSV or simulation;
+//!   batch fit of the same model; it runs on the generic recursive least squares of
+//!   `flexstage-numerics` (Eq. (A9)–(A11): [`Rls`], its information form [`WeightedMoments`],
+//!   [`batch_least_squares`]), re-exported here;
+//! * [`data`], [`synth`]: records (t, U, x) from CSV (read by `flexstage-numerics`'
+//!   [`NumericCsv`]) or simulation with seeded [`GaussianNoise`];
 //! * [`samples`]: problems with known answers.
 //!
 //! **Units.** x and h in µm, U in V, t in s: the units of Table A1 and of the scenario file
@@ -38,7 +38,6 @@ mod error;
 pub mod hysteresis;
 pub mod identify;
 pub mod model;
-pub mod rls;
 pub mod samples;
 pub mod synth;
 
@@ -55,5 +54,7 @@ pub use identify::{
     rms_model_error,
 };
 pub use model::{BoucWen, BoucWenParams, MICROMETRE, advance, simulate};
-pub use rls::{Rls, RlsParams, SpdFactor, WeightedMoments, batch_least_squares, solve_spd};
+// The generic numerics these modules run on, at their former paths.
+pub use flexstage_numerics::dense::{SpdFactor, solve_spd};
+pub use flexstage_numerics::rls::{Rls, RlsParams, WeightedMoments, batch_least_squares};
 pub use synth::{GaussianNoise, synthesize};

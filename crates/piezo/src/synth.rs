@@ -1,49 +1,12 @@
-//! Synthetic records: the model driven by a waveform, plus Gaussian sensor noise.
+//! Synthetic records: the model driven by a waveform, plus Gaussian sensor noise
+//! ([`GaussianNoise`] of `flexstage-numerics`, re-exported here).
 
-use rand_chacha::ChaCha8Rng;
-use rand_core::{RngCore, SeedableRng};
+pub use flexstage_numerics::noise::GaussianNoise;
 
 use crate::data::PeaData;
 use crate::error::{Result, check};
 use crate::hysteresis::Waveform;
 use crate::model::{BoucWenParams, simulate};
-
-/// Gaussian white noise from a seeded ChaCha8 generator (Box–Muller), reproducible across
-/// platforms.
-#[derive(Debug, Clone)]
-pub struct GaussianNoise {
-    rng: ChaCha8Rng,
-    std: f64,
-    spare: Option<f64>,
-}
-
-impl GaussianNoise {
-    /// Noise of standard deviation `std` (≥ 0) from `seed`.
-    pub fn new(std: f64, seed: u64) -> Self {
-        GaussianNoise {
-            rng: ChaCha8Rng::seed_from_u64(seed),
-            std,
-            spare: None,
-        }
-    }
-
-    fn uniform(&mut self) -> f64 {
-        // 53 random bits in (0, 1].
-        ((self.rng.next_u64() >> 11) as f64 + 1.0) * (1.0 / (1u64 << 53) as f64)
-    }
-
-    /// The next sample.
-    pub fn sample(&mut self) -> f64 {
-        if let Some(z) = self.spare.take() {
-            return self.std * z;
-        }
-        let (u1, u2) = (self.uniform(), self.uniform());
-        let r = (-2.0 * u1.ln()).sqrt();
-        let a = std::f64::consts::TAU * u2;
-        self.spare = Some(r * a.sin());
-        self.std * r * a.cos()
-    }
-}
 
 /// A synthetic record: the virgin actuator `params` driven by `waveform` [V] sampled every
 /// `dt` [s], with Gaussian noise of standard deviation `noise_std` [µm] added to x.

@@ -116,6 +116,8 @@ pub fn analyze(folder: &RunFolder, options: &AnalyzeOptions) -> Result<AnalyzeSu
     let workspace = options.inputs.is_empty();
     if !workspace {
         problem.cases = options.inputs.iter().map(|p| p.to_vec()).collect();
+        // The stress constraint's case indexes belong to the optimizer's load cases.
+        problem.stress = None;
     }
     let design = options
         .design
@@ -126,7 +128,7 @@ pub fn analyze(folder: &RunFolder, options: &AnalyzeOptions) -> Result<AnalyzeSu
     let replaced = folder.has_results(out.dir());
     let run = folder.dir();
     let t = Instant::now();
-    let mut ev = Evaluator::new(&problem, 0.0, AnalysisParams::default())?;
+    let mut ev = Evaluator::new(&problem, AnalysisParams::default())?;
     let r = ev.solve_cases(&rho, None)?;
     let seconds = t.elapsed().as_secs_f64();
     run.write(out.cases(), cases_csv(&problem, &r).as_bytes())?;

@@ -14,10 +14,11 @@ use std::time::Instant;
 use flexstage_fem::{AdditiveYeoh, Kinematics};
 use flexstage_report::{RunDir, csv_columns, layout::design as files};
 use flexstage_scenario::Scenario;
+use flexstage_topopt::check::{CheckSetup, check_gradients};
+use flexstage_topopt::summary::{FinalAnalysis, final_analysis};
 use flexstage_topopt::{
-    AnalysisParams, DesignFile, Evaluator, IterationRecord, Optimizer, OptimizerParams, Problem,
-    Projection, Response, StopReason, check::check_gradients, density_csv, perimeter_walk,
-    shoelace,
+    AnalysisParams, CaseResults, DesignFile, DesignSpace, Evaluator, IterationRecord, Optimizer,
+    OptimizerParams, Problem, StopReason, density_csv, perimeter_walk, shoelace,
 };
 
 use crate::error::{PipelineError, Result, require, to_json};
@@ -103,8 +104,9 @@ pub struct DesignSummary {
     pub area_initial: f64,
     /// Workspace area of the design, final analysis \[m²\].
     pub area: f64,
-    /// Output of the compressive corner (+a, −a) of the final analysis \[m\].
-    pub compressive_corner: [f64; 2],
+    /// The designed mechanism in the units a user compares: α, θ, area, mass, stresses, minimum
+    /// sizes, symmetry, first frequency (flexstage-topopt's final analysis).
+    pub design: flexstage_topopt::DesignSummary,
     /// Fraction of design elements with 0.1 < ρ < 0.9 (of the last iteration).
     pub grey_fraction: f64,
     /// Volume fraction of the last iteration.
@@ -151,7 +153,8 @@ pub fn design(
                 path: path.clone(),
                 source,
             })?;
-            let o = Optimizer::resume(&problem, params, &bytes)?;
+            let payload = crate::envelope::payload_for(&path, &bytes, folder.scenario())?;
+            let o = Optimizer::resume(&problem, params, payload)?;
             progress.note(&format!(
                 "resuming {} at iteration {}",
                 folder.root().display(),
@@ -164,9 +167,10 @@ pub fn design(
     let t0 = Instant::now();
     let stop = optimize(
         &mut opt,
-        run,
+        folder,
         options,
         s.optimization.max_iterations,
+        (2.0 * s.actuators.stroke_amplitude).powi(2),
         progress,
     )?;
     let seconds = t0.elapsed().as_secs_f64();
@@ -207,18 +211,20 @@ fn prepare_fresh(folder: &RunFolder, force: bool) -> Result<()> {
 /// Algorithm 1's loop with progress, polygon snapshots and checkpoints.
 fn optimize(
     opt: &mut Optimizer,
-    run: &RunDir,
+    folder: &RunFolder,
     options: &DesignOptions,
     max_iterations: usize,
+    input_square: f64,
     progress: &dyn Progress,
 ) -> Result<StopReason> {
+    let run = folder.dir();
     let names = opt.constraint_names();
     progress.start("design", max_iterations as u64 + 1);
     progress.set_position(opt.iteration() as u64);
     let stop = loop {
         let rec = opt.step()?;
         progress.set_position(rec.iteration as u64 + 1);
-        progress.set_message(&iteration_message(&names, &rec, opt.history()[0].area));
+        progress.set_message(&iteration_message(&names, &rec, input_square));
         for &c in &rec.retried_cases {
             progress.note(&format!(
                 "iteration {}: load case {c} needed a cutback retry",
@@ -230,14 +236,16 @@ fn optimize(
             let (_, ev) = opt.last().expect("an iteration was evaluated");
             run.write(
                 files::snapshot(rec.iteration),
-                polygon_csv(&ev.response.outputs).as_bytes(),
+                polygon_csv(&ev.blueprint().response.outputs).as_bytes(),
             )?;
         }
         if let Some(stop) = stopped {
             break stop;
         }
         if opt.iteration() % options.checkpoint_every == 0 {
-            run.write(files::CHECKPOINT, &opt.checkpoint())?;
+            // Sealed with the scenario's hash and a CRC (crate::envelope).
+            let sealed = crate::envelope::seal(folder.scenario(), &opt.checkpoint());
+            run.write(files::CHECKPOINT, &sealed)?;
             run.write(
                 files::HISTORY_CSV,
                 history_csv(&names, opt.history()).as_bytes(),
@@ -248,35 +256,49 @@ fn optimize(
     Ok(stop)
 }
 
-fn iteration_message(names: &[&str], rec: &IterationRecord, area0: f64) -> String {
+fn iteration_message(names: &[&str], rec: &IterationRecord, input_square: f64) -> String {
     let g: Vec<String> = names
         .iter()
         .zip(&rec.constraints)
         .map(|(n, v)| format!("{n} {v:+.3}"))
         .collect();
     format!(
-        "J {:.3e} m² ({:.2}x)  {}  grey {:.2}  β {}",
-        rec.area,
-        rec.area / area0,
+        "J {:.0} µm² ({:.2} × input square)  {}  grey {:.2}  β {}",
+        rec.area * 1e12,
+        rec.area / input_square,
         g.join(" "),
         rec.grey,
         rec.beta
     )
 }
 
-/// The final analyses of the start design and of `rho`: nonlinear, no additive material, the
-/// p_m workspace samples. Returns the problem, both responses and the displacement of the
-/// compressive corner of the design.
-fn final_analysis(s: &Scenario, rho: &[f64]) -> Result<(Problem, Response, Response, Vec<f64>)> {
-    let mut fin = Problem::from_scenario(s, Some(Kinematics::TotalLagrangian))?;
-    fin.cases = perimeter_walk(s.optimization.samples, s.actuators.stroke_amplitude);
-    let mut rho0 = vec![s.optimization.initial_density; rho.len()];
-    fin.mesh().apply_passive(&mut rho0, fin.rho_min);
-    let r0 = Evaluator::new(&fin, 0.0, AnalysisParams::default())?.solve_cases(&rho0, None)?;
-    let mut ev = Evaluator::new(&fin, 0.0, AnalysisParams::default())?;
-    let r = ev.solve_cases(rho, None)?;
-    let u = ev.cases[fin.differential_corners().0].u.clone();
-    Ok((fin, r0, r, u))
+/// The final analyses: the design's (every realization; flexstage-topopt's
+/// [`final_analysis`], with the first natural frequency added) and the uniform start design's
+/// (nonlinear, no additive material, the p_m workspace samples). Returns the final-analysis
+/// problem, the start design's response and the design's analysis.
+fn final_analyses(s: &Scenario, opt: &Optimizer) -> Result<(Problem, CaseResults, FinalAnalysis)> {
+    let (dens, _) = opt.last().expect("at least one iteration");
+    let mut fin = final_analysis(s, dens, opt.params().robust)?;
+    fin.summary.first_frequency_hz = Some(first_frequency(s, &dens.physical)?);
+    let mut problem = Problem::from_scenario(s, Some(Kinematics::TotalLagrangian))?;
+    problem.cases = perimeter_walk(s.optimization.samples, s.actuators.stroke_amplitude);
+    let mut rho0 = vec![s.optimization.initial_density; dens.physical.len()];
+    problem.mesh().apply_passive(&mut rho0, problem.rho_min);
+    let r0 = Evaluator::new(&problem, AnalysisParams::default())?.solve_cases(&rho0, None)?;
+    Ok((problem, r0, fin))
+}
+
+/// The lowest natural frequency of the design: the mechanism held by the PEA springs, without
+/// the optimizer's output load or plate masses (flexstage-reduce's modal analysis).
+fn first_frequency(s: &Scenario, rho: &[f64]) -> Result<f64> {
+    let problem = flexstage_reduce::reduction_problem(s, false)?;
+    let params = flexstage_reduce::ModalParams {
+        modes: 1,
+        ..flexstage_reduce::ModalParams::default()
+    };
+    let modes =
+        flexstage_reduce::modal_analysis(&problem.model, rho, s.material.density, &[], &params)?;
+    Ok(modes.frequencies[0])
 }
 
 /// The final analysis and every result file of the design folder.
@@ -293,7 +315,8 @@ fn finish(
     let h = opt.history();
     let last = h.last().expect("at least one iteration");
     let rho = &opt.last().expect("at least one iteration").0.physical;
-    let (fin, r0, r, u) = final_analysis(s, rho)?;
+    let (fin, r0, analysis) = final_analyses(s, opt)?;
+    let (r, u) = (&analysis.response, &analysis.corner_displacement);
     let mesh = problem.mesh();
     let summary = DesignSummary {
         stop,
@@ -302,8 +325,8 @@ fn finish(
         seconds,
         seconds_per_iteration: h.iter().map(|r| r.time).sum::<f64>() / h.len() as f64,
         area_initial: shoelace(&r0.outputs),
-        area: shoelace(&r.outputs),
-        compressive_corner: r.outputs[fin.differential_corners().0],
+        area: analysis.summary.area,
+        design: analysis.summary.clone(),
         // The optimizer's own measure of the design it analysed last (= `rho`).
         grey_fraction: last.grey,
         volume: last.volume,
@@ -325,6 +348,7 @@ fn finish(
         area_initial: summary.area_initial,
         area: summary.area,
         grey_fraction: summary.grey_fraction,
+        summary: Some(analysis.summary.clone()),
     };
     let (nl, nw) = (mesh.nl, mesh.nw);
     run.write(
@@ -335,8 +359,8 @@ fn finish(
         files::DENSITY_PNG,
         &flexstage_report::image::density_png(nl, nw, 4, |i, j| rho[i * nw + j])?,
     )?;
-    write_vtu(run, files::VTU, &fin, rho, &u)?;
-    run.write(files::CASES, cases_csv(&fin, &r).as_bytes())?;
+    write_vtu(run, files::VTU, &fin, rho, u)?;
+    run.write(files::CASES, cases_csv(&fin, r).as_bytes())?;
     run.write(files::WORKSPACE_FINAL, polygon_csv(&r.outputs).as_bytes())?;
     run.write(
         files::WORKSPACE_INITIAL,
@@ -398,9 +422,9 @@ fn summary_json(s: &DesignSummary) -> String {
         "iterations": s.iterations,
         "seconds": s.seconds,
         "seconds_per_iteration": s.seconds_per_iteration,
+        "design": s.design,
         "area_initial_m2": s.area_initial,
         "area_final_m2": s.area,
-        "area_growth": s.area / s.area_initial,
         "grey_fraction": s.grey_fraction,
         "volume": s.volume,
         "constraints": constraints,
@@ -487,32 +511,40 @@ pub fn gradient_check(scenario: &Scenario) -> Result<GradientReport> {
     let mut s = scenario.clone();
     s.mesh.nl = 16;
     s.mesh.nw = 8;
+    s.regions.clear();
     s.optimization.samples = 8;
     s.actuators.stroke_amplitude = 3e-4;
     s.actuators.max_stroke = s.actuators.max_stroke.max(1e-3);
     let problem = Problem::from_scenario(&s, None)?;
+    let params = OptimizerParams::from_scenario(&s);
     let ne = problem.mesh().n_elements();
     let e0 = s.material.youngs_modulus;
     let yeoh = AdditiveYeoh::uniform(ne, 1e-6 * e0, 1e-3 * e0);
-    let n = problem.design_elements().len();
+    let n = DesignSpace::new(problem.mesh(), problem.mirror_symmetry)?.n();
     let x: Vec<f64> = (0..n)
         .map(|j| 0.3 + 0.6 * (0.5 + 0.5 * (j as f64 * 0.77).sin()))
         .collect();
-    let proj = Projection {
-        beta: 2.0,
+    let check = CheckSetup {
+        filter_radius: params.effective_filter_radius(),
+        robust: params.thresholds(),
         eta: 0.5,
+        beta: 2.0,
     };
     let setup = format!(
-        "{} x {} mesh, p_m = {}, strokes ±{} µm, nonlinear, additive material on, filter {} \
-         elements, projection β = 2; central differences h = 1e-6",
+        "{} x {} mesh, p_m = {}, strokes ±{} µm, nonlinear, additive material on, filter {:.2} \
+         elements, projection β = 2{}; central differences h = 1e-6",
         s.mesh.nl,
         s.mesh.nw,
         s.optimization.samples,
         s.actuators.stroke_amplitude * 1e6,
-        s.optimization.filter_radius
+        check.filter_radius,
+        if check.robust.is_some() {
+            ", eroded/blueprint/dilated designs"
+        } else {
+            ""
+        }
     );
-    let radius = s.optimization.filter_radius;
-    let checks = check_gradients(&problem, radius, proj, Some(&yeoh), &x, 10, 1e-6)?;
+    let checks = check_gradients(&problem, &check, Some(&yeoh), &x, 10, 1e-6)?;
     Ok(GradientReport { setup, checks })
 }
 
@@ -540,7 +572,7 @@ mod tests {
     fn gradient_verdict_fails_above_the_tolerance() {
         // Goal: the check can fail (a NaN error counts as a failure, not a pass).
         let row = |e: f64| flexstage_topopt::check::GradientCheck {
-            name: "objective",
+            name: "objective".into(),
             relative_error: e,
             scale: 1.0,
             checked: 10,

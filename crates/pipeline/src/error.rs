@@ -39,16 +39,39 @@ pub enum PipelineError {
         /// How to produce it.
         hint: String,
     },
-    /// The run folder records another scenario than the one given.
-    #[error(
-        "{root} holds a run of another scenario ({recorded}); give that scenario, another \
-         folder (--out), or --force to replace its scenario"
-    )]
+    /// The run folder (or a checkpoint in it) records another scenario than the one given.
+    #[error("{root} holds {what} made with another scenario ({changes}); {hint}")]
     OtherScenario {
+        /// The run folder or file.
+        root: PathBuf,
+        /// What it holds ("a run", "finished stages", "an interrupted design").
+        what: &'static str,
+        /// What changed, field by field (old → new), or why the record cannot be read.
+        changes: String,
+        /// How to go on.
+        hint: String,
+    },
+    /// Another process works in the run folder.
+    #[error("{root} is in use by another flexstage process ({holder}); {hint} (lock file {lock})")]
+    Locked {
         /// The run folder.
         root: PathBuf,
-        /// The recorded scenario's name, or why it cannot be read.
-        recorded: String,
+        /// The lock holder, in words.
+        holder: String,
+        /// The lock file.
+        lock: PathBuf,
+        /// How to go on.
+        hint: String,
+    },
+    /// A file of the run folder is damaged (checksum, length, format) and is not used.
+    #[error("{path} is damaged: {reason}; {hint}")]
+    Damaged {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+        /// How to go on.
+        hint: String,
     },
     /// An input file could not be read.
     #[error("cannot read {path}")]
@@ -123,6 +146,9 @@ pub enum PipelineError {
     /// Density images.
     #[error(transparent)]
     Image(#[from] flexstage_report::image::ImageError),
+    /// Verification of the exported outline.
+    #[error(transparent)]
+    Verify(#[from] flexstage_verify::VerifyError),
 }
 
 /// Result alias of this crate.

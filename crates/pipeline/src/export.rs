@@ -1,6 +1,8 @@
 //! `export`: the manufacturing outline of a design (paper Section 4.1, wire-cut from a
 //! plate): the ρ = level iso-contour as DXF and SVG closed polylines, and a binary STL extruded
-//! by the plate thickness.
+//! by the plate thickness; then the verification of that outline (`flexstage-verify`:
+//! body-fitted stress, α and first frequency beside the design mesh's, manufacturability
+//! findings, the verdict).
 
 use std::path::PathBuf;
 
@@ -8,6 +10,7 @@ use flexstage_fem::Kinematics;
 use flexstage_report::layout::export as files;
 use flexstage_report::outline::{Outline, Unit};
 use flexstage_topopt::Problem;
+use flexstage_verify::{Verification, VerifyParams};
 
 use crate::error::{Result, require};
 use crate::folder::RunFolder;
@@ -25,6 +28,12 @@ pub struct ExportOptions {
     /// Taubin smoothing passes, in [0, 1000] (0: the raw marching-squares polygon).
     /// Default 10.
     pub smoothing: usize,
+    /// Longest chord of the exported curve \[m\], in [0, 10 mm] (a centripetal Catmull–Rom
+    /// curve through the smoothed contour; 0: the polygon itself). Default 0.05 mm.
+    pub max_chord: f64,
+    /// The verification of the exported outline (`None`: skipped). Default: the Al 6061-T6
+    /// defaults of [`VerifyParams`].
+    pub verify: Option<VerifyParams>,
 }
 
 impl Default for ExportOptions {
@@ -34,6 +43,8 @@ impl Default for ExportOptions {
             unit: Unit::Millimetres,
             level: 0.5,
             smoothing: 10,
+            max_chord: 0.05e-3,
+            verify: Some(VerifyParams::default()),
         }
     }
 }
@@ -52,7 +63,17 @@ impl ExportOptions {
             "export.smoothing",
             self.smoothing,
             "an integer in [0, 1000]",
-        )
+        )?;
+        require(
+            (0.0..=10e-3).contains(&self.max_chord),
+            "export.max_chord",
+            self.max_chord,
+            "a length in [0, 0.01] m",
+        )?;
+        if let Some(v) = &self.verify {
+            v.validate()?;
+        }
+        Ok(())
     }
 }
 
@@ -69,6 +90,17 @@ pub struct ExportSummary {
     pub files: Vec<PathBuf>,
     /// Whether earlier export files were replaced.
     pub replaced: bool,
+    /// The verification (`None` if skipped or failed).
+    pub verification: Option<Box<Verification>>,
+    /// Why the verification could not be done (the design is then not called safe).
+    pub verify_error: Option<String>,
+}
+
+impl ExportSummary {
+    /// Is the design verified safe?
+    pub fn safe(&self) -> bool {
+        self.verification.as_ref().is_some_and(|v| v.verdict.safe)
+    }
 }
 
 /// Exports the outline to [`files::DXF`], [`files::SVG`] and [`files::STL`].
@@ -79,20 +111,33 @@ pub fn export(folder: &RunFolder, options: &ExportOptions) -> Result<ExportSumma
     let rho = load_design(folder, &options.design, &problem)?;
     let (nl, nw) = (s.mesh.nl, s.mesh.nw);
     let (dx, dy) = (s.mesh.length / nl as f64, s.mesh.width / nw as f64);
-    let outline = Outline::from_fem_order(nl, nw, dx, dy, options.level, options.smoothing, &rho)?;
+    let outline = Outline::from_fem_order(nl, nw, dx, dy, options.level, options.smoothing, &rho)?
+        .refined(options.max_chord);
     let replaced = folder.has_results(files::DIR);
     let run = folder.dir();
     let unit = options.unit;
-    let files = vec![
+    let mut files = vec![
         run.write(files::DXF, &outline.to_dxf(unit)?)?,
         run.write(files::SVG, outline.to_svg(unit).as_bytes())?,
         run.write(files::STL, &outline.to_stl(s.mesh.thickness, unit))?,
     ];
+    let (mut verification, mut verify_error) = (None, None);
+    if let Some(p) = &options.verify {
+        match flexstage_verify::verify(s, &rho, &outline.loops, p) {
+            Ok(v) => {
+                files.extend(flexstage_verify::write_files(&v, run)?);
+                verification = Some(Box::new(v));
+            }
+            Err(e) => verify_error = Some(e.to_string()),
+        }
+    }
     Ok(ExportSummary {
         design: options.design.clone(),
         loops: outline.loops.len(),
         area: outline.area(),
         files,
         replaced,
+        verification,
+        verify_error,
     })
 }

@@ -5,7 +5,7 @@ use flexstage_fem::Design;
 use flexstage_report::plot::{Figure, Series};
 use flexstage_report::vtk::{PointField, QuadMesh};
 use flexstage_report::{RunDir, csv_columns, read_csv_columns};
-use flexstage_topopt::{Problem, Response};
+use flexstage_topopt::{CaseResults as Response, Problem};
 
 use crate::error::Result;
 

@@ -10,7 +10,16 @@
 //!
 //! * **One scenario per run, in memory.** [`RunFolder`] opens `runs/<scenario name>/` (or a
 //!   folder the caller picks), records the scenario, and hands it to every stage; no stage
-//!   re-reads the recorded copy. A folder of another scenario is refused unless replaced.
+//!   re-reads the recorded copy. A folder of another scenario is refused, naming the changed
+//!   fields ([`diff`]), unless replaced.
+//! * **One process per folder.** An open [`RunFolder`] holds the folder's lock (`run.lock`,
+//!   [`lock`]); a second process is refused with the holder's PID, host, start and command;
+//!   the lock of a killed process is taken over, and the temporary files of its interrupted
+//!   writes are removed.
+//! * **Nothing damaged is used.** Design checkpoints carry the scenario's hash and a CRC-32
+//!   ([`envelope`]); `run_state.json` records the scenario and option hashes of every finished
+//!   stage ([`RunState`]). A damaged file or one of another scenario is refused with a
+//!   message, never resumed.
 //! * **One set of defaults.** Each stage takes a typed options struct ([`DesignOptions`],
 //!   [`AnalyzeOptions`], [`ExportOptions`], [`ReduceOptions`], [`PeaOptions`],
 //!   [`PeaIdOptions`], [`StageIdOptions`], [`TrackOptions`], [`RunOptions`]) whose `Default`
@@ -25,18 +34,23 @@
 //!   summary whether it replaced earlier results.
 //! * **No printing.** Progress goes to a [`Progress`] (the CLI draws bars), results come back
 //!   as typed summaries.
-//! * **Resumable.** [`run::run`] records finished stages in `run_state.json` ([`RunState`],
-//!   the one place that reads and writes it) and resumes after them.
+//! * **Resumable, bitwise.** [`run::run`] records finished stages in `run_state.json`
+//!   ([`RunState`], the one place that reads and writes it) and resumes after them; an
+//!   interrupted design continues from its checkpoint to the same bits as an uninterrupted
+//!   one (floats in checkpoint headers round-trip exactly: serde_json's `float_roundtrip`).
 //!
 //! The simulated experiments (stage identification, tracking) run on the *designed* stage
 //! once the run has a reduced model ([`Plant`]).
 
 pub mod analyze;
 pub mod design;
+pub mod diff;
+pub mod envelope;
 pub mod error;
 pub mod export;
 mod figures;
 pub mod folder;
+pub mod lock;
 pub mod names;
 pub mod pea;
 mod pea_files;
@@ -58,6 +72,7 @@ pub use design::{
 pub use error::{PipelineError, Result};
 pub use export::{ExportOptions, ExportSummary, export};
 pub use folder::{DEFAULT_PRESET, PRESETS, RunFolder, default_root, default_run, load_scenario};
+pub use lock::{LockHolder, RunLock};
 pub use pea::{
     PeaIdOptions, PeaIdSummary, PeaOptions, PeaRecord, identify_pea, simulate_pea, write_pea_csv,
     write_pea_record,
@@ -76,3 +91,4 @@ pub use flexstage_control::{actuator::Compensation, experiment::Variant};
 pub use flexstage_piezo::WaveShape;
 pub use flexstage_report::outline::Unit;
 pub use flexstage_scenario::Scenario;
+pub use flexstage_verify::{Verification, VerifyParams};

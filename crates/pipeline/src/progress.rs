@@ -30,13 +30,12 @@ pub struct Silent;
 
 impl Progress for Silent {}
 
-/// Why `run` starts over instead of resuming.
+/// Why `run` starts over instead of resuming. (A folder of another scenario is refused, not
+/// started over: see [`crate::run::run`].)
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum StartOver {
     /// The caller asked for it (`--restart`).
     Requested,
-    /// The scenario differs from the one the finished stages ran with.
-    ScenarioChanged,
 }
 
 /// The steps of [`crate::run::run`].

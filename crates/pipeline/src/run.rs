@@ -3,28 +3,29 @@
 //!
 //! Every stage gets the scenario in memory (never the recorded `scenario.toml`) and reads
 //! what earlier stages wrote through [`flexstage_report::layout`]. Finished stages are
-//! recorded in `run_state.json` ([`RunState`]) with a hash of the scenario, so calling `run`
-//! again resumes after the last finished stage (an interrupted design continues from its
-//! checkpoint); a changed scenario or [`RunOptions::restart`] starts over, and says so through
-//! [`Progress::event`].
+//! recorded in `run_state.json` ([`RunState`]) with hashes of the scenario and the options, so
+//! calling `run` again resumes after the last finished stage (an interrupted design continues
+//! from its checkpoint, which carries the scenario's hash and a CRC). A folder of another
+//! scenario is refused with the list of changed fields; [`RunOptions::restart`] starts over,
+//! and says so through [`Progress::event`]. The folder is locked while `run` works in it.
 //!
 //! Stage identification and tracking run on the designed mechanism ([`crate::plant`]).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use flexstage_report::{RunDir, html, layout};
+use flexstage_report::{html, layout};
 use flexstage_scenario::Scenario;
 
 use crate::design::{DesignOptions, DesignStart, DesignSummary, design};
-use crate::error::Result;
+use crate::error::{PipelineError, Result};
 use crate::export::{ExportOptions, ExportSummary, export};
-use crate::folder::RunFolder;
+use crate::folder::{RunFolder, recorded_changes};
 use crate::pea::{PeaIdOptions, PeaIdSummary, PeaOptions, simulate_and_identify_each};
 use crate::progress::{Progress, RunEvent, StartOver};
 use crate::reduce::{ReduceOptions, ReduceSummary, reduce};
 use crate::stage_id::{ParameterRow, StageIdOptions, StageIdSummary, identify_stage, read_table};
-use crate::state::RunState;
+use crate::state::{Mismatch, RunState, fnv1a};
 use crate::track::{TrackOptions, TrackSummary, track};
 
 /// The stages of `run`, in order.
@@ -145,8 +146,18 @@ pub struct RunSummary {
     pub report: PathBuf,
 }
 
+/// How to go on when a run folder holds stages of another scenario.
+const RESTART_HINT: &str = "give that scenario again to resume, --restart to start over with \
+                            this one, or another folder (--out)";
+
 /// Runs every stage of the scheme on `scenario` in the run folder `root`, resuming after the
-/// stages a previous call finished with the same scenario.
+/// stages a previous call finished with the same scenario and options.
+///
+/// The folder is locked for the whole call ([`crate::lock`]). A folder whose finished stages
+/// (or whose recorded scenario) belong to another scenario is refused with
+/// [`PipelineError::OtherScenario`], which lists the changed fields; other stage options
+/// are refused with [`PipelineError::Exists`]; a damaged `run_state.json` with
+/// [`PipelineError::Damaged`]. [`RunOptions::restart`] starts over in every case.
 pub fn run(
     scenario: Scenario,
     root: &Path,
@@ -155,32 +166,12 @@ pub fn run(
 ) -> Result<RunSummary> {
     options.validate()?;
     let t0 = Instant::now();
-    let dir = RunDir::create(root)?;
-    let previous = RunState::load(&dir);
-    let resume = !options.restart && previous.as_ref().is_some_and(|s| s.is_for(&scenario));
-    let mut state = match previous {
-        Some(st) if resume => {
-            if !st.finished.is_empty() {
-                progress.event(&RunEvent::Resuming(&st.finished_stages()));
-            }
-            st
-        }
-        previous => {
-            let had_results = previous.is_some_and(|s| !s.finished.is_empty())
-                || crate::folder::other_scenario(root, &scenario).is_some();
-            if had_results {
-                progress.event(&RunEvent::StartingOver(if options.restart {
-                    StartOver::Requested
-                } else {
-                    StartOver::ScenarioChanged
-                }));
-            }
-            RunState::new(&scenario)
-        }
-    };
-    state.save(&dir)?;
-    // `run` owns its folder: the state above decided what is kept.
-    let folder = RunFolder::open(scenario, root, true)?;
+    let folder = RunFolder::locked(scenario, root.to_path_buf())?;
+    for line in folder.notices() {
+        progress.note(line);
+    }
+    let (mut state, resume) = start_state(&folder, options, progress)?;
+    state.save(folder.dir())?;
     for stage in Stage::ALL {
         if state.finished(stage) {
             progress.event(&RunEvent::Skipped(stage));
@@ -196,8 +187,9 @@ pub fn run(
             summary: &summary,
         });
         state.finish(stage, seconds);
-        state.save(&dir)?;
+        state.save(folder.dir())?;
     }
+    let dir = folder.dir();
     let report = dir.path(layout::REPORT);
     Ok(RunSummary {
         root: root.to_path_buf(),
@@ -209,6 +201,71 @@ pub fn run(
             .unwrap_or_default(),
         report: std::fs::canonicalize(&report).unwrap_or(report),
     })
+}
+
+/// The state `run` starts from, and whether it resumes: records the scenario in the locked
+/// folder, or refuses a folder of another scenario or options (see [`run`]).
+fn start_state(
+    folder: &RunFolder,
+    options: &RunOptions,
+    progress: &dyn Progress,
+) -> Result<(RunState, bool)> {
+    let s = folder.scenario();
+    let opts = options_hash(options);
+    if options.restart {
+        let had_results = folder.dir().exists(layout::RUN_STATE)
+            || folder.dir().exists(layout::design::CHECKPOINT)
+            || folder.dir().exists(layout::design::DESIGN)
+            || recorded_changes(folder.root(), s).is_some();
+        if had_results {
+            progress.event(&RunEvent::StartingOver(StartOver::Requested));
+        }
+        folder.record(true, RESTART_HINT)?;
+        return Ok((RunState::new(s, &opts), false));
+    }
+    let Some(state) = RunState::load(folder.dir())? else {
+        folder.record(false, RESTART_HINT)?;
+        return Ok((RunState::new(s, &opts), false));
+    };
+    match state.mismatch(s, &opts) {
+        None => {
+            folder.record(false, RESTART_HINT)?;
+            if !state.stages.is_empty() {
+                progress.event(&RunEvent::Resuming(&state.finished_stages()));
+            }
+            Ok((state, true))
+        }
+        Some(Mismatch::Scenario) => Err(PipelineError::OtherScenario {
+            root: folder.root().to_path_buf(),
+            what: if state.stages.is_empty() {
+                "an unfinished run"
+            } else {
+                "finished stages"
+            },
+            changes: recorded_changes(folder.root(), s).unwrap_or_else(|| {
+                "its scenario.toml was since replaced by this scenario, but not its \
+                 run_state.json"
+                    .into()
+            }),
+            hint: RESTART_HINT.into(),
+        }),
+        Some(Mismatch::Options) => Err(PipelineError::Exists {
+            path: folder.dir().path(layout::RUN_STATE),
+            what: "stages that ran with other stage options (another flexstage version or \
+                   library call)",
+            hint: "--restart starts over with these options".into(),
+        }),
+    }
+}
+
+/// FNV-1a of the stage options (`Debug`, which prints floats exactly), without
+/// [`RunOptions::restart`]: the options a run's finished stages must share to be resumed.
+pub fn options_hash(options: &RunOptions) -> String {
+    let o = RunOptions {
+        restart: false,
+        ..options.clone()
+    };
+    format!("{:016x}", fnv1a(format!("{o:?}").as_bytes()))
 }
 
 /// One stage with the run's options.
@@ -245,14 +302,14 @@ fn run_stage(
             progress,
         )?)),
         Stage::Track => StageSummary::Track(track(folder, &options.track, progress)?),
-        Stage::Report => StageSummary::Report(write_report(folder.root())?),
+        Stage::Report => StageSummary::Report(write_report(folder)?),
     })
 }
 
 /// Builds the HTML report of a run folder and writes it ([`layout::REPORT`]).
-pub fn write_report(root: &Path) -> Result<PathBuf> {
-    let html = html::build_report(root);
-    Ok(RunDir::create(root)?.write(layout::REPORT, html.as_bytes())?)
+pub fn write_report(folder: &RunFolder) -> Result<PathBuf> {
+    let html = html::build_report(folder.root());
+    Ok(folder.dir().write(layout::REPORT, html.as_bytes())?)
 }
 
 #[cfg(test)]

@@ -235,6 +235,7 @@ mod tests {
             area_initial: 0.0,
             area: 0.0,
             grey_fraction: 0.0,
+            summary: None,
         };
         let csv_path = dir.write("d.csv", csv.as_bytes()).unwrap();
         let png_path = dir.write("d.png", &png).unwrap();

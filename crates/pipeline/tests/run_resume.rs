@@ -1,8 +1,9 @@
-//! Reference: issue #17 (the pipeline library keeps `flexstage run` resumable) and issue #10
-//! ("running it again resumes"). Goal: on a short version of the quick scenario, `run`
-//! finishes every stage; a second call with the same scenario skips all seven; a changed
-//! scenario is announced and every stage runs again on it; `restart` does the same on request.
-//! The events come through the `Progress` trait, in order.
+//! Reference: issue #17 (the pipeline library keeps `flexstage run` resumable), issue #10
+//! ("running it again resumes") and issue #16 (a mismatch refuses to resume, saying what
+//! changed). Goal: on a short version of the quick scenario, `run` finishes every stage; a
+//! second call with the same scenario skips all seven; a changed scenario is refused with the
+//! changed field and leaves the folder as it was; other options are refused; `restart` starts
+//! over on request. The events come through the `Progress` trait, in order.
 
 use std::sync::Mutex;
 
@@ -21,7 +22,6 @@ impl Progress for Recorder {
     fn event(&self, e: &RunEvent) {
         let line = match e {
             RunEvent::StartingOver(StartOver::Requested) => "restart".to_string(),
-            RunEvent::StartingOver(StartOver::ScenarioChanged) => "changed".to_string(),
             RunEvent::Resuming(done) => format!("resuming {}", done.len()),
             RunEvent::Skipped(s) => format!("skip {}", s.name()),
             RunEvent::Started(s) => format!("start {}", s.name()),
@@ -67,7 +67,7 @@ fn started(events: &[String]) -> usize {
 }
 
 #[test]
-fn run_resumes_and_starts_over_when_the_scenario_changes() {
+fn run_resumes_and_refuses_another_scenario_until_restarted() {
     let root = std::env::temp_dir().join(format!("flexstage-run-resume-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&root);
     let quick: Scenario = preset("quick").unwrap();
@@ -79,7 +79,9 @@ fn run_resumes_and_starts_over_when_the_scenario_changes() {
     assert_eq!(started(&ev), 7, "{ev:?}");
     assert!(s.report.is_file(), "report written");
     assert!(!s.headline.is_empty(), "headline numbers");
-    let state = RunState::load(&RunDir::create(&root).unwrap()).unwrap();
+    let state = RunState::load(&RunDir::create(&root).unwrap())
+        .unwrap()
+        .unwrap();
     assert_eq!(state.finished_stages(), Stage::ALL.to_vec());
 
     run(quick.clone(), &root, &options, &rec).unwrap();
@@ -90,23 +92,36 @@ fn run_resumes_and_starts_over_when_the_scenario_changes() {
 
     let mut changed = quick.clone();
     changed.simulation.seed += 1;
-    run(changed.clone(), &root, &options, &rec).unwrap();
+    let e = run(changed.clone(), &root, &options, &rec)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("simulation.seed: ") && e.contains("--restart"),
+        "{e}"
+    );
+    assert!(rec.take().is_empty(), "nothing ran");
+    let recorded = Scenario::load(&root.join("scenario.toml")).unwrap();
+    assert_eq!(recorded, quick, "the refused call changed nothing");
+
+    let mut other_options = short();
+    other_options.design.max_iterations = Some(5);
+    let e = run(quick.clone(), &root, &other_options, &rec)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("other stage options"), "{e}");
+
+    let restart = RunOptions {
+        restart: true,
+        ..short()
+    };
+    run(changed.clone(), &root, &restart, &rec).unwrap();
     let ev = rec.take();
-    assert_eq!(ev[0], "changed", "{ev:?}");
+    assert_eq!(ev[0], "restart", "{ev:?}");
     assert_eq!(started(&ev), 7, "{ev:?}");
     let recorded = Scenario::load(&root.join("scenario.toml")).unwrap();
     assert_eq!(
         recorded, changed,
         "the folder records the scenario the stages ran with"
     );
-
-    let restart = RunOptions {
-        restart: true,
-        ..short()
-    };
-    run(changed, &root, &restart, &rec).unwrap();
-    let ev = rec.take();
-    assert_eq!(ev[0], "restart", "{ev:?}");
-    assert_eq!(started(&ev), 7, "{ev:?}");
     std::fs::remove_dir_all(&root).unwrap();
 }

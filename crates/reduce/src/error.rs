@@ -1,21 +1,15 @@
 //! Typed errors: each names the field or port and, where it applies, the accepted range.
 
 use flexstage_fem::{NewtonError, ParamError as FemParamError, SolverError};
+use flexstage_numerics::RangeError;
 use thiserror::Error;
 
 /// Errors of the model reduction.
 #[derive(Debug, Error)]
 pub enum ReduceError {
     /// A parameter is outside its accepted range.
-    #[error("parameter `{field}` = {value} is outside the accepted range {range}")]
-    OutOfRange {
-        /// Field name.
-        field: &'static str,
-        /// Rejected value.
-        value: f64,
-        /// Accepted range.
-        range: &'static str,
-    },
+    #[error(transparent)]
+    OutOfRange(#[from] RangeError),
     /// The model and the ports or the densities do not fit together.
     #[error("invalid reduction input: {0}")]
     Input(String),
@@ -57,15 +51,4 @@ pub enum ReduceError {
 /// Result alias.
 pub type Result<T> = std::result::Result<T, ReduceError>;
 
-/// `Ok` if `ok`, else [`ReduceError::OutOfRange`].
-pub(crate) fn check(field: &'static str, value: f64, ok: bool, range: &'static str) -> Result<()> {
-    if ok && value.is_finite() {
-        Ok(())
-    } else {
-        Err(ReduceError::OutOfRange {
-            field,
-            value,
-            range,
-        })
-    }
-}
+flexstage_numerics::range_checks!(ReduceError);

@@ -48,7 +48,7 @@ pub use condense::{Condensation, Condenser, Ports, condense};
 pub use error::{ReduceError, Result};
 pub use lumped::{stage_params, stage_params_toml};
 pub use mass::{MassInterpolation, MassLumping, MassMatrix, PointMass, design_mass};
-pub use modal::{ModalParams, Modes, jacobi_eigen, modal_analysis};
+pub use modal::{ModalParams, Modes, modal_analysis};
 pub use reduction::{
     Assumption2, ReduceParams, Reduction, input_frequency, reduce, reduction_problem,
 };

@@ -29,7 +29,7 @@
 
 use flexstage_fem::{Mesh, Model};
 
-use crate::error::{Result, check};
+use crate::error::{Result, check, within};
 
 /// `Σ_e ρ_e ρ0 V_e` [kg].
 pub fn design_mass(mesh: &Mesh, rho: &[f64], density: f64) -> f64 {
@@ -74,18 +74,8 @@ impl MassInterpolation {
     }
     /// Checks the fields.
     pub fn validate(&self) -> Result<()> {
-        check(
-            "MassInterpolation::cutoff",
-            self.cutoff,
-            (0.0..=1.0).contains(&self.cutoff),
-            "[0, 1]",
-        )?;
-        check(
-            "MassInterpolation::exponent",
-            self.exponent,
-            (1.0..=20.0).contains(&self.exponent),
-            "[1, 20]",
-        )
+        within("MassInterpolation::cutoff", self.cutoff, 0.0, 1.0)?;
+        within("MassInterpolation::exponent", self.exponent, 1.0, 20.0)
     }
     /// Relative mass `m(ρ)`.
     #[inline]
@@ -128,7 +118,12 @@ impl MassMatrix {
         point_masses: &[PointMass],
     ) -> Result<Self> {
         interpolation.validate()?;
-        check("material density", density, density > 0.0, "(0, ∞) kg/m³")?;
+        check(
+            "material density",
+            density,
+            density > 0.0,
+            "a finite number > 0 [kg/m³]",
+        )?;
         let mesh = model.mesh();
         if rho.len() != mesh.n_elements() {
             return Err(crate::ReduceError::Input(format!(
@@ -138,7 +133,12 @@ impl MassMatrix {
             )));
         }
         for p in point_masses {
-            check("PointMass::mass", p.mass, p.mass >= 0.0, "[0, ∞) kg")?;
+            check(
+                "PointMass::mass",
+                p.mass,
+                p.mass >= 0.0,
+                "a finite number ≥ 0 [kg]",
+            )?;
             if p.node >= mesh.n_nodes() {
                 return Err(crate::ReduceError::Input(format!(
                     "point mass on node {} of {}",

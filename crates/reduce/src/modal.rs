@@ -8,14 +8,17 @@
 //! (faer low-level API through [`flexstage_fem::Factor`], factored once) and one `M` mat-vec;
 //! the Lanczos basis is fully reorthogonalized (twice, classical Gram–Schmidt in the `M` inner
 //! product), which is cheap for the few modes needed. The eigenvalues `θ = 1/ω²` of the
-//! tridiagonal matrix come from cyclic Jacobi rotations. A Ritz pair is accepted when the
+//! tridiagonal matrix come from nalgebra's symmetric QR algorithm
+//! ([`flexstage_numerics::dense::symmetric_eigen`]). A Ritz pair is accepted when the
 //! Lanczos residual bound `|β_j s_ji| ≤ tol·θ_i`; the reported residual
 //! `‖Kφ − ω²Mφ‖/‖Kφ‖` is recomputed from the mode shape. `M` may be singular (massless void
 //! nodes): the start vector is taken in the range of `K⁻¹M`, so infinite eigenvalues stay out.
 
-use flexstage_fem::{Design, Factor, Model, SolveWorkspace, SymbolicFactor};
+use flexstage_fem::{Design, Factor, Model, SolveWorkspace, SparseMatrix, SymbolicFactor};
+use flexstage_numerics::dense::{dot, symmetric_eigen};
+use flexstage_numerics::noise::SplitMix64;
 
-use crate::error::{ReduceError, Result, check};
+use crate::error::{ReduceError, Result, count, within};
 use crate::mass::{MassInterpolation, MassLumping, MassMatrix, PointMass};
 
 /// Parameters of the modal analysis.
@@ -52,24 +55,9 @@ impl Default for ModalParams {
 impl ModalParams {
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
-        check(
-            "ModalParams::modes",
-            self.modes as f64,
-            (1..=50).contains(&self.modes),
-            "[1, 50]",
-        )?;
-        check(
-            "ModalParams::tolerance",
-            self.tolerance,
-            (1e-14..=1e-3).contains(&self.tolerance),
-            "[1e-14, 1e-3]",
-        )?;
-        check(
-            "ModalParams::max_steps",
-            self.max_steps as f64,
-            (10..=5000).contains(&self.max_steps),
-            "[10, 5000]",
-        )?;
+        count("ModalParams::modes", self.modes, 1, 50)?;
+        within("ModalParams::tolerance", self.tolerance, 1e-14, 1e-3)?;
+        count("ModalParams::max_steps", self.max_steps, 10, 5000)?;
         self.interpolation.validate()
     }
 }
@@ -89,70 +77,6 @@ pub struct Modes {
     pub steps: usize,
     /// Total mass in the mass matrix [kg].
     pub total_mass: f64,
-}
-
-/// Splitmix64: a small deterministic generator for the start vector.
-fn splitmix(state: &mut u64) -> f64 {
-    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    let mut z = *state;
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^= z >> 31;
-    (z >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// Eigen-decomposition of a small symmetric matrix (row-major `n×n`) by cyclic Jacobi:
-/// returns eigenvalues and eigenvectors (column `k` of the row-major `v`), unsorted.
-pub fn jacobi_eigen(a: &[f64], n: usize) -> (Vec<f64>, Vec<f64>) {
-    let mut a = a.to_vec();
-    let mut v = vec![0.0; n * n];
-    for i in 0..n {
-        v[i * n + i] = 1.0;
-    }
-    for _sweep in 0..100 {
-        let off: f64 = (0..n)
-            .flat_map(|i| (0..n).filter(move |&j| j != i).map(move |j| (i, j)))
-            .map(|(i, j)| a[i * n + j] * a[i * n + j])
-            .sum();
-        let diag: f64 = (0..n).map(|i| a[i * n + i] * a[i * n + i]).sum();
-        if off <= 1e-30 * diag || off == 0.0 {
-            break;
-        }
-        for p in 0..n {
-            for q in p + 1..n {
-                let apq = a[p * n + q];
-                if apq.abs() <= 1e-300 {
-                    continue;
-                }
-                let (app, aqq) = (a[p * n + p], a[q * n + q]);
-                let tau = (aqq - app) / (2.0 * apq);
-                let t = tau.signum() / (tau.abs() + (1.0 + tau * tau).sqrt());
-                let t = if tau == 0.0 { 1.0 } else { t };
-                let c = 1.0 / (1.0 + t * t).sqrt();
-                let s = t * c;
-                for k in 0..n {
-                    let (akp, akq) = (a[k * n + p], a[k * n + q]);
-                    a[k * n + p] = c * akp - s * akq;
-                    a[k * n + q] = s * akp + c * akq;
-                }
-                for k in 0..n {
-                    let (apk, aqk) = (a[p * n + k], a[q * n + k]);
-                    a[p * n + k] = c * apk - s * aqk;
-                    a[q * n + k] = s * apk + c * aqk;
-                }
-                for k in 0..n {
-                    let (vkp, vkq) = (v[k * n + p], v[k * n + q]);
-                    v[k * n + p] = c * vkp - s * vkq;
-                    v[k * n + q] = s * vkp + c * vkq;
-                }
-            }
-        }
-    }
-    ((0..n).map(|i| a[i * n + i]).collect(), v)
 }
 
 /// The lowest `params.modes` natural frequencies and mode shapes of `model` with densities
@@ -175,149 +99,251 @@ pub fn modal_analysis(
         params.lumping,
         point_masses,
     )?;
-    let mut k = model.new_matrix();
-    let zero = model.zero_vector();
-    let mut aws = model.new_workspace();
-    model.assemble(&design, &zero, None, Some(&mut k), &mut aws);
-    let symbolic = SymbolicFactor::for_model(model)?;
-    let mut factor = Factor::new(symbolic.clone());
-    factor.allow_indefinite = false;
-    factor.factorize(&k)?;
-    let mut sws = SolveWorkspace::new(&symbolic);
-    let n = mass.n();
-    let nev = params.modes.min(n);
-    let max_steps = params.max_steps.min(n);
+    let mut stiffness = Stiffness::factor(model, &design)?;
+    let nev = params.modes.min(mass.n());
+    let mut lanczos = Lanczos::start(&mass, &mut stiffness, params.seed)?;
+    let ritz = lanczos.run(&mass, &mut stiffness, nev, params)?;
+    Ok(lanczos.modes(model, &mass, &stiffness.k, &ritz, nev))
+}
 
-    // Start vector in range(K⁻¹M).
-    let mut seed = params.seed ^ 0x5DEE_CE66;
-    let r0: Vec<f64> = (0..n).map(|_| splitmix(&mut seed)).collect();
-    let mut w = vec![0.0; n];
-    mass.matvec(&r0, &mut w);
-    factor.solve_in_place(&mut w, &mut sws)?;
-    let mut mw = vec![0.0; n];
-    mass.matvec(&w, &mut mw);
-    let b0 = dot(&w, &mw).sqrt();
-    if b0.is_nan() || b0 <= 0.0 {
-        return Err(ReduceError::Input(
-            "the mass matrix is zero on the free DOFs".into(),
-        ));
+/// K at the undeformed state and its sparse Cholesky factor: `K⁻¹` is applied by solves.
+struct Stiffness {
+    k: SparseMatrix,
+    factor: Factor,
+    workspace: SolveWorkspace,
+}
+
+impl Stiffness {
+    fn factor(model: &Model, design: &Design) -> Result<Self> {
+        let mut k = model.new_matrix();
+        let zero = model.zero_vector();
+        let mut aws = model.new_workspace();
+        model.assemble(design, &zero, None, Some(&mut k), &mut aws);
+        let symbolic = SymbolicFactor::for_model(model)?;
+        let mut factor = Factor::new(symbolic.clone());
+        factor.allow_indefinite = false;
+        factor.factorize(&k)?;
+        let workspace = SolveWorkspace::new(&symbolic);
+        Ok(Self {
+            k,
+            factor,
+            workspace,
+        })
     }
-    let mut q: Vec<Vec<f64>> = vec![w.iter().map(|x| x / b0).collect()];
-    let mut mq: Vec<Vec<f64>> = vec![mw.iter().map(|x| x / b0).collect()];
-    let mut alphas: Vec<f64> = Vec::new();
-    let mut betas: Vec<f64> = Vec::new();
-    let mut converged: Option<(Vec<f64>, Vec<f64>, usize)> = None;
-    let mut n_conv = 0;
-    for j in 0..max_steps {
-        // w = K⁻¹ M q_j
-        w.copy_from_slice(&mq[j]);
-        factor.solve_in_place(&mut w, &mut sws)?;
-        let a = dot(&mq[j], &w);
-        alphas.push(a);
-        for (wi, qi) in w.iter_mut().zip(&q[j]) {
+
+    /// `w ← K⁻¹ w`.
+    fn solve(&mut self, w: &mut [f64]) -> Result<()> {
+        self.factor.solve_in_place(w, &mut self.workspace)?;
+        Ok(())
+    }
+}
+
+/// The converged Ritz values `θ = 1/ω²` and vectors `s` (row-major `m × m`, column `i` for
+/// `θ_i`) of the `m`-step Lanczos tridiagonal matrix.
+struct Ritz {
+    theta: Vec<f64>,
+    s: Vec<f64>,
+    m: usize,
+}
+
+impl Ritz {
+    /// Indices of the Ritz values, largest θ (lowest ω) first.
+    fn order(&self) -> Vec<usize> {
+        let mut order: Vec<usize> = (0..self.m).collect();
+        order.sort_by(|&x, &y| self.theta[y].total_cmp(&self.theta[x]));
+        order
+    }
+}
+
+/// The M-orthonormal Lanczos basis `q` (and `M q`) of `K⁻¹M` with the tridiagonal
+/// coefficients α (diagonal) and β (off-diagonal).
+struct Lanczos {
+    q: Vec<Vec<f64>>,
+    mq: Vec<Vec<f64>>,
+    alphas: Vec<f64>,
+    betas: Vec<f64>,
+    /// Scratch: the next vector and `M` times it.
+    w: Vec<f64>,
+    mw: Vec<f64>,
+}
+
+impl Lanczos {
+    /// The first basis vector `q₀ ∝ K⁻¹M r₀` (in the range of `K⁻¹M`, so that the infinite
+    /// eigenvalues of a singular `M` stay out), `r₀` pseudo-random from `seed`.
+    fn start(mass: &MassMatrix, stiffness: &mut Stiffness, seed: u64) -> Result<Self> {
+        let n = mass.n();
+        let mut rng = SplitMix64::new(seed ^ 0x5DEE_CE66);
+        let r0: Vec<f64> = (0..n).map(|_| rng.next_f64() - 0.5).collect();
+        let mut w = vec![0.0; n];
+        mass.matvec(&r0, &mut w);
+        stiffness.solve(&mut w)?;
+        let mut mw = vec![0.0; n];
+        mass.matvec(&w, &mut mw);
+        let b0 = dot(&w, &mw).sqrt();
+        if b0.is_nan() || b0 <= 0.0 {
+            return Err(ReduceError::Input(
+                "the mass matrix is zero on the free DOFs".into(),
+            ));
+        }
+        Ok(Self {
+            q: vec![w.iter().map(|x| x / b0).collect()],
+            mq: vec![mw.iter().map(|x| x / b0).collect()],
+            alphas: Vec::new(),
+            betas: Vec::new(),
+            w,
+            mw,
+        })
+    }
+
+    /// Lanczos steps until the `nev` largest Ritz values pass the residual bound
+    /// `|β_j s_ji| ≤ tol·θ_i` (checked every 5 steps), the Krylov space is exhausted or
+    /// `max_steps` is reached.
+    fn run(
+        &mut self,
+        mass: &MassMatrix,
+        stiffness: &mut Stiffness,
+        nev: usize,
+        params: &ModalParams,
+    ) -> Result<Ritz> {
+        let max_steps = params.max_steps.min(mass.n());
+        let mut n_conv = 0;
+        for j in 0..max_steps {
+            let (a, b) = self.step(j, mass, stiffness)?;
+            let m = j + 1;
+            let exhausted = b <= 1e-14 * a.abs();
+            if m >= nev && (m % 5 == 0 || m == max_steps || exhausted) {
+                let ritz = self.ritz(m);
+                n_conv = ritz.order()[..nev]
+                    .iter()
+                    .filter(|&&i| {
+                        (b * ritz.s[(m - 1) * m + i]).abs()
+                            <= params.tolerance * ritz.theta[i].abs()
+                    })
+                    .count();
+                if n_conv == nev || exhausted || m == max_steps {
+                    if n_conv < nev {
+                        break;
+                    }
+                    return Ok(ritz);
+                }
+            }
+            if b <= 0.0 {
+                break;
+            }
+            self.extend(b);
+        }
+        Err(ReduceError::Eigen {
+            wanted: nev,
+            converged: n_conv,
+            steps: self.alphas.len(),
+        })
+    }
+
+    /// Step `j`: `w = K⁻¹M q_j − α_j q_j − β_{j−1} q_{j−1}`, fully reorthogonalized (twice,
+    /// classical Gram–Schmidt in the M inner product); returns α_j and β_j = ‖w‖_M.
+    fn step(
+        &mut self,
+        j: usize,
+        mass: &MassMatrix,
+        stiffness: &mut Stiffness,
+    ) -> Result<(f64, f64)> {
+        let w = &mut self.w;
+        w.copy_from_slice(&self.mq[j]);
+        stiffness.solve(w)?;
+        let a = dot(&self.mq[j], w);
+        self.alphas.push(a);
+        for (wi, qi) in w.iter_mut().zip(&self.q[j]) {
             *wi -= a * qi;
         }
         if j > 0 {
-            let b = betas[j - 1];
-            for (wi, qi) in w.iter_mut().zip(&q[j - 1]) {
+            let b = self.betas[j - 1];
+            for (wi, qi) in w.iter_mut().zip(&self.q[j - 1]) {
                 *wi -= b * qi;
             }
         }
         for _ in 0..2 {
-            for (qi, mqi) in q.iter().zip(&mq) {
-                let c = dot(mqi, &w);
+            for (qi, mqi) in self.q.iter().zip(&self.mq) {
+                let c = dot(mqi, w);
                 for (wk, qk) in w.iter_mut().zip(qi) {
                     *wk -= c * qk;
                 }
             }
         }
-        mass.matvec(&w, &mut mw);
-        let b = dot(&w, &mw).max(0.0).sqrt();
-        let m = j + 1;
-        let check_now = m >= nev && (m % 5 == 0 || m == max_steps || b <= 1e-14 * a.abs());
-        if check_now {
-            let mut t = vec![0.0; m * m];
-            for i in 0..m {
-                t[i * m + i] = alphas[i];
-                if i + 1 < m {
-                    t[i * m + i + 1] = betas[i];
-                    t[(i + 1) * m + i] = betas[i];
+        mass.matvec(w, &mut self.mw);
+        Ok((a, dot(w, &self.mw).max(0.0).sqrt()))
+    }
+
+    /// Appends `q_{j+1} = w/β_j` (and `M q_{j+1}`).
+    fn extend(&mut self, b: f64) {
+        self.betas.push(b);
+        self.q.push(self.w.iter().map(|x| x / b).collect());
+        self.mq.push(self.mw.iter().map(|x| x / b).collect());
+    }
+
+    /// Eigen-decomposition of the leading `m × m` tridiagonal matrix.
+    fn ritz(&self, m: usize) -> Ritz {
+        let mut t = vec![0.0; m * m];
+        for i in 0..m {
+            t[i * m + i] = self.alphas[i];
+            if i + 1 < m {
+                t[i * m + i + 1] = self.betas[i];
+                t[(i + 1) * m + i] = self.betas[i];
+            }
+        }
+        let (theta, s) = symmetric_eigen(&t, m);
+        Ritz { theta, s, m }
+    }
+
+    /// The `nev` lowest modes from the Ritz pairs: `φ = Q s` normalized to `φᵀMφ = 1`,
+    /// `ω² = 1/θ`, and the residual `‖Kφ − ω²Mφ‖/‖Kφ‖` recomputed from the shape.
+    fn modes(
+        &mut self,
+        model: &Model,
+        mass: &MassMatrix,
+        k: &SparseMatrix,
+        ritz: &Ritz,
+        nev: usize,
+    ) -> Modes {
+        let (n, m) = (mass.n(), ritz.m);
+        let mut out = Modes {
+            omega2: Vec::new(),
+            frequencies: Vec::new(),
+            shapes: Vec::new(),
+            residuals: Vec::new(),
+            steps: m,
+            total_mass: mass.total_mass(),
+        };
+        let mw = &mut self.mw;
+        let mut kphi = vec![0.0; n];
+        for &i in &ritz.order()[..nev] {
+            let mut phi = vec![0.0; n];
+            for (jj, qj) in self.q.iter().take(m).enumerate() {
+                let c = ritz.s[jj * m + i];
+                for (p, qv) in phi.iter_mut().zip(qj) {
+                    *p += c * qv;
                 }
             }
-            let (theta, s) = jacobi_eigen(&t, m);
-            let mut order: Vec<usize> = (0..m).collect();
-            order.sort_by(|&x, &y| theta[y].total_cmp(&theta[x]));
-            let ok = order[..nev]
+            mass.matvec(&phi, mw);
+            let nrm = dot(&phi, mw).sqrt();
+            phi.iter_mut().for_each(|x| *x /= nrm);
+            mw.iter_mut().for_each(|x| *x /= nrm);
+            let om2 = 1.0 / ritz.theta[i];
+            k.matvec(&phi, &mut kphi);
+            let res = kphi
                 .iter()
-                .filter(|&&i| (b * s[(m - 1) * m + i]).abs() <= params.tolerance * theta[i].abs())
-                .count();
-            n_conv = ok;
-            if ok == nev || b <= 1e-14 * a.abs() || m == max_steps {
-                converged = Some((theta, s, m));
-                break;
-            }
+                .zip(mw.iter())
+                .map(|(a, b)| (a - om2 * b).powi(2))
+                .sum::<f64>()
+                .sqrt()
+                / dot(&kphi, &kphi).sqrt();
+            let mut full = model.zero_vector();
+            model.dofs().scatter(&phi, &mut full);
+            out.omega2.push(om2);
+            out.frequencies
+                .push(om2.sqrt() / (2.0 * std::f64::consts::PI));
+            out.shapes.push(full);
+            out.residuals.push(res);
         }
-        if b <= 0.0 {
-            break;
-        }
-        betas.push(b);
-        q.push(w.iter().map(|x| x / b).collect());
-        mq.push(mw.iter().map(|x| x / b).collect());
+        out
     }
-    let Some((theta, s, m)) = converged else {
-        return Err(ReduceError::Eigen {
-            wanted: nev,
-            converged: n_conv,
-            steps: alphas.len(),
-        });
-    };
-    if n_conv < nev {
-        return Err(ReduceError::Eigen {
-            wanted: nev,
-            converged: n_conv,
-            steps: m,
-        });
-    }
-    let mut order: Vec<usize> = (0..m).collect();
-    order.sort_by(|&x, &y| theta[y].total_cmp(&theta[x]));
-    let dofs = model.dofs();
-    let mut out = Modes {
-        omega2: Vec::new(),
-        frequencies: Vec::new(),
-        shapes: Vec::new(),
-        residuals: Vec::new(),
-        steps: m,
-        total_mass: mass.total_mass(),
-    };
-    let mut kphi = vec![0.0; n];
-    for &i in &order[..nev] {
-        let mut phi = vec![0.0; n];
-        for (jj, qj) in q.iter().take(m).enumerate() {
-            let c = s[jj * m + i];
-            for (p, qv) in phi.iter_mut().zip(qj) {
-                *p += c * qv;
-            }
-        }
-        mass.matvec(&phi, &mut mw);
-        let nrm = dot(&phi, &mw).sqrt();
-        phi.iter_mut().for_each(|x| *x /= nrm);
-        mw.iter_mut().for_each(|x| *x /= nrm);
-        let om2 = 1.0 / theta[i];
-        k.matvec(&phi, &mut kphi);
-        let res = kphi
-            .iter()
-            .zip(&mw)
-            .map(|(a, b)| (a - om2 * b).powi(2))
-            .sum::<f64>()
-            .sqrt()
-            / dot(&kphi, &kphi).sqrt();
-        let mut full = model.zero_vector();
-        dofs.scatter(&phi, &mut full);
-        out.omega2.push(om2);
-        out.frequencies
-            .push(om2.sqrt() / (2.0 * std::f64::consts::PI));
-        out.shapes.push(full);
-        out.residuals.push(res);
-    }
-    Ok(out)
 }

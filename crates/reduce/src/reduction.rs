@@ -7,7 +7,7 @@ use flexstage_topopt::Problem;
 use serde::Serialize;
 
 use crate::condense::{Condensation, Condenser, Ports};
-use crate::error::{ReduceError, Result, check};
+use crate::error::{ReduceError, Result, check, within};
 use crate::lumped::stage_params;
 use crate::mass::{PointMass, design_mass};
 use crate::modal::{ModalParams, Modes, modal_analysis};
@@ -68,7 +68,7 @@ impl ReduceParams {
                     "ReduceParams::operating_point",
                     x,
                     x.abs() <= 1e-3,
-                    "[-1e-3, 1e-3] m per input",
+                    "a number in [-1e-3, 1e-3] [m] per input",
                 )?;
             }
         }
@@ -78,12 +78,7 @@ impl ReduceParams {
         if let Some(v) = &self.validity {
             v.validate()?;
         }
-        check(
-            "ReduceParams::separation",
-            self.separation,
-            (1.0..=1e6).contains(&self.separation),
-            "[1, 1e6]",
-        )
+        within("ReduceParams::separation", self.separation, 1.0, 1e6)
     }
 }
 

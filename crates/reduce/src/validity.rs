@@ -64,7 +64,7 @@ impl ValidityParams {
                 "ValidityParams::scales",
                 s,
                 s > last && s <= 2.0,
-                "(0, 2], strictly increasing",
+                "a number in (0, 2], strictly increasing",
             )?;
             last = s;
         }

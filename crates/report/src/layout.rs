@@ -6,7 +6,8 @@
 //! the run folder and use `/` (they are joined with [`crate::RunDir::path`]).
 //!
 //! ```text
-//! scenario.toml  plant.toml  run_state.json  report.html  tilted/ (a nested run, Figure 4b)
+//! scenario.toml  plant.toml  run_state.json  report.html  run.lock (while a command runs)
+//!             tilted/ (a nested run, Figure 4b)
 //! design/     design.json density.{csv,png} design.vtu cases.csv history.{csv,json}
 //!             workspace_{initial,final}.csv workspace_iterNNNNN.csv workspace{,_history}.svg
 //!             summary.json checkpoint.bin
@@ -36,6 +37,9 @@ pub const REPORT: &str = "report.html";
 /// `flexstage design tilted.toml --out runs/paper/tilted`. The report shows it beside the
 /// run's own design.
 pub const TILTED: &str = "tilted";
+/// The lock of the run folder: exists while a flexstage command works in the folder, and
+/// names its process (PID, host, start time, command).
+pub const LOCK: &str = "run.lock";
 
 /// `design/`: the topology optimization (paper Section 2.2, Algorithm 1).
 pub mod design {

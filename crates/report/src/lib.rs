@@ -51,8 +51,11 @@ pub enum ReportError {
 /// Result alias of this crate.
 pub type Result<T> = std::result::Result<T, ReportError>;
 
-/// Writes `bytes` to `path` atomically: temporary file in the same folder, `fsync`, rename.
-/// Creates the parent folder if needed.
+/// Writes `bytes` to `path` atomically: temporary file in the same folder
+/// ([`temporary_name`]), `fsync`, rename, `fsync` of the folder (so the rename itself
+/// survives a power cut). Creates the parent folder if needed. A process killed in the middle
+/// leaves the old file untouched and at most a temporary file, which
+/// [`RunDir::remove_stale_temporaries`] removes later.
 pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     let err = |source| ReportError::Write {
         path: path.to_path_buf(),
@@ -67,7 +70,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
         .unwrap_or_else(|| "out".into());
-    let tmp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let tmp = dir.join(temporary_name(&name, std::process::id()));
     let result = (|| {
         let mut f = fs::File::create(&tmp)?;
         f.write_all(bytes)?;
@@ -77,7 +80,32 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
     }
-    result.map_err(err)
+    result.map_err(err)?;
+    sync_dir(&dir);
+    Ok(())
+}
+
+/// `fsync` of a folder, so that a rename into it is durable. Best effort: not every platform
+/// or file system lets a folder be opened and synced, and the file itself is already synced.
+fn sync_dir(dir: &Path) {
+    if let Ok(d) = fs::File::open(dir) {
+        let _ = d.sync_all();
+    }
+}
+
+/// The temporary file name [`write_atomic`] uses for `name` in process `pid`:
+/// `.NAME.tmp-PID` (hidden, in the target's folder).
+pub fn temporary_name(name: &str, pid: u32) -> String {
+    format!(".{name}.tmp-{pid}")
+}
+
+/// The process id of a [`temporary_name`], or `None` if `file_name` is not one.
+pub fn temporary_pid(file_name: &str) -> Option<u32> {
+    let (head, pid) = file_name.strip_prefix('.')?.rsplit_once(".tmp-")?;
+    if head.is_empty() || pid.is_empty() || !pid.bytes().all(|b| b.is_ascii_digit()) {
+        return None;
+    }
+    pid.parse().ok()
 }
 
 /// The folder of one run: the scenario used and every result.
@@ -123,7 +151,45 @@ impl RunDir {
     pub fn read_to_string(&self, relative: impl AsRef<Path>) -> Option<String> {
         fs::read_to_string(self.path(relative)).ok()
     }
+
+    /// Removes the temporary files of [`write_atomic`] that a killed process left behind in
+    /// this folder and its sub-folders (down to [`TEMPORARY_SEARCH_DEPTH`] levels; symbolic
+    /// links are not followed). A temporary is stale when `is_stale(pid)` says so for the
+    /// process id in its name; the caller holds the folder's lock, so no live writer of this
+    /// folder can own one. Returns the files removed.
+    pub fn remove_stale_temporaries(&self, is_stale: impl Fn(u32) -> bool) -> Result<Vec<PathBuf>> {
+        let mut removed = Vec::new();
+        let mut folders = vec![(self.root.clone(), 0)];
+        while let Some((dir, depth)) = folders.pop() {
+            let Ok(entries) = fs::read_dir(&dir) else {
+                continue;
+            };
+            for entry in entries.flatten() {
+                let Ok(kind) = entry.file_type() else {
+                    continue;
+                };
+                let path = entry.path();
+                if kind.is_dir() && depth < TEMPORARY_SEARCH_DEPTH {
+                    folders.push((path, depth + 1));
+                } else if kind.is_file()
+                    && temporary_pid(&entry.file_name().to_string_lossy()).is_some_and(&is_stale)
+                {
+                    fs::remove_file(&path).map_err(|source| ReportError::Write {
+                        path: path.clone(),
+                        source,
+                    })?;
+                    removed.push(path);
+                }
+            }
+        }
+        removed.sort();
+        Ok(removed)
+    }
 }
+
+/// How deep [`RunDir::remove_stale_temporaries`] looks below the run folder: the deepest
+/// result folders are `track/<variant>/` and `identify/stage/` (2 levels).
+pub const TEMPORARY_SEARCH_DEPTH: usize = 4;
 
 /// Reads numeric CSV columns by header name from text written by [`csv_columns`]; missing or
 /// unparsable cells become NaN. `None` when the text has no header or lacks a column.
@@ -189,6 +255,59 @@ mod tests {
             .collect();
         assert!(leftovers.is_empty(), "temporary files left: {leftovers:?}");
         fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn temporary_names_parse_back_to_their_process() {
+        // Goal: the cleaner recognises exactly the names the writer makes.
+        let name = temporary_name("params.toml", 4242);
+        assert_eq!(name, ".params.toml.tmp-4242");
+        assert_eq!(temporary_pid(&name), Some(4242));
+        for other in [
+            "params.toml",
+            ".params.toml",
+            ".tmp-12",
+            "params.toml.tmp-12",
+            ".a.tmp-",
+            ".a.tmp-12x",
+            ".a.tmp-99999999999",
+        ] {
+            assert_eq!(temporary_pid(other), None, "{other:?}");
+        }
+    }
+
+    #[test]
+    fn stale_temporaries_are_removed_and_nothing_else() {
+        // Goal: what a kill -9 during write_atomic leaves behind is removed at the next start;
+        // results and the temporaries of live processes stay.
+        let root = std::env::temp_dir().join(format!("flexstage-tmpclean-{}", std::process::id()));
+        let _ = fs::remove_dir_all(&root);
+        let run = RunDir::create(&root).unwrap();
+        run.write("design/design.json", b"{}").unwrap();
+        run.write("track/compensation-off/metrics.csv", b"a\n")
+            .unwrap();
+        let dead = [
+            "design/.design.json.tmp-7",
+            "track/compensation-off/.metrics.csv.tmp-8",
+            ".scenario.toml.tmp-7",
+        ];
+        for rel in dead {
+            fs::write(run.path(rel), b"half a fi").unwrap();
+        }
+        fs::write(run.path("design/.checkpoint.bin.tmp-9"), b"live").unwrap();
+        let removed = run.remove_stale_temporaries(|pid| pid != 9).unwrap();
+        assert_eq!(removed.len(), 3, "{removed:?}");
+        for rel in dead {
+            assert!(!run.path(rel).exists(), "{rel} left");
+        }
+        assert!(
+            run.exists("design/.checkpoint.bin.tmp-9"),
+            "a live writer's file"
+        );
+        assert!(
+            run.exists("design/design.json") && run.exists("track/compensation-off/metrics.csv")
+        );
+        fs::remove_dir_all(&root).unwrap();
     }
 
     #[test]

@@ -128,14 +128,14 @@ impl Selector {
             if mesh.contains(p) {
                 Ok(())
             } else {
-                Err(ScenarioError::OutOfRange {
+                Err(ScenarioError::OutOfRange(crate::RangeError {
                     field: format!("{field}.{what}"),
                     value: format!("[{:e}, {:e}]", p[0], p[1]),
                     expected: format!(
                         "a point inside the domain [0, {}] x [0, {}] m",
                         mesh.length, mesh.width
                     ),
-                })
+                }))
             }
         };
         match self {
@@ -267,12 +267,16 @@ pub enum RegionKind {
     Void,
 }
 
+fn default_true() -> bool {
+    true
+}
+
 fn default_stagnation_window() -> usize {
     20
 }
 
 fn default_stagnation_tolerance() -> f64 {
-    1e-5
+    1e-3
 }
 
 /// Topology-optimization settings (Table 3, Eq. 5, DECISIONS.md).
@@ -287,12 +291,15 @@ pub struct Optimization {
     pub max_iterations: usize,
     /// Input samples p_m on the perimeter of the stroke square (multiple of 4). Table 3: 40.
     pub samples: usize,
-    /// Initial uniform density, in (ρ_min, 1]. The paper is silent; 0.5.
+    /// Initial uniform density, in (ρ_min, 1]. The paper is silent; default equal to
+    /// `volume_fraction` (a feasible start).
     pub initial_density: f64,
-    /// Density-filter radius in element sizes (0 = off). DECISIONS.md: a filter by default.
+    /// Density-filter radius in element sizes, in [0, 20] (0 = off). DECISIONS.md: a filter by
+    /// default. With `robust`, the smallest radius: the minimum sizes of `limits` may need more.
     pub filter_radius: f64,
-    /// Upper bound on the volume fraction, in (0, 1]; 1 disables the constraint (the paper has
-    /// none).
+    /// Upper bound on the volume fraction of the design domain, in (0, 1]; 1 disables the
+    /// constraint (the paper states none). Default 0.235: the paper's stage weighs 46 g (Table
+    /// 4, weighed), 23.5 % of the 195 g solid domain (DECISIONS.md, "Constraints").
     pub volume_fraction: f64,
     /// Stop when the largest density change falls below this, in (0, 1).
     pub change_tolerance: f64,
@@ -302,19 +309,19 @@ pub struct Optimization {
     /// What is maximized: the workspace area (Eq. 4–5) or a single output displacement (the
     /// displacement inverter of the classic codes).
     pub objective: ObjectiveKind,
-    /// Output-port stiffness [N/m], ≥ 0: grounded springs on both output DOFs (the load of the
-    /// stage on the mechanism, Table 4's `K_qo`), for either objective; 0 = none. Default 1e7
-    /// N/m: with no output load the workspace optimum is a linkage of rigid bodies joined by
-    /// void "hinges" (quick preset: α ≈ 13, solid stresses ≈ 1 MPa, void strains 1.5 %, zero
-    /// output stiffness); with 1e7 N/m it has α ≈ 0.95 (paper Table 4: 1.012) and 36 MPa peak
-    /// von Mises stress (Al 6061-T6 yield ≈ 276 MPa).
+    /// Stiffness [N/m] of the load the output port drives, ≥ 0; 0 = none. It acts on the
+    /// output's motion relative to the moving frame of Eq. (22): on `u_oy`, and on
+    /// `u_ox − ½(u_in1 + u_in2)` (a rigid translation of the floating stage loads nothing).
+    /// Default 4e6 N/m, the paper's measured output stiffness (Table 4, K_qo ≈ 3.8–4.0e6): the
+    /// design must push its output against a load as stiff as the stage the paper built, so it
+    /// transmits force, not only motion (without a load the workspace optimum moves the output
+    /// through void "hinges"). DECISIONS.md, "Output load".
     pub output_spring: f64,
-    /// Strain-energy bound Σ0 [J], ≥ 0 (Eq. 5); 0 = relative to the initial design, see
-    /// `strain_energy_factor`.
+    /// Strain-energy bound Σ0 [J] of Eq. (5), ≥ 0; 0 = derived from the allowable stress:
+    /// `Σ0 = (1 − ν) σ_a² V* / E0` with `σ_a = limits.fatigue_strength / limits.safety_factor`
+    /// and `V*` the material volume — the most energy the material can store without exceeding
+    /// σ_a anywhere (DECISIONS.md, "Strain-energy bound").
     pub strain_energy_limit: f64,
-    /// Σ0 = factor · Σ(initial design) when `strain_energy_limit` is 0; > 0. Default 2: a
-    /// "coarse upper bound" (Section 2.2).
-    pub strain_energy_factor: f64,
     /// Largest angle [deg] between the differential output and the tilted target axis θ
     /// (`output.tilt_deg`), in (0, 45]; only used when θ ≠ 0.
     pub tilt_tolerance_deg: f64,
@@ -324,13 +331,31 @@ pub struct Optimization {
     /// Stagnation window W [iterations], in [0, 10000]; 0 = off. At the final β the run also
     /// stops when, over the last W iterations, the objective varied by at most
     /// `stagnation_tolerance` (relative), every update's mean |Δx| was below
-    /// `change_tolerance`, the constraints hold and the KKT residual is below
-    /// `kkt_tolerance`. Default 20.
+    /// `change_tolerance`, the constraints hold and (without the robust formulation) the KKT
+    /// residual is below `kkt_tolerance`. Default 20.
     #[serde(default = "default_stagnation_window")]
     pub stagnation_window: usize,
-    /// Relative objective variation over the stagnation window, in (0, 1). Default 1e-5.
+    /// Relative objective variation over the stagnation window, in (0, 1). Default 1e-3: the
+    /// worst case of the robust formulation wobbles by a few 1e-4 at a stationary design.
     #[serde(default = "default_stagnation_tolerance")]
     pub stagnation_tolerance: f64,
+    /// Mirror symmetry about the vertical centre line x = l/2: one design variable for each
+    /// element and its mirror image, so the design is symmetric by construction. Needs a
+    /// mirror-symmetric problem (supports, ports, passive regions) and `output.tilt_deg = 0`.
+    /// Default true (the normal configuration).
+    #[serde(default = "default_true")]
+    pub mirror_symmetry: bool,
+    /// Robust formulation (Wang, Lazarov & Sigmund 2011): maximize the worst workspace of the
+    /// eroded, intermediate (blueprint) and dilated designs, with the thresholds and the filter
+    /// radius mapped from `limits.min_hinge_thickness` and `limits.min_slot_width`
+    /// (DECISIONS.md, "Robust formulation"). Default true.
+    #[serde(default = "default_true")]
+    pub robust: bool,
+    /// Fatigue stress constraint: aggregated von Mises stress of the (eroded) design at the
+    /// four Table 2 extreme inputs ≤ `limits.fatigue_strength / limits.safety_factor`
+    /// (DECISIONS.md, "Stress constraint"). Default true.
+    #[serde(default = "default_true")]
+    pub stress_constraint: bool,
     /// Heaviside projection with β continuation (DECISIONS.md filtering).
     pub projection: Projection,
     /// Additive Yeoh hyperelasticity in low-density elements (Appendix A, Eq. A2–A4).
@@ -377,7 +402,9 @@ pub struct Projection {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Additive {
-    /// Use it during optimization (never in the final analysis).
+    /// Use it during optimization (never in the final analysis). Default false: at the paper's
+    /// stroke (strains ≈ 1e-3) it changes neither the topology nor the workspace area
+    /// (DECISIONS.md, "Additive material"), and it costs a third of every assembly.
     pub enabled: bool,
     /// Initial hyper-elastic coefficient as a fraction of E0. Table 3: 1e-5.
     pub initial_coefficient: f64,
@@ -403,12 +430,12 @@ impl Optimization {
         )?;
         count("optimization.samples", self.samples, 4, 4000)?;
         if self.samples % 4 != 0 {
-            return Err(ScenarioError::OutOfRange {
+            return Err(ScenarioError::OutOfRange(crate::RangeError {
                 field: "optimization.samples".into(),
                 value: self.samples.to_string(),
                 expected: "a multiple of 4 (the samples walk the four sides of the stroke square)"
                     .into(),
-            });
+            }));
         }
         check(
             "optimization.initial_density",
@@ -431,10 +458,6 @@ impl Optimization {
         )?;
         non_negative("optimization.output_spring", self.output_spring)?;
         non_negative("optimization.strain_energy_limit", self.strain_energy_limit)?;
-        positive(
-            "optimization.strain_energy_factor",
-            self.strain_energy_factor,
-        )?;
         check(
             "optimization.tilt_tolerance_deg",
             self.tilt_tolerance_deg,
@@ -479,6 +502,86 @@ impl Optimization {
         positive(
             "optimization.additive.strain_threshold",
             self.additive.strain_threshold,
+        )
+    }
+}
+
+/// What the built stage must withstand and what the workshop can make: the fatigue strength
+/// with its safety factor, and the smallest hinge and slot (DECISIONS.md, "Stress constraint",
+/// "Robust formulation"). Defaults: aluminium 6061-T6 and wire EDM.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Limits {
+    /// Fatigue strength of the solid material [Pa], > 0: the fully reversed stress amplitude
+    /// it survives for the design life. Al 6061-T6: 96.5e6 (5·10⁸ cycles, R. R. Moore
+    /// rotating beam; ASM Handbook Vol. 2, 1990, and the Aluminum Association's data).
+    pub fatigue_strength: f64,
+    /// Tensile yield strength [Pa], ≥ fatigue_strength. Al 6061-T6: 276e6 (same sources).
+    pub yield_strength: f64,
+    /// Safety factor on the fatigue strength, in [1, 10]: the allowable stress is
+    /// `fatigue_strength / safety_factor`. Default 1.5.
+    pub safety_factor: f64,
+    /// How much the design mesh under-estimates the peak stress of a hinge, in [1, 10]: the
+    /// optimizer keeps the design-mesh stress below `allowable / mesh_stress_factor`. Default 2
+    /// (measured 2–3× between the 1 mm design mesh and refined re-analyses of hinges); the
+    /// body-fitted re-analysis of the exported outline checks it.
+    pub mesh_stress_factor: f64,
+    /// Smallest solid member (hinge) thickness the workshop can make [m], > 0. Default 0.5 mm.
+    pub min_hinge_thickness: f64,
+    /// Smallest void (slot) width [m], > 0, e.g. the wire-EDM kerf. Default 0.4 mm.
+    pub min_slot_width: f64,
+}
+
+impl Default for Limits {
+    fn default() -> Self {
+        Self {
+            fatigue_strength: 96.5e6,
+            yield_strength: 276e6,
+            safety_factor: 1.5,
+            mesh_stress_factor: 2.0,
+            min_hinge_thickness: 0.5e-3,
+            min_slot_width: 0.4e-3,
+        }
+    }
+}
+
+impl Limits {
+    /// The allowable stress `fatigue_strength / safety_factor` [Pa].
+    pub fn allowable_stress(&self) -> f64 {
+        self.fatigue_strength / self.safety_factor
+    }
+
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        positive("limits.fatigue_strength", self.fatigue_strength)?;
+        positive("limits.yield_strength", self.yield_strength)?;
+        if self.fatigue_strength > self.yield_strength {
+            return Err(ScenarioError::Inconsistent {
+                fields: "limits.fatigue_strength, limits.yield_strength".into(),
+                reason: format!(
+                    "the fatigue strength ({:e} Pa) cannot exceed the yield strength ({:e} Pa)",
+                    self.fatigue_strength, self.yield_strength
+                ),
+            });
+        }
+        within("limits.safety_factor", self.safety_factor, 1.0, 10.0)?;
+        within(
+            "limits.mesh_stress_factor",
+            self.mesh_stress_factor,
+            1.0,
+            10.0,
+        )?;
+        check(
+            "limits.min_hinge_thickness",
+            self.min_hinge_thickness,
+            self.min_hinge_thickness > 0.0 && self.min_hinge_thickness <= 0.1,
+            "a length in (0, 0.1] m",
+        )?;
+        check(
+            "limits.min_slot_width",
+            self.min_slot_width,
+            self.min_slot_width > 0.0 && self.min_slot_width <= 0.1,
+            "a length in (0, 0.1] m",
         )
     }
 }

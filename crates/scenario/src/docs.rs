@@ -163,15 +163,15 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.initial_density",
-        "Initial uniform density, in (ρ_min, 1]. Paper silent: 0.5.",
+        "Initial uniform density, in (ρ_min, 1]. Paper silent; default equal to volume_fraction (a feasible start).",
     ),
     (
         "optimization.filter_radius",
-        "Density-filter radius in element sizes, in [0, 20]; 0 = off. Paper silent; DECISIONS.md asks for a filter.",
+        "Density-filter radius in element sizes, in [0, 20]; 0 = off. Paper silent; DECISIONS.md asks for a filter. With robust = true, the smallest radius: the minimum sizes of [limits] may enlarge it.",
     ),
     (
         "optimization.volume_fraction",
-        "Volume-fraction upper bound, in (0, 1]; 1 = no volume constraint (the paper has none).",
+        "Volume-fraction upper bound of the design domain, in (0, 1]; 1 = none (the paper states none). Default 0.235: the paper's stage weighs 46 g (Table 4), 23.5 % of the 195 g solid domain.",
     ),
     (
         "optimization.change_tolerance",
@@ -187,19 +187,15 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.output_spring",
-        "Output-port stiffness [N/m], ≥ 0: grounded springs on both output DOFs (the stage load, Table 4's K_qo), either objective; 0 = none. Default 1e7: without it the workspace optimum moves the output through void hinges (α ≈ 13, zero output stiffness); with it α ≈ 0.95 (paper 1.012) at 36 MPa peak stress.",
+        "Stiffness [N/m] of the load the output drives, ≥ 0; 0 = none. Acts on u_oy and on u_ox − ½(u_in1 + u_in2), the motion relative to the moving frame of Eq. 22. Default 4e6, the paper's measured output stiffness (Table 4, K_qo): the design must transmit force, not only motion.",
     ),
     (
         "optimization.strain_energy_limit",
-        "Strain-energy bound Σ0 [J], ≥ 0 (Eq. 5); 0 = strain_energy_factor × Σ(initial design).",
-    ),
-    (
-        "optimization.strain_energy_factor",
-        "Σ0 relative to the initial design's largest per-sample strain energy, > 0. Default 2 (a coarse upper bound).",
+        "Strain-energy bound Σ0 [J] of Eq. 5, ≥ 0; 0 = derived from the allowable stress, Σ0 = (1 − ν) σ_a² V* / E0: the most energy the material volume V* stores without exceeding σ_a = fatigue_strength / safety_factor (DECISIONS.md).",
     ),
     (
         "optimization.tilt_tolerance_deg",
-        "Max angle [deg] between the differential output and the tilted axis θ, in (0, 45]; used when tilt_deg ≠ 0.",
+        "Max angle [deg] between the differential output and the tilted axis θ, in (0, 45]; used when tilt_deg ≠ 0. Default 1.",
     ),
     (
         "optimization.kkt_tolerance",
@@ -211,7 +207,19 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.stagnation_tolerance",
-        "Largest relative objective variation over the stagnation window, in (0, 1).",
+        "Largest relative objective variation over the stagnation window, in (0, 1). Default 1e-3 (the robust worst case wobbles by a few 1e-4 at a stationary design).",
+    ),
+    (
+        "optimization.mirror_symmetry",
+        "Mirror symmetry about x = l/2: one design variable per element pair, so the design is symmetric by construction. Needs a symmetric problem and tilt_deg = 0. Default true.",
+    ),
+    (
+        "optimization.robust",
+        "Robust formulation (Wang, Lazarov & Sigmund 2011): maximize the worst workspace of the eroded, intermediate and dilated designs; thresholds and filter radius come from limits.min_hinge_thickness and limits.min_slot_width (DECISIONS.md). Default true.",
+    ),
+    (
+        "optimization.stress_constraint",
+        "Fatigue stress constraint: aggregated von Mises stress of the (eroded) design at the four Table 2 extreme inputs ≤ fatigue_strength / safety_factor / mesh_stress_factor (DECISIONS.md). Default true.",
     ),
     (
         "optimization.projection",
@@ -236,7 +244,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.additive.enabled",
-        "Use the additive material during optimization.",
+        "Use the additive material during optimization. Default false: at the paper's stroke (strains ≈ 1e-3) it changes neither the topology nor the area (DECISIONS.md); turn it on for large-stroke designs.",
     ),
     (
         "optimization.additive.initial_coefficient",
@@ -245,6 +253,34 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     (
         "optimization.additive.strain_threshold",
         "Von Mises strain threshold ε* of the c2 update (Eq. A3), > 0. Table 3: 0.5.",
+    ),
+    (
+        "limits",
+        "What the built stage must withstand and what the workshop can make (DECISIONS.md). Defaults: aluminium 6061-T6, wire EDM.",
+    ),
+    (
+        "limits.fatigue_strength",
+        "Fatigue strength [Pa], > 0: fully reversed stress amplitude survived for the design life. Al 6061-T6: 96.5e6 (5e8 cycles, R. R. Moore; ASM Handbook Vol. 2).",
+    ),
+    (
+        "limits.yield_strength",
+        "Tensile yield strength [Pa], ≥ fatigue_strength. Al 6061-T6: 276e6 (ASM Handbook Vol. 2).",
+    ),
+    (
+        "limits.safety_factor",
+        "Safety factor on the fatigue strength, in [1, 10]; allowable stress = fatigue_strength / safety_factor. Default 1.5.",
+    ),
+    (
+        "limits.mesh_stress_factor",
+        "How much the design mesh under-estimates hinge peak stress, in [1, 10]: the optimizer keeps the design-mesh stress ≤ allowable / this. Default 2 (measured 2-3x); the body-fitted re-analysis checks it.",
+    ),
+    (
+        "limits.min_hinge_thickness",
+        "Smallest solid member (hinge) thickness [m], in (0, 0.1]. Default 0.5 mm. Sets the robust formulation's erosion threshold and filter radius.",
+    ),
+    (
+        "limits.min_slot_width",
+        "Smallest void (slot) width [m], in (0, 0.1], e.g. the wire-EDM kerf. Default 0.4 mm. Sets the dilation threshold.",
     ),
     (
         "hysteresis",
@@ -462,7 +498,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "controller.stroke",
-        "Largest nominal displacement |x_nom| the controller commands [m], > 0. Section 4.1: 30 µm.",
+        "Largest nominal displacement |x_nom| the controller commands [m], > 0. Section 4.1 preloads to ±30 µm, but 0-1000 V delivers only +30.5/-24.9 µm around the 500 V bias with Table A1: default 24 µm.",
     ),
     (
         "controller.pid",
@@ -498,7 +534,110 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "simulation.amplifier_bandwidth",
-        "Amplifier bandwidth [Hz], ≥ 0: first-order lag of the voltage; 0 = ideal zero-order hold.",
+        "Amplifier bandwidth [Hz], ≥ 0, of the lumped plant without the rig (identification and the ideal-loop experiment): first-order lag of the voltage; 0 = ideal zero-order hold. The rig's amplifier is rig.amplifier.",
+    ),
+    (
+        "rig",
+        "The loop around the simulated stage, as on a rig (DECISIONS.md, Digital twin and rig). Each effect is on at a realistic value and 0 switches it off.",
+    ),
+    (
+        "rig.delay",
+        "Computation + I/O delay [controller samples], 0, 1 or 2: the command computed from sample k acts from t_k + delay·T_s. Default 1 (a real-time target that computes within one period).",
+    ),
+    (
+        "rig.amplifier",
+        "The high-voltage amplifiers (Section 4.1: PI E-472.20). Its data sheet was not available to us: the defaults are typical of 1 kV linear piezo amplifiers, set them from your amplifier's data sheet.",
+    ),
+    (
+        "rig.amplifier.bandwidth",
+        "Small-signal bandwidth with the PEA as load [Hz], first order, in [0, 1e6]; 0 = ideal zero-order hold. Default 3000 (assumption, see rig.amplifier).",
+    ),
+    (
+        "rig.amplifier.slew_rate",
+        "Slew-rate limit of the amplifier [V/s], ≥ 0; 0 = none. Default 1e7 (10 V/µs, assumption).",
+    ),
+    (
+        "rig.amplifier.current_limit",
+        "Peak output current [A], in [0, 100]; 0 = none. The PEA is a capacitor, i = C dU/dt (PI piezo tutorial, Eq. 4-15), so |dU/dt| ≤ I/C. Default 0.1 (assumption).",
+    ),
+    (
+        "rig.amplifier.capacitance",
+        "Capacitance of one PEA [F], in (0, 1e-3]. Default 1.5e-6: PI's stack estimate C ≈ n ε33 A/d_s (piezo tutorial, Eq. 4-14) for a 1000 V stack with Table 1's stiffness and stroke.",
+    ),
+    (
+        "rig.sensor",
+        "Dynamics and noise spectrum of the capacitive sensors (white level and resolution in [sensors]).",
+    ),
+    (
+        "rig.sensor.bandwidth",
+        "Bandwidth of the sensor electronics [Hz], first order, in [0, 1e7]; 0 = ideal. Default 15000 (the wide setting of common capacitive-sensor drivers).",
+    ),
+    (
+        "rig.sensor.flicker_corner",
+        "1/f corner [Hz] where the 1/f spectrum equals the white one, in [0, 1e4]; 0 = white noise only. Default 1 (assumption).",
+    ),
+    ("rig.creep", "Logarithmic creep of the PEAs."),
+    (
+        "rig.creep.factor",
+        "Creep factor γ per time decade, in [0, 0.1]: Δx(t) = Δx(0.1 s)(1 + γ lg(t/0.1 s)) (PI piezo tutorial, Eq. 4-2: 0.01 to 0.02); 0 = off. Default 0.01.",
+    ),
+    (
+        "rig.floor",
+        "Floor vibration as a base acceleration in x and y: one sine per 1/3-octave band, random phases.",
+    ),
+    (
+        "rig.floor.velocity_rms",
+        "RMS velocity per 1/3-octave band [m/s], in [0, 1e-2]; 0 = off. Default 12.5e-6: the VC-C criterion (Gordon 1991, SPIE 1619) of a precision lab.",
+    ),
+    (
+        "rig.floor.bands",
+        "Lowest and highest 1/3-octave band centre [Hz], in (0, 1e4]. Default 8 to 80 (the flat part of the VC curves).",
+    ),
+    (
+        "rig.pea1",
+        "The plant's own PEA1 (Bouc–Wen truth, Eq. 18; µm, V, s). [hysteresis] is the compensator's identified model. Default: Table A1 with d_p +3 % and A_bw +10 % (identification error; set equal to [hysteresis] for a perfect model).",
+    ),
+    ("rig.pea1.d_p", "Piezoelectric coefficient d_p [µm/V], > 0."),
+    ("rig.pea1.a_bw", "A_bw [µm/V]."),
+    ("rig.pea1.b_bw", "B_bw [1/V], ≥ 0."),
+    ("rig.pea1.gamma_bw", "Γ_bw [1/V], B_bw + Γ_bw > 0."),
+    ("rig.pea1.delta_bw", "Asymmetry δ_bw [µm/(V·s)]."),
+    (
+        "rig.pea2",
+        "The plant's own PEA2 (Bouc–Wen truth). Default: Table A1 with d_p +3 % and A_bw +10 %.",
+    ),
+    ("rig.pea2.d_p", "Piezoelectric coefficient d_p [µm/V], > 0."),
+    ("rig.pea2.a_bw", "A_bw [µm/V]."),
+    ("rig.pea2.b_bw", "B_bw [1/V], ≥ 0."),
+    ("rig.pea2.gamma_bw", "Γ_bw [1/V], B_bw + Γ_bw > 0."),
+    ("rig.pea2.delta_bw", "Asymmetry δ_bw [µm/(V·s)]."),
+    (
+        "twin",
+        "The digital twin of the designed mechanism (flexstage-twin): Craig–Bampton reduction of the design's FE model with the two PEA ports and the output as interface, Rayleigh damping, geometric nonlinearity from nonlinear FE, the PEA sets of Eq. 1-3.",
+    ),
+    (
+        "twin.coverage",
+        "The fixed-interface modes kept cover this multiple of the first resonance, in [1, 20]. Default 3.",
+    ),
+    (
+        "twin.min_modes",
+        "At least this many fixed-interface modes, in [1, 40]. Default 6.",
+    ),
+    (
+        "twin.damping_ratio",
+        "Damping ratio ζ of the stage's modes, in [0, 0.5): Rayleigh damping with ζ at the first resonance and at coverage × it. Paper silent; default 0.01 (aluminium flexures: 0.5–2 %).",
+    ),
+    (
+        "twin.nonlinear",
+        "Add the geometric nonlinearity (a polynomial fitted to nonlinear FE static solves over the stroke square); false gives the linear twin.",
+    ),
+    (
+        "twin.fit_points",
+        "Grid points per axis of the nonlinear static solves, in [3, 15]. Default 5.",
+    ),
+    (
+        "twin.fit_span",
+        "The grid spans ± this multiple of actuators.stroke_amplitude, in [0.1, 3]. Default 1.2.",
     ),
     (
         "trajectories",
@@ -515,11 +654,11 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "trajectories.amplitude",
-        "Amplitudes (A1, A2) [m], ≥ 0. Paper silent; inside the designed workspace.",
+        "Amplitudes (A1, A2) [m], ≥ 0. Paper silent; default 8 and 16 µm: at most 65 % of what the amplifier range delivers (the rest is headroom for the controller), checked before a run.",
     ),
     (
         "trajectories.radius",
-        "Circle radius [m], > 0. Paper silent; inside the designed workspace.",
+        "Circle radius [m], > 0. Paper silent; default 8 µm, sized like the Lissajous amplitudes.",
     ),
     (
         "trajectories.frequency",

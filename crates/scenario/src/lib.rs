@@ -19,6 +19,7 @@
 mod design;
 mod docs;
 mod error;
+mod rig;
 mod stage;
 
 use std::path::Path;
@@ -26,10 +27,11 @@ use std::path::Path;
 use serde::{Deserialize, Serialize};
 
 pub use design::{
-    Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Material, Mesh, ObjectiveKind,
-    Optimization, Output, Projection, Region, RegionKind, Selector, Support,
+    Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Limits, Material, Mesh,
+    ObjectiveKind, Optimization, Output, Projection, Region, RegionKind, Selector, Support,
 };
-pub use error::{Result, ScenarioError};
+pub use error::{RangeError, Result, ScenarioError};
+pub use rig::{Amplifier, Creep, FloorVibration, Rig, SensorDynamics, Twin};
 pub use stage::{
     BoucWen, Controller, Hysteresis, Sensors, Simulation, Stage, StageParams, Trajectory,
 };
@@ -50,6 +52,9 @@ pub struct Scenario {
     pub output: Output,
     /// Optimization settings.
     pub optimization: Optimization,
+    /// Fatigue strength, safety factor and the smallest hinge and slot.
+    #[serde(default)]
+    pub limits: Limits,
     /// Piezo hysteresis and amplifier.
     pub hysteresis: Hysteresis,
     /// Reduced stage model: guess and truth.
@@ -60,6 +65,13 @@ pub struct Scenario {
     pub sensors: Sensors,
     /// Timing of the simulated experiment.
     pub simulation: Simulation,
+    /// The loop around the simulated stage, as on a rig (delay, amplifiers, PEA truth and
+    /// creep, sensor dynamics and noise, floor vibration).
+    #[serde(default = "default_rig")]
+    pub rig: Rig,
+    /// How the digital twin is built from the design.
+    #[serde(default)]
+    pub twin: Twin,
     /// Supports.
     pub supports: Vec<Support>,
     /// Passive regions.
@@ -68,23 +80,34 @@ pub struct Scenario {
     pub trajectories: Vec<Trajectory>,
 }
 
+fn default_rig() -> Rig {
+    Rig::realistic(&Scenario::paper().hysteresis)
+}
+
 /// Built-in scenarios.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Preset {
     /// The paper's settings (Tables 1, 3, 4, A1): 120 × 60 mesh, p_m = 40, up to 1000
     /// iterations.
     Paper,
-    /// A coarse, fast variant for first contact and tests: 48 × 24 mesh, p_m = 16, up to 80
-    /// iterations, β doubled every 15 iterations.
+    /// A coarse, fast variant for first contact and tests: 48 × 24 mesh (2.5 mm elements),
+    /// p_m = 16, up to 100 iterations, β doubled every 10 iterations.
     Quick,
+    /// The paper's domain at twice the resolution, 240 × 120 (0.5 mm elements), so that
+    /// hinges of about a millimetre span several elements; p_m = 40.
+    Fine,
 }
 
 impl Preset {
-    /// Parses a preset name ("paper" or "quick").
+    /// The names [`Preset::from_name`] accepts.
+    pub const NAMES: [&'static str; 3] = ["paper", "quick", "fine"];
+
+    /// Parses a preset name ("paper", "quick" or "fine").
     pub fn from_name(name: &str) -> Option<Preset> {
         match name {
             "paper" => Some(Preset::Paper),
             "quick" => Some(Preset::Quick),
+            "fine" => Some(Preset::Fine),
             _ => None,
         }
     }
@@ -128,6 +151,24 @@ impl Scenario {
             ..guess.clone()
         };
         let damping_ratio = 0.02;
+        let hysteresis = Hysteresis {
+            voltage_min: 0.0,
+            voltage_max: 1000.0,
+            pea1: BoucWen {
+                d_p: 6.2e-2,
+                a_bw: 1.2e-2,
+                b_bw: 1.9e-3,
+                gamma_bw: 1.6e-3,
+                delta_bw: 5.015e-4,
+            },
+            pea2: BoucWen {
+                d_p: 6.5e-2,
+                a_bw: 2.5e-2,
+                b_bw: 1.8e-3,
+                gamma_bw: 5.3e-3,
+                delta_bw: 1.973e-4,
+            },
+        };
         let mut scenario = Scenario {
             name: "paper".into(),
             regions: Vec::new(),
@@ -156,49 +197,37 @@ impl Scenario {
                 rho_min: 1e-6,
                 max_iterations: 1000,
                 samples: 40,
-                initial_density: 0.5,
-                filter_radius: 1.5,
-                volume_fraction: 1.0,
+                initial_density: 0.235,
+                filter_radius: 2.0,
+                volume_fraction: 0.235,
                 change_tolerance: 1e-3,
                 kinematics: KinematicsKind::Nonlinear,
                 objective: ObjectiveKind::Workspace,
-                output_spring: 1e7,
+                output_spring: 4e6,
                 strain_energy_limit: 0.0,
-                strain_energy_factor: 2.0,
-                tilt_tolerance_deg: 2.0,
+                tilt_tolerance_deg: 1.0,
                 kkt_tolerance: 1e-3,
                 stagnation_window: 20,
-                stagnation_tolerance: 1e-5,
+                stagnation_tolerance: 1e-3,
+                mirror_symmetry: true,
+                robust: true,
+                stress_constraint: true,
                 projection: Projection {
                     enabled: true,
                     beta_max: 16.0,
-                    interval: 40,
+                    interval: 30,
                     eta: 0.5,
                 },
                 additive: Additive {
-                    enabled: true,
+                    enabled: false,
                     initial_coefficient: 1e-5,
                     strain_threshold: 0.5,
                 },
             },
-            hysteresis: Hysteresis {
-                voltage_min: 0.0,
-                voltage_max: 1000.0,
-                pea1: BoucWen {
-                    d_p: 6.2e-2,
-                    a_bw: 1.2e-2,
-                    b_bw: 1.9e-3,
-                    gamma_bw: 1.6e-3,
-                    delta_bw: 5.015e-4,
-                },
-                pea2: BoucWen {
-                    d_p: 6.5e-2,
-                    a_bw: 2.5e-2,
-                    b_bw: 1.8e-3,
-                    gamma_bw: 5.3e-3,
-                    delta_bw: 1.973e-4,
-                },
-            },
+            limits: Limits::default(),
+            rig: Rig::realistic(&hysteresis),
+            twin: Twin::default(),
+            hysteresis,
             stage: Stage {
                 damping_ratio,
                 guess: guess.with_damping_ratio(damping_ratio),
@@ -218,7 +247,9 @@ impl Scenario {
                 a_bound: [1e-6, 1e-6],
                 boundary_layer: [1e-4, 1e-8],
                 observer_velocity: false,
-                stroke: 30e-6,
+                // What 0–1000 V delivers around the 500 V bias with Table A1 (PEA1: +30.5/−24.9
+                // µm, flexstage-control `deliverable_stroke`), not the ±30 µm of Section 4.1.
+                stroke: 24e-6,
                 pid: [0.0, 300.0, 0.0],
             },
             sensors: Sensors {
@@ -245,20 +276,20 @@ impl Scenario {
                 Trajectory::Lissajous {
                     name: "lissajous-3".into(),
                     ratio: 3.0,
-                    amplitude: [10e-6, 20e-6],
+                    amplitude: [8e-6, 16e-6],
                     frequency: 2.0,
                     duration: 1.0,
                 },
                 Trajectory::Lissajous {
                     name: "lissajous-2".into(),
                     ratio: 2.0,
-                    amplitude: [10e-6, 20e-6],
+                    amplitude: [8e-6, 16e-6],
                     frequency: 2.0,
                     duration: 1.0,
                 },
                 Trajectory::Circle {
                     name: "circle".into(),
-                    radius: 10e-6,
+                    radius: 8e-6,
                     frequency: 2.0,
                     duration: 1.0,
                 },
@@ -278,9 +309,17 @@ impl Scenario {
                 s.mesh.nl = 48;
                 s.mesh.nw = 24;
                 s.optimization.samples = 16;
-                s.optimization.max_iterations = 80;
-                s.optimization.projection.interval = 15;
+                s.optimization.max_iterations = 100;
+                s.optimization.projection.interval = 10;
                 s.regions = port_patches(&s, 2);
+                s
+            }
+            Preset::Fine => {
+                let mut s = Scenario::paper();
+                s.name = "fine".into();
+                s.mesh.nl = 240;
+                s.mesh.nw = 120;
+                s.regions = port_patches(&s, 6);
                 s
             }
         }
@@ -288,18 +327,7 @@ impl Scenario {
 
     /// Checks every group and the relations between them.
     pub fn validate(&self) -> Result<()> {
-        if self.name.is_empty()
-            || !self
-                .name
-                .chars()
-                .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
-        {
-            return Err(ScenarioError::OutOfRange {
-                field: "name".into(),
-                value: format!("{:?}", self.name),
-                expected: "a non-empty name of letters, digits, '-' and '_'".into(),
-            });
-        }
+        error::file_name("name", &self.name)?;
         self.mesh.validate()?;
         self.material.validate()?;
         self.actuators.validate(&self.mesh)?;
@@ -307,11 +335,24 @@ impl Scenario {
         design::validate_supports(&self.supports, &self.mesh)?;
         design::validate_regions(&self.regions, &self.mesh)?;
         self.optimization.validate()?;
+        self.limits.validate()?;
+        if self.optimization.mirror_symmetry && self.output.tilt_deg != 0.0 {
+            return Err(ScenarioError::Inconsistent {
+                fields: "optimization.mirror_symmetry, output.tilt_deg".into(),
+                reason: format!(
+                    "a tilted output (tilt_deg = {}) is not mirror-symmetric: set \
+                     optimization.mirror_symmetry = false",
+                    self.output.tilt_deg
+                ),
+            });
+        }
         self.hysteresis.validate()?;
         self.stage.validate()?;
         self.controller.validate()?;
         self.sensors.validate()?;
         self.simulation.validate()?;
+        self.rig.validate()?;
+        self.twin.validate()?;
         for (i, t) in self.trajectories.iter().enumerate() {
             t.validate(&format!("trajectories[{i}]"))?;
         }
@@ -355,22 +396,26 @@ impl Scenario {
     }
 }
 
-/// Solid patches of `n × n` elements at the two input ports and the output port (DECISIONS.md).
+/// Solid patches at the two input ports and the output port (DECISIONS.md): `n` elements deep
+/// from the edge, and along the edge the elements whose centroids lie within `n/2 + 1/4`
+/// element sizes of the port (the quarter element keeps centroids off the box edges, so the
+/// selection does not depend on rounding and stays mirror-symmetric).
 fn port_patches(s: &Scenario, n: usize) -> Vec<Region> {
     let (dx, dy) = s.mesh.element_size();
     let (l, w) = (s.mesh.length, s.mesh.width);
-    let (hx, hy) = (n as f64 * dx, 0.5 * n as f64 * dy);
+    let nf = n as f64;
+    // Depth: centroids at (k + ½)·d, k < n, all at least ½ d inside the box.
+    let (deep_x, deep_y) = (nf * dx, nf * dy);
+    // Along the edge: half-widths with the quarter-element margin.
+    let (half_x, half_y) = ((0.5 * nf + 0.25) * dx, (0.5 * nf + 0.25) * dy);
     let solid = |min: [f64; 2], max: [f64; 2]| Region {
         kind: RegionKind::Solid,
         at: Selector::Box { min, max },
     };
     vec![
-        solid([0.0, 0.5 * w - hy], [hx, 0.5 * w + hy]),
-        solid([l - hx, 0.5 * w - hy], [l, 0.5 * w + hy]),
-        solid(
-            [0.5 * l - 0.5 * n as f64 * dx, w - n as f64 * dy],
-            [0.5 * l + 0.5 * n as f64 * dx, w],
-        ),
+        solid([0.0, 0.5 * w - half_y], [deep_x, 0.5 * w + half_y]),
+        solid([l - deep_x, 0.5 * w - half_y], [l, 0.5 * w + half_y]),
+        solid([0.5 * l - half_x, w - deep_y], [0.5 * l + half_x, w]),
     ]
 }
 
@@ -380,7 +425,7 @@ mod tests {
 
     #[test]
     fn every_key_has_a_comment() {
-        for preset in [Preset::Paper, Preset::Quick] {
+        for preset in [Preset::Paper, Preset::Quick, Preset::Fine] {
             let text = Scenario::preset(preset).to_commented_toml();
             let lines: Vec<&str> = text.lines().collect();
             for (i, line) in lines.iter().enumerate() {

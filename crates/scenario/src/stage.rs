@@ -3,7 +3,7 @@
 
 use serde::{Deserialize, Serialize};
 
-use crate::error::{Result, ScenarioError, check, count, non_negative, positive};
+use crate::error::{Result, check, count, file_name, non_negative, positive};
 
 /// Bouc–Wen hysteresis of one PEA, Eq. (18) with n = 1, in the paper's units (x in µm, U in V,
 /// t in s), as identified in Table A1.
@@ -23,7 +23,7 @@ pub struct BoucWen {
 }
 
 impl BoucWen {
-    fn validate(&self, field: &str) -> Result<()> {
+    pub(crate) fn validate(&self, field: &str) -> Result<()> {
         positive(&format!("{field}.d_p"), self.d_p)?;
         check(&format!("{field}.a_bw"), self.a_bw, true, "a finite number")?;
         non_negative(&format!("{field}.b_bw"), self.b_bw)?;
@@ -258,7 +258,7 @@ fn default_boundary_layer() -> [f64; 2] {
 }
 
 fn default_stroke() -> f64 {
-    30e-6
+    24e-6
 }
 
 fn default_pid() -> [f64; 3] {
@@ -390,21 +390,7 @@ impl Trajectory {
 
     /// Checks every field; `field` is the TOML path of this entry.
     pub fn validate(&self, field: &str) -> Result<()> {
-        let name_ok = |name: &str| {
-            if !name.is_empty()
-                && name
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
-            {
-                Ok(())
-            } else {
-                Err(ScenarioError::OutOfRange {
-                    field: format!("{field}.name"),
-                    value: format!("{name:?}"),
-                    expected: "a non-empty name of letters, digits, '-' and '_'".into(),
-                })
-            }
-        };
+        let name_ok = |name: &str| file_name(&format!("{field}.name"), name);
         match self {
             Trajectory::Lissajous {
                 name,

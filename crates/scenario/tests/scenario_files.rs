@@ -39,7 +39,7 @@ fn error_of(text: &str) -> String {
 
 #[test]
 fn init_output_round_trips_for_every_preset() {
-    for preset in [Preset::Paper, Preset::Quick] {
+    for preset in [Preset::Paper, Preset::Quick, Preset::Fine] {
         let s = Scenario::preset(preset);
         s.validate().unwrap();
         let back = Scenario::from_toml_str(&s.to_commented_toml(), "round-trip").unwrap();
@@ -62,9 +62,25 @@ fn paper_preset_reproduces_the_tables() {
     assert_eq!(s.stage.truth.k_in2, 0.89e5);
     // Table A1
     assert_eq!(s.hysteresis.pea2.gamma_bw, 5.3e-3);
+    // Table 4's weighed mass, 46 g, of the 195 g solid domain (DECISIONS.md, Constraints).
+    let solid = s.mesh.length * s.mesh.width * s.mesh.thickness * s.material.density;
+    assert!((s.optimization.volume_fraction * solid - 0.046).abs() < 0.001);
+    assert_eq!(
+        s.optimization.initial_density,
+        s.optimization.volume_fraction
+    );
     // DECISIONS.md: damping ratio 2 % of the vertical output mode: c = 2ζ√(kM)
     let c = 2.0 * 0.02 * (4.03e6f64 * 0.046).sqrt();
     assert!((s.stage.truth.c_qo2 - c).abs() < 1e-12 * c);
+}
+
+#[test]
+fn tilted_output_with_mirror_symmetry_is_rejected() {
+    let e = error_of(&with_value("output", "tilt_deg", "20.0"));
+    assert!(e.contains("optimization.mirror_symmetry"), "{e}");
+    let text = with_value("output", "tilt_deg", "20.0");
+    let text = text.replace("mirror_symmetry = true", "mirror_symmetry = false");
+    Scenario::from_toml_str(&text, "test.toml").unwrap();
 }
 
 #[test]
@@ -149,6 +165,14 @@ fn one_bad_value_per_group_is_rejected() {
             "sensors.noise_std[0]",
         ),
         ("simulation", "substeps", "0", "simulation.substeps"),
+        ("limits", "safety_factor", "0.5", "limits.safety_factor"),
+        ("limits", "min_slot_width", "0.0", "limits.min_slot_width"),
+        (
+            "limits",
+            "fatigue_strength",
+            "300e6",
+            "limits.fatigue_strength, limits.yield_strength",
+        ),
         (
             "trajectories",
             "frequency",

@@ -1,8 +1,8 @@
 //! Per-iteration timing of a preset (default: paper) or of the 120×60 linear inverter:
 //! `cargo run --release -p flexstage-topopt --example profile_paper --
-//! [paper|quick|inverter] [iterations] [checkpoint]`. Prints the wall time of each design
-//! iteration split into preconditioner, Newton solves and adjoints, with Newton/PCG counts
-//! (per case with `PROFILE_CASES=1`).
+//! [paper|quick|fine|inverter] [iterations] [checkpoint]`. Prints the wall time of each design
+//! iteration split, per realization, into preconditioner, equilibrium and adjoints, with
+//! Newton/PCG counts (per case with `PROFILE_CASES=1`; `PROFILE_SAMPLES=n` overrides p_m).
 
 use std::time::Instant;
 
@@ -27,25 +27,32 @@ fn cpu_time() -> f64 {
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let preset = match args.get(1).map(String::as_str) {
-        Some("quick") => Preset::Quick,
-        _ => Preset::Paper,
-    };
+    let name = args.get(1).map(String::as_str).unwrap_or("paper");
     let iters: usize = args.get(2).and_then(|v| v.parse().ok()).unwrap_or(8);
-    let s = Scenario::preset(preset);
-    // "inverter": the linear 120×60 displacement inverter of the benchmark.
-    let inverter = args.get(1).map(String::as_str) == Some("inverter");
+    let inverter = name == "inverter";
+    let mut s = Scenario::preset(Preset::from_name(name).unwrap_or(Preset::Paper));
+    // PROFILE_NO_ADDITIVE=1: without the additive material.
+    if std::env::var_os("PROFILE_NO_ADDITIVE").is_some() {
+        s.optimization.additive.enabled = false;
+    }
+    // PROFILE_SAMPLES=n: fewer load cases (e.g. for callgrind).
+    if let Some(n) = std::env::var("PROFILE_SAMPLES")
+        .ok()
+        .and_then(|v| v.parse().ok())
+    {
+        s.optimization.samples = n;
+    }
     let problem = if inverter {
         samples::inverter(120, 60).unwrap()
     } else {
         Problem::from_scenario(&s, None).unwrap()
     };
-    // Optional third argument: a checkpoint (design/checkpoint.bin of a run of this preset).
     let params = if inverter {
         samples::inverter_params(100_000)
     } else {
         OptimizerParams::from_scenario(&s)
     };
+    // Optional third argument: a checkpoint (design/checkpoint.bin of a run of this preset).
     let mut opt = match args.get(3) {
         Some(path) => {
             let bytes = std::fs::read(path).unwrap();
@@ -53,8 +60,7 @@ fn main() {
         }
         None => Optimizer::new(&problem, params).unwrap(),
     };
-    let mut total = 0.0;
-    let mut total_cpu = 0.0;
+    let (mut total, mut total_cpu) = (0.0, 0.0);
     for k in 0..iters {
         let t = Instant::now();
         let c0 = cpu_time();
@@ -65,47 +71,36 @@ fn main() {
         if k > 0 {
             total += dt;
         }
-        let tm = opt.evaluator.timing;
         let (_, ev) = opt.last().unwrap();
-        let lin: usize = ev.response.linear_iterations.iter().sum();
+        let mut parts = Vec::new();
+        let mut fe = 0.0;
+        for (e, r) in opt.evaluator.evaluators.iter().zip(&ev.realizations) {
+            let tm = e.timing;
+            fe += tm.precondition + tm.solve + tm.adjoint;
+            let lin: usize = r.response.linear_iterations.iter().sum();
+            parts.push(format!(
+                "{} {:.3}/{:.3}/{:.3} pcg {lin} adj {}",
+                r.kind.name(),
+                tm.precondition,
+                tm.solve,
+                tm.adjoint,
+                tm.adjoint_iterations
+            ));
+            if std::env::var_os("PROFILE_CASES").is_some() {
+                println!(
+                    "  {} sweeps per case: {:?}",
+                    r.kind.name(),
+                    r.response.newton_iterations
+                );
+            }
+        }
         println!(
-            "it {k:3}: {dt:.3} s, cpu {cpu:.2} s (precond {:.3}, solve {:.3}, adjoint {:.3}, rest {:.3}) newton {}/{} max, pcg {lin}, adjoint its {}, area {:.4e}",
-            tm.precondition,
-            tm.solve,
-            tm.adjoint,
-            dt - tm.precondition - tm.solve - tm.adjoint,
-            rec.newton_total,
-            rec.newton_max,
-            tm.adjoint_iterations,
-            rec.area
+            "it {k:3}: {dt:.3} s, cpu {cpu:.2} s, rest {:.3} s [{}] area {:.0} µm²",
+            dt - fe,
+            parts.join("; "),
+            rec.area * 1e12
         );
-        if std::env::var_os("PROFILE_CASES").is_some() {
-            println!("  sweeps per case: {:?}", ev.response.newton_iterations);
-            println!(
-                "  adjoint its per case: {:?}",
-                opt.evaluator
-                    .cases
-                    .iter()
-                    .map(|c| c.adjoint_iterations())
-                    .collect::<Vec<_>>()
-            );
-        }
     }
-    let eps = opt.evaluator.max_element_strains();
-    let (dens, _) = opt.last().unwrap();
-    let mut hist = [0usize; 5];
-    for (e, v) in eps.iter().enumerate() {
-        let b = [1e-4, 1e-3, 1e-2, 1e-1].iter().filter(|t| *v > **t).count();
-        if dens.physical[e] > 0.5 {
-            continue;
-        }
-        hist[b] += 1;
-    }
-    let mx = eps.iter().cloned().fold(0.0, f64::max);
-    println!(
-        "void-ish element strains: <1e-4 {}, <1e-3 {}, <1e-2 {}, <1e-1 {}, more {}; max strain {mx:.3e}",
-        hist[0], hist[1], hist[2], hist[3], hist[4]
-    );
     if iters > 1 {
         println!(
             "mean over iterations 1..{iters}: {:.3} s wall; CPU {:.3} s per iteration (all iterations)",

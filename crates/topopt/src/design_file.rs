@@ -9,6 +9,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::error::{Result, TopoptError};
+use crate::summary::DesignSummary;
 
 /// A finished (or in-progress) design.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -32,6 +33,10 @@ pub struct DesignFile {
     pub area: f64,
     /// Fraction of design elements with 0.1 < ρ < 0.9.
     pub grey_fraction: f64,
+    /// What the design delivers: α, θ, area, mass, stress, minimum sizes (absent in files of
+    /// older versions).
+    #[serde(default)]
+    pub summary: Option<DesignSummary>,
 }
 
 impl DesignFile {

@@ -12,8 +12,15 @@
 //! * `regions` → passive solid / void elements (selectors pick element centroids);
 //! * `actuators.pea1/pea2` → input ports: a grounded spring `K_pea` on the x DOF and the force
 //!   `K_pea·x_nom` (Eq. 2–3), global signs;
-//! * `output.at` → the output node `L_o` (Eq. 7); with `optimization.output_spring > 0`,
-//!   grounded springs of that stiffness on both output DOFs (either objective).
+//! * `output.at` → the output node `L_o` (Eq. 7); with `optimization.output_spring = k > 0`,
+//!   the load it drives acts on the output's motion relative to the moving frame of Eq. (22): a
+//!   grounded spring k on `u_oy` and a link spring k on `u_ox − ½(u_in1 + u_in2)`, so a rigid
+//!   translation of the floating stage loads nothing (DECISIONS.md, "Output load");
+//! * constraints: the strain energy Σ ≤ Σ0 (Eq. 5; Σ0 absolute, or derived from the allowable
+//!   stress), the input strokes, the volume, the tilt (θ ≠ 0) and the fatigue stress
+//!   ([`StressConstraint`]) at the four corners of the stroke square;
+//! * `optimization.mirror_symmetry` → [`Problem::mirror_symmetry`], checked against the
+//!   supports, springs, ports and passive regions.
 //!
 //! # Load cases (DECISIONS.md)
 //! The `p_m` samples walk the perimeter of the stroke square `[−a, a]²` in `(x_nom1, x_nom2)`,
@@ -33,7 +40,9 @@ use flexstage_scenario::{
     Selector,
 };
 
+use crate::design_space::{DesignSpace, mirror_element};
 use crate::error::{Result, TopoptError};
+use crate::stress::StressConstraint;
 
 /// An input port: a grounded spring on one DOF, loaded by `stiffness · x_nom` (Eq. 2–3).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,15 +71,6 @@ pub enum Objective {
     },
 }
 
-/// The strain-energy bound Σ0 of Eq. (5).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum EnergyLimit {
-    /// Σ0 in joules.
-    Absolute(f64),
-    /// Σ0 = factor × (largest per-case strain energy of the initial design).
-    Relative(f64),
-}
-
 /// Orientation requirement of the tilted output (Figure 4b): the differential output
 /// `D = u_out(+a,−a) − u_out(−a,+a)` must lie within `tolerance` of the axis
 /// `d = (sin θ, cos θ)`: `(D·n)² ≤ tan²(tolerance)·(D·d)²`, `n = (cos θ, −sin θ)`.
@@ -95,14 +95,18 @@ pub struct Problem {
     pub cases: Vec<Vec<f64>>,
     /// Objective.
     pub objective: Objective,
-    /// Strain-energy bound (None = no constraint).
-    pub energy_limit: Option<EnergyLimit>,
+    /// Strain-energy bound Σ0 [J] (None = no constraint).
+    pub energy_limit: Option<f64>,
     /// Largest allowed |input displacement| [m] (None = no constraint).
     pub max_stroke: Option<f64>,
     /// Volume-fraction bound (None = no constraint).
     pub volume_fraction: Option<f64>,
     /// Tilted-output requirement (workspace objective only).
     pub tilt: Option<Tilt>,
+    /// Fatigue stress constraint (None = no constraint).
+    pub stress: Option<StressConstraint>,
+    /// One design variable per element and its mirror image about `x = l/2`.
+    pub mirror_symmetry: bool,
     /// Lower density bound ρ_min.
     pub rho_min: f64,
     /// Initial uniform design density.
@@ -176,6 +180,23 @@ pub fn perimeter_walk(samples: usize, a: f64) -> Vec<Vec<f64>> {
     out
 }
 
+/// The corners `(+a,+a)`, `(+a,−a)`, `(−a,−a)`, `(−a,+a)` of a perimeter walk of `n` samples.
+pub fn corner_cases(n: usize) -> [usize; 4] {
+    let q = n / 4;
+    [0, q, 2 * q, 3 * q]
+}
+
+/// The strain-energy bound derived from the allowable stress (DECISIONS.md, "Strain-energy
+/// bound"): `Σ0 = (1 − ν) σ_a² V* / E0`. In plane stress the energy density is
+/// `(σ1² + σ2² − 2ν σ1σ2)/(2E) ≤ (1 − ν) σ_vm²/E` (equality for equibiaxial stress), so a
+/// material volume V* whose von Mises stress stays below σ_a stores at most Σ0.
+pub fn stress_energy_bound(s: &Scenario) -> f64 {
+    let m = &s.mesh;
+    let volume = m.length * m.width * m.thickness * s.optimization.volume_fraction;
+    let sa = s.limits.allowable_stress();
+    (1.0 - s.material.poisson_ratio) * sa * sa * volume / s.material.youngs_modulus
+}
+
 /// Mesh with the scenario's passive regions (later regions override earlier ones).
 pub fn scenario_mesh(s: &Scenario) -> Result<Mesh> {
     let m = &s.mesh;
@@ -244,11 +265,12 @@ impl Problem {
         };
         let direction = [sign * theta.sin(), sign * theta.cos()];
         if o.output_spring > 0.0 {
-            // The output port's load (the stage, Table 4's K_qo): grounded springs on both
-            // output DOFs. For the workspace objective this forces the mechanism to transmit
-            // force to the output instead of moving it through void "hinges".
-            bcs.add_spring(2 * out, o.output_spring)
-                .add_spring(2 * out + 1, o.output_spring);
+            // The load the output drives, relative to the moving frame of Eq. (22): it forces
+            // the mechanism to transmit force to the output instead of moving it through void
+            // "hinges", while a rigid translation of the floating stage loads nothing.
+            let k = o.output_spring;
+            bcs.add_spring(2 * out + 1, k)
+                .add_link(&[(2 * out, 1.0), (2 * n1, -0.5), (2 * n2, -0.5)], k);
         }
         let (objective, cases) = match o.objective {
             ObjectiveKind::Workspace => (
@@ -270,10 +292,18 @@ impl Problem {
         let kin = kinematics.unwrap_or_else(|| scenario_kinematics(s));
         let model = Model::new(mesh, material, kin, bcs)?;
         let energy_limit = Some(if o.strain_energy_limit > 0.0 {
-            EnergyLimit::Absolute(o.strain_energy_limit)
+            o.strain_energy_limit
         } else {
-            EnergyLimit::Relative(o.strain_energy_factor)
+            stress_energy_bound(s)
         });
+        let corners = corner_cases(cases.len());
+        let stress = (o.stress_constraint && matches!(objective, Objective::Workspace { .. }))
+            .then(|| StressConstraint {
+                allowable: s.limits.allowable_stress() / s.limits.mesh_stress_factor,
+                cases: corners.to_vec(),
+                relaxation: 0.5,
+                exponent: 8.0,
+            });
         let tilt =
             (matches!(objective, Objective::Workspace { .. }) && theta != 0.0).then_some(Tilt {
                 theta,
@@ -300,11 +330,57 @@ impl Problem {
             max_stroke: Some(a.max_stroke),
             volume_fraction: (o.volume_fraction < 1.0).then_some(o.volume_fraction),
             tilt,
+            stress,
+            mirror_symmetry: o.mirror_symmetry,
             rho_min: o.rho_min,
             initial_density: o.initial_density,
         };
         p.validate()?;
         Ok(p)
+    }
+
+    /// Checks that the problem is mirror-symmetric about `x = l/2` (passive regions, supports,
+    /// springs, ports, output on the centre line), as [`Problem::mirror_symmetry`] needs.
+    pub fn check_mirror_symmetry(&self) -> Result<()> {
+        let mesh = self.mesh();
+        DesignSpace::new(mesh, true)?;
+        let mirror_node = |n: usize| {
+            let (i, j) = mesh.node_ij(n);
+            mesh.node(mesh.nl - i, j)
+        };
+        // The mirror keeps a DOF's component: x ↦ −x of the mirror node, y ↦ y.
+        let mirror_dof = |d: usize| 2 * mirror_node(d / 2) + d % 2;
+        let asym = |what: &str| {
+            TopoptError::Problem(format!(
+                "mirror symmetry: the {what} is not symmetric about x = l/2; make it symmetric                  or set optimization.mirror_symmetry = false"
+            ))
+        };
+        let bcs = self.model.bcs();
+        let fixed: std::collections::BTreeSet<usize> = bcs.fixed.iter().copied().collect();
+        if fixed.iter().any(|&d| !fixed.contains(&mirror_dof(d))) {
+            return Err(asym("set of supports"));
+        }
+        let mut springs: Vec<(usize, u64)> = bcs
+            .springs
+            .iter()
+            .map(|s| (s.dof, s.stiffness.to_bits()))
+            .collect();
+        let mut mirrored: Vec<(usize, u64)> =
+            springs.iter().map(|&(d, k)| (mirror_dof(d), k)).collect();
+        springs.sort_unstable();
+        mirrored.sort_unstable();
+        if springs != mirrored {
+            return Err(asym("set of springs"));
+        }
+        let ports: Vec<usize> = self.inputs.iter().map(|p| p.node).collect();
+        if ports.len() == 2 && mirror_node(ports[0]) != ports[1] {
+            return Err(asym("pair of input ports"));
+        }
+        if mirror_node(self.output) != self.output {
+            return Err(asym("output port (it must lie on the centre line)"));
+        }
+        debug_assert!(mesh.n_elements() == 0 || mirror_element(mesh, 0) < mesh.n_elements());
+        Ok(())
     }
 
     /// Consistency checks.
@@ -339,6 +415,34 @@ impl Problem {
             self.rho_min > 0.0 && self.rho_min <= 0.1,
             "(0, 0.1]",
         )?;
+        if let Some(sc) = &self.stress {
+            crate::error::check_range(
+                "StressConstraint::allowable",
+                sc.allowable,
+                sc.allowable > 0.0 && sc.allowable.is_finite(),
+                "(0, ∞) Pa",
+            )?;
+            crate::error::check_range(
+                "StressConstraint::relaxation",
+                sc.relaxation,
+                sc.relaxation > 0.0 && sc.relaxation <= 1.0,
+                "(0, 1]",
+            )?;
+            crate::error::check_range(
+                "StressConstraint::exponent",
+                sc.exponent,
+                (2.0..=64.0).contains(&sc.exponent),
+                "[2, 64]",
+            )?;
+            if sc.cases.iter().any(|&k| k >= self.cases.len()) {
+                return Err(TopoptError::Problem(
+                    "a stress case index exceeds the number of load cases".into(),
+                ));
+            }
+        }
+        if self.mirror_symmetry {
+            self.check_mirror_symmetry()?;
+        }
         Ok(())
     }
 
@@ -368,6 +472,11 @@ impl Problem {
     pub fn differential_corners(&self) -> (usize, usize) {
         let q = self.cases.len() / 4;
         (q, 3 * q)
+    }
+
+    /// The case indices of the four corners of the perimeter walk (Table 2).
+    pub fn corner_cases(&self) -> [usize; 4] {
+        corner_cases(self.cases.len())
     }
 
     /// The same problem with other kinematics (e.g. the final nonlinear analysis).

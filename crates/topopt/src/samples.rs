@@ -48,6 +48,8 @@ pub fn inverter(nl: usize, nw: usize) -> Result<Problem> {
         max_stroke: None,
         volume_fraction: Some(0.3),
         tilt: None,
+        stress: None,
+        mirror_symmetry: false,
         rho_min: 1e-3,
         initial_density: 0.3,
     };

@@ -1,46 +1,78 @@
 //! Reference: adjoint sensitivities of discretized nonlinear equilibrium (Buhl, Pedersen &
 //! Sigmund 2000) through a density filter and Heaviside projection (Wang, Lazarov & Sigmund
-//! 2011). Goal (issue #5): relative error ≤ 1e-5 between the adjoint gradients and central
-//! finite differences for the workspace area J, the strain energy Σ and the input strokes,
-//! on a small nonlinear mesh with the additive Yeoh material on, for a tilted reversed setup.
+//! 2011), for every response of the eroded, blueprint and dilated designs of the robust
+//! formulation, including the aggregated qp-relaxed von Mises stress (Le et al. 2010) and the
+//! volume, with mirror-symmetric design variables.
+//! Goal (issues #5, #19): relative error ≤ 1e-5 between the adjoint gradients and central
+//! finite differences, on small nonlinear meshes: a tilted reversed set-up (tilt, no symmetry)
+//! with the additive Yeoh material on, and the robust, symmetric, stress-constrained default
+//! without it.
 
 use flexstage_fem::AdditiveYeoh;
 use flexstage_scenario::{Configuration, Preset, Scenario};
-use flexstage_topopt::{Problem, Projection, check::check_gradients};
+use flexstage_topopt::check::{CheckSetup, check_gradients};
+use flexstage_topopt::{DesignSpace, Problem, RobustThresholds};
 
-#[test]
-fn adjoint_matches_central_differences_nonlinear_with_additive_material() {
-    let mut s = Scenario::preset(Preset::Quick);
+fn small(mut s: Scenario) -> Scenario {
     s.mesh.nl = 16;
     s.mesh.nw = 8;
     s.regions.clear();
     s.optimization.samples = 8;
-    s.output.tilt_deg = 20.0;
-    s.actuators.configuration = Configuration::Reversed;
     // Large strokes so that the geometric nonlinearity matters.
     s.actuators.stroke_amplitude = 3e-4;
     s.actuators.max_stroke = 1e-3;
-    let problem = Problem::from_scenario(&s, None).unwrap();
+    s
+}
+
+fn check(s: &Scenario, robust: Option<RobustThresholds>, additive: bool, expected: usize) {
+    let problem = Problem::from_scenario(s, None).unwrap();
     let ne = problem.mesh().n_elements();
-    let yeoh = AdditiveYeoh::uniform(ne, 1e5, 1e8);
-    let n = problem.design_elements().len();
+    let yeoh = additive.then(|| AdditiveYeoh::uniform(ne, 1e5, 1e8));
+    let n = DesignSpace::new(problem.mesh(), problem.mirror_symmetry)
+        .unwrap()
+        .n();
     let x: Vec<f64> = (0..n)
         .map(|j| 0.3 + 0.6 * (0.5 + 0.5 * (j as f64 * 0.77).sin()))
         .collect();
-    let proj = Projection {
-        beta: 2.0,
+    let setup = CheckSetup {
+        filter_radius: 1.5,
+        robust,
         eta: 0.5,
+        beta: 2.0,
     };
-    let checks = check_gradients(&problem, 1.5, proj, Some(&yeoh), &x, 10, 1e-6).unwrap();
+    let checks = check_gradients(&problem, &setup, yeoh.as_ref(), &x, 10, 1e-6).unwrap();
     for c in &checks {
         println!(
-            "{:>14}: relative error {:.2e} (scale {:.3e})",
+            "{:>24}: relative error {:.2e} (scale {:.3e})",
             c.name, c.relative_error, c.scale
         );
     }
-    assert_eq!(checks.len(), 5);
+    assert_eq!(checks.len(), expected);
     for c in &checks {
         assert!(c.scale > 0.0, "{} has a zero gradient", c.name);
         assert!(c.relative_error <= 1e-5, "{c:?}");
     }
+}
+
+#[test]
+fn adjoint_matches_central_differences_tilted_reversed() {
+    let mut s = small(Scenario::preset(Preset::Quick));
+    s.output.tilt_deg = 20.0;
+    s.optimization.mirror_symmetry = false;
+    s.actuators.configuration = Configuration::Reversed;
+    // objective, energy, stroke, tilt, stress, volume on the blueprint.
+    check(&s, None, true, 6);
+}
+
+#[test]
+fn adjoint_matches_central_differences_robust_symmetric_with_stress() {
+    let s = small(Scenario::preset(Preset::Quick));
+    let robust = RobustThresholds {
+        eroded: 0.6,
+        dilated: 0.4,
+    };
+    // eroded: objective, stress; blueprint: objective, energy, stroke; dilated: objective,
+    // volume. Without the additive material (the default): the contraction with the stored
+    // element forces.
+    check(&s, Some(robust), false, 7);
 }

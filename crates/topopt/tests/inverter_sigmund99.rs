@@ -36,7 +36,7 @@ fn linear_inverter_matches_the_99_line_code() {
         .collect();
     problem.mesh().apply_passive(&mut rho, 1e-3);
     assert!(problem.mesh().passive.iter().all(|p| *p == Passive::Design));
-    let mut ev = Evaluator::new(&problem, 0.0, AnalysisParams::tight()).unwrap();
+    let mut ev = Evaluator::new(&problem, AnalysisParams::tight()).unwrap();
     let r = ev.solve_cases(&rho, None).unwrap();
     let u_out = r.outputs[0][0];
     println!("thresholded u_out = {u_out:.4}");

@@ -5,7 +5,9 @@
 // square-root form stays exact where the regressors span many decades; the information form
 // (WeightedMoments + solve_spd) gives the same weighted solution for a re-mapped regressor.
 
-use flexstage_piezo::{Rls, RlsParams, WeightedMoments, batch_least_squares, samples, solve_spd};
+use flexstage_numerics::dense::solve_spd;
+use flexstage_numerics::rls::{Rls, RlsParams, WeightedMoments, batch_least_squares};
+use flexstage_numerics::samples;
 
 fn rel(a: &[f64; 4], b: &[f64; 4]) -> f64 {
     a.iter()

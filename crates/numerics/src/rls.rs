@@ -1,5 +1,7 @@
-//! Recursive least squares with a forgetting factor, Eq. (A9)–(A11), generic over the number
-//! of parameters, and the batch least squares it must agree with.
+//! Recursive least squares with a forgetting factor, generic over the number of parameters,
+//! and the batch least squares it must agree with (L. Ljung, T. Söderström, *Theory and
+//! Practice of Recursive Identification*, MIT Press 1983, ch. 2; written with the equation
+//! numbers of Actuators 2022, 11(7), 179, Appendix B, Eq. (A9)–(A11)).
 //!
 //! For a scalar measurement y(t) = φ(t)ᵀθ + e(t) the estimator minimizes
 //!
@@ -32,18 +34,27 @@
 //! which is algebraically identical to (A11) (S Sᵀ after the step equals Cov(t), and the gain
 //! equals Cov(t)φW₀), but keeps Cov positive semi-definite by construction and needs half
 //! the precision: the conventional update Γ − ggᵀ/(W₀⁻¹ + φᵀg) cancels catastrophically
-//! once the covariance spans more than ~10⁸ (the summed PEA regression of [`crate::identify`],
+//! once the covariance spans more than ~10⁸ (the summed PEA regression of `flexstage-piezo`,
 //! whose regressors grow with time, reaches 10¹⁵ and more, and the conventional form then
 //! loses positive definiteness and diverges). Each update is O(P²) on stack arrays (one
 //! square root): no allocation.
 //!
-//! The stage identification uses the same type: build φ and y per sample and call
-//! [`Rls::update`].
+//! The stage identification of `flexstage-identify` uses [`Rls`] directly (build φ and y per
+//! sample and call [`Rls::update`]); the parallel RLS of the Bouc–Wen model in
+//! `flexstage-piezo` uses the information form [`WeightedMoments`] with [`SpdFactor`].
+//!
+//! [`SpdFactor`]: crate::dense::SpdFactor
 
 // Small dense matrix code reads best with explicit indices.
 #![allow(clippy::needless_range_loop)]
 
-use crate::error::{Result, check, data_error};
+use nalgebra::{Cholesky, Const, SMatrix, SVector};
+
+use crate::Error;
+use crate::validate::{DataError, Interval, RangeError, check};
+
+/// Accepted forgetting factors λ_f.
+const FORGETTING: Interval = Interval::open_closed(0.0, 1.0);
 
 /// Settings of [`Rls`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -72,13 +83,8 @@ impl Default for RlsParams {
 
 impl RlsParams {
     /// Checks the fields.
-    pub fn validate(&self) -> Result<()> {
-        check(
-            "rls.forgetting",
-            self.forgetting,
-            self.forgetting > 0.0 && self.forgetting <= 1.0,
-            "a number in (0, 1]",
-        )?;
+    pub fn validate(&self) -> Result<(), RangeError> {
+        FORGETTING.check("rls.forgetting", self.forgetting)?;
         check(
             "rls.weight",
             self.weight,
@@ -92,11 +98,11 @@ impl RlsParams {
             "a finite number > 0",
         )?;
         if self.max_trace.is_nan() || self.max_trace <= 0.0 {
-            return Err(crate::PiezoError::OutOfRange {
-                field: "rls.max_trace".into(),
-                value: format!("{:e}", self.max_trace),
-                expected: "a number > 0 (inf for no limit)".into(),
-            });
+            return Err(RangeError::number(
+                "rls.max_trace",
+                self.max_trace,
+                "a number > 0 (inf for no limit)",
+            ));
         }
         Ok(())
     }
@@ -114,7 +120,7 @@ pub struct Rls<const P: usize> {
 
 impl<const P: usize> Rls<P> {
     /// An estimator starting at `theta0` with Cov(0) = `initial_covariance`·I.
-    pub fn new(params: RlsParams, theta0: [f64; P]) -> Result<Self> {
+    pub fn new(params: RlsParams, theta0: [f64; P]) -> Result<Self, RangeError> {
         params.validate()?;
         let mut rls = Rls {
             theta: theta0,
@@ -130,29 +136,19 @@ impl<const P: usize> Rls<P> {
     /// least-squares solution and Cov the inverse weighted normal matrix (A9), with the
     /// weights W(N, i) of (A10) at constant λ_f. Continuing with [`Rls::update`] then equals
     /// batch least squares over all data seen, with no prior term.
-    pub fn from_batch(params: RlsParams, phis: &[[f64; P]], ys: &[f64]) -> Result<Self> {
+    pub fn from_batch(params: RlsParams, phis: &[[f64; P]], ys: &[f64]) -> Result<Self, Error> {
         params.validate()?;
         let (normal, rhs) = normal_equations(phis, ys, params.forgetting, params.weight)?;
         let chol = cholesky(&normal)?;
-        let theta = chol_solve(&chol, &rhs);
-        // normal = L Lᵀ, so Cov = L⁻ᵀ L⁻¹ = S Sᵀ with S = L⁻ᵀ: column j of S solves Lᵀ s = e_j.
-        let mut sqrt_cov = [[0.0; P]; P];
-        for j in 0..P {
-            let mut x = [0.0; P];
-            for i in (0..P).rev() {
-                let mut v = if i == j { 1.0 } else { 0.0 };
-                for k in i + 1..P {
-                    v -= chol[k][i] * x[k];
-                }
-                x[i] = v / chol[i][i];
-            }
-            for i in 0..P {
-                sqrt_cov[i][j] = x[i];
-            }
-        }
+        let theta = chol.solve(&SVector::from(rhs));
+        // normal = L Lᵀ, so Cov = L⁻ᵀ L⁻¹ = S Sᵀ with S = L⁻ᵀ: Lᵀ S = I.
+        let s = chol
+            .l_dirty()
+            .tr_solve_lower_triangular(&SMatrix::<f64, P, P>::identity())
+            .expect("a Cholesky factor has a non-zero diagonal");
         Ok(Rls {
-            theta,
-            sqrt_cov,
+            theta: theta.into(),
+            sqrt_cov: std::array::from_fn(|i| std::array::from_fn(|j| s[(i, j)])),
             params,
             updates: phis.len() as u64,
         })
@@ -321,15 +317,15 @@ fn normal_equations<const P: usize>(
     ys: &[f64],
     forgetting: f64,
     weight: f64,
-) -> Result<([[f64; P]; P], [f64; P])> {
+) -> Result<([[f64; P]; P], [f64; P]), DataError> {
     if phis.len() != ys.len() {
-        return Err(data_error(
+        return Err(DataError::new(
             "least squares",
             format!("{} regressors but {} measurements", phis.len(), ys.len()),
         ));
     }
     if phis.len() < P {
-        return Err(data_error(
+        return Err(DataError::new(
             "least squares",
             format!("need at least {P} samples, got {}", phis.len()),
         ));
@@ -361,64 +357,33 @@ pub fn batch_least_squares<const P: usize>(
     phis: &[[f64; P]],
     ys: &[f64],
     forgetting: f64,
-) -> Result<[f64; P]> {
-    check(
-        "forgetting",
-        forgetting,
-        forgetting > 0.0 && forgetting <= 1.0,
-        "a number in (0, 1]",
-    )?;
+) -> Result<[f64; P], Error> {
+    FORGETTING.check("forgetting", forgetting)?;
     let (a, b) = normal_equations(phis, ys, forgetting, 1.0)?;
-    let l = cholesky(&a)?;
-    Ok(chol_solve(&l, &b))
+    Ok(cholesky(&a)?.solve(&SVector::from(b)).into())
 }
 
-/// Lower Cholesky factor of a symmetric positive definite matrix.
-fn cholesky<const P: usize>(a: &[[f64; P]; P]) -> Result<[[f64; P]; P]> {
-    let mut l = [[0.0; P]; P];
-    for j in 0..P {
-        let mut d = a[j][j];
-        for k in 0..j {
-            d -= l[j][k] * l[j][k];
-        }
-        if d.is_nan() || d <= 1e-14 * a[j][j].abs() || !d.is_finite() {
-            return Err(data_error(
-                "least squares",
-                "the regressors are linearly dependent (normal matrix not positive definite): \
-                 the data do not excite every parameter",
-            ));
-        }
-        let d = d.sqrt();
-        l[j][j] = d;
-        for i in j + 1..P {
-            let mut v = a[i][j];
-            for k in 0..j {
-                v -= l[i][k] * l[j][k];
-            }
-            l[i][j] = v / d;
-        }
-    }
-    Ok(l)
-}
+/// Smallest accepted Cholesky pivot of the normal equations, relative to its diagonal entry.
+const NORMAL_MIN_PIVOT: f64 = 1e-14;
 
-fn chol_solve<const P: usize>(l: &[[f64; P]; P], b: &[f64; P]) -> [f64; P] {
-    let mut y = [0.0; P];
-    for i in 0..P {
-        let mut v = b[i];
-        for k in 0..i {
-            v -= l[i][k] * y[k];
-        }
-        y[i] = v / l[i][i];
-    }
-    let mut x = [0.0; P];
-    for i in (0..P).rev() {
-        let mut v = y[i];
-        for k in i + 1..P {
-            v -= l[k][i] * x[k];
-        }
-        x[i] = v / l[i][i];
-    }
-    x
+/// Cholesky factor of the normal matrix, or a [`DataError`] when a pivot is below
+/// [`NORMAL_MIN_PIVOT`] of its diagonal entry (the regressors are linearly dependent).
+fn cholesky<const P: usize>(a: &[[f64; P]; P]) -> Result<Cholesky<f64, Const<P>>, DataError> {
+    let m = SMatrix::<f64, P, P>::from_fn(|i, j| a[i][j]);
+    let chol = Cholesky::new(m).filter(|c| {
+        let l = c.l_dirty();
+        (0..P).all(|j| {
+            let pivot = l[(j, j)] * l[(j, j)];
+            pivot.is_finite() && pivot > NORMAL_MIN_PIVOT * a[j][j].abs()
+        })
+    });
+    chol.ok_or_else(|| {
+        DataError::new(
+            "least squares",
+            "the regressors are linearly dependent (normal matrix not positive definite): \
+             the data do not excite every parameter",
+        )
+    })
 }
 
 /// Exponentially weighted second moments M(t) = Σ_{i ≤ t} W(t, i) v(i) v(i)ᵀ of a data vector
@@ -429,7 +394,7 @@ fn chol_solve<const P: usize>(l: &[[f64; P]; P], b: &[f64; P]) -> [f64; P] {
 /// weighted residual sum of squares is (b − Aᵀθ)ᵀ M (b − Aᵀθ). Unlike the covariance
 /// recursion (A11), the maps A and b may change from one sample to the next and still apply
 /// to every past sample: the recursive least-squares estimate is re-evaluated exactly for the
-/// *current* map. [`crate::identify`] uses this for the Bouc–Wen regressor, which depends on
+/// *current* map. `flexstage-piezo`'s parallel RLS uses this for the Bouc–Wen regressor, which depends on
 /// the current d_p estimate. One update is O(N²) on stack arrays, no allocation.
 #[derive(Debug, Clone)]
 pub struct WeightedMoments<const N: usize> {
@@ -442,13 +407,8 @@ pub struct WeightedMoments<const N: usize> {
 
 impl<const N: usize> WeightedMoments<N> {
     /// Empty moments with forgetting factor λ_f ∈ (0, 1] and weight W₀ > 0.
-    pub fn new(forgetting: f64, weight: f64) -> Result<Self> {
-        check(
-            "forgetting",
-            forgetting,
-            forgetting > 0.0 && forgetting <= 1.0,
-            "a number in (0, 1]",
-        )?;
+    pub fn new(forgetting: f64, weight: f64) -> Result<Self, RangeError> {
+        FORGETTING.check("forgetting", forgetting)?;
         check("weight", weight, weight > 0.0, "a finite number > 0")?;
         Ok(WeightedMoments {
             m: [[0.0; N]; N],
@@ -520,73 +480,5 @@ impl<const N: usize> WeightedMoments<N> {
             self.m[i][k] = 0.0;
             self.m[k][i] = 0.0;
         }
-    }
-}
-
-/// Solves the symmetric positive definite system A x = b by Cholesky after symmetric diagonal
-/// equilibration (so that the columns' very different scales do not matter). `None` when A
-/// is not numerically positive definite (a pivot below 1e-13 of its diagonal). No allocation.
-pub fn solve_spd<const P: usize>(a: &[[f64; P]; P], b: &[f64; P]) -> Option<[f64; P]> {
-    SpdFactor::new(a).map(|f| f.solve(b))
-}
-
-/// The equilibrated Cholesky factor of a symmetric positive definite matrix, for solving
-/// with several right-hand sides ([`solve_spd`]). No allocation.
-#[derive(Debug, Clone, Copy)]
-pub struct SpdFactor<const P: usize> {
-    /// Lower Cholesky factor of D A D.
-    l: [[f64; P]; P],
-    /// D = diag(A)^{-1/2}.
-    s: [f64; P],
-}
-
-impl<const P: usize> SpdFactor<P> {
-    /// Factors A; `None` when A is not numerically positive definite (a pivot below 1e-13
-    /// of its diagonal, or a non-positive or non-finite diagonal).
-    #[inline]
-    pub fn new(a: &[[f64; P]; P]) -> Option<Self> {
-        let mut s = [0.0; P];
-        for i in 0..P {
-            if a[i][i].is_nan() || a[i][i] <= 0.0 || !a[i][i].is_finite() {
-                return None;
-            }
-            s[i] = a[i][i].sqrt().recip();
-        }
-        let mut l = [[0.0; P]; P];
-        for j in 0..P {
-            let mut d: f64 = 1.0;
-            for k in 0..j {
-                d -= l[j][k] * l[j][k];
-            }
-            if d.is_nan() || d <= 1e-13 {
-                return None;
-            }
-            let d = d.sqrt();
-            l[j][j] = d;
-            let inv = d.recip();
-            for i in j + 1..P {
-                let mut v = a[i][j] * s[i] * s[j];
-                for k in 0..j {
-                    v -= l[i][k] * l[j][k];
-                }
-                l[i][j] = v * inv;
-            }
-        }
-        Some(SpdFactor { l, s })
-    }
-
-    /// Solves A x = b.
-    #[inline]
-    pub fn solve(&self, b: &[f64; P]) -> [f64; P] {
-        let mut sb = [0.0; P];
-        for i in 0..P {
-            sb[i] = b[i] * self.s[i];
-        }
-        let z = chol_solve(&self.l, &sb);
-        let mut x = [0.0; P];
-        for i in 0..P {
-            x[i] = z[i] * self.s[i];
-        }
-        x
     }
 }

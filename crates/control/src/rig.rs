@@ -1,0 +1,720 @@
+//! The loop around a simulated stage, as on a rig: everything between the controller's
+//! command and its next measurement except the mechanics. Each effect is a small part with
+//! its own parameters, and the parts compose with any [`Mechanics`] (the lumped 8-state model
+//! of [`crate::plant`] or the finite-element twin of `flexstage-twin`) into a
+//! [`RigPlant`], which the experiment runner drives through [`StagePlant`].
+//!
+//! Per controller sample T (the command is held, ZOH), in this order:
+//!
+//! 1. **Delay** ([`RigParams::delay`], 0–2 samples): the command computed from the sample at
+//!    t_k reaches the amplifiers at t_k + dT (computation and I/O time of a real-time target).
+//! 2. **Amplifier** ([`AmplifierParams`]): a first-order small-signal response of bandwidth
+//!    f_a, a voltage rate limited by the slew rate and by the output current,
+//!    `|dU/dt| ≤ I_max/C_pea` (the PEA is a capacitor, `i = C dU/dt`), and the output range.
+//! 3. **PEA** (Eq. 18, Table A1): the plant's own Bouc–Wen actuators ([`RigParams::hysteresis`],
+//!    the truth, not the compensator's model), preloaded to the bias voltage, plus
+//!    **creep** ([`CreepParams`]): the logarithmic law `Δx(t) = Δx(0.1 s)·(1 + γ lg(t/0.1 s))`
+//!    realized as a sum of first-order relaxations, one per time decade.
+//! 4. **Mechanics** ([`Mechanics`]): x_nom(t) (linear within a substep) and the **floor
+//!    vibration** ([`FloorParams`], base acceleration) in, the output q out.
+//! 5. **Sensor** ([`SensorParams`]): a first-order low-pass of the true output (sensor
+//!    electronics), white noise (`sensors.noise_std`) plus 1/f noise above the corner where
+//!    both spectra are equal, then quantization to the resolution (Section 4.1).
+//!
+//! Each sample is split into `substeps`; the amplifier, the PEAs, the creep, the mechanics and
+//! the sensor filter advance per substep. No allocation per sample.
+
+use flexstage_piezo::{BoucWen, BoucWenParams, GaussianNoise, MICROMETRE};
+
+use crate::actuator::preload;
+use crate::controller::Command;
+use crate::error::{ControlError, Result, check, non_negative, positive};
+
+/// How the plant's actuators are driven.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PlantActuator {
+    /// Voltages through the amplifiers and the Bouc–Wen PEAs (the full plant).
+    Hysteretic,
+    /// The command's x_nom directly (no amplifier, no PEA: the linear plant of Eq. 36).
+    Ideal,
+}
+
+/// The high-voltage amplifier of one PEA.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AmplifierParams {
+    /// Small-signal bandwidth f_a [Hz] of a first-order response; 0 = ideal (the voltage
+    /// jumps at the start of the sample).
+    pub bandwidth: f64,
+    /// Slew-rate limit [V/s]; 0 = none.
+    pub slew_rate: f64,
+    /// Output current limit I_max [A]; 0 = none.
+    pub current_limit: f64,
+    /// PEA capacitance C_pea [F] (for `i = C dU/dt`), > 0 when a current limit is set.
+    pub capacitance: f64,
+}
+
+impl AmplifierParams {
+    /// An ideal amplifier (ZOH, no limits).
+    pub fn ideal() -> Self {
+        AmplifierParams {
+            bandwidth: 0.0,
+            slew_rate: 0.0,
+            current_limit: 0.0,
+            capacitance: 0.0,
+        }
+    }
+
+    /// The largest |dU/dt| [V/s] (∞ without limits): min(slew rate, I_max/C).
+    pub fn max_rate(&self) -> f64 {
+        let mut r = f64::INFINITY;
+        if self.slew_rate > 0.0 {
+            r = r.min(self.slew_rate);
+        }
+        if self.current_limit > 0.0 && self.capacitance > 0.0 {
+            r = r.min(self.current_limit / self.capacitance);
+        }
+        r
+    }
+
+    fn validate(&self) -> Result<()> {
+        non_negative("rig.amplifier.bandwidth", self.bandwidth)?;
+        non_negative("rig.amplifier.slew_rate", self.slew_rate)?;
+        non_negative("rig.amplifier.current_limit", self.current_limit)?;
+        non_negative("rig.amplifier.capacitance", self.capacitance)?;
+        check(
+            "rig.amplifier.capacitance",
+            self.capacitance,
+            self.current_limit == 0.0 || self.capacitance > 0.0,
+            "> 0 [F] when a current limit is set",
+        )
+    }
+}
+
+/// The position sensors' dynamics and noise spectrum (white level and quantization come from
+/// [`RigParams::noise_std`] and [`RigParams::resolution`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorParams {
+    /// First-order bandwidth of the sensor electronics [Hz]; 0 = ideal.
+    pub bandwidth: f64,
+    /// 1/f corner [Hz]: below it the 1/f part dominates the white noise; 0 = white only.
+    pub flicker_corner: f64,
+}
+
+impl SensorParams {
+    /// An ideal sensor (white noise only, no dynamics).
+    pub fn ideal() -> Self {
+        SensorParams {
+            bandwidth: 0.0,
+            flicker_corner: 0.0,
+        }
+    }
+}
+
+/// Logarithmic creep of the PEAs.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CreepParams {
+    /// Creep factor γ per time decade (PI: 0.01–0.02); 0 = off.
+    pub factor: f64,
+}
+
+/// Floor vibration as a base acceleration: one sine per 1/3-octave band between
+/// `bands[0]` and `bands[1]`, each with RMS velocity `velocity_rms` (the flat part of the
+/// VC vibration criteria), random phases, both in-plane directions.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FloorParams {
+    /// RMS velocity per 1/3-octave band [m/s]; 0 = off. VC-C: 12.5e-6.
+    pub velocity_rms: f64,
+    /// Lowest and highest band centre [Hz].
+    pub bands: [f64; 2],
+}
+
+/// Everything around the mechanics (module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigParams {
+    /// Computation + I/O delay in samples, 0–2.
+    pub delay: usize,
+    /// Actuator mode.
+    pub actuator: PlantActuator,
+    /// The amplifiers.
+    pub amplifier: AmplifierParams,
+    /// The plant's own Bouc–Wen PEAs (µm, V, s).
+    pub hysteresis: [BoucWenParams; 2],
+    /// Creep.
+    pub creep: CreepParams,
+    /// Amplifier output range [V].
+    pub voltage_range: [f64; 2],
+    /// Preload bias voltage [V].
+    pub bias_voltage: f64,
+    /// Floor vibration.
+    pub floor: FloorParams,
+    /// Sensor dynamics and spectrum.
+    pub sensor: SensorParams,
+    /// Quantization steps [m] (0: none).
+    pub resolution: [f64; 2],
+    /// White-noise standard deviations [m].
+    pub noise_std: [f64; 2],
+    /// Noise seed.
+    pub seed: u64,
+    /// Controller sample time T [s].
+    pub sample_time: f64,
+    /// Substeps per sample, ≥ 1.
+    pub substeps: usize,
+}
+
+impl RigParams {
+    /// The rig of a scenario: `[rig]` for the loop effects and the plant's PEAs, the amplifier
+    /// range of `[hysteresis]` with the bias in its middle, `[sensors]` for the white noise and
+    /// resolution, `[simulation]` for the timing and the seed.
+    pub fn from_scenario(s: &flexstage_scenario::Scenario) -> RigParams {
+        let r = &s.rig;
+        let h = &s.hysteresis;
+        RigParams {
+            delay: r.delay,
+            actuator: PlantActuator::Hysteretic,
+            amplifier: AmplifierParams {
+                bandwidth: r.amplifier.bandwidth,
+                slew_rate: r.amplifier.slew_rate,
+                current_limit: r.amplifier.current_limit,
+                capacitance: r.amplifier.capacitance,
+            },
+            hysteresis: [BoucWenParams::from(&r.pea1), BoucWenParams::from(&r.pea2)],
+            creep: CreepParams {
+                factor: r.creep.factor,
+            },
+            voltage_range: [h.voltage_min, h.voltage_max],
+            bias_voltage: 0.5 * (h.voltage_min + h.voltage_max),
+            floor: FloorParams {
+                velocity_rms: r.floor.velocity_rms,
+                bands: r.floor.bands,
+            },
+            sensor: SensorParams {
+                bandwidth: r.sensor.bandwidth,
+                flicker_corner: r.sensor.flicker_corner,
+            },
+            resolution: s.sensors.resolution,
+            noise_std: s.sensors.noise_std,
+            seed: s.simulation.seed,
+            sample_time: s.simulation.sample_time,
+            substeps: s.simulation.substeps,
+        }
+    }
+
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        check(
+            "rig.delay",
+            self.delay as f64,
+            self.delay <= 2,
+            "0, 1 or 2 samples",
+        )?;
+        self.amplifier.validate()?;
+        for (i, p) in self.hysteresis.iter().enumerate() {
+            p.validate().map_err(|e| {
+                ControlError::from(flexstage_numerics::RangeError::new(
+                    format!("rig.pea{}", i + 1),
+                    e.to_string(),
+                    "valid Bouc–Wen parameters",
+                ))
+            })?;
+        }
+        check(
+            "rig.creep.factor",
+            self.creep.factor,
+            (0.0..=0.1).contains(&self.creep.factor),
+            "a number in [0, 0.1] per decade",
+        )?;
+        let [lo, hi] = self.voltage_range;
+        check("hysteresis.voltage_max", hi, hi > lo, "> voltage_min [V]")?;
+        check(
+            "bias_voltage",
+            self.bias_voltage,
+            self.bias_voltage > lo && self.bias_voltage < hi,
+            "inside the amplifier range [V]",
+        )?;
+        non_negative("rig.floor.velocity_rms", self.floor.velocity_rms)?;
+        check(
+            "rig.floor.bands",
+            self.floor.bands[1],
+            self.floor.bands[0] > 0.0 && self.floor.bands[1] >= self.floor.bands[0],
+            "0 < bands[0] ≤ bands[1] [Hz]",
+        )?;
+        non_negative("rig.sensor.bandwidth", self.sensor.bandwidth)?;
+        non_negative("rig.sensor.flicker_corner", self.sensor.flicker_corner)?;
+        for i in 0..2 {
+            non_negative(&format!("sensors.resolution[{i}]"), self.resolution[i])?;
+            non_negative(&format!("sensors.noise_std[{i}]"), self.noise_std[i])?;
+        }
+        positive("simulation.sample_time", self.sample_time)?;
+        check(
+            "simulation.substeps",
+            self.substeps as f64,
+            (1..=10_000).contains(&self.substeps),
+            "an integer in [1, 10000]",
+        )
+    }
+
+    /// The substep h = T / substeps [s].
+    pub fn substep(&self) -> f64 {
+        self.sample_time / self.substeps as f64
+    }
+}
+
+/// The stage mechanics between the PEAs and the sensors. Advanced in fixed substeps of
+/// [`Mechanics::substep_time`] with x_nom and the base acceleration varying linearly within
+/// the substep. No allocation.
+pub trait Mechanics: Send {
+    /// The substep h [s] the model was discretized for.
+    fn substep_time(&self) -> f64;
+    /// Advances by h; `x_nom[0]` and `x_nom[1]` are the nominal PEA displacements [m] at the
+    /// start and the end of the substep, `floor[0..2]` the base accelerations [m/s²] (x, y).
+    fn advance(&mut self, x_nom: [[f64; 2]; 2], floor: [[f64; 2]; 2]);
+    /// The true output q [m] (relative to the base).
+    fn output(&self) -> [f64; 2];
+    /// The input-plate displacements x_in [m].
+    fn inputs(&self) -> [f64; 2];
+}
+
+/// A simulated stage as the experiment runner sees it: sensors sampled at t_k, a command
+/// held until t_{k+1}.
+pub trait StagePlant: Send {
+    /// Samples the sensors at the current time.
+    fn measure(&mut self) -> [f64; 2];
+    /// The true output q [m].
+    fn output(&self) -> [f64; 2];
+    /// Advances one sample with the command (after the rig's delay).
+    fn apply(&mut self, cmd: &Command);
+    /// The voltages the amplifiers currently deliver [V].
+    fn voltage(&self) -> [f64; 2];
+    /// The PEAs' current nominal displacement x_nom [m] (creep included).
+    fn x_nom(&self) -> [f64; 2];
+}
+
+/// Creep time constants [s]: one relaxation per decade from 0.1 s (PI's reference time).
+const CREEP_TAU: [f64; 4] = [0.1, 1.0, 10.0, 100.0];
+
+/// 1/f noise: a sum of Ornstein–Uhlenbeck processes with corner frequencies two per decade
+/// from 0.01 Hz to ten times the 1/f corner and equal variances; their Lorentzian spectra add
+/// up to `S(f) ≈ v/(f ln r)` (r the corner ratio), matched to the white level at the corner.
+#[derive(Debug, Clone)]
+struct Flicker {
+    x: [f64; Flicker::N],
+    a: [f64; Flicker::N],
+    b: [f64; Flicker::N],
+    n: usize,
+    noise: GaussianNoise,
+}
+
+impl Flicker {
+    const N: usize = 16;
+
+    /// `white_std` [m] over the Nyquist band of sample time `t`, corner `fc` [Hz].
+    fn new(white_std: f64, fc: f64, t: f64, seed: u64) -> Flicker {
+        let mut f = Flicker {
+            x: [0.0; Flicker::N],
+            a: [0.0; Flicker::N],
+            b: [0.0; Flicker::N],
+            n: 0,
+            noise: GaussianNoise::new(1.0, seed),
+        };
+        if fc <= 0.0 || white_std <= 0.0 {
+            return f;
+        }
+        let ratio = 10f64.sqrt();
+        let s_white = white_std * white_std / (0.5 / t); // one-sided PSD [m²/Hz]
+        let v = s_white * fc * ratio.ln();
+        let mut corner = 0.01;
+        while f.n < Flicker::N && corner <= (10.0 * fc).min(0.25 / t) {
+            let lambda = std::f64::consts::TAU * corner;
+            let a = (-lambda * t).exp();
+            f.a[f.n] = a;
+            f.b[f.n] = (v * (1.0 - a * a)).sqrt();
+            f.x[f.n] = v.sqrt() * f.noise.sample();
+            f.n += 1;
+            corner *= ratio;
+        }
+        f
+    }
+
+    #[inline]
+    fn sample(&mut self) -> f64 {
+        let mut s = 0.0;
+        for k in 0..self.n {
+            self.x[k] = self.a[k] * self.x[k] + self.b[k] * self.noise.sample();
+            s += self.x[k];
+        }
+        s
+    }
+}
+
+/// Floor acceleration: 1/3-octave sines as rotating phasors (one complex multiply per band
+/// and sample).
+#[derive(Debug, Clone)]
+struct Floor {
+    /// Per band and axis: amplitude·(cos, sin) of the current phase.
+    phasor: [[[f64; 2]; 2]; Floor::N],
+    /// Per band: (cos, sin) of ωT.
+    rot: [[f64; 2]; Floor::N],
+    n: usize,
+}
+
+impl Floor {
+    const N: usize = 16;
+
+    fn new(p: &FloorParams, t: f64, seed: u64) -> Floor {
+        let mut f = Floor {
+            phasor: [[[0.0; 2]; 2]; Floor::N],
+            rot: [[1.0, 0.0]; Floor::N],
+            n: 0,
+        };
+        if p.velocity_rms <= 0.0 {
+            return f;
+        }
+        let mut noise = GaussianNoise::new(1.0, seed);
+        let mut band = 0i32;
+        loop {
+            // Preferred 1/3-octave centres: 10^(k/10) Hz (1000 Hz · 10^(k/10)…), from bands[0].
+            let fc = p.bands[0] * 10f64.powf(band as f64 / 10.0);
+            if fc > p.bands[1] * (1.0 + 1e-9) || f.n == Floor::N {
+                break;
+            }
+            let w = std::f64::consts::TAU * fc;
+            let amp = std::f64::consts::SQRT_2 * p.velocity_rms * w; // acceleration amplitude
+            for axis in 0..2 {
+                // Uniform on (−π, π]: the angle of an isotropic Gaussian pair.
+                let phase = noise.sample().atan2(noise.sample());
+                f.phasor[f.n][axis] = [amp * phase.cos(), amp * phase.sin()];
+            }
+            f.rot[f.n] = [(w * t).cos(), (w * t).sin()];
+            f.n += 1;
+            band += 1;
+        }
+        f
+    }
+
+    /// The acceleration now [m/s²] (x, y).
+    #[inline]
+    fn value(&self) -> [f64; 2] {
+        let mut a = [0.0; 2];
+        for k in 0..self.n {
+            a[0] += self.phasor[k][0][0];
+            a[1] += self.phasor[k][1][0];
+        }
+        a
+    }
+
+    /// Advances by one sample.
+    #[inline]
+    fn advance(&mut self) {
+        for k in 0..self.n {
+            let [c, s] = self.rot[k];
+            for axis in 0..2 {
+                let [re, im] = self.phasor[k][axis];
+                self.phasor[k][axis] = [re * c - im * s, re * s + im * c];
+            }
+        }
+    }
+}
+
+/// The rig's state: delay line, amplifiers, PEAs with creep, floor and sensors.
+#[derive(Debug, Clone)]
+struct Rig {
+    params: RigParams,
+    /// Pending commands (voltages, x_nom), oldest first; `pending[delay]` is the newest.
+    pending: [([f64; 2], [f64; 2]); 3],
+    voltage: [f64; 2],
+    pea: [BoucWen; 2],
+    x_bias: [f64; 2],
+    creep: [[f64; CREEP_TAU.len()]; 2],
+    creep_decay: [f64; CREEP_TAU.len()],
+    x_nom: [f64; 2],
+    floor: Floor,
+    sensed: [f64; 2],
+    white: [GaussianNoise; 2],
+    flicker: [Flicker; 2],
+    amp_decay: f64,
+    sensor_decay: f64,
+    sensor_ramp: f64,
+    /// x_nom at the substep boundaries of the current sample (preallocated).
+    path: Vec<[f64; 2]>,
+    /// The amplifier voltage at the substep boundaries (preallocated).
+    u_path: Vec<f64>,
+}
+
+impl Rig {
+    fn new(params: RigParams) -> Result<Rig> {
+        params.validate()?;
+        let h = params.substep();
+        let mut pea = [
+            BoucWen::new(params.hysteresis[0]),
+            BoucWen::new(params.hysteresis[1]),
+        ];
+        let mut x_bias = [0.0; 2];
+        for i in 0..2 {
+            let (u, hh, x) = preload(&params.hysteresis[i], params.bias_voltage);
+            pea[i].set_state(u, hh);
+            x_bias[i] = x;
+        }
+        let s = params.seed;
+        let white = [
+            GaussianNoise::new(params.noise_std[0], s.wrapping_mul(2).wrapping_add(1)),
+            GaussianNoise::new(params.noise_std[1], s.wrapping_mul(2).wrapping_add(2)),
+        ];
+        let fc = params.sensor.flicker_corner;
+        let t = params.sample_time;
+        let flicker = [
+            Flicker::new(
+                params.noise_std[0],
+                fc,
+                t,
+                s.wrapping_mul(11).wrapping_add(5),
+            ),
+            Flicker::new(
+                params.noise_std[1],
+                fc,
+                t,
+                s.wrapping_mul(11).wrapping_add(6),
+            ),
+        ];
+        let floor = Floor::new(&params.floor, t, s.wrapping_mul(13).wrapping_add(7));
+        let amp_decay = if params.amplifier.bandwidth > 0.0 {
+            (-std::f64::consts::TAU * params.amplifier.bandwidth * h).exp()
+        } else {
+            0.0
+        };
+        let a = std::f64::consts::TAU * params.sensor.bandwidth * h;
+        let sensor_decay = if a > 0.0 { (-a).exp() } else { 0.0 };
+        let sensor_ramp = if a > 0.0 {
+            1.0 - (1.0 - sensor_decay) / a
+        } else {
+            0.0
+        };
+        let bias = params.bias_voltage;
+        Ok(Rig {
+            pending: [([bias; 2], [0.0; 2]); 3],
+            voltage: [bias; 2],
+            pea,
+            x_bias,
+            creep: [[0.0; CREEP_TAU.len()]; 2],
+            creep_decay: CREEP_TAU.map(|tau| (-h / tau).exp()),
+            x_nom: [0.0; 2],
+            floor,
+            sensed: [0.0; 2],
+            white,
+            flicker,
+            amp_decay,
+            sensor_decay,
+            sensor_ramp,
+            path: vec![[0.0; 2]; params.substeps + 1],
+            u_path: vec![0.0; params.substeps + 1],
+            params,
+        })
+    }
+
+    /// The command that acts during this sample (after the delay).
+    fn take(&mut self, cmd: &Command) -> ([f64; 2], [f64; 2]) {
+        let d = self.params.delay;
+        self.pending[d] = (cmd.voltage, cmd.x_nom);
+        let now = self.pending[0];
+        for k in 0..d {
+            self.pending[k] = self.pending[k + 1];
+        }
+        now
+    }
+
+    /// Amplifier output after one substep towards `target` (module docs); returns the new
+    /// voltage and whether it ramped (false: an ideal jump at the substep start).
+    #[inline]
+    fn amplify(&self, u0: f64, target: f64, h: f64) -> (f64, bool) {
+        let a = &self.params.amplifier;
+        let [lo, hi] = self.params.voltage_range;
+        let target = target.clamp(lo, hi);
+        let mut u1 = target + (u0 - target) * self.amp_decay;
+        let rate = a.max_rate();
+        let ramped = a.bandwidth > 0.0 || rate.is_finite();
+        if rate.is_finite() {
+            let step = rate * h;
+            u1 = u1.clamp(u0 - step, u0 + step);
+        }
+        (u1.clamp(lo, hi), ramped)
+    }
+
+    /// Creep increment after one substep of the PEA displacement deviation `dx` [m].
+    #[inline]
+    fn creep(&mut self, i: usize, dx: f64) -> f64 {
+        let g = self.params.creep.factor;
+        if g == 0.0 {
+            return 0.0;
+        }
+        let mut c = 0.0;
+        for k in 0..CREEP_TAU.len() {
+            let z = &mut self.creep[i][k];
+            *z = dx + (*z - dx) * self.creep_decay[k];
+            c += *z;
+        }
+        g * c
+    }
+
+    /// The actuators over one sample: x_nom at every substep boundary into `self.path`
+    /// (`path[0]` = now). The amplifier's voltage is followed substep by substep; within a
+    /// sample it moves monotonically towards its target (first-order response, rate limit),
+    /// and the rate-independent part of Bouc–Wen depends only on the voltage path, not its
+    /// timing, so one exact Bouc–Wen step over the sample gives the end state and x_nom in
+    /// between is interpolated in U along the branch (error ≈ h''(U)·ΔU²/8: picometres for
+    /// the voltage steps of a sample). An ideal amplifier jumps at the start of the sample.
+    fn actuate(&mut self, target: ([f64; 2], [f64; 2]), h: f64) {
+        let n = self.params.substeps;
+        if self.params.actuator == PlantActuator::Ideal {
+            self.x_nom = target.1;
+            self.path.iter_mut().for_each(|p| *p = target.1);
+            return;
+        }
+        let t = self.params.sample_time;
+        let x_start = self.x_nom;
+        let mut jump = false;
+        for i in 0..2 {
+            let u_start = self.voltage[i];
+            let mut u = u_start;
+            for k in 1..=n {
+                let (u1, ramped) = self.amplify(u, target.0[i], h);
+                jump |= !ramped;
+                u = u1;
+                self.u_path[k] = u1;
+            }
+            let x_bw0 = self.pea[i].x();
+            let x_bw1 = self.pea[i].step(u, if jump { 0.0 } else { t });
+            self.voltage[i] = u;
+            let du = u - u_start;
+            for k in 1..=n {
+                let xb = if du != 0.0 && !jump {
+                    x_bw0 + (x_bw1 - x_bw0) * (self.u_path[k] - u_start) / du
+                } else {
+                    x_bw1
+                };
+                let dx = (xb - self.x_bias[i]) * MICROMETRE;
+                let c = self.creep(i, dx);
+                self.path[k][i] = dx + c;
+            }
+            self.path[0][i] = if jump { self.path[1][i] } else { x_start[i] };
+            self.x_nom[i] = self.path[n][i];
+        }
+    }
+
+    /// Sensor filter after one substep with the output moving linearly from `q0` to `q1`.
+    #[inline]
+    fn sense(&mut self, q0: [f64; 2], q1: [f64; 2]) {
+        if self.params.sensor.bandwidth <= 0.0 {
+            self.sensed = q1;
+            return;
+        }
+        let (e, r) = (self.sensor_decay, self.sensor_ramp);
+        for i in 0..2 {
+            self.sensed[i] = e * self.sensed[i] + (1.0 - e) * q0[i] + r * (q1[i] - q0[i]);
+        }
+    }
+
+    /// Samples the sensors; `q` is the true output now (used when the sensor is ideal).
+    fn measure(&mut self, q: [f64; 2]) -> [f64; 2] {
+        let base = if self.params.sensor.bandwidth > 0.0 {
+            self.sensed
+        } else {
+            q
+        };
+        let mut y = [0.0; 2];
+        for (i, yi) in y.iter_mut().enumerate() {
+            let v = base[i] + self.white[i].sample() + self.flicker[i].sample();
+            let r = self.params.resolution[i];
+            *yi = if r > 0.0 { (v / r).round() * r } else { v };
+        }
+        y
+    }
+}
+
+/// A [`Mechanics`] inside the rig: a complete simulated stage. No allocation per sample.
+#[derive(Debug, Clone)]
+pub struct RigPlant<M> {
+    rig: Rig,
+    mechanics: M,
+}
+
+impl<M: Mechanics> RigPlant<M> {
+    /// The plant at rest at the bias. `mechanics` must be discretized for the rig's substep.
+    pub fn new(params: RigParams, mechanics: M) -> Result<RigPlant<M>> {
+        let rig = Rig::new(params)?;
+        let h = rig.params.substep();
+        let hm = mechanics.substep_time();
+        check(
+            "mechanics substep",
+            hm,
+            ((hm - h) / h).abs() < 1e-9,
+            &format!("equal to simulation.sample_time / substeps = {h:e} s"),
+        )?;
+        let mut plant = RigPlant { rig, mechanics };
+        plant.rig.sensed = plant.mechanics.output();
+        Ok(plant)
+    }
+
+    /// The rig's settings.
+    pub fn params(&self) -> &RigParams {
+        &self.rig.params
+    }
+
+    /// The mechanics.
+    pub fn mechanics(&self) -> &M {
+        &self.mechanics
+    }
+
+    /// The mechanics, mutably (e.g. to set an initial state).
+    pub fn mechanics_mut(&mut self) -> &mut M {
+        &mut self.mechanics
+    }
+
+    /// Advances one sample with `cmd` (after the delay).
+    pub fn step(&mut self, cmd: &Command) {
+        let target = self.rig.take(cmd);
+        let n = self.rig.params.substeps;
+        let h = self.rig.params.substep();
+        let f0 = self.rig.floor.value();
+        self.rig.floor.advance();
+        let f1 = self.rig.floor.value();
+        let filtered = self.rig.params.sensor.bandwidth > 0.0;
+        let mut q0 = if filtered {
+            self.mechanics.output()
+        } else {
+            [0.0; 2]
+        };
+        self.rig.actuate(target, h);
+        for k in 0..n {
+            let x = [self.rig.path[k], self.rig.path[k + 1]];
+            let (s0, s1) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
+            let floor = [
+                [f0[0] + s0 * (f1[0] - f0[0]), f0[1] + s0 * (f1[1] - f0[1])],
+                [f0[0] + s1 * (f1[0] - f0[0]), f0[1] + s1 * (f1[1] - f0[1])],
+            ];
+            self.mechanics.advance(x, floor);
+            if filtered {
+                let q1 = self.mechanics.output();
+                self.rig.sense(q0, q1);
+                q0 = q1;
+            }
+        }
+    }
+}
+
+impl<M: Mechanics> StagePlant for RigPlant<M> {
+    fn measure(&mut self) -> [f64; 2] {
+        let q = self.mechanics.output();
+        self.rig.measure(q)
+    }
+    fn output(&self) -> [f64; 2] {
+        self.mechanics.output()
+    }
+    fn apply(&mut self, cmd: &Command) {
+        self.step(cmd);
+    }
+    fn voltage(&self) -> [f64; 2] {
+        self.rig.voltage
+    }
+    fn x_nom(&self) -> [f64; 2] {
+        self.rig.x_nom
+    }
+}

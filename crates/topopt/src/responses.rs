@@ -1,0 +1,267 @@
+//! The named responses of the optimization problem (paper Eq. 5 and DECISIONS.md): the
+//! objective and the quantities the constraints bound, with their partial derivatives with
+//! respect to the case quantities that the adjoints need.
+//!
+//! Each response `Q(u_1 … u_pm, ρ)` depends on the load cases through a few quantities per
+//! case — the output displacement `u_o = L_oᵀu` (Eq. 7), the input displacements, the strain
+//! energy `W` and, for the stress, a full vector — so its adjoint right-hand side for case k is
+//! `∂Q/∂u_k = a_o·L_o + a_in·L_in + a_W·∂W/∂u + b_k` ([`CaseCoefficients`]).
+
+use std::ops::{Index, IndexMut};
+
+use crate::analysis::CaseResults;
+use crate::problem::{Objective, Problem, Tilt, shoelace, shoelace_gradient};
+
+/// The tilt constraint bounds the angle error by `TILT_MARGIN · τ`: MMA leaves an active
+/// constraint slightly violated while β continuation perturbs the design, and the margin keeps
+/// the delivered design within the documented tolerance τ.
+pub const TILT_MARGIN: f64 = 0.75;
+
+/// Exponent of the p-norm that aggregates per-case strain energies (Σ ≈ max_k W_k) and input
+/// strokes; the p-norm over-estimates the maximum by at most `N^{1/p}` (conservative).
+pub const AGGREGATION_P: f64 = 8.0;
+
+/// A response of the problem.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ResponseKind {
+    /// The maximized objective Φ: signed workspace area `sign·J` (Eq. 4) or `d·u_out`.
+    Objective,
+    /// p-norm aggregate of the per-case strain energies [J] (≈ Σ of Eq. 15).
+    Energy,
+    /// p-norm aggregate of |u_in| / max stroke (1 = at the stroke limit).
+    Stroke,
+    /// Orientation error of the differential output (≤ 0 within tolerance; [`tilt`]).
+    Tilt,
+    /// p-norm aggregate of the relaxed von Mises stress / design allowable at the Table 2
+    /// extreme inputs ([`crate::stress`]).
+    Stress,
+    /// Volume fraction of the design elements.
+    Volume,
+}
+
+impl ResponseKind {
+    /// Every response, in a fixed order.
+    pub const ALL: [ResponseKind; 6] = [
+        ResponseKind::Objective,
+        ResponseKind::Energy,
+        ResponseKind::Stroke,
+        ResponseKind::Tilt,
+        ResponseKind::Stress,
+        ResponseKind::Volume,
+    ];
+
+    /// Responses computed from the load cases (by adjoints); the volume is not.
+    pub const FE: [ResponseKind; 5] = [
+        ResponseKind::Objective,
+        ResponseKind::Energy,
+        ResponseKind::Stroke,
+        ResponseKind::Tilt,
+        ResponseKind::Stress,
+    ];
+
+    /// A short name (for tables and gradient checks).
+    pub fn name(self) -> &'static str {
+        match self {
+            ResponseKind::Objective => "objective",
+            ResponseKind::Energy => "strain energy",
+            ResponseKind::Stroke => "input stroke",
+            ResponseKind::Tilt => "tilt",
+            ResponseKind::Stress => "stress",
+            ResponseKind::Volume => "volume",
+        }
+    }
+
+    fn index(self) -> usize {
+        self as usize
+    }
+}
+
+/// One value per response, indexed by [`ResponseKind`].
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PerResponse<T>(pub [T; 6]);
+
+impl<T> Index<ResponseKind> for PerResponse<T> {
+    type Output = T;
+    fn index(&self, q: ResponseKind) -> &T {
+        &self.0[q.index()]
+    }
+}
+
+impl<T> IndexMut<ResponseKind> for PerResponse<T> {
+    fn index_mut(&mut self, q: ResponseKind) -> &mut T {
+        &mut self.0[q.index()]
+    }
+}
+
+impl<T> PerResponse<T> {
+    /// A map built from a function of the response.
+    pub fn from_fn(f: impl FnMut(ResponseKind) -> T) -> Self {
+        PerResponse(ResponseKind::ALL.map(f))
+    }
+}
+
+/// `∂Q/∂(case quantities)` of one response for one load case (module docs).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CaseCoefficients {
+    /// `∂Q/∂u_o` (x, y).
+    pub output: [f64; 2],
+    /// `∂Q/∂u_in,i` per input port (at most two).
+    pub inputs: [f64; 2],
+    /// `∂Q/∂W_k` (strain energy of the case).
+    pub energy: f64,
+    /// Any other part of `∂Q/∂u_k`, as a full vector (the stress response).
+    pub extra: Option<Vec<f64>>,
+}
+
+impl CaseCoefficients {
+    /// Whether the response depends on this case at all.
+    pub fn is_active(&self) -> bool {
+        self.output.iter().chain(&self.inputs).any(|v| *v != 0.0)
+            || self.energy != 0.0
+            || self.extra.is_some()
+    }
+}
+
+/// A response's value and its partial derivatives: per case, and the explicit `∂Q/∂ρ` at fixed
+/// displacements (the stress relaxation; zero for the others).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct ResponseCoefficients {
+    /// The value Q.
+    pub value: f64,
+    /// Per load case.
+    pub cases: Vec<CaseCoefficients>,
+    /// Explicit `∂Q/∂ρ_e` (length n_elements), if any.
+    pub explicit: Option<Vec<f64>>,
+}
+
+impl ResponseCoefficients {
+    fn zero(value: f64, nc: usize) -> Self {
+        Self {
+            value,
+            cases: vec![CaseCoefficients::default(); nc],
+            explicit: None,
+        }
+    }
+}
+
+/// `‖v‖_p` and its gradient `∂‖v‖_p/∂v` (scaled by the largest entry, overflow-free).
+pub fn pnorm(v: &[f64], p: f64) -> (f64, Vec<f64>) {
+    let vmax = v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    if vmax == 0.0 {
+        return (0.0, vec![0.0; v.len()]);
+    }
+    let s: f64 = v.iter().map(|x| (x.abs() / vmax).powf(p)).sum();
+    let n = vmax * s.powf(1.0 / p);
+    let d = v
+        .iter()
+        .map(|x| (x.abs() / n).powf(p - 1.0) * x.signum())
+        .collect();
+    (n, d)
+}
+
+/// The objective Φ (Eq. 4 or `d·u_out`) and the shoelace area J of the output polygon (0 for
+/// the displacement objective).
+pub fn objective(problem: &Problem, r: &CaseResults) -> (ResponseCoefficients, f64) {
+    let nc = r.outputs.len();
+    match problem.objective {
+        Objective::Workspace { sign } => {
+            let a = shoelace(&r.outputs);
+            let mut c = ResponseCoefficients::zero(sign * a, nc);
+            for (cc, g) in c.cases.iter_mut().zip(shoelace_gradient(&r.outputs)) {
+                cc.output = [sign * g[0], sign * g[1]];
+            }
+            (c, a)
+        }
+        Objective::Displacement { direction } => {
+            let o = r.outputs[0];
+            let mut c = ResponseCoefficients::zero(direction[0] * o[0] + direction[1] * o[1], nc);
+            c.cases[0].output = direction;
+            (c, 0.0)
+        }
+    }
+}
+
+/// p-norm of the per-case strain energies.
+pub fn energy(r: &CaseResults) -> ResponseCoefficients {
+    let (value, de) = pnorm(&r.energies, AGGREGATION_P);
+    let mut c = ResponseCoefficients::zero(value, r.energies.len());
+    for (cc, d) in c.cases.iter_mut().zip(de) {
+        cc.energy = d;
+    }
+    c
+}
+
+/// p-norm (exponent `2·AGGREGATION_P`) of `|u_in| / max_stroke` over cases and inputs.
+pub fn stroke(max_stroke: f64, r: &CaseResults) -> ResponseCoefficients {
+    let ni = r.inputs.first().map_or(0, Vec::len);
+    let s: Vec<f64> = r.inputs.iter().flatten().map(|u| u / max_stroke).collect();
+    let (value, ds) = pnorm(&s, 2.0 * AGGREGATION_P);
+    let mut c = ResponseCoefficients::zero(value, r.inputs.len());
+    for (k, cc) in c.cases.iter_mut().enumerate() {
+        for i in 0..ni {
+            cc.inputs[i] = ds[k * ni + i] / max_stroke;
+        }
+    }
+    c
+}
+
+/// Tilt measure `((D·n)² − t (D·d)²) / (t |D|²)`, `t = tan²(TILT_MARGIN·τ)`, of the
+/// differential output `D = u_o(+a,−a) − u_o(−a,+a)` against the axis `d = (sin θ, cos θ)`,
+/// `n = (cos θ, −sin θ)` (Figure 4b): ≤ 0 iff `D` is within `TILT_MARGIN·τ` of the axis (either
+/// sign of `D·d`; the objective's orientation fixes it). Dimensionless and independent of |D|
+/// (`= (tan²φ − t) cos²φ / t` for an angle error φ), so it stays O(1) while the workspace
+/// grows.
+pub fn tilt(t: Tilt, corners: (usize, usize), r: &CaseResults) -> ResponseCoefficients {
+    let (kc, kt) = corners;
+    let (oc, ot) = (r.outputs[kc], r.outputs[kt]);
+    let dvec = [oc[0] - ot[0], oc[1] - ot[1]];
+    let d = [t.theta.sin(), t.theta.cos()];
+    let n = [t.theta.cos(), -t.theta.sin()];
+    let (dn, dd) = (
+        dvec[0] * n[0] + dvec[1] * n[1],
+        dvec[0] * d[0] + dvec[1] * d[1],
+    );
+    let t2 = (TILT_MARGIN * t.tolerance).tan().powi(2);
+    let (a, b) = (dn * dn, dd * dd);
+    let s2 = (a + b).max(f64::MIN_POSITIVE);
+    let ga = b * (1.0 + t2) / (t2 * s2 * s2);
+    let gb = -a * (1.0 + t2) / (t2 * s2 * s2);
+    let g = [
+        ga * 2.0 * dn * n[0] + gb * 2.0 * dd * d[0],
+        ga * 2.0 * dn * n[1] + gb * 2.0 * dd * d[1],
+    ];
+    let mut c = ResponseCoefficients::zero((a - t2 * b) / (t2 * s2), r.outputs.len());
+    for i in 0..2 {
+        c.cases[kc].output[i] += g[i];
+        c.cases[kt].output[i] -= g[i];
+    }
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pnorm_gradient_matches_central_differences() {
+        let v = [0.3, -1.2, 0.8, 1.1];
+        let (n, d) = pnorm(&v, 8.0);
+        assert!(n >= 1.2 && n <= 1.2 * 4f64.powf(1.0 / 8.0));
+        let h = 1e-7;
+        for j in 0..v.len() {
+            let (mut p, mut m) = (v, v);
+            p[j] += h;
+            m[j] -= h;
+            let fd = (pnorm(&p, 8.0).0 - pnorm(&m, 8.0).0) / (2.0 * h);
+            assert!((fd - d[j]).abs() < 1e-7, "{fd} vs {}", d[j]);
+        }
+    }
+
+    #[test]
+    fn per_response_is_indexed_by_name() {
+        let mut p = PerResponse::from_fn(|q| q.name().len());
+        assert_eq!(p[ResponseKind::Volume], "volume".len());
+        p[ResponseKind::Tilt] = 0;
+        assert_eq!(p.0[3], 0);
+    }
+}

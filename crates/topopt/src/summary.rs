@@ -1,0 +1,272 @@
+//! What a finished design delivers, in the terms users compare (DECISIONS.md, "Reference
+//! result"): the amplification α and the direction θ of the differential output, the absolute
+//! workspace area (and relative to the input stroke square, the meaningful reference), the
+//! mass, the design-mesh peak stress against the allowable, the minimum sizes, one-node hinges
+//! and the symmetry, from a final analysis with geometrically nonlinear kinematics and without
+//! the additive material. The robust formulation adds the eroded and dilated workspaces.
+
+use flexstage_fem::{Kinematics, Passive, STRESS_POINTS};
+use flexstage_scenario::Scenario;
+use serde::{Deserialize, Serialize};
+
+use crate::analysis::{AnalysisParams, CaseResults, Evaluator};
+use crate::error::Result;
+use crate::geometry::{Field, Measured, member_sizes, mirror_asymmetry, one_node_hinges};
+use crate::length_scale::LengthScale;
+use crate::problem::{Problem, perimeter_walk, shoelace};
+use crate::realization::{Densities, Realization};
+use crate::stress::stress_measure;
+
+/// Refinement of the geometry checks' grid (sizes resolve to about h/4).
+pub const GEOMETRY_REFINE: usize = 4;
+
+/// What a design delivers (module docs). Areas in m², lengths in m, stresses in Pa.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DesignSummary {
+    /// Workspace area J of the blueprint (Eq. 4) [m²].
+    pub area: f64,
+    /// `J / (2a)²`: the workspace in units of the input stroke square (≈ |det A| ≈ |α| in the
+    /// floating set-up).
+    pub area_ratio: f64,
+    /// Differential amplification `α = ±|D| / Δ`, `D = u_o(+a,−a) − u_o(−a,+a)`,
+    /// `Δ = (x_in1 − x_in2)(+a,−a) − (x_in1 − x_in2)(−a,+a)` (actual input displacements, Eq.
+    /// 24–27), positive when D points along the target axis of the configuration.
+    pub alpha: f64,
+    /// Direction of the differential output's axis from +y towards +x [deg], in (−90, 90].
+    pub theta_deg: f64,
+    /// Target θ of the scenario [deg].
+    pub theta_target_deg: f64,
+    /// Mass of the blueprint [kg]: Σ ρ_e V_e ρ0 over all elements.
+    pub mass: f64,
+    /// Volume fraction of the design elements of the blueprint.
+    pub volume_fraction: f64,
+    /// Workspace area of the eroded design [m²] (robust formulation).
+    pub area_eroded: Option<f64>,
+    /// Workspace area of the dilated design [m²] (robust formulation).
+    pub area_dilated: Option<f64>,
+    /// Largest Gauss-point von Mises stress of the blueprint's solid (ρ ≥ ½) design elements at
+    /// the four corners of the stroke square, on the design mesh [Pa].
+    pub peak_stress: f64,
+    /// What the stress constraint bounds: the largest relaxed (ρ^q) Gauss-point von Mises
+    /// stress of the eroded design (the blueprint without the robust formulation) at the four
+    /// corners [Pa]; lower than `peak_stress` by the relaxation of grey boundary elements.
+    #[serde(default)]
+    pub constrained_stress: Option<f64>,
+    /// Allowable stress `fatigue_strength / safety_factor` [Pa].
+    pub allowable_stress: f64,
+    /// The design-mesh bound `allowable / mesh_stress_factor` the optimizer enforced [Pa].
+    pub design_allowable: f64,
+    /// Number of one-node hinges at ρ = ½ ([`crate::geometry`]).
+    pub one_node_hinges: usize,
+    /// Thinnest solid member of the blueprint at ρ = ½ (local thickness) [m].
+    pub thinnest_member: Option<f64>,
+    /// Where the thinnest member is: (x, y) [m].
+    #[serde(default)]
+    pub thinnest_member_at: Option<[f64; 2]>,
+    /// Narrowest void gap of the blueprint at ρ = ½ (local thickness) [m].
+    pub narrowest_gap: Option<f64>,
+    /// Where the narrowest gap is: (x, y) [m].
+    #[serde(default)]
+    pub narrowest_gap_at: Option<[f64; 2]>,
+    /// Minimum solid size the length scale guarantees [m] (robust formulation).
+    pub guaranteed_member: Option<f64>,
+    /// Minimum void size the length scale guarantees [m] (robust formulation).
+    pub guaranteed_gap: Option<f64>,
+    /// Largest |ρ − ρ_mirror| about x = l/2.
+    pub mirror_asymmetry: f64,
+    /// Lowest natural frequency of the design [Hz] (computed by the reduced model, if run).
+    #[serde(default)]
+    pub first_frequency_hz: Option<f64>,
+}
+
+/// The final analysis of a design: its summary, the blueprint's case results and the
+/// displacements of the compressive corner `(+a, −a)` (for plots).
+#[derive(Debug, Clone)]
+pub struct FinalAnalysis {
+    /// The summary.
+    pub summary: DesignSummary,
+    /// Blueprint case results (the perimeter walk).
+    pub response: CaseResults,
+    /// Full displacement vector of the blueprint at `(+a, −a)`.
+    pub corner_displacement: Vec<f64>,
+}
+
+/// α and θ of the differential output (see [`DesignSummary::alpha`]).
+fn amplification(problem: &Problem, r: &CaseResults, theta_target: f64, sign: f64) -> (f64, f64) {
+    let (kc, kt) = problem.differential_corners();
+    let d = [
+        r.outputs[kc][0] - r.outputs[kt][0],
+        r.outputs[kc][1] - r.outputs[kt][1],
+    ];
+    let din = |k: usize| r.inputs[k][0] - r.inputs[k].get(1).copied().unwrap_or(0.0);
+    let delta = din(kc) - din(kt);
+    let axis = [sign * theta_target.sin(), sign * theta_target.cos()];
+    let along = d[0] * axis[0] + d[1] * axis[1];
+    let alpha = along.signum() * d[0].hypot(d[1]) / delta.abs().max(f64::MIN_POSITIVE);
+    let theta = if d[1] == 0.0 {
+        90.0
+    } else {
+        (d[0] / d[1]).atan().to_degrees()
+    };
+    (alpha, theta)
+}
+
+/// Peak Gauss-point von Mises stress of the solid design elements at the four corners.
+fn peak_stress(problem: &Problem, ev: &Evaluator, rho: &[f64]) -> f64 {
+    let model = &problem.model;
+    let mesh = model.mesh();
+    let mut vm2 = vec![[0.0; STRESS_POINTS]; mesh.n_elements()];
+    let mut peak = 0.0f64;
+    for k in problem.corner_cases() {
+        model.solid_von_mises_squared(&ev.cases[k].u, &mut vm2);
+        for (e, p) in vm2.iter().enumerate() {
+            if mesh.passive[e] == Passive::Design && rho[e] >= 0.5 {
+                peak = p.iter().fold(peak, |a, s| a.max(s.sqrt()));
+            }
+        }
+    }
+    peak
+}
+
+/// The final analysis (module docs) of the densities of an optimization of scenario `s`,
+/// with the length scale of its robust formulation (if any).
+pub fn final_analysis(
+    s: &Scenario,
+    dens: &Densities,
+    length_scale: Option<LengthScale>,
+) -> Result<FinalAnalysis> {
+    let mut problem = Problem::from_scenario(s, Some(Kinematics::TotalLagrangian))?;
+    let a = s.actuators.stroke_amplitude;
+    problem.cases = perimeter_walk(s.optimization.samples, a);
+    let area_of = |rho: &[f64]| -> Result<(f64, CaseResults, Evaluator)> {
+        let mut ev = Evaluator::new(&problem, AnalysisParams::default())?;
+        let r = ev.solve_cases(rho, None)?;
+        Ok((shoelace(&r.outputs), r, ev))
+    };
+    let (area, response, ev) = area_of(&dens.physical)?;
+    let eroded = dens
+        .of(Realization::Eroded)
+        .map(|r| area_of(r).map(|x| (r, x)))
+        .transpose()?;
+    let area_dilated = dens
+        .of(Realization::Dilated)
+        .map(|r| area_of(r).map(|x| x.0))
+        .transpose()?;
+    // The constrained measure, on the eroded design (or the blueprint without it).
+    let constrained_stress = problem.stress.as_ref().map(|sc| {
+        let (rho_s, cases) = match &eroded {
+            Some((rho_e, (_, _, ev_e))) => (*rho_e, &ev_e.cases),
+            None => (dens.physical.as_slice(), &ev.cases),
+        };
+        stress_measure(&problem.model, sc, rho_s, cases).max * sc.allowable
+    });
+    let sign = match s.actuators.configuration {
+        flexstage_scenario::Configuration::Regular => 1.0,
+        flexstage_scenario::Configuration::Reversed => -1.0,
+    };
+    let theta_target = s.output.tilt_deg.to_radians();
+    let (alpha, theta) = amplification(&problem, &response, theta_target, sign);
+    let mesh = problem.mesh();
+    let rho = &dens.physical;
+    let design: Vec<usize> = problem.design_elements();
+    let field = Field {
+        nl: mesh.nl,
+        nw: mesh.nw,
+        h: (mesh.dx(), mesh.dy()),
+        rho,
+    };
+    let (thinnest, gap) = member_sizes(&field, GEOMETRY_REFINE);
+    let element_volume = mesh.dx() * mesh.dy() * mesh.thickness;
+    let summary = DesignSummary {
+        area,
+        area_ratio: area / (2.0 * a).powi(2),
+        alpha,
+        theta_deg: theta,
+        theta_target_deg: s.output.tilt_deg,
+        mass: rho.iter().sum::<f64>() * element_volume * s.material.density,
+        volume_fraction: design.iter().map(|&e| rho[e]).sum::<f64>() / design.len() as f64,
+        area_eroded: eroded.as_ref().map(|(_, x)| x.0),
+        area_dilated,
+        peak_stress: peak_stress(&problem, &ev, rho),
+        constrained_stress,
+        allowable_stress: s.limits.allowable_stress(),
+        design_allowable: s.limits.allowable_stress() / s.limits.mesh_stress_factor,
+        one_node_hinges: one_node_hinges(&field).len(),
+        thinnest_member: thinnest.map(|m| m.size),
+        thinnest_member_at: thinnest.map(|m| m.at),
+        narrowest_gap: gap.map(|m| m.size),
+        narrowest_gap_at: gap.map(|m: Measured| m.at),
+        guaranteed_member: length_scale.map(|l| l.solid_size),
+        guaranteed_gap: length_scale.map(|l| l.void_size),
+        mirror_asymmetry: mirror_asymmetry(&field),
+        first_frequency_hz: None,
+    };
+    let corner_displacement = ev.cases[problem.differential_corners().0].u.clone();
+    Ok(FinalAnalysis {
+        summary,
+        response,
+        corner_displacement,
+    })
+}
+
+impl DesignSummary {
+    /// The summary as lines of text, α, θ and the absolute area first.
+    pub fn lines(&self) -> Vec<String> {
+        let mm = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{:.2} mm", v * 1e3));
+        let at = |p: Option<[f64; 2]>| {
+            p.map_or(String::new(), |p| {
+                format!(" at ({:.1}, {:.1}) mm", p[0] * 1e3, p[1] * 1e3)
+            })
+        };
+        let mut out = vec![
+            format!(
+                "amplification α = {:.3}, output direction θ = {:.2}° (target {:.1}°)",
+                self.alpha, self.theta_deg, self.theta_target_deg
+            ),
+            format!(
+                "workspace area {:.0} µm² ({:.3} × the input stroke square)",
+                self.area * 1e12,
+                self.area_ratio
+            ),
+        ];
+        if let (Some(e), Some(d)) = (self.area_eroded, self.area_dilated) {
+            out.push(format!(
+                "eroded / dilated designs: {:.0} / {:.0} µm² ({:.0} % / {:.0} % of the blueprint)",
+                e * 1e12,
+                d * 1e12,
+                100.0 * e / self.area,
+                100.0 * d / self.area
+            ));
+        }
+        out.push(format!(
+            "mass {:.1} g (volume fraction {:.3})",
+            self.mass * 1e3,
+            self.volume_fraction,
+        ));
+        out.push(format!(
+            "design-mesh von Mises: peak of the solid {:.1} MPa, constrained (relaxed) {} MPa \
+             (bound {:.1} MPa = allowable {:.1} MPa / mesh factor)",
+            self.peak_stress / 1e6,
+            self.constrained_stress
+                .map_or("-".into(), |v| format!("{:.1}", v / 1e6)),
+            self.design_allowable / 1e6,
+            self.allowable_stress / 1e6
+        ));
+        out.push(format!(
+            "thinnest member {}{}, narrowest gap {}{} (guaranteed {} / {}); one-node hinges {}; \
+             mirror asymmetry {:.1e}",
+            mm(self.thinnest_member),
+            at(self.thinnest_member_at),
+            mm(self.narrowest_gap),
+            at(self.narrowest_gap_at),
+            mm(self.guaranteed_member),
+            mm(self.guaranteed_gap),
+            self.one_node_hinges,
+            self.mirror_asymmetry
+        ));
+        if let Some(f) = self.first_frequency_hz {
+            out.push(format!("first natural frequency {f:.0} Hz"));
+        }
+        out
+    }
+}

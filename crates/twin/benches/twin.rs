@@ -1,0 +1,117 @@
+//! Cost of the twin. Target (issue #15): the twin with ≥ 6 modes runs ≥ 20× faster than real
+//! time at 10 kHz on one core (≤ 50 ms per simulated second, rig included), allocation-free per
+//! step (`tests/allocation.rs`). Reported without a target: building the twin and one step of
+//! the full nonlinear transient reference.
+//!
+//! Designs: the rhombus amplifier (`samples::rhombus`) on the quick (48 × 24) and the paper
+//! (120 × 60) meshes. Run: `cargo bench -p flexstage-twin`.
+
+use divan::{Bencher, black_box};
+use flexstage_control::controller::Command;
+use flexstage_control::experiment::Setup;
+use flexstage_control::rig::{RigParams, StagePlant};
+use flexstage_fem::{Transient, TransientParams};
+use flexstage_scenario::{Preset, Scenario};
+use flexstage_twin::{StageFe, Twin, TwinParams, samples};
+
+fn main() {
+    divan::main();
+}
+
+fn scenario(preset: Preset) -> (Scenario, Vec<f64>) {
+    let s = Scenario::preset(preset);
+    let problem = flexstage_reduce::reduction_problem(&s, false).unwrap();
+    let dx = problem.mesh().dx();
+    let rho = samples::rhombus(&problem, 3.0 * dx);
+    (s, rho)
+}
+
+fn twin(preset: Preset) -> (Scenario, Twin) {
+    let (s, rho) = scenario(preset);
+    let t = Twin::from_scenario(&s, &rho).unwrap();
+    (s, t)
+}
+
+/// Voltages of a 3:1 Lissajous-like drive around the bias, one per sample.
+fn drive(n: usize) -> Vec<Command> {
+    (0..n)
+        .map(|k| {
+            let t = k as f64 * 1e-4;
+            let a = 200.0 * (std::f64::consts::TAU * 6.0 * t).sin();
+            let b = 200.0 * (std::f64::consts::TAU * 2.0 * t).sin();
+            Command {
+                voltage: [500.0 + a + b, 500.0 + a - b],
+                ..Command::default()
+            }
+        })
+        .collect()
+}
+
+/// One simulated second (10 000 samples: measure + apply) of the twin in the scenario's
+/// realistic rig.
+#[divan::bench(args = [Preset::Quick, Preset::Paper], sample_count = 10)]
+fn twin_plant_one_second(b: Bencher, preset: Preset) {
+    let (s, t) = twin(preset);
+    let rig = RigParams::from_scenario(&s);
+    let cmds = drive(10_000);
+    println!("{preset:?}: {} modes", t.modal.modes.len());
+    b.with_inputs(|| t.plant(&rig).unwrap())
+        .bench_local_values(|mut p| {
+            for c in &cmds {
+                black_box(p.measure());
+                p.apply(c);
+            }
+            black_box(p.output())
+        });
+}
+
+/// The same second on the lumped 8-state plant in the same rig.
+#[divan::bench(sample_count = 10)]
+fn lumped_plant_one_second(b: Bencher) {
+    let setup = Setup::from_scenario(&Scenario::paper());
+    let cmds = drive(10_000);
+    b.with_inputs(|| setup.lumped_plant().unwrap())
+        .bench_local_values(|mut p| {
+            for c in &cmds {
+                black_box(p.measure());
+                p.apply(c);
+            }
+            black_box(p.output())
+        });
+}
+
+/// Building the twin (Craig–Bampton, modal form, 24 nonlinear static solves).
+#[divan::bench(args = [Preset::Quick, Preset::Paper], sample_count = 3)]
+fn build(b: Bencher, preset: Preset) {
+    let (s, rho) = scenario(preset);
+    b.bench_local(|| {
+        let fe = StageFe::from_scenario(&s, &rho).unwrap();
+        black_box(Twin::build(fe, &TwinParams::from_scenario(&s)).unwrap())
+    });
+}
+
+/// One step (Δt = 2 µs) of the full nonlinear transient reference under a 24 µm PEA load.
+#[divan::bench(args = [Preset::Quick, Preset::Paper], sample_count = 20)]
+fn full_transient_step(b: Bencher, preset: Preset) {
+    let (_, t) = twin(preset);
+    let fe = &t.fe;
+    let mut tr = Transient::new(
+        &fe.model,
+        fe.design(),
+        fe.mass_matrix().unwrap(),
+        t.modal.damping,
+        TransientParams {
+            dt: 2e-6,
+            ..TransientParams::default()
+        },
+    )
+    .unwrap();
+    let mut k = 0usize;
+    let mut p = fe.model.zero_vector();
+    b.bench_local(|| {
+        k += 1;
+        let w = (k as f64 / 200.0).min(1.0);
+        fe.pea_load_into([24e-6 * w, -12e-6 * w], &mut p);
+        tr.step(&p).unwrap();
+    });
+}
