@@ -2,7 +2,9 @@
 //! (Actuators 2022, 11(7), 179) next to the scenario that produced it: Figure 4 (a)/(b),
 //! workspace polygons, convergence, reduced model and validity map, mode shapes, Table A1
 //! and Figure A2 for both PEAs, Table 4 with the estimator and controller gains, Figures
-//! 9–11, the manufacturing outline.
+//! 9–11, the manufacturing outline; beyond the paper, the design summary (α, θ, area, mass,
+//! stresses, minimum sizes, first frequency), the body-fitted verification of the exported
+//! outline and the digital twin (modes, Bode, validity).
 //!
 //! The report only *reads* a run folder, so it works on any run, also a partial one: a
 //! missing result is shown as "not run". Figures are embedded: SVG inline (text stays
@@ -19,11 +21,14 @@
 //! [`Builder::other_figures`] embeds every figure of a folder not shown yet.
 
 mod design;
+mod design_summary;
 mod page;
 mod pea;
 mod reduce;
 mod stage;
 mod tracking;
+mod twin;
+mod verify;
 
 use std::fmt::Write as _;
 use std::fs;
@@ -54,6 +59,11 @@ pub const SECTIONS: &[Section] = &[
         id: "design",
         title: "Design (Figure 4) and workspace",
         render: design::design,
+    },
+    Section {
+        id: "design-summary",
+        title: "Design summary: α, θ, area, mass, stress, sizes, frequency",
+        render: design_summary::design_summary,
     },
     Section {
         id: "convergence",
@@ -89,6 +99,16 @@ pub const SECTIONS: &[Section] = &[
         id: "export",
         title: "Manufacturing outline",
         render: export,
+    },
+    Section {
+        id: "verification",
+        title: "Export verification (body-fitted re-analysis, manufacturability)",
+        render: verify::verification,
+    },
+    Section {
+        id: "twin",
+        title: "Digital twin (modes, frequency response, validity)",
+        render: twin::twin,
     },
 ];
 
