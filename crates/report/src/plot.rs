@@ -302,6 +302,10 @@ impl Figure {
         let (x0, x1, y0, y1) = self.range(size).ok_or_else(|| PlotError::Empty {
             title: self.title.clone(),
         })?;
+        // Tick labels ≈ 80 px apart along x (wide numbers like "-60.0" must not touch in a
+        // narrow panel) and 50 px along y; 3 to 8 of them.
+        let x_ticks = ((size.0.saturating_sub(Y_LABEL_AREA) / 80) as usize).clamp(3, 8);
+        let y_ticks = ((size.1.saturating_sub(X_LABEL_AREA) / 50) as usize).clamp(3, 8);
         let mut chart = ChartBuilder::on(area)
             .caption(&self.title, font(TITLE_SIZE))
             .margin(MARGIN)
@@ -315,8 +319,8 @@ impl Figure {
             .y_desc(&self.y_label)
             .label_style(font(TICK_SIZE))
             .axis_desc_style(font(AXIS_NAME_SIZE))
-            .x_labels(8)
-            .y_labels(8)
+            .x_labels(x_ticks)
+            .y_labels(y_ticks)
             .max_light_lines(2)
             .light_line_style(RGBColor(238, 238, 238))
             .bold_line_style(RGBColor(215, 215, 215))

@@ -47,7 +47,11 @@ pub(super) fn rows(d: &Value, limits: &dyn Fn(&str) -> Option<f64>) -> Vec<Vec<S
     row("α (Eq. 27)", num(d, &["alpha"]).map(fmt_num), String::new());
     row(
         "θ of the differential output",
-        num(d, &["theta_deg"]).map(|t| format!("{}°", fmt_num(t))),
+        num(d, &["theta_deg"]).map(|t| {
+            // Rounding noise of a symmetric design (1e-16°) reads as 0°.
+            let t = if t.abs() < 1e-9 { 0.0 } else { t };
+            format!("{}°", fmt_num(t))
+        }),
         num(d, &["theta_target_deg"])
             .map(|t| format!("target {}°", fmt_num(t)))
             .unwrap_or_default(),

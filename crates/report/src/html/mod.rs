@@ -62,7 +62,7 @@ pub const SECTIONS: &[Section] = &[
     },
     Section {
         id: "design-summary",
-        title: "Design summary: α, θ, area, mass, stress, sizes, frequency",
+        title: "Design summary",
         render: design_summary::design_summary,
     },
     Section {
@@ -102,12 +102,12 @@ pub const SECTIONS: &[Section] = &[
     },
     Section {
         id: "verification",
-        title: "Export verification (body-fitted re-analysis, manufacturability)",
+        title: "Export verification",
         render: verify::verification,
     },
     Section {
         id: "twin",
-        title: "Digital twin (modes, frequency response, validity)",
+        title: "Digital twin",
         render: twin::twin,
     },
 ];
@@ -431,11 +431,8 @@ pub fn summary_rows(root: &Path) -> Vec<(String, String)> {
     let b = &Builder::new(root);
     let mut rows: Vec<(String, String)> = Vec::new();
     if let Some(d) = b.json(layout::design::SUMMARY) {
-        if let (Some(a0), Some(a1), Some(g)) = (
-            num(&d, &["area_initial_m2"]),
-            num(&d, &["area_final_m2"]),
-            num(&d, &["area_growth"]),
-        ) {
+        if let (Some(a0), Some(a1)) = (num(&d, &["area_initial_m2"]), num(&d, &["area_final_m2"])) {
+            let g = num(&d, &["area_growth"]).unwrap_or(a1 / a0);
             rows.push((
                 "workspace area (initial → final)".into(),
                 format!(
@@ -445,6 +442,9 @@ pub fn summary_rows(root: &Path) -> Vec<(String, String)> {
                     fmt_num(g)
                 ),
             ));
+        }
+        if let Some(a) = num(&d, &["design", "alpha"]) {
+            rows.push(("α, design's final analysis (Eq. 27)".into(), fmt_num(a)));
         }
         if let Some(it) = num(&d, &["iterations"]) {
             rows.push((
@@ -459,7 +459,7 @@ pub fn summary_rows(root: &Path) -> Vec<(String, String)> {
     }
     if let Some(r) = b.json(layout::reduce::SUMMARY_JSON) {
         if let Some(a) = num(&r, &["alpha_scalar"]) {
-            rows.push(("α (Eq. 27)".into(), fmt_num(a)));
+            rows.push(("α, reduced model (Eq. 27)".into(), fmt_num(a)));
         }
         if let Some(f) = num(&r, &["modal", "frequencies_hz", "0"]) {
             rows.push((

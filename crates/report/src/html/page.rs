@@ -12,8 +12,8 @@ const STYLE: &str = "body{font-family:system-ui,-apple-system,Segoe UI,Roboto,sa
 margin:0;color:#1b2a41;background:#f5f6f8;font-size:15px;line-height:1.45}\
 header{background:#1b2a41;color:#fff;padding:18px 32px}header h1{margin:0;font-size:24px}\
 header p{margin:4px 0 0;color:#c9d3e3}\
-nav{padding:8px 32px;background:#e4e8ef;position:sticky;top:0;z-index:2}\
-nav a{margin-right:16px;color:#1b2a41;white-space:nowrap}\
+nav{padding:8px 32px;background:#e4e8ef;position:sticky;top:0;z-index:2;display:flex;\
+flex-wrap:wrap;gap:2px 16px;font-size:14px}nav a{color:#1b2a41;white-space:nowrap}\
 main{padding:0 32px 40px;max-width:1180px}section{background:#fff;margin:18px 0;\
 padding:14px 24px;border-radius:6px;box-shadow:0 1px 3px rgba(0,0,0,.12)}\
 h2{margin-top:4px;font-size:21px}h3{font-size:17px;margin:22px 0 8px}\
@@ -25,7 +25,7 @@ background:#fff;cursor:zoom-in}\
 figure img.px{image-rendering:pixelated}\
 figcaption{font-size:14px;color:#445;margin-top:4px}figcaption .src{color:#889;font-size:13px}\
 table{border-collapse:collapse;font-size:14px;margin:8px 0}td,th{border:1px solid #ccd;\
-padding:3px 9px;text-align:right}th{background:#eef1f6}table.kv th,td.l,th.l{text-align:left}\
+padding:3px 9px;text-align:right}th{background:#eef1f6}table.kv th,td.l,th.l,td:first-child,th:first-child{text-align:left}\
 tr.part td{background:#f6f7fa;text-align:left;font-weight:600}\
 .notrun{color:#a33;font-style:italic}.notrun span{color:#888;font-size:13px}\
 .note{color:#445;font-size:14px;max-width:960px}\
