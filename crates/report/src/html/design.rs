@@ -47,7 +47,7 @@ fn designs(b: &Builder) -> Vec<Shown> {
             .unwrap_or(0.0);
         out.push(Shown { prefix, tilt });
     }
-    out.sort_by(|a, b| (a.tilt != 0.0).cmp(&(b.tilt != 0.0)));
+    out.sort_by_key(|d| d.tilt != 0.0);
     out
 }
 

@@ -118,7 +118,7 @@ pub(super) fn rows(d: &Value, limits: &dyn Fn(&str) -> Option<f64>) -> Vec<Vec<S
         "one-node hinges",
         num(d, &["one_node_hinges"]).map(fmt_num),
         match num(d, &["one_node_hinges"]) {
-            Some(n) if n == 0.0 => "none: ok".into(),
+            Some(0.0) => "none: ok".into(),
             Some(_) => "a one-node hinge cannot be manufactured".into(),
             None => String::new(),
         },

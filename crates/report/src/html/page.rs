@@ -108,7 +108,7 @@ pub(super) fn inline_svg(svg: &str) -> Option<String> {
         return None;
     }
     let tag_end = s.find('>')?;
-    let attrs = parse_attributes(&s[4..tag_end].trim_end_matches('/'))?;
+    let attrs = parse_attributes(s[4..tag_end].trim_end_matches('/'))?;
     let get = |n: &str| attrs.iter().find(|(k, _)| k == n).map(|(_, v)| v.as_str());
     let mut tag = String::from("<svg");
     for (k, v) in &attrs {

@@ -120,7 +120,7 @@ fn error_view(b: &mut Builder, track: &Tracking, trajectory: &str, rows: &[Metri
         .iter()
         .flat_map(|(_, _, c)| c.hull.iter())
         .fold(0.0f64, |m, p| m.max(p.0.abs()).max(p.1.abs()));
-    if clouds.is_empty() || !(reach > 0.0) {
+    if clouds.is_empty() || reach.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return;
     }
     let lim = 1.08 * reach;
