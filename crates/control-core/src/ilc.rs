@@ -170,9 +170,18 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
     }
 
     /// One sample: records e = q_d − y and returns the correction c [m] to subtract from the
-    /// measurement the feedback controller sees.
+    /// measurement the feedback controller sees ([`Ilc::correction`] then [`Ilc::record`]).
     #[inline]
     pub fn step(&mut self, y: [f64; 2], reference: [f64; 2]) -> [f64; 2] {
+        let c = self.correction();
+        self.record(y, reference);
+        c
+    }
+
+    /// The correction c_{j+1}[k] [m] of the current sample k (module docs); call once per
+    /// sample, before [`Ilc::record`].
+    #[inline]
+    pub fn correction(&mut self) -> [f64; 2] {
         let n = self.params.period;
         let k = self.k;
         let learned = self.buf.learned.as_ref();
@@ -196,7 +205,15 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
             c
         };
         self.buf.applied.as_mut()[k] = c;
-        let error_now = &mut self.buf.error_now.as_mut()[k];
+        c
+    }
+
+    /// Records the measurement y [m] and the reference q_d [m] of the current sample and
+    /// moves to the next (a new period after N samples).
+    #[inline]
+    pub fn record(&mut self, y: [f64; 2], reference: [f64; 2]) {
+        let n = self.params.period;
+        let error_now = &mut self.buf.error_now.as_mut()[self.k];
         for a in 0..2 {
             let e = reference[a] - y[a];
             error_now[a] = if e.is_finite() { e } else { 0.0 };
@@ -208,6 +225,5 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
             core::mem::swap(&mut self.buf.learned, &mut self.buf.applied);
             core::mem::swap(&mut self.buf.error, &mut self.buf.error_now);
         }
-        c
     }
 }
