@@ -26,6 +26,8 @@
 //! check.
 #![no_std]
 #![deny(missing_docs)]
+// Loops over the two axes index several arrays at once, as the equations do.
+#![allow(clippy::needless_range_loop)]
 
 pub mod ilc;
 pub mod pid;

@@ -6,6 +6,7 @@
 //!
 //! `cargo run --release -p flexstage-twin --example learn -- quick runs/quick/design/design.json [PERIODS]`
 
+use flexstage_control::ControlError;
 use flexstage_control::actuator::Compensation;
 use flexstage_control::controller::StageControl;
 use flexstage_control::experiment::{Setup, Variant, run};
@@ -53,7 +54,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let period = (1.0 / (frequency * t)).round() as usize;
     let make = || -> flexstage_control::Result<(Box<dyn StageControl>, Box<dyn StagePlant>)> {
         let c = setup.controller(Variant::PidFeedforward, Compensation::Inverse, reference)?;
-        let p: Box<dyn StagePlant> = Box::new(twin.plant(&setup.rig)?);
+        let plant = twin
+            .plant(&setup.rig)
+            .map_err(|e| ControlError::Infeasible {
+                what: "twin plant".into(),
+                detail: e.to_string(),
+            })?;
+        let p: Box<dyn StagePlant> = Box::new(plant);
         Ok((c, p))
     };
     let t0 = std::time::Instant::now();
@@ -80,7 +87,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let rec = run(&mut with, p.as_mut(), duration, t, |_| {});
     let (mut c0, mut p0) = make()?;
     let rec0 = run(c0.as_mut(), p0.as_mut(), duration, t, |_| {});
-    println!("period  pid-ff+learning q1/q2 [nm]   pid-ff q1/q2 [nm]   (error against the true output)");
+    println!(
+        "period  pid-ff+learning q1/q2 [nm]   pid-ff q1/q2 [nm]   (error against the true output)"
+    );
     for (j, (a, b)) in rms_per_period(&rec.error, period)
         .iter()
         .zip(rms_per_period(&rec0.error, period))
