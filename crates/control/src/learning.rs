@@ -16,6 +16,14 @@
 //! The kernel is the allocation-free one of the embeddable core, so the simulated and the
 //! embedded learning layers are the same code.
 //!
+//! # Measured
+//! PID + feed-forward, 3:1 Lissajous at 2 Hz (N = 5000), error against the true output:
+//! on the twin of the quick design in its rig (`cargo run --release -p flexstage-twin
+//! --example learn -- quick runs/quick/design/design.json`), 17.0/21.5 nm without learning,
+//! 7.5–7.7/2.2–2.5 nm with it from period 7 to 20 (design γ = 0.7, λ = 5, M = 1,
+//! ρ = 0.941; the sensor noise floor is ≈ 7.8/10.4 nm); on the lumped stage in the rig
+//! (tests/learning.rs) 23/46 nm → 2.8/2.7 nm after 10 periods.
+//!
 //! # Design from the loop's frequency response
 //! The signals of a learning controller are N-periodic, so the only frequencies are the
 //! harmonics k f_0 (f_0 = f_s/N) up to Nyquist. [`measure_learning_plant`] measures T at
