@@ -36,9 +36,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         kd: setup.pid.kd,
     };
     let stroke = setup.controller.actuator.stroke;
-    let law = PidLaw::new(gains, [[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]], t, stroke)?;
+    let law = PidLaw::new(
+        gains,
+        [[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]],
+        t,
+        stroke,
+    )?;
     // On a target these are `static mut` arrays or a linker section; here on the stack.
-    let (mut b1, mut b2, mut b3, mut b4) = ([[0.0; 2]; N], [[0.0; 2]; N], [[0.0; 2]; N], [[0.0; 2]; N]);
+    let (mut b1, mut b2, mut b3, mut b4) =
+        ([[0.0; 2]; N], [[0.0; 2]; N], [[0.0; 2]; N], [[0.0; 2]; N]);
     let learning = IlcParams {
         period: N,
         gain: 0.5,

@@ -54,8 +54,8 @@ fn compare(pid: PidParams, amplitude_scale: f64) -> (f64, usize) {
         }
         let cmd = full.step(y);
         let u = core.step(y, cmd.reference);
-        for i in 0..2 {
-            worst = worst.max((u[i] - cmd.x_nom[i]).abs());
+        for (a, b) in u.iter().zip(&cmd.x_nom) {
+            worst = worst.max((a - b).abs());
         }
         assert_eq!(core.saturated(), cmd.saturated, "sample {k}");
         saturated += cmd.saturated as usize;
