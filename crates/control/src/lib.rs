@@ -26,6 +26,8 @@
 //! * [`experiment`]: one run of a variant on a plant ([`experiment::experiment_on`] takes any
 //!   [`rig::StagePlant`]: the lumped model in the rig, [`experiment::Setup::lumped_plant`], or
 //!   the twin of `flexstage-twin`), its time series and metrics;
+//! * [`learning`]: iterative learning on top of any controller for periodic scans, designed
+//!   from the loop's measured frequency response (monotone-convergence check);
 //! * [`analysis`]: closed-loop poles of the sampled loop on the nominal linear model;
 //! * [`linalg`]: `expm`, `c2d` (ZOH), `lyap`, `dlyap`, `poles` in python-control style;
 //! * [`samples`]: problems with known answers.
@@ -99,6 +101,7 @@ pub mod backstepping;
 pub mod controller;
 mod error;
 pub mod experiment;
+pub mod learning;
 pub mod linalg;
 pub mod model;
 pub mod observer;

@@ -432,6 +432,12 @@ pub struct Identification {
     /// The parameter set to use (e.g. in `flexstage track`): the estimates, with any
     /// negative damping estimate replaced by the guess (listed in `warnings`).
     pub params: StageParams,
+    /// The cross-axis coupling stiffness k_c of Eq. (30) [N/m] for the controller's model
+    /// (`flexstage_control::model::StageModel::with_coupling(&params, coupling)`): the mean of
+    /// the q_o1 and q_o2 rows' estimates ([`Physical::coupling`]), 0 when
+    /// [`IdentifyParams::coupling`] is off. Keeping it in the model cuts the tracking error
+    /// 3–5× at ten times the default scan speed (issue #18).
+    pub coupling: f64,
     /// Condition numbers of the four rows ([`StageIdentifier::conditioning`]).
     pub conditioning: [f64; 4],
     /// Convergence history.
@@ -516,6 +522,11 @@ pub fn identify(
             *slot = g;
         }
     }
+    let coupling = if params.coupling {
+        0.5 * (raw.coupling[0] + raw.coupling[1])
+    } else {
+        0.0
+    };
     Ok(Identification {
         sample_time: ts,
         regression_time: id.regression_time(),
@@ -523,6 +534,7 @@ pub fn identify(
         theta: id.theta(),
         raw,
         params: out,
+        coupling,
         conditioning,
         history,
         warnings,

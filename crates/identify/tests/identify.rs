@@ -124,3 +124,33 @@ fn nearly_identical_drives_warn_of_ill_conditioning() {
         Err(e) => panic!("expected a warning, got the error {e}"),
     }
 }
+
+#[test]
+fn identified_coupling_is_the_plants_cross_stiffness() {
+    // Reference: the plant's own cross-coupling k_c of Eq. (30) (flexstage-control's lumped
+    // plant). Goal: the field the controller uses (`Identification::coupling`) carries it,
+    // noise-free on the full plant (Bouc–Wen PEAs, cross terms), and is 0 when switched off.
+    let sim = samples::paper_simulation(2.0, false, false);
+    assert!(sim.plant.coupling > 0.0);
+    let record = simulate(&sim).unwrap();
+    let guess = samples::table4_guess();
+    let id = identify(&record, &guess, &IdentifyParams::default()).unwrap();
+    let err = id.coupling / sim.plant.coupling - 1.0;
+    println!(
+        "k_c {} vs {}: {:+.2} %",
+        id.coupling,
+        sim.plant.coupling,
+        100.0 * err
+    );
+    assert!(
+        err.abs() < 0.05,
+        "k_c {} vs {}",
+        id.coupling,
+        sim.plant.coupling
+    );
+    let off = IdentifyParams {
+        coupling: false,
+        ..IdentifyParams::default()
+    };
+    assert_eq!(identify(&record, &guess, &off).unwrap().coupling, 0.0);
+}

@@ -65,3 +65,16 @@ pub fn identification_problem(
 
 /// A linear regression with known θ*, for RLS tests (moved to `flexstage-numerics`).
 pub use flexstage_numerics::samples::linear_regression;
+
+/// A single-amplitude 0–1000 V drive of `shape` (triangle or sine) at 1 Hz for 10 periods:
+/// the record on which a narrow-valley d_p profile defeats a local search (see
+/// `identify`'s module docs, "Global d_p").
+pub fn single_amplitude_drive(shape: WaveShape) -> Waveform {
+    Waveform {
+        shape,
+        low: 0.0,
+        high: 1000.0,
+        frequency: 1.0,
+        cycles: 10,
+    }
+}
