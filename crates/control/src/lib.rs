@@ -100,11 +100,14 @@ pub mod controller;
 mod error;
 pub mod experiment;
 pub mod linalg;
+pub mod margins;
 pub mod model;
 pub mod observer;
+pub mod pi_notch;
 pub mod plant;
 pub mod rig;
 pub mod samples;
 pub mod trajectory;
+pub mod tuning;
 
 pub use error::{ControlError, Result};
