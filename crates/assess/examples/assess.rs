@@ -7,7 +7,7 @@
 //! cargo run --release -p flexstage-assess --example assess -- quick runs/quick/design/design.json [OUT_DIR]
 //! ```
 
-use flexstage_assess::{Assessment, AssessParams, Bench};
+use flexstage_assess::{AssessParams, Assessment, Bench};
 use flexstage_control::experiment::Setup;
 use flexstage_reduce::{ReduceParams, reduce, reduction_problem};
 use flexstage_scenario::{Preset, Scenario};

@@ -119,7 +119,7 @@ impl Bench {
                     kp: p.kp,
                     ki: p.ki,
                     kd: p.kd,
-                    notch: None,
+                    notches: [None, None],
                 };
                 Some(PiNotchParams {
                     axes: [axis; 2],
@@ -144,7 +144,9 @@ impl Bench {
         actuator.compensation = compensation;
         Ok(match c {
             Candidate::Robust => setup.controller(Variant::Robust, compensation, reference)?,
-            Candidate::NonRobust => setup.controller(Variant::NonRobust, compensation, reference)?,
+            Candidate::NonRobust => {
+                setup.controller(Variant::NonRobust, compensation, reference)?
+            }
             Candidate::PidScenario => Box::new(PidController::new(
                 &setup.controller.model,
                 setup.pid,

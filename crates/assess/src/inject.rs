@@ -127,15 +127,19 @@ pub fn injected_margins(
     m: &MarginParams,
     p: &InjectionParams,
 ) -> Result<Option<[Margins; 2]>> {
-    if !is_stable(bench, c, delay, 0.3)? {
+    if !is_stable(bench, c, delay, 1.0)? {
         return Ok(None);
     }
     let mut out = [None, None];
     for axis in 0..2 {
         let mut err = None;
+        let mut diverged = false;
         let r = margin(
             |f| match return_ratio(bench, c, delay, axis, f, p) {
-                Ok(z) => z,
+                Ok(z) => {
+                    diverged |= !(z.re.is_finite() && z.im.is_finite());
+                    z
+                }
                 Err(e) => {
                     err = Some(e);
                     Complex::new(f64::NAN, f64::NAN)
@@ -145,6 +149,10 @@ pub fn injected_margins(
         )?;
         if let Some(e) = err {
             return Err(e);
+        }
+        if diverged {
+            // The loop diverged under injection: not stable, no margins.
+            return Ok(None);
         }
         out[axis] = Some(r);
     }

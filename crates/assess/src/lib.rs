@@ -105,7 +105,14 @@ impl Assessment {
                 reference,
                 duration,
             )?;
-            tracking.push((c, if track::diverged(&m) { [f64::INFINITY; 2] } else { m.rms }));
+            tracking.push((
+                c,
+                if track::diverged(&m) {
+                    [f64::INFINITY; 2]
+                } else {
+                    m.rms
+                },
+            ));
             standstill.push((c, track::standstill(bench, c, 0.2)?));
         }
         let mc = montecarlo::monte_carlo(bench, cands, reference, &p.montecarlo)?;

@@ -51,14 +51,17 @@ pub fn margins_table(
     let mut rows = Vec::new();
     for &c in candidates {
         let (method, m) = if c.is_linear() {
-            let stable = crate::inject::is_stable(bench, c, delay, 0.3)?;
+            let stable = crate::inject::is_stable(bench, c, delay, 1.0)?;
             let m = bench.analytic_margins(c, delay)?;
             ("transfer function", if stable { m } else { None })
         } else {
             let mut mp = bench.tuning.margins;
             mp.points = 48;
             mp.refine = 10;
-            ("sine injection", injected_margins(bench, c, delay, &mp, injection)?)
+            (
+                "sine injection",
+                injected_margins(bench, c, delay, &mp, injection)?,
+            )
         };
         let meets = m.is_some_and(|m| {
             m.iter()

@@ -13,7 +13,7 @@
 //! * delay 0, 1 or 2 samples.
 //!
 //! A plant passes when the run does not diverge and the RMS error of each axis is within
-//! [`MonteCarloParams::rms_bound`].
+//! [`MonteCarloParams::rms_bound_pct`] of that axis's reference range (peak to peak).
 
 use flexstage_control::trajectory::Reference;
 use flexstage_numerics::noise::SplitMix64;
@@ -30,9 +30,9 @@ pub struct MonteCarloParams {
     pub plants: usize,
     /// Duration of each run [s], > 0 (default 0.5: one period of the default Lissajous).
     pub duration: f64,
-    /// Pass bound on the RMS error per axis [m] (default 2 × the noise floor of the
-    /// default sensors plus 10 nm: 25/30 nm).
-    pub rms_bound: [f64; 2],
+    /// Pass bound on the RMS error per axis in % of its reference range, > 0 (default 0.5 %:
+    /// 80/160 nm on the default 8/16 µm Lissajous).
+    pub rms_bound_pct: f64,
     /// Seed of the perturbations.
     pub seed: u64,
     /// Relative spread of K, M, α and the compensator parameters (default 0.2).
@@ -50,7 +50,7 @@ impl Default for MonteCarloParams {
         MonteCarloParams {
             plants: 100,
             duration: 0.5,
-            rms_bound: [25e-9, 30e-9],
+            rms_bound_pct: 0.5,
             seed: 18,
             spread: 0.2,
             coupling: 0.15,
@@ -63,9 +63,30 @@ impl Default for MonteCarloParams {
 impl MonteCarloParams {
     /// Checks the fields.
     pub fn validate(&self) -> Result<()> {
-        check("montecarlo.plants", self.plants as f64, self.plants >= 1, "≥ 1")?;
-        check("montecarlo.duration", self.duration, self.duration > 0.0, "> 0 s")?;
-        check("montecarlo.spread", self.spread, (0.0..0.9).contains(&self.spread), "0–0.9")?;
+        check(
+            "montecarlo.plants",
+            self.plants as f64,
+            self.plants >= 1,
+            "≥ 1",
+        )?;
+        check(
+            "montecarlo.duration",
+            self.duration,
+            self.duration > 0.0,
+            "> 0 s",
+        )?;
+        check(
+            "montecarlo.rms_bound_pct",
+            self.rms_bound_pct,
+            self.rms_bound_pct > 0.0,
+            "> 0 %",
+        )?;
+        check(
+            "montecarlo.spread",
+            self.spread,
+            (0.0..0.9).contains(&self.spread),
+            "0–0.9",
+        )?;
         check(
             "montecarlo.coupling",
             self.coupling,
@@ -180,7 +201,11 @@ fn one_plant(
     let mut rng = SplitMix64::new(p.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ i as u64);
     let mut u = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
     let s = p.spread;
-    let (k, m, a) = (u(1.0 - s, 1.0 + s), u(1.0 - s, 1.0 + s), u(1.0 - s, 1.0 + s));
+    let (k, m, a) = (
+        u(1.0 - s, 1.0 + s),
+        u(1.0 - s, 1.0 + s),
+        u(1.0 - s, 1.0 + s),
+    );
     let zeta = u(p.damping[0], p.damping[1]);
     let mut coupling = [0.0; 2];
     for c in &mut coupling {
@@ -196,7 +221,10 @@ fn one_plant(
             *x /= m.sqrt();
         }
         let o = mode.output.map(|x| x / m.sqrt());
-        mode.output = [o[0] + coupling[0] * o[1] * a, a * (o[1] + coupling[1] * o[0])];
+        mode.output = [
+            o[0] + coupling[0] * o[1] * a,
+            a * (o[1] + coupling[1] * o[0]),
+        ];
     }
     let mut setup = bench.setup.clone();
     for h in &mut setup.controller.actuator.hysteresis {
@@ -212,8 +240,13 @@ fn one_plant(
     let mut results = Vec::with_capacity(candidates.len());
     for &c in candidates {
         let r = track_on(bench, &setup, &twin, &rig, c, reference, p.duration)?;
-        let pass = !diverged(&r) && r.rms[0] <= p.rms_bound[0] && r.rms[1] <= p.rms_bound[1];
-        let rms = if diverged(&r) { [f64::INFINITY; 2] } else { r.rms };
+        let pass =
+            !diverged(&r) && r.rms_pct[0] <= p.rms_bound_pct && r.rms_pct[1] <= p.rms_bound_pct;
+        let rms = if diverged(&r) {
+            [f64::INFINITY; 2]
+        } else {
+            r.rms
+        };
         results.push((c, rms, pass));
     }
     Ok(PlantResult {

@@ -47,8 +47,8 @@ pub struct AxisGains {
     pub ki: f64,
     /// Derivative gain [s], ≥ 0.
     pub kd: f64,
-    /// Optional notch.
-    pub notch: Option<Notch>,
+    /// Up to two notches in series (None: none).
+    pub notches: [Option<Notch>; 2],
 }
 
 /// Settings of [`PiNotchController`].
@@ -86,7 +86,7 @@ impl PiNotchParams {
                 a.kd >= 0.0,
                 "≥ 0 [s]",
             )?;
-            if let Some(n) = a.notch {
+            for n in a.notches.iter().flatten() {
                 check(
                     &format!("pi_notch.axes[{i}].notch.frequency"),
                     n.frequency,
@@ -124,15 +124,14 @@ impl PiNotchParams {
         let z = Complex::from_polar(1.0, std::f64::consts::TAU * f * t);
         let one = Complex::new(1.0, 0.0);
         self.axes.map(|a| {
-            let pid = a.kp + a.ki * t * (z + one) / (2.0 * (z - one)) + a.kd * (one - one / z) / t;
-            match a.notch {
-                Some(n) => {
-                    let q = Biquad::notch(&n, t);
-                    pid * (q.b[0] + q.b[1] / z + q.b[2] / (z * z))
-                        / (one + q.a[0] / z + q.a[1] / (z * z))
-                }
-                None => pid,
+            let mut c =
+                a.kp + a.ki * t * (z + one) / (2.0 * (z - one)) + a.kd * (one - one / z) / t;
+            for n in a.notches.iter().flatten() {
+                let q = Biquad::notch(n, t);
+                c *= (q.b[0] + q.b[1] / z + q.b[2] / (z * z))
+                    / (one + q.a[0] / z + q.a[1] / (z * z));
             }
+            c
         })
     }
 }
@@ -191,7 +190,7 @@ impl Biquad {
 pub struct PiNotchController {
     params: PiNotchParams,
     g_inv: Matrix2<f64>,
-    notch: [Biquad; 2],
+    notch: [[Biquad; 2]; 2],
     actuator: Actuator,
     reference: Reference,
     k: u64,
@@ -218,8 +217,8 @@ impl PiNotchController {
             })?;
         let t = params.sample_time;
         let notch = params.axes.map(|a| {
-            a.notch
-                .map_or_else(Biquad::identity, |n| Biquad::notch(&n, t))
+            a.notches
+                .map(|n| n.map_or_else(Biquad::identity, |n| Biquad::notch(&n, t)))
         });
         Ok(PiNotchController {
             params,
@@ -254,7 +253,8 @@ impl StageControl for PiNotchController {
                 0.0
             };
             let pid = a.kp * e[i] + a.ki * (self.integral[i] + 0.5 * t * e[i]) + a.kd * de;
-            w[i] = r.q[i] + self.notch[i].step(pid);
+            let c = self.notch[i][0].step(pid);
+            w[i] = r.q[i] + self.notch[i][1].step(c);
         }
         let u = self.g_inv * w;
         let mut u = [u[0], u[1]];
@@ -295,7 +295,7 @@ mod tests {
             kp: 0.3,
             ki: 800.0,
             kd: 1e-5,
-            notch,
+            notches: [notch, None],
         };
         PiNotchParams {
             axes: [a, a],

@@ -79,7 +79,12 @@ impl TuningParams {
         )?;
         for &r in self.zero_ratios.iter().chain(&self.derivative_corners) {
             if r != f64::INFINITY {
-                check("tuning.zero_ratios / derivative_corners", r, r > 0.0, "> 0 or ∞")?;
+                check(
+                    "tuning.zero_ratios / derivative_corners",
+                    r,
+                    r > 0.0,
+                    "> 0 or ∞",
+                )?;
             }
         }
         check(
@@ -153,21 +158,36 @@ pub fn loop_margins(
     ])
 }
 
-/// The notch of axis `i` by step 1 of the procedure: at the mode with the largest peak of
-/// |P_ii| (the mode that dominates that axis).
-pub fn notch_for_axis(plant: &dyn LoopPlant, i: usize, width: f64) -> Option<Notch> {
+/// The notches of axis `i` by step 1 of the procedure: at the highest peaks of the sampled
+/// response |P_ii(e^{jωT})| relative to its static value (aliased modes above Nyquist
+/// included: a mode at f_s − f appears at f), each at least 1.5× the static value, up to
+/// two, with the depth ζ_z/ζ_p equal to the inverse of the peak's height (the notch flattens
+/// the peak) and the width ζ_p = `width`.
+pub fn notches_for_axis(plant: &dyn LoopPlant, i: usize, width: f64) -> [Option<Notch>; 2] {
     let nyquist = 0.5 / plant.sample_time();
-    plant
-        .modes()
-        .into_iter()
-        .filter(|(f, _)| *f < 0.98 * nyquist)
-        .map(|(f, z)| (f, z, plant.response(f)[i][i].norm()))
-        .max_by(|a, b| a.2.total_cmp(&b.2))
-        .map(|(f, z, _)| Notch {
+    let g0 = plant.response(1e-3 * nyquist)[i][i].norm();
+    let n = 2000;
+    let grid: Vec<f64> = (0..n)
+        .map(|k| nyquist * (0.02 + 0.97 * k as f64 / (n - 1) as f64))
+        .collect();
+    let mag: Vec<f64> = grid
+        .iter()
+        .map(|&f| plant.response(f)[i][i].norm() / g0)
+        .collect();
+    let mut peaks: Vec<(f64, f64)> = (1..n - 1)
+        .filter(|&k| mag[k] > mag[k - 1] && mag[k] >= mag[k + 1] && mag[k] > 1.5)
+        .map(|k| (grid[k], mag[k]))
+        .collect();
+    peaks.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let mut out = [None, None];
+    for (slot, (f, h)) in out.iter_mut().zip(peaks) {
+        *slot = Some(Notch {
             frequency: f,
-            zero_damping: z.min(0.5 * width),
+            zero_damping: width / h,
             pole_damping: width,
-        })
+        });
+    }
+    out
 }
 
 /// The result of tuning one structure.
@@ -184,8 +204,8 @@ pub fn tune(plant: &dyn LoopPlant, structure: Structure, p: &TuningParams) -> Re
     p.validate()?;
     let t = plant.sample_time();
     let notch = match structure {
-        Structure::PiNotch => [0, 1].map(|i| notch_for_axis(plant, i, p.notch_width)),
-        Structure::Pid => [None, None],
+        Structure::PiNotch => [0, 1].map(|i| notches_for_axis(plant, i, p.notch_width)),
+        Structure::Pid => [[None, None]; 2],
     };
     let corners: Vec<Option<f64>> = match structure {
         Structure::PiNotch => vec![None],
@@ -205,7 +225,7 @@ pub fn tune(plant: &dyn LoopPlant, structure: Structure, p: &TuningParams) -> Re
                         kp,
                         ki,
                         kd,
-                        notch: n,
+                        notches: n,
                     }),
                     static_gain: plant.static_gain(),
                     sample_time: t,
@@ -396,7 +416,15 @@ mod tests {
             let m = loop_margins(&p, &more, &tp.margins).unwrap();
             assert!(!m.iter().all(|m| m.meets(6.0, 40.0)), "{s:?} not maximal");
         }
-        let n = notch_for_axis(&p, 1, 0.5).unwrap();
-        assert!((n.frequency - 3900.0).abs() < 1e-9);
+        let n = notches_for_axis(&p, 1, 0.5)[0].unwrap();
+        assert!((n.frequency - 3900.0).abs() < 5.0, "{n:?}");
+        // The peak of a 1 % mode is 1/(2ζ) = 50× its static value, times the ZOH's
+        // sin(πfT)/(πfT) in the sampled response: the notch depth is its inverse.
+        let x = std::f64::consts::PI * 3900.0 * 1e-4;
+        let peak = 50.0 * x.sin() / x;
+        assert!(
+            (n.zero_damping / n.pole_damping * peak - 1.0).abs() < 0.05,
+            "{n:?}"
+        );
     }
 }
