@@ -80,6 +80,7 @@ fn experiment_one_second_two_in_parallel(b: Bencher) {
 /// One step of the PI + two notches + FF controller (inverse-hysteresis compensation on).
 #[divan::bench(sample_size = 1000)]
 fn pi_notch_step(b: Bencher) {
+    use flexstage_control::controller::StageControl;
     use flexstage_control::pi_notch::{AxisGains, Notch, PiNotchController, PiNotchParams};
     let (setup, r) = setup();
     let y = measurements(4096);
