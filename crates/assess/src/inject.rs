@@ -89,7 +89,9 @@ pub fn return_ratio(
 
 /// Whether the closed loop of a candidate on the linear rig is asymptotically stable: after
 /// a 10 nm kick of both measurements, the output over the last fifth of `duration` [s] stays
-/// below half its peak and decays.
+/// below a tenth of its peak and does not grow over the last tenth. (A slowly growing mode
+/// can still pass for a short `duration`; [`injected_margins`] also reports a loop that
+/// diverges under injection as unstable.)
 pub fn is_stable(bench: &Bench, c: Candidate, delay: usize, duration: f64) -> Result<bool> {
     let (mut ctrl, mut plant) = closed_loop(bench, c, delay)?;
     let t = bench.setup.rig.sample_time;
@@ -115,7 +117,7 @@ pub fn is_stable(bench: &Bench, c: Candidate, delay: usize, duration: f64) -> Re
             last = last.max(m);
         }
     }
-    Ok(tail < 0.5 * peak && last <= tail)
+    Ok(tail < 0.1 * peak && last <= tail)
 }
 
 /// Margins of a candidate from measured return ratios; `None` when the closed loop is
