@@ -76,3 +76,36 @@ fn experiment_one_second_two_in_parallel(b: Bencher) {
         })
     });
 }
+
+/// One step of the PI + two notches + FF controller (inverse-hysteresis compensation on).
+#[divan::bench(sample_size = 1000)]
+fn pi_notch_step(b: Bencher) {
+    use flexstage_control::controller::StageControl;
+    use flexstage_control::pi_notch::{AxisGains, Notch, PiNotchController, PiNotchParams};
+    let (setup, r) = setup();
+    let y = measurements(4096);
+    let notch = |f: f64| {
+        Some(Notch {
+            frequency: f,
+            zero_damping: 0.02,
+            pole_damping: 0.5,
+        })
+    };
+    let axis = AxisGains {
+        kp: 0.0,
+        ki: 900.0,
+        kd: 0.0,
+        notches: [notch(1000.0), notch(3000.0)],
+    };
+    let p = PiNotchParams {
+        axes: [axis; 2],
+        static_gain: [[0.5, 0.5], [2.0, -2.0]],
+        sample_time: 1e-4,
+    };
+    let mut c = PiNotchController::new(p, setup.controller.actuator, r).expect("controller");
+    let mut k = 0usize;
+    b.bench_local(|| {
+        k = (k + 1) & 4095;
+        black_box(c.step(black_box(y[k])))
+    });
+}

@@ -28,6 +28,13 @@
 //!   the twin of `flexstage-twin`), its time series and metrics;
 //! * [`learning`]: iterative learning on top of any controller for periodic scans, designed
 //!   from the loop's measured frequency response (monotone-convergence check);
+//! * [`pi_notch`]: the industry baseline: per-axis PI(D) with up to two notches, static
+//!   feed-forward through a measured static gain, inverse-hysteresis compensation;
+//! * [`margins`]: gain, phase and delay margins of a loop from its frequency response
+//!   (python-control's `margin`), loop-at-a-time for the 2 × 2 loop;
+//! * [`tuning`]: one documented tuning procedure (notches on the peaks of the sampled
+//!   response, largest integral gain with ≥ 6 dB / 40°) applied with equal budget to every
+//!   loop-shaping structure, on an exact ZOH modal plant;
 //! * [`analysis`]: closed-loop poles of the sampled loop on the nominal linear model;
 //! * [`linalg`]: `expm`, `c2d` (ZOH), `lyap`, `dlyap`, `poles` in python-control style;
 //! * [`samples`]: problems with known answers.
@@ -92,6 +99,18 @@
 //! PID baseline's integral gain 300 s⁻¹ is near its stability limit (the 1.5–2.3 kHz output
 //! modes have ≈ 2 % damping; 1000 s⁻¹ is unstable).
 
+//! # Which controller wins where (on the twin of the designed stage)
+//! Measured with `flexstage-assess` on the quick design (README): the PI + notch + FF, tuned
+//! by [`tuning`] on the twin's sampled frequency response, meets 6 dB / 40° on both loops
+//! with one sample of delay, tracks the default Lissajous to 10.2/8.4 nm RMS (the sensor
+//! noise floor is 7.8/10.4 nm) and passes 93 % of 100 perturbed twins. It wins because the
+//! twin's modes above Nyquist fold into the sampled loop (8.99 kHz appears at 1.02 kHz on
+//! q1) and the notches sit on those peaks, which lets the integral gain rise 3.7×. The PID +
+//! FF without notch is limited by the same peaks to a 40 Hz crossover (18–27 nm); with the
+//! scenario's gains its q1 gain margin is 4.3 dB. The backstepping controllers, designed on
+//! the lumped model of Eq. (36), are unstable on the twin (with and without the robust
+//! terms): they remain the paper's method on its own model, not a controller to ship.
+
 // Loops over the two axes index several arrays at once, as the equations do.
 #![allow(clippy::needless_range_loop)]
 
@@ -103,11 +122,14 @@ mod error;
 pub mod experiment;
 pub mod learning;
 pub mod linalg;
+pub mod margins;
 pub mod model;
 pub mod observer;
+pub mod pi_notch;
 pub mod plant;
 pub mod rig;
 pub mod samples;
 pub mod trajectory;
+pub mod tuning;
 
 pub use error::{ControlError, Result};

@@ -18,6 +18,7 @@
 //! identify/pea<N>/   estimates.toml convergence.{csv,svg} loop.{csv,svg} compensation.{csv,svg}
 //! identify/stage/    params.toml table.csv convergence.{csv,svg} record.csv
 //! track/[<variant>/] <trajectory>_<controller>.csv <trajectory>_<controller>_error.svg
+//!                    margins.csv montecarlo.csv scan_frequency.csv scan_frequency.svg
 //!                    <trajectory>_2d.svg metrics.csv
 //! ```
 
@@ -252,6 +253,23 @@ impl Tracking {
     /// The metrics table, one row per trajectory and controller.
     pub fn metrics(&self) -> String {
         format!("{}/metrics.csv", self.dir)
+    }
+    /// Loop-at-a-time gain, phase and delay margins of every controller on the twin
+    /// (`flexstage-assess`).
+    pub fn margins(&self) -> String {
+        format!("{}/margins.csv", self.dir)
+    }
+    /// Monte-Carlo robustness: one row per perturbed plant and controller.
+    pub fn montecarlo(&self) -> String {
+        format!("{}/montecarlo.csv", self.dir)
+    }
+    /// RMS error against scan frequency (Lissajous 3:1), data.
+    pub fn scan_frequency_csv(&self) -> String {
+        format!("{}/scan_frequency.csv", self.dir)
+    }
+    /// RMS error against scan frequency, figure.
+    pub fn scan_frequency_svg(&self) -> String {
+        format!("{}/scan_frequency.svg", self.dir)
     }
     /// The trajectory of a [`Tracking::paths_svg`] file name (the name only).
     pub fn paths_trajectory(file_name: &str) -> Option<&str> {

@@ -1,0 +1,51 @@
+//! The controllers on the twin of a design: margins (loop-at-a-time, one sample of delay),
+//! the tuned baselines, Monte-Carlo robustness and error against scan frequency. The
+//! controllers' model is the design's reduced lumped model (`flexstage reduce`), as in
+//! `flexstage-twin`'s `track` example.
+//!
+//! ```text
+//! cargo run --release -p flexstage-assess --example assess -- quick runs/quick/design/design.json [OUT_DIR]
+//! ```
+
+use flexstage_assess::{AssessParams, Assessment, Bench};
+use flexstage_control::experiment::Setup;
+use flexstage_reduce::{ReduceParams, reduce, reduction_problem};
+use flexstage_scenario::{Preset, Scenario};
+use flexstage_topopt::DesignFile;
+use flexstage_twin::Twin;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let preset = args
+        .get(1)
+        .and_then(|p| Preset::from_name(p))
+        .ok_or("usage: assess quick|paper DESIGN.json [OUT_DIR]")?;
+    let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
+    let out = args.get(3).cloned();
+    let scenario = Scenario::preset(preset);
+    let problem = reduction_problem(&scenario, false)?;
+    let params = ReduceParams {
+        modal: None,
+        validity: None,
+        ..ReduceParams::default()
+    };
+    let reduced = reduce(&scenario, &problem, &design.rho, &params)?;
+    let mut s = scenario.clone();
+    s.stage.guess = reduced.params.clone();
+    s.stage.truth = reduced.params.clone();
+    let setup = Setup::from_scenario(&s);
+    let twin = Twin::from_scenario(&s, &design.rho)?;
+    let t0 = std::time::Instant::now();
+    let bench = Bench::new(setup, twin, Default::default())?;
+    let a = Assessment::run(&bench, &s, &AssessParams::default())?;
+    print!("{}", a.summary());
+    println!("assessed in {:.1} s", t0.elapsed().as_secs_f64());
+    if let Some(dir) = out {
+        std::fs::create_dir_all(&dir)?;
+        for (name, text) in a.files()? {
+            std::fs::write(format!("{dir}/{name}"), text)?;
+        }
+        println!("wrote {dir}");
+    }
+    Ok(())
+}

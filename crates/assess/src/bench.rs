@@ -1,0 +1,210 @@
+//! The test bench: the twin of a design, the controllers compared on it and how to build
+//! each one, its linear loop for margins and its full rig for tracking.
+
+use flexstage_control::actuator::Compensation;
+use flexstage_control::controller::{PidController, StageControl};
+use flexstage_control::experiment::{Setup, Variant};
+use flexstage_control::pi_notch::{AxisGains, PiNotchController, PiNotchParams};
+use flexstage_control::rig::{AmplifierParams, PlantActuator, RigParams, RigPlant, SensorParams};
+use flexstage_control::trajectory::Reference;
+use flexstage_control::tuning::{
+    ModalPlant, PlantMode, Structure, Tuned, TuningParams, loop_margins, tune,
+};
+use flexstage_twin::{Twin, TwinStage};
+
+use crate::error::Result;
+
+/// The controllers compared.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Candidate {
+    /// Robust backstepping with the disturbance observer (scenario gains).
+    Robust,
+    /// Backstepping without the robust terms.
+    NonRobust,
+    /// The PID + FF baseline with the scenario's gains (`controller.pid`) and the
+    /// controller model's static gain.
+    PidScenario,
+    /// PID + FF with the twin's static gain, tuned by [`flexstage_control::tuning`].
+    PidTuned,
+    /// PI + notch + FF with the twin's static gain, tuned by the same procedure.
+    PiNotch,
+}
+
+impl Candidate {
+    /// All, in report order.
+    pub const ALL: [Candidate; 5] = [
+        Candidate::Robust,
+        Candidate::NonRobust,
+        Candidate::PidScenario,
+        Candidate::PidTuned,
+        Candidate::PiNotch,
+    ];
+
+    /// Short name for files and tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Candidate::Robust => "robust",
+            Candidate::NonRobust => "nonrobust",
+            Candidate::PidScenario => "pid-ff",
+            Candidate::PidTuned => "pid-ff-tuned",
+            Candidate::PiNotch => "pi-notch-ff",
+        }
+    }
+
+    /// Whether the controller is linear (margins computed analytically from its transfer
+    /// function; otherwise by sine injection).
+    pub fn is_linear(self) -> bool {
+        !matches!(self, Candidate::Robust | Candidate::NonRobust)
+    }
+}
+
+/// The bench: controllers' setup, the twin and the tuned baselines.
+#[derive(Debug, Clone)]
+pub struct Bench {
+    /// The controllers' settings (backstepping model, gains, actuator) and the rig.
+    pub setup: Setup,
+    /// The twin of the design.
+    pub twin: Twin,
+    /// The tuned PID + FF.
+    pub pid: Tuned,
+    /// The tuned PI + notch + FF.
+    pub pi_notch: Tuned,
+    /// The tuning settings used.
+    pub tuning: TuningParams,
+}
+
+/// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay.
+pub fn modal_plant(twin: &Twin, t: f64, delay: usize) -> Result<ModalPlant> {
+    let modes = twin
+        .modal
+        .modes
+        .iter()
+        .map(|m| PlantMode {
+            frequency: m.frequency,
+            damping: m.damping,
+            input: [m.input[0], m.input[1]],
+            output: m.output,
+        })
+        .collect();
+    Ok(ModalPlant::new(modes, t, delay)?)
+}
+
+impl Bench {
+    /// Tunes the loop-shaping baselines on the twin's sampled loop with the rig's delay and
+    /// returns the bench.
+    pub fn new(setup: Setup, twin: Twin, tuning: TuningParams) -> Result<Bench> {
+        let plant = modal_plant(&twin, setup.rig.sample_time, setup.rig.delay)?;
+        let pid = tune(&plant, Structure::Pid, &tuning)?;
+        let pi_notch = tune(&plant, Structure::PiNotch, &tuning)?;
+        Ok(Bench {
+            setup,
+            twin,
+            pid,
+            pi_notch,
+            tuning,
+        })
+    }
+
+    /// The linear-controller parameters of a linear candidate (the scenario's PID as a
+    /// PI-notch structure with the controller model's static gain).
+    pub fn linear_params(&self, c: Candidate) -> Result<Option<PiNotchParams>> {
+        Ok(match c {
+            Candidate::PidTuned => Some(self.pid.params),
+            Candidate::PiNotch => Some(self.pi_notch.params),
+            Candidate::PidScenario => {
+                let m = flexstage_control::model::StageModel::new(&self.setup.controller.model)?
+                    .dc_gain()?;
+                let p = self.setup.pid;
+                let axis = AxisGains {
+                    kp: p.kp,
+                    ki: p.ki,
+                    kd: p.kd,
+                    notches: [None, None],
+                };
+                Some(PiNotchParams {
+                    axes: [axis; 2],
+                    static_gain: [[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]],
+                    sample_time: self.setup.rig.sample_time,
+                })
+            }
+            Candidate::Robust | Candidate::NonRobust => None,
+        })
+    }
+
+    /// Builds a controller for `reference` with `compensation`, using `setup` (the bench's
+    /// or a perturbed copy).
+    pub fn controller_with(
+        &self,
+        setup: &Setup,
+        c: Candidate,
+        compensation: Compensation,
+        reference: Reference,
+    ) -> Result<Box<dyn StageControl>> {
+        let mut actuator = setup.controller.actuator;
+        actuator.compensation = compensation;
+        Ok(match c {
+            Candidate::Robust => setup.controller(Variant::Robust, compensation, reference)?,
+            Candidate::NonRobust => {
+                setup.controller(Variant::NonRobust, compensation, reference)?
+            }
+            Candidate::PidScenario => Box::new(PidController::new(
+                &setup.controller.model,
+                setup.pid,
+                actuator,
+                setup.rig.sample_time,
+                reference,
+            )?),
+            Candidate::PidTuned | Candidate::PiNotch => {
+                let p = self.linear_params(c)?.expect("linear candidate");
+                Box::new(PiNotchController::new(p, actuator, reference)?)
+            }
+        })
+    }
+
+    /// [`Bench::controller_with`] on the bench's own setup.
+    pub fn controller(
+        &self,
+        c: Candidate,
+        compensation: Compensation,
+        reference: Reference,
+    ) -> Result<Box<dyn StageControl>> {
+        self.controller_with(&self.setup, c, compensation, reference)
+    }
+
+    /// The linear loop of the rig with `delay` samples: ideal amplifier and sensor, no PEA
+    /// (x_nom applied directly), no noise, creep or floor; the twin without its geometric
+    /// correction. What margins are computed on.
+    pub fn linear_rig(&self, delay: usize) -> RigParams {
+        let mut r = self.setup.rig.clone();
+        r.delay = delay;
+        r.actuator = PlantActuator::Ideal;
+        r.amplifier = AmplifierParams::ideal();
+        r.sensor = SensorParams::ideal();
+        r.creep.factor = 0.0;
+        r.floor.velocity_rms = 0.0;
+        r.noise_std = [0.0; 2];
+        r.resolution = [0.0; 2];
+        r
+    }
+
+    /// The linear twin in the linear rig (see [`Bench::linear_rig`]).
+    pub fn linear_plant(&self, delay: usize) -> Result<RigPlant<TwinStage>> {
+        let rig = self.linear_rig(delay);
+        let stage = TwinStage::new(&self.twin.modal, None, rig.substep());
+        Ok(RigPlant::new(rig, stage)?)
+    }
+
+    /// Margins of a linear candidate computed from its transfer function on the twin's
+    /// sampled loop.
+    pub fn analytic_margins(
+        &self,
+        c: Candidate,
+        delay: usize,
+    ) -> Result<Option<[flexstage_control::margins::Margins; 2]>> {
+        let Some(p) = self.linear_params(c)? else {
+            return Ok(None);
+        };
+        let plant = modal_plant(&self.twin, self.setup.rig.sample_time, delay)?;
+        Ok(Some(loop_margins(&plant, &p, &self.tuning.margins)?))
+    }
+}

@@ -1,0 +1,22 @@
+//! Typed errors of the assessment.
+
+/// Everything that can go wrong in an assessment.
+#[derive(Debug, thiserror::Error)]
+pub enum AssessError {
+    /// A controller, tuning or margin setting (names the field, value and range).
+    #[error(transparent)]
+    Control(#[from] flexstage_control::ControlError),
+    /// Building or running the twin.
+    #[error(transparent)]
+    Twin(#[from] flexstage_twin::TwinError),
+    /// Drawing a figure.
+    #[error(transparent)]
+    Plot(#[from] flexstage_report::plot::PlotError),
+    /// A setting of the assessment itself out of range.
+    #[error(transparent)]
+    OutOfRange(#[from] flexstage_numerics::RangeError),
+}
+
+/// Result alias of this crate.
+pub type Result<T> = std::result::Result<T, AssessError>;
+flexstage_numerics::range_checks!(AssessError);

@@ -1,0 +1,162 @@
+//! Margins of any controller by sine injection, as on a rig: a small sine d is added to
+//! the measurement of axis i before the controller (the loop broken at the sensor), the
+//! other loop stays closed, and after the transient the return ratio is
+//! `L_i(jω) = −A/B`, A the plant's output of axis i, B = A + d the controller's input (both
+//! one DFT bin at the injected frequency over whole periods). This needs no linear model of
+//! the controller, so it works for the backstepping controllers with their observer and
+//! input transformation; for a linear controller it equals the analytic loop-at-a-time
+//! ratio (tests).
+
+use flexstage_control::actuator::Compensation;
+use flexstage_control::margins::{MarginParams, Margins, margin};
+use flexstage_control::rig::StagePlant;
+use flexstage_control::trajectory::{Reference, Shape};
+use nalgebra::Complex;
+
+use crate::bench::{Bench, Candidate};
+use crate::error::Result;
+
+/// Settings of the injection.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InjectionParams {
+    /// Injected amplitude [m] (small: the nonlinear parts stay linear).
+    pub amplitude: f64,
+    /// Settling time before measuring [s] (plus three periods).
+    pub settle: f64,
+    /// Shortest measuring window [s] (at least four periods, whole periods).
+    pub window: f64,
+}
+
+impl Default for InjectionParams {
+    fn default() -> Self {
+        InjectionParams {
+            amplitude: 1e-9,
+            settle: 0.05,
+            window: 0.02,
+        }
+    }
+}
+
+/// One closed loop of a candidate on the bench's linear rig, at rest with a zero reference.
+fn closed_loop(
+    bench: &Bench,
+    c: Candidate,
+    delay: usize,
+) -> Result<(
+    Box<dyn flexstage_control::controller::StageControl>,
+    Box<dyn StagePlant>,
+)> {
+    let r = Reference::new(Shape::Step { target: [0.0; 2] });
+    let ctrl = bench.controller(c, Compensation::Ideal, r)?;
+    let plant = bench.linear_plant(delay)?;
+    Ok((ctrl, Box::new(plant)))
+}
+
+/// The measured return ratio of loop `axis` at `f` [Hz]; NaN when the loop diverges.
+pub fn return_ratio(
+    bench: &Bench,
+    c: Candidate,
+    delay: usize,
+    axis: usize,
+    f: f64,
+    p: &InjectionParams,
+) -> Result<Complex<f64>> {
+    let (mut ctrl, mut plant) = closed_loop(bench, c, delay)?;
+    let t = bench.setup.rig.sample_time;
+    let settle = ((p.settle + 3.0 / f) / t).ceil() as usize;
+    let cycles = (4.0f64).max((p.window * f).ceil());
+    let n = (cycles / (f * t)).round() as usize;
+    let w = std::f64::consts::TAU * f * t;
+    let (mut a, mut b) = (Complex::new(0.0, 0.0), Complex::new(0.0, 0.0));
+    for k in 0..settle + n {
+        let y = plant.measure();
+        let d = p.amplitude * (w * k as f64).sin();
+        let mut yc = y;
+        yc[axis] += d;
+        let cmd = ctrl.step(yc);
+        plant.apply(&cmd);
+        if !(y[axis].is_finite() && y[axis].abs() < 1e-3) {
+            return Ok(Complex::new(f64::NAN, f64::NAN));
+        }
+        if k >= settle {
+            let e = Complex::from_polar(1.0, -w * k as f64);
+            a += y[axis] * e;
+            b += yc[axis] * e;
+        }
+    }
+    Ok(-a / b)
+}
+
+/// Whether the closed loop of a candidate on the linear rig is asymptotically stable: after
+/// a 10 nm kick of both measurements, the output over the last fifth of `duration` [s] stays
+/// below a tenth of its peak and does not grow over the last tenth. (A slowly growing mode
+/// can still pass for a short `duration`; [`injected_margins`] also reports a loop that
+/// diverges under injection as unstable.)
+pub fn is_stable(bench: &Bench, c: Candidate, delay: usize, duration: f64) -> Result<bool> {
+    let (mut ctrl, mut plant) = closed_loop(bench, c, delay)?;
+    let t = bench.setup.rig.sample_time;
+    let n = (duration / t).round() as usize;
+    let (mut peak, mut tail, mut last) = (0.0f64, 0.0f64, 0.0f64);
+    for k in 0..n {
+        let mut y = plant.measure();
+        if k == 0 {
+            y = [y[0] + 1e-8, y[1] + 1e-8];
+        }
+        let cmd = ctrl.step(y);
+        plant.apply(&cmd);
+        let q = plant.output();
+        let m = q[0].abs().max(q[1].abs());
+        if !m.is_finite() || m > 1e-3 {
+            return Ok(false);
+        }
+        peak = peak.max(m);
+        if k >= n * 4 / 5 {
+            tail = tail.max(m);
+        }
+        if k >= n * 9 / 10 {
+            last = last.max(m);
+        }
+    }
+    Ok(tail < 0.1 * peak && last <= tail)
+}
+
+/// Margins of a candidate from measured return ratios; `None` when the closed loop is
+/// unstable (no margin to speak of).
+pub fn injected_margins(
+    bench: &Bench,
+    c: Candidate,
+    delay: usize,
+    m: &MarginParams,
+    p: &InjectionParams,
+) -> Result<Option<[Margins; 2]>> {
+    if !is_stable(bench, c, delay, 1.0)? {
+        return Ok(None);
+    }
+    let mut out = [None, None];
+    for axis in 0..2 {
+        let mut err = None;
+        let mut diverged = false;
+        let r = margin(
+            |f| match return_ratio(bench, c, delay, axis, f, p) {
+                Ok(z) => {
+                    diverged |= !(z.re.is_finite() && z.im.is_finite());
+                    z
+                }
+                Err(e) => {
+                    err = Some(e);
+                    Complex::new(f64::NAN, f64::NAN)
+                }
+            },
+            m,
+        )?;
+        if let Some(e) = err {
+            return Err(e);
+        }
+        if diverged {
+            // The loop diverged under injection: not stable, no margins.
+            return Ok(None);
+        }
+        out[axis] = Some(r);
+    }
+    Ok(Some([out[0].unwrap(), out[1].unwrap()]))
+}

@@ -1,0 +1,117 @@
+//! The margins table: every candidate's loop-at-a-time gain, phase and delay margins on the
+//! twin's sampled loop with the rig's delay, flagged against the targets.
+
+use flexstage_control::margins::Margins;
+
+use crate::bench::{Bench, Candidate};
+use crate::error::Result;
+use crate::inject::{InjectionParams, injected_margins};
+
+/// Targets a shipped controller must meet (issue #18): 6 dB and 40°.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MarginTargets {
+    /// Gain margin [dB].
+    pub gain_db: f64,
+    /// Phase margin [deg].
+    pub phase_deg: f64,
+}
+
+impl Default for MarginTargets {
+    fn default() -> Self {
+        MarginTargets {
+            gain_db: 6.0,
+            phase_deg: 40.0,
+        }
+    }
+}
+
+/// One row: a candidate's margins (per loop), or `None` when its closed loop is unstable.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MarginRow {
+    /// The controller.
+    pub candidate: Candidate,
+    /// The rig delay [samples].
+    pub delay: usize,
+    /// How the margins were obtained ("transfer function" or "sine injection").
+    pub method: &'static str,
+    /// Margins of loop q1 and q2; `None`: the closed loop is unstable.
+    pub margins: Option<[Margins; 2]>,
+    /// Whether both loops meet the targets.
+    pub meets: bool,
+}
+
+/// The margins of every candidate in `candidates` with `delay` samples of delay.
+pub fn margins_table(
+    bench: &Bench,
+    candidates: &[Candidate],
+    delay: usize,
+    targets: MarginTargets,
+    injection: &InjectionParams,
+) -> Result<Vec<MarginRow>> {
+    let mut rows = Vec::new();
+    for &c in candidates {
+        let (method, m) = if c.is_linear() {
+            let stable = crate::inject::is_stable(bench, c, delay, 1.0)?;
+            let m = bench.analytic_margins(c, delay)?;
+            ("transfer function", if stable { m } else { None })
+        } else {
+            let mut mp = bench.tuning.margins;
+            mp.points = 48;
+            mp.refine = 10;
+            (
+                "sine injection",
+                injected_margins(bench, c, delay, &mp, injection)?,
+            )
+        };
+        let meets = m.is_some_and(|m| {
+            m.iter()
+                .all(|l| l.meets(targets.gain_db, targets.phase_deg))
+        });
+        rows.push(MarginRow {
+            candidate: c,
+            delay,
+            method,
+            margins: m,
+            meets,
+        });
+    }
+    Ok(rows)
+}
+
+/// CSV of the table: controller, delay, loop, GM [dB], f_pc [Hz], PM [deg], f_gc [Hz],
+/// delay margin [samples], method, meets.
+pub fn csv(rows: &[MarginRow], sample_time: f64) -> String {
+    let mut s = String::from(
+        "controller,delay_samples,loop,gain_margin_dB,phase_crossover_Hz,phase_margin_deg,gain_crossover_Hz,delay_margin_samples,method,meets_targets\n",
+    );
+    for r in rows {
+        for l in 0..2 {
+            match &r.margins {
+                Some(m) => {
+                    let m = m[l];
+                    s.push_str(&format!(
+                        "{},{},q{},{:.2},{:.1},{:.1},{:.1},{:.2},{},{}\n",
+                        r.candidate.name(),
+                        r.delay,
+                        l + 1,
+                        m.gain_db,
+                        m.phase_crossover,
+                        m.phase_deg,
+                        m.gain_crossover,
+                        m.delay / sample_time,
+                        r.method,
+                        r.meets
+                    ));
+                }
+                None => s.push_str(&format!(
+                    "{},{},q{},unstable,,,,,{},false\n",
+                    r.candidate.name(),
+                    r.delay,
+                    l + 1,
+                    r.method
+                )),
+            }
+        }
+    }
+    s
+}

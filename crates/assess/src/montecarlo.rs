@@ -1,0 +1,262 @@
+//! Robustness as a number: every candidate, tuned on the nominal twin, on `plants` perturbed
+//! twins in the full rig. The perturbation acts on the twin's modal model (not the lumped
+//! plant): it keeps the designed stage's modes, tilt and coupling, which the controllers must
+//! survive, and perturbs them the way a manufactured stage differs from its drawing:
+//!
+//! * stiffness and mass × U(0.8, 1.2) each: ω_k ∝ √(K/M), mass-normalized shapes ∝ 1/√M, so
+//!   the static gain ∝ 1/K;
+//! * amplification α × U(0.8, 1.2): the q2 output row;
+//! * damping: every mode ζ ~ U(0.5 %, 3 %);
+//! * coupling: q1 += c₁ q2, q2 += c₂ q1, |c_i| ~ U(0, 0.15) with random sign;
+//! * the compensator's Bouc–Wen parameters (d_p, A, B, γ, δ of both PEAs) × U(0.8, 1.2)
+//!   each (the rig's PEAs stay the twin's own);
+//! * delay 0, 1 or 2 samples.
+//!
+//! A plant passes when the run does not diverge and the RMS error of each axis is within
+//! [`MonteCarloParams::rms_bound_pct`] of that axis's reference range (peak to peak).
+
+use flexstage_control::trajectory::Reference;
+use flexstage_numerics::noise::SplitMix64;
+use rayon::prelude::*;
+
+use crate::bench::{Bench, Candidate};
+use crate::error::{Result, check};
+use crate::track::{diverged, track_on};
+
+/// Settings of the Monte-Carlo study.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MonteCarloParams {
+    /// Number of plants, ≥ 1 (default 100).
+    pub plants: usize,
+    /// Duration of each run [s], > 0 (default 0.5: one period of the default Lissajous).
+    pub duration: f64,
+    /// Pass bound on the RMS error per axis in % of its reference range, > 0 (default 0.5 %:
+    /// 80/160 nm on the default 8/16 µm Lissajous).
+    pub rms_bound_pct: f64,
+    /// Seed of the perturbations.
+    pub seed: u64,
+    /// Relative spread of K, M, α and the compensator parameters (default 0.2).
+    pub spread: f64,
+    /// Largest coupling (default 0.15).
+    pub coupling: f64,
+    /// Damping range (default 0.5–3 %).
+    pub damping: [f64; 2],
+    /// Largest delay [samples] (default 2).
+    pub max_delay: usize,
+}
+
+impl Default for MonteCarloParams {
+    fn default() -> Self {
+        MonteCarloParams {
+            plants: 100,
+            duration: 0.5,
+            rms_bound_pct: 0.5,
+            seed: 18,
+            spread: 0.2,
+            coupling: 0.15,
+            damping: [0.005, 0.03],
+            max_delay: 2,
+        }
+    }
+}
+
+impl MonteCarloParams {
+    /// Checks the fields.
+    pub fn validate(&self) -> Result<()> {
+        check(
+            "montecarlo.plants",
+            self.plants as f64,
+            self.plants >= 1,
+            "≥ 1",
+        )?;
+        check(
+            "montecarlo.duration",
+            self.duration,
+            self.duration > 0.0,
+            "> 0 s",
+        )?;
+        check(
+            "montecarlo.rms_bound_pct",
+            self.rms_bound_pct,
+            self.rms_bound_pct > 0.0,
+            "> 0 %",
+        )?;
+        check(
+            "montecarlo.spread",
+            self.spread,
+            (0.0..0.9).contains(&self.spread),
+            "0–0.9",
+        )?;
+        check(
+            "montecarlo.coupling",
+            self.coupling,
+            (0.0..0.9).contains(&self.coupling),
+            "0–0.9",
+        )?;
+        check(
+            "montecarlo.damping",
+            self.damping[0],
+            self.damping[0] > 0.0 && self.damping[1] >= self.damping[0] && self.damping[1] < 1.0,
+            "0 < min ≤ max < 1",
+        )?;
+        check(
+            "montecarlo.max_delay",
+            self.max_delay as f64,
+            self.max_delay <= 2,
+            "0–2 samples",
+        )
+    }
+}
+
+/// One perturbed plant and every candidate's result on it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlantResult {
+    /// Plant index.
+    pub index: usize,
+    /// Factors (K, M, α), damping, couplings (c₁, c₂), delay.
+    pub stiffness: f64,
+    /// Mass factor.
+    pub mass: f64,
+    /// Amplification factor.
+    pub alpha: f64,
+    /// Damping ratio of every mode.
+    pub damping: f64,
+    /// Couplings.
+    pub coupling: [f64; 2],
+    /// Delay [samples].
+    pub delay: usize,
+    /// Per candidate: RMS error per axis [m] and pass.
+    pub results: Vec<(Candidate, [f64; 2], bool)>,
+}
+
+/// The study's result.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MonteCarlo {
+    /// The candidates, in column order.
+    pub candidates: Vec<Candidate>,
+    /// One entry per plant.
+    pub plants: Vec<PlantResult>,
+}
+
+impl MonteCarlo {
+    /// Pass rate of candidate column `j` [0–1].
+    pub fn pass_rate(&self, j: usize) -> f64 {
+        let n = self.plants.iter().filter(|p| p.results[j].2).count();
+        n as f64 / self.plants.len().max(1) as f64
+    }
+
+    /// CSV: one row per plant and candidate.
+    pub fn csv(&self) -> String {
+        let mut s = String::from(
+            "plant,stiffness,mass,alpha,damping,coupling1,coupling2,delay,controller,rms1_nm,rms2_nm,pass\n",
+        );
+        for p in &self.plants {
+            for (c, rms, pass) in &p.results {
+                s.push_str(&format!(
+                    "{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{:.2},{:.2},{}\n",
+                    p.index,
+                    p.stiffness,
+                    p.mass,
+                    p.alpha,
+                    p.damping,
+                    p.coupling[0],
+                    p.coupling[1],
+                    p.delay,
+                    c.name(),
+                    rms[0] * 1e9,
+                    rms[1] * 1e9,
+                    pass
+                ));
+            }
+        }
+        s
+    }
+}
+
+/// Runs the study on `reference` for the `candidates`, plants in parallel.
+pub fn monte_carlo(
+    bench: &Bench,
+    candidates: &[Candidate],
+    reference: Reference,
+    p: &MonteCarloParams,
+) -> Result<MonteCarlo> {
+    p.validate()?;
+    let plants = (0..p.plants)
+        .into_par_iter()
+        .map(|i| one_plant(bench, candidates, reference, p, i))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(MonteCarlo {
+        candidates: candidates.to_vec(),
+        plants,
+    })
+}
+
+fn one_plant(
+    bench: &Bench,
+    candidates: &[Candidate],
+    reference: Reference,
+    p: &MonteCarloParams,
+    i: usize,
+) -> Result<PlantResult> {
+    let mut rng = SplitMix64::new(p.seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ i as u64);
+    let mut u = |lo: f64, hi: f64| lo + (hi - lo) * rng.next_f64();
+    let s = p.spread;
+    let (k, m, a) = (
+        u(1.0 - s, 1.0 + s),
+        u(1.0 - s, 1.0 + s),
+        u(1.0 - s, 1.0 + s),
+    );
+    let zeta = u(p.damping[0], p.damping[1]);
+    let mut coupling = [0.0; 2];
+    for c in &mut coupling {
+        let sign = if u(0.0, 1.0) < 0.5 { -1.0 } else { 1.0 };
+        *c = sign * u(0.0, p.coupling);
+    }
+    let delay = ((u(0.0, 1.0) * (p.max_delay + 1) as f64) as usize).min(p.max_delay);
+    let mut twin = bench.twin.clone();
+    for mode in &mut twin.modal.modes {
+        mode.frequency *= (k / m).sqrt();
+        mode.damping = zeta;
+        for x in mode.input.iter_mut().take(2) {
+            *x /= m.sqrt();
+        }
+        let o = mode.output.map(|x| x / m.sqrt());
+        mode.output = [
+            o[0] + coupling[0] * o[1] * a,
+            a * (o[1] + coupling[1] * o[0]),
+        ];
+    }
+    let mut setup = bench.setup.clone();
+    for h in &mut setup.controller.actuator.hysteresis {
+        h.d_p *= u(1.0 - s, 1.0 + s);
+        h.a_bw *= u(1.0 - s, 1.0 + s);
+        h.b_bw *= u(1.0 - s, 1.0 + s);
+        h.gamma_bw *= u(1.0 - s, 1.0 + s);
+        h.delta_bw *= u(1.0 - s, 1.0 + s);
+    }
+    let mut rig = bench.setup.rig.clone();
+    rig.delay = delay;
+    rig.seed = rig.seed.wrapping_add(i as u64);
+    let mut results = Vec::with_capacity(candidates.len());
+    for &c in candidates {
+        let r = track_on(bench, &setup, &twin, &rig, c, reference, p.duration)?;
+        let pass =
+            !diverged(&r) && r.rms_pct[0] <= p.rms_bound_pct && r.rms_pct[1] <= p.rms_bound_pct;
+        let rms = if diverged(&r) {
+            [f64::INFINITY; 2]
+        } else {
+            r.rms
+        };
+        results.push((c, rms, pass));
+    }
+    Ok(PlantResult {
+        index: i,
+        stiffness: k,
+        mass: m,
+        alpha: a,
+        damping: zeta,
+        coupling,
+        delay,
+        results,
+    })
+}
