@@ -240,9 +240,9 @@ pub fn tilt(t: Tilt, corners: (usize, usize), r: &CaseResults) -> ResponseCoeffi
     let (g_dn, g_dd) = (gphi * dd / s2, -gphi * dn / s2);
     let g = [g_dn * n[0] + g_dd * d[0], g_dn * n[1] + g_dd * d[1]];
     let mut c = ResponseCoefficients::zero(root / bound - 1.0, r.outputs.len());
-    for i in 0..2 {
-        c.cases[kc].output[i] += g[i];
-        c.cases[kt].output[i] -= g[i];
+    for (i, gi) in g.into_iter().enumerate() {
+        c.cases[kc].output[i] += gi;
+        c.cases[kt].output[i] -= gi;
     }
     c
 }
