@@ -6,9 +6,9 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 use flexstage_pipeline::names::{self, COMPENSATIONS, SCHEMES, SHAPES, UNITS, name, parse};
 use flexstage_pipeline::{
-    AnalyzeOptions, DesignOptions, DesignSource, DesignStart, ExportOptions, PeaIdOptions,
-    PeaOptions, ReduceOptions, RunFolder, Simulation, StageData, StageIdOptions, TrackOptions,
-    VerifyParams,
+    AnalyzeOptions, DesignOptions, DesignSource, DesignStart, ExportOptions, LimitOverrides,
+    PeaIdOptions, PeaOptions, ReduceOptions, RunFolder, Simulation, StageData, StageIdOptions,
+    TrackOptions, VerifyParams,
 };
 
 /// The simulated actuators of `identify stage`: index 1 is the linear one.
@@ -131,18 +131,22 @@ pub struct ExportArgs {
     /// Exit with status 2 when the verdict is "NOT safe" (files are written either way).
     #[arg(long)]
     pub require_safe: bool,
-    /// Fatigue strength of the material [MPa] (Al 6061-T6: 96.5).
-    #[arg(long, default_value_t = VerifyParams::default().fatigue_strength * 1e-6)]
-    pub fatigue_strength_mpa: f64,
-    /// Safety factor: allowable stress = fatigue strength / safety factor.
-    #[arg(long, default_value_t = VerifyParams::default().safety_factor)]
-    pub safety_factor: f64,
-    /// Minimum hinge (ligament) thickness [mm].
-    #[arg(long, default_value_t = VerifyParams::default().min_ligament * 1e3)]
-    pub min_ligament_mm: f64,
-    /// Minimum slot width [mm] (the wire-EDM kerf).
-    #[arg(long, default_value_t = VerifyParams::default().min_gap * 1e3)]
-    pub min_gap_mm: f64,
+    /// Fatigue strength of the material [MPa]. Default: the scenario's
+    /// limits.fatigue_strength (Al 6061-T6: 96.5).
+    #[arg(long)]
+    pub fatigue_strength_mpa: Option<f64>,
+    /// Safety factor: allowable stress = fatigue strength / safety factor. Default: the
+    /// scenario's limits.safety_factor (1.5).
+    #[arg(long)]
+    pub safety_factor: Option<f64>,
+    /// Minimum hinge (ligament) thickness [mm]. Default: the scenario's
+    /// limits.min_hinge_thickness (0.5).
+    #[arg(long)]
+    pub min_ligament_mm: Option<f64>,
+    /// Minimum slot width [mm] (the wire-EDM kerf). Default: the scenario's
+    /// limits.min_slot_width (0.4).
+    #[arg(long)]
+    pub min_gap_mm: Option<f64>,
     /// Wire-EDM start-hole diameter [mm].
     #[arg(long, default_value_t = VerifyParams::default().start_hole_diameter * 1e3)]
     pub start_hole_mm: f64,
@@ -150,13 +154,12 @@ pub struct ExportArgs {
 
 pub fn export(a: ExportArgs) -> anyhow::Result<()> {
     let folder = a.target.open()?;
-    let verify = (!a.no_verify).then(|| VerifyParams {
-        fatigue_strength: a.fatigue_strength_mpa * 1e6,
+    let verify = (!a.no_verify).then(|| LimitOverrides {
+        fatigue_strength: a.fatigue_strength_mpa.map(|v| v * 1e6),
         safety_factor: a.safety_factor,
-        min_ligament: a.min_ligament_mm * 1e-3,
-        min_gap: a.min_gap_mm * 1e-3,
-        start_hole_diameter: a.start_hole_mm * 1e-3,
-        ..VerifyParams::default()
+        min_ligament: a.min_ligament_mm.map(|v| v * 1e-3),
+        min_gap: a.min_gap_mm.map(|v| v * 1e-3),
+        start_hole_diameter: Some(a.start_hole_mm * 1e-3),
     });
     let options = ExportOptions {
         design: a.design.map_or(Ok(DesignSource::Run), |d| d.parse())?,

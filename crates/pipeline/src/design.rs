@@ -106,7 +106,7 @@ pub struct DesignSummary {
     pub area: f64,
     /// The designed mechanism in the units a user compares: α, θ, area, mass, stresses, minimum
     /// sizes, symmetry, first frequency (flexstage-topopt's final analysis).
-    pub design: flexstage_topopt::DesignSummary,
+    pub design: Box<flexstage_topopt::DesignSummary>,
     /// Fraction of design elements with 0.1 < ρ < 0.9 (of the last iteration).
     pub grey_fraction: f64,
     /// Volume fraction of the last iteration.
@@ -326,7 +326,7 @@ fn finish(
         seconds_per_iteration: h.iter().map(|r| r.time).sum::<f64>() / h.len() as f64,
         area_initial: shoelace(&r0.outputs),
         area: analysis.summary.area,
-        design: analysis.summary.clone(),
+        design: Box::new(analysis.summary.clone()),
         // The optimizer's own measure of the design it analysed last (= `rho`).
         grey_fraction: last.grey,
         volume: last.volume,

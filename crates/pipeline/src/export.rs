@@ -31,9 +31,40 @@ pub struct ExportOptions {
     /// Longest chord of the exported curve \[m\], in [0, 10 mm] (a centripetal Catmull–Rom
     /// curve through the smoothed contour; 0: the polygon itself). Default 0.05 mm.
     pub max_chord: f64,
-    /// The verification of the exported outline (`None`: skipped). Default: the Al 6061-T6
-    /// defaults of [`VerifyParams`].
-    pub verify: Option<VerifyParams>,
+    /// The verification of the exported outline (`None`: skipped). Default: the scenario's
+    /// `limits` ([`VerifyParams::from_limits`]) with no override.
+    pub verify: Option<LimitOverrides>,
+}
+
+/// Sign-off limits of the verification that replace the scenario's `limits` group (`None`:
+/// the scenario's value). Lengths in metres, stresses in pascals.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LimitOverrides {
+    /// Fatigue strength [Pa] (else `limits.fatigue_strength`).
+    pub fatigue_strength: Option<f64>,
+    /// Safety factor (else `limits.safety_factor`).
+    pub safety_factor: Option<f64>,
+    /// Minimum ligament [m] (else `limits.min_hinge_thickness`).
+    pub min_ligament: Option<f64>,
+    /// Minimum gap [m] (else `limits.min_slot_width`).
+    pub min_gap: Option<f64>,
+    /// Wire-EDM start-hole diameter [m] (else [`VerifyParams`]' default, 1 mm).
+    pub start_hole_diameter: Option<f64>,
+}
+
+impl LimitOverrides {
+    /// The verification parameters: the scenario's limits, then these overrides.
+    pub fn params(&self, limits: &flexstage_scenario::Limits) -> VerifyParams {
+        let base = VerifyParams::from_limits(limits);
+        VerifyParams {
+            fatigue_strength: self.fatigue_strength.unwrap_or(base.fatigue_strength),
+            safety_factor: self.safety_factor.unwrap_or(base.safety_factor),
+            min_ligament: self.min_ligament.unwrap_or(base.min_ligament),
+            min_gap: self.min_gap.unwrap_or(base.min_gap),
+            start_hole_diameter: self.start_hole_diameter.unwrap_or(base.start_hole_diameter),
+            ..base
+        }
+    }
 }
 
 impl Default for ExportOptions {
@@ -44,7 +75,7 @@ impl Default for ExportOptions {
             level: 0.5,
             smoothing: 10,
             max_chord: 0.05e-3,
-            verify: Some(VerifyParams::default()),
+            verify: Some(LimitOverrides::default()),
         }
     }
 }
@@ -71,7 +102,8 @@ impl ExportOptions {
             "a length in [0, 0.01] m",
         )?;
         if let Some(v) = &self.verify {
-            v.validate()?;
+            v.params(&flexstage_scenario::Limits::default())
+                .validate()?;
         }
         Ok(())
     }
@@ -122,8 +154,10 @@ pub fn export(folder: &RunFolder, options: &ExportOptions) -> Result<ExportSumma
         run.write(files::STL, &outline.to_stl(s.mesh.thickness, unit))?,
     ];
     let (mut verification, mut verify_error) = (None, None);
-    if let Some(p) = &options.verify {
-        match flexstage_verify::verify(s, &rho, &outline.loops, p) {
+    if let Some(o) = &options.verify {
+        let p = o.params(&s.limits);
+        p.validate()?;
+        match flexstage_verify::verify(s, &rho, &outline.loops, &p) {
             Ok(v) => {
                 files.extend(flexstage_verify::write_files(&v, run)?);
                 verification = Some(Box::new(v));
@@ -140,4 +174,37 @@ pub fn export(folder: &RunFolder, options: &ExportOptions) -> Result<ExportSumma
         verification,
         verify_error,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flexstage_scenario::Limits;
+
+    /// Goal: the verification signs off against the scenario's `limits` (the ones the optimizer
+    /// designed for) unless an option overrides a field.
+    #[test]
+    fn verification_limits_default_to_the_scenario_and_options_override_them() {
+        let limits = Limits {
+            fatigue_strength: 120e6,
+            safety_factor: 2.0,
+            min_hinge_thickness: 0.7e-3,
+            min_slot_width: 0.3e-3,
+            ..Limits::default()
+        };
+        let p = LimitOverrides::default().params(&limits);
+        assert_eq!(p.fatigue_strength, 120e6);
+        assert_eq!(p.safety_factor, 2.0);
+        assert_eq!(p.allowable_stress(), limits.allowable_stress());
+        assert_eq!(p.min_ligament, 0.7e-3);
+        assert_eq!(p.min_gap, 0.3e-3);
+        let o = LimitOverrides {
+            safety_factor: Some(3.0),
+            min_gap: Some(0.5e-3),
+            ..LimitOverrides::default()
+        };
+        let p = o.params(&limits);
+        assert_eq!((p.fatigue_strength, p.safety_factor), (120e6, 3.0));
+        assert_eq!((p.min_ligament, p.min_gap), (0.7e-3, 0.5e-3));
+    }
 }

@@ -70,7 +70,7 @@ pub use design::{
     DesignOptions, DesignStart, DesignSummary, GradientReport, design, gradient_check,
 };
 pub use error::{PipelineError, Result};
-pub use export::{ExportOptions, ExportSummary, export};
+pub use export::{ExportOptions, ExportSummary, LimitOverrides, export};
 pub use folder::{DEFAULT_PRESET, PRESETS, RunFolder, default_root, default_run, load_scenario};
 pub use lock::{LockHolder, RunLock};
 pub use pea::{

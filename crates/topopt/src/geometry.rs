@@ -111,12 +111,7 @@ fn distance_to_outside(inside: &[bool], nx: usize, ny: usize) -> Vec<f64> {
     let (mut v, mut z, mut col, mut out) =
         (vec![0; n], vec![0.0; n + 1], vec![0.0; n], vec![0.0; n]);
     for y in 0..ny {
-        edt_1d(
-            &d[y * nx..(y + 1) * nx].to_vec(),
-            &mut out[..nx],
-            &mut v,
-            &mut z,
-        );
+        edt_1d(&d[y * nx..(y + 1) * nx], &mut out[..nx], &mut v, &mut z);
         d[y * nx..(y + 1) * nx].copy_from_slice(&out[..nx]);
     }
     for x in 0..nx {

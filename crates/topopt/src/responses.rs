@@ -205,12 +205,18 @@ pub fn stroke(max_stroke: f64, r: &CaseResults) -> ResponseCoefficients {
     c
 }
 
-/// Tilt measure `((D·n)² − t (D·d)²) / (t |D|²)`, `t = tan²(TILT_MARGIN·τ)`, of the
-/// differential output `D = u_o(+a,−a) − u_o(−a,+a)` against the axis `d = (sin θ, cos θ)`,
-/// `n = (cos θ, −sin θ)` (Figure 4b): ≤ 0 iff `D` is within `TILT_MARGIN·τ` of the axis (either
-/// sign of `D·d`; the objective's orientation fixes it). Dimensionless and independent of |D|
-/// (`= (tan²φ − t) cos²φ / t` for an angle error φ), so it stays O(1) while the workspace
-/// grows.
+/// Smoothing angle of the tilt measure, as a fraction of the bound `TILT_MARGIN·τ`.
+const TILT_SMOOTHING: f64 = 0.1;
+
+/// Tilt measure `√(φ² + ε²)/(TILT_MARGIN·τ) − 1` of the differential output
+/// `D = u_o(+a,−a) − u_o(−a,+a)` against the axis `d = (sin θ, cos θ)`, `n = (cos θ, −sin θ)`
+/// (Figure 4b), with the angle error `φ = atan((D·n)/(D·d))` ∈ (−90°, 90°] (either sign of
+/// `D·d`; the objective's orientation fixes it) and `ε = TILT_SMOOTHING·TILT_MARGIN·τ`:
+/// ≤ 0 iff `D` is within about `TILT_MARGIN·τ` of the axis. Dimensionless, independent of |D|
+/// and linear in the angle error, so an error of 20° reads ≈ 26 for τ = 1°, not thousands:
+/// an earlier measure `(tan²φ − t)cos²φ/t` (`t = tan²(TILT_MARGIN·τ)`) reached 10³ and made
+/// MMA oscillate between violated and over-satisfied tilts without settling.
+/// `∂φ/∂(D·n) = (D·d)/|D|²`, `∂φ/∂(D·d) = −(D·n)/|D|²` on both branches of the arctangent.
 pub fn tilt(t: Tilt, corners: (usize, usize), r: &CaseResults) -> ResponseCoefficients {
     let (kc, kt) = corners;
     let (oc, ot) = (r.outputs[kc], r.outputs[kt]);
@@ -221,19 +227,22 @@ pub fn tilt(t: Tilt, corners: (usize, usize), r: &CaseResults) -> ResponseCoeffi
         dvec[0] * n[0] + dvec[1] * n[1],
         dvec[0] * d[0] + dvec[1] * d[1],
     );
-    let t2 = (TILT_MARGIN * t.tolerance).tan().powi(2);
-    let (a, b) = (dn * dn, dd * dd);
-    let s2 = (a + b).max(f64::MIN_POSITIVE);
-    let ga = b * (1.0 + t2) / (t2 * s2 * s2);
-    let gb = -a * (1.0 + t2) / (t2 * s2 * s2);
-    let g = [
-        ga * 2.0 * dn * n[0] + gb * 2.0 * dd * d[0],
-        ga * 2.0 * dn * n[1] + gb * 2.0 * dd * d[1],
-    ];
-    let mut c = ResponseCoefficients::zero((a - t2 * b) / (t2 * s2), r.outputs.len());
-    for i in 0..2 {
-        c.cases[kc].output[i] += g[i];
-        c.cases[kt].output[i] -= g[i];
+    let bound = TILT_MARGIN * t.tolerance;
+    let eps = TILT_SMOOTHING * bound;
+    let phi = if dd == 0.0 {
+        std::f64::consts::FRAC_PI_2
+    } else {
+        (dn / dd).atan()
+    };
+    let root = (phi * phi + eps * eps).sqrt();
+    let s2 = (dn * dn + dd * dd).max(f64::MIN_POSITIVE);
+    let gphi = phi / (root * bound);
+    let (g_dn, g_dd) = (gphi * dd / s2, -gphi * dn / s2);
+    let g = [g_dn * n[0] + g_dd * d[0], g_dn * n[1] + g_dd * d[1]];
+    let mut c = ResponseCoefficients::zero(root / bound - 1.0, r.outputs.len());
+    for (i, gi) in g.into_iter().enumerate() {
+        c.cases[kc].output[i] += gi;
+        c.cases[kt].output[i] -= gi;
     }
     c
 }

@@ -229,6 +229,17 @@ impl Cholesky {
     }
 }
 
+/// A spring on a linear combination of port mean displacements,
+/// `½ k (Σᵢ cᵢ ū_{aᵢ,cᵢ})²` (the design model's `flexstage_fem::LinkSpring`, e.g. the output
+/// load relative to the moving frame of Eq. 22).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PortLink {
+    /// `(port index a, component c, coefficient)`.
+    pub terms: Vec<(usize, usize, f64)>,
+    /// Stiffness k [N/m].
+    pub stiffness: f64,
+}
+
 /// The body-fitted FE model: mesh, material, ports and direct supports, with the map from
 /// full DOFs to reduced unknowns.
 #[derive(Debug, Clone)]
@@ -405,9 +416,28 @@ impl FeModel {
         }
     }
 
+    /// `½ k (Σᵢ cᵢ ū_{aᵢ,cᵢ})²` of each link spring between port means
+    /// (`flexstage_fem::LinkSpring` carried over to the ports): the outer product of its
+    /// weights over the nodes of the ports involved.
+    fn link_entries(&self, links: &[PortLink], out: &mut Vec<(usize, usize, f64)>) {
+        for l in links {
+            for &(a, ca, wa) in &l.terms {
+                for &(b, cb, wb) in &l.terms {
+                    let (att_a, att_b) = (&self.attachments[a], &self.attachments[b]);
+                    for (i, &ni) in att_a.nodes.iter().enumerate() {
+                        for (j, &nj) in att_b.nodes.iter().enumerate() {
+                            let v = l.stiffness * wa * wb * att_a.weights[i] * att_b.weights[j];
+                            self.scatter(&[2 * ni + ca, 2 * nj + cb], &[[0.0, v], [0.0, 0.0]], out);
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// Stiffness with grounded springs `springs[a] = [k_x, k_y]` on the ports' mean
-    /// displacements.
-    pub fn stiffness(&self, springs: &[[f64; 2]]) -> SymCsc {
+    /// displacements and link springs between them.
+    pub fn stiffness(&self, springs: &[[f64; 2]], links: &[PortLink]) -> SymCsc {
         let ne = self.mesh.elements.len();
         let mut entries: Vec<(usize, usize, f64)> = (0..ne)
             .into_par_iter()
@@ -421,6 +451,7 @@ impl FeModel {
                 a
             });
         self.port_entries(springs, &mut entries);
+        self.link_entries(links, &mut entries);
         SymCsc::from_entries(self.n, entries)
     }
 

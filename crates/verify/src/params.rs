@@ -98,6 +98,21 @@ impl Default for VerifyParams {
 }
 
 impl VerifyParams {
+    /// The defaults with the sign-off limits of a scenario's `limits` group: fatigue and yield
+    /// strength, safety factor, minimum hinge thickness (as the minimum ligament) and minimum
+    /// slot width (as the minimum gap), so the verification checks the design against the
+    /// limits the optimizer designed it for.
+    pub fn from_limits(l: &flexstage_scenario::Limits) -> Self {
+        VerifyParams {
+            fatigue_strength: l.fatigue_strength,
+            yield_strength: l.yield_strength,
+            safety_factor: l.safety_factor,
+            min_ligament: l.min_hinge_thickness,
+            min_gap: l.min_slot_width,
+            ..VerifyParams::default()
+        }
+    }
+
     /// Allowable von Mises stress [Pa]: fatigue strength / safety factor.
     pub fn allowable_stress(&self) -> f64 {
         self.fatigue_strength / self.safety_factor

@@ -8,7 +8,7 @@ use serde::Serialize;
 
 use crate::design_mesh::{self, DesignMeshValues};
 use crate::error::{Result, VerifyError};
-use crate::fe::{Attachment, Cholesky, FeModel};
+use crate::fe::{Attachment, Cholesky, FeModel, PortLink};
 use crate::feature::{Boundary, medial_balls};
 use crate::geometry::Geometry;
 use crate::manufacture::{self, Limits, Manufacturability};
@@ -156,7 +156,7 @@ fn port_specs(
     stress: &Problem,
     reduced: &Problem,
     plate_masses: bool,
-) -> (Vec<PortSpec>, Vec<Support>) {
+) -> (Vec<PortSpec>, Vec<Support>, Vec<PortLink>) {
     let mesh = stress.mesh();
     let springs = |p: &Problem, node: usize| {
         let mut k = [0.0; 2];
@@ -192,6 +192,34 @@ fn port_specs(
             named.push((format!("spring at node {node}"), node, 0.0));
         }
     }
+    for l in &stress.model.bcs().links {
+        for &(dof, _) in &l.terms {
+            let node = dof / 2;
+            if !named.iter().any(|n| n.1 == node) {
+                named.push((format!("link spring at node {node}"), node, 0.0));
+            }
+        }
+    }
+    let links: Vec<PortLink> = stress
+        .model
+        .bcs()
+        .links
+        .iter()
+        .map(|l| PortLink {
+            terms: l
+                .terms
+                .iter()
+                .map(|&(dof, c)| {
+                    let port = named
+                        .iter()
+                        .position(|n| n.1 == dof / 2)
+                        .expect("named above");
+                    (port, dof % 2, c)
+                })
+                .collect(),
+            stiffness: l.stiffness,
+        })
+        .collect();
     for (name, node, mass) in named {
         specs.push(PortSpec {
             name,
@@ -212,7 +240,7 @@ fn port_specs(
             supports.push((p, fixed(node)));
         }
     }
-    (specs, supports)
+    (specs, supports, links)
 }
 
 /// The stroke corners `(±a, ±a)`.
@@ -303,7 +331,7 @@ fn prepare(
 
 /// Checks that every connected part of the mesh is held against rigid motion by the
 /// supports, rollers and springs (otherwise the stiffness is singular).
-fn check_held(model: &FeModel, specs: &[PortSpec]) -> Result<()> {
+fn check_held(model: &FeModel, specs: &[PortSpec], links: &[PortLink]) -> Result<()> {
     let mesh = &model.mesh;
     let nn = mesh.nodes.len();
     let mut parent: Vec<usize> = (0..nn).collect();
@@ -346,9 +374,17 @@ fn check_held(model: &FeModel, specs: &[PortSpec]) -> Result<()> {
     for &(node, c) in &model.fixed {
         add_row(roots[node], row(node, c, 1.0), &mut groups);
     }
-    for (att, spec) in model.attachments.iter().zip(specs) {
+    for (a, (att, spec)) in model.attachments.iter().zip(specs).enumerate() {
         for c in 0..2 {
-            if spec.fixed[c] || spec.spring_reduced[c] > 0.0 || spec.spring_stress[c] > 0.0 {
+            // A link spring holds a component elastically against the other ports it joins.
+            let linked = links
+                .iter()
+                .any(|l| l.stiffness > 0.0 && l.terms.iter().any(|t| t.0 == a && t.1 == c));
+            if spec.fixed[c]
+                || spec.spring_reduced[c] > 0.0
+                || spec.spring_stress[c] > 0.0
+                || linked
+            {
                 let mut per_part: std::collections::BTreeMap<usize, [f64; 3]> = Default::default();
                 for (&n, &w) in att.nodes.iter().zip(&att.weights) {
                     let r = per_part.entry(roots[n]).or_insert([0.0; 3]);
@@ -390,11 +426,12 @@ fn check_held(model: &FeModel, specs: &[PortSpec]) -> Result<()> {
 fn corner_statics(
     model: &FeModel,
     specs: &[PortSpec],
+    links: &[PortLink],
     inputs: &[(usize, f64)],
     corners: &[[f64; 2]],
 ) -> Result<(StressPeak, Vec<[f64; 2]>, Vec<f64>)> {
     let springs: Vec<[f64; 2]> = specs.iter().map(|s| s.spring_stress).collect();
-    let k = model.stiffness(&springs);
+    let k = model.stiffness(&springs, links);
     let factor = Cholesky::new(&k)?;
     let n = model.n();
     // Unit nominal strokes: the PEA force K_pea · 1 m on each input (Eq. 2–3).
@@ -456,7 +493,7 @@ fn transfer_and_modes(
     modes: usize,
 ) -> Result<(Transfer, Vec<f64>)> {
     let springs: Vec<[f64; 2]> = specs.iter().map(|s| s.spring_reduced).collect();
-    let k = model.stiffness(&springs);
+    let k = model.stiffness(&springs, &[]);
     let factor = Cholesky::new(&k)?;
     let n = model.n();
     let mut rhs = vec![0.0; 2 * n];
@@ -515,7 +552,7 @@ pub fn verify(
         max_nodes: p.max_nodes,
     };
     let port_radius = p.port_radius.unwrap_or(1.5 * h_design);
-    let (specs, supports) = port_specs(scenario, &stress_problem, &reduced, p.plate_masses);
+    let (specs, supports, links) = port_specs(scenario, &stress_problem, &reduced, p.plate_masses);
     let geometry = Geometry::new(loops.to_vec())?;
     let anchors: Vec<[f64; 2]> = specs
         .iter()
@@ -531,7 +568,7 @@ pub fn verify(
         port_radius,
         h_design,
     )?;
-    check_held(&model, &specs)?;
+    check_held(&model, &specs, &links)?;
     let corners = stroke_corners(scenario.actuators.stroke_amplitude);
     let inputs: Vec<(usize, f64)> = stress_problem
         .inputs
@@ -540,7 +577,7 @@ pub fn verify(
         .map(|(k, port)| (k, port.stiffness))
         .collect();
     let (stress, displacement, nodal_von_mises) =
-        corner_statics(&model, &specs, &inputs, &corners)?;
+        corner_statics(&model, &specs, &links, &inputs, &corners)?;
     let (stress_refined, refined_elements) = if p.refine_check {
         let fine = Sizing {
             elements_across: 2.0 * sizing.elements_across,
@@ -556,7 +593,7 @@ pub fn verify(
             port_radius,
             h_design,
         )?;
-        let peak = corner_statics(&fine_model, &specs, &inputs, &corners)?.0;
+        let peak = corner_statics(&fine_model, &specs, &links, &inputs, &corners)?.0;
         (Some(peak), fine_model.mesh.elements.len())
     } else {
         (None, 0)

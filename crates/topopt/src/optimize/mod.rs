@@ -44,9 +44,10 @@
 //! with the volume target every `update_interval` iterations and constant in between (so the
 //! gradient is `c·∇Σ_S` and MMA sees a fixed function; updating every iteration made the
 //! stress and the design oscillate by ±10 %). The tilt constraint is the
-//! scale-invariant `((D·n)² − tan²τ (D·d)²) / (tan²τ |D|²)` with the *current* |D| (an earlier
-//! version divided by the initial |D⁰|², which grows by the workspace growth factor squared and
-//! left θ = 20° at 15° after 25 iterations).
+//! scale-invariant angle error `√(φ² + ε²)/(0.75 τ) − 1` of [`crate::responses::tilt`], linear
+//! in the angle (earlier measures divided by the initial |D⁰|², which grows by the workspace
+//! growth factor squared, or were quadratic in tan φ and reached 10³, and left θ = 20° at
+//! 15–18° after 25 iterations).
 //!
 //! # Stopping rule
 //!
