@@ -64,6 +64,7 @@ pub mod stage_id;
 pub mod state;
 pub mod track;
 mod track_files;
+pub mod twin;
 
 pub use analyze::{AnalyzeOptions, AnalyzeSummary, analyze};
 pub use design::{
@@ -84,7 +85,8 @@ pub use run::{RunOptions, RunSummary, Stage, StageSummary, write_report};
 pub use source::DesignSource;
 pub use stage_id::{Simulation, StageData, StageIdOptions, StageIdSummary, identify_stage};
 pub use state::RunState;
-pub use track::{ModelSource, TrackOptions, TrackSummary, track};
+pub use track::{ModelSource, PlantKind, TrackOptions, TrackSummary, track};
+pub use twin::{TwinOptions, TwinSummary, TwinValidation, write_twin};
 
 /// The stage crates' types that appear in options and summaries.
 pub use flexstage_control::{actuator::Compensation, experiment::Variant};

@@ -1,5 +1,5 @@
-//! `run`: the paper's whole scheme on one scenario, design → export → reduce → PEA
-//! identification → stage identification → tracking → report, in one run folder.
+//! `run`: the paper's whole scheme on one scenario, design → export → reduce → twin → PEA
+//! identification (both PEAs) → stage identification → tracking → report, in one run folder.
 //!
 //! Every stage gets the scenario in memory (never the recorded `scenario.toml`) and reads
 //! what earlier stages wrote through [`flexstage_report::layout`]. Finished stages are
@@ -9,7 +9,9 @@
 //! scenario is refused with the list of changed fields; [`RunOptions::restart`] starts over,
 //! and says so through [`Progress::event`]. The folder is locked while `run` works in it.
 //!
-//! Stage identification and tracking run on the designed mechanism ([`crate::plant`]).
+//! Stage identification runs on the designed mechanism's lumped model ([`crate::plant`]);
+//! tracking on the digital twin of the design ([`crate::twin`], [`crate::track`]), with the
+//! compensator on the identified PEA parameters.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -29,6 +31,7 @@ use crate::reduce::{ReduceOptions, ReduceSummary, reduce};
 use crate::stage_id::{ParameterRow, StageIdOptions, StageIdSummary, identify_stage, read_table};
 use crate::state::{Mismatch, RunState, fnv1a};
 use crate::track::{TrackOptions, TrackSummary, track};
+use crate::twin::{TwinOptions, TwinSummary, write_twin};
 
 /// The stages of `run`, in order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -39,6 +42,8 @@ pub enum Stage {
     Export,
     /// Reduced model.
     Reduce,
+    /// The digital twin of the design: its modes, frequency response and validity.
+    Twin,
     /// Simulated PEA record and its Bouc–Wen identification.
     Pea,
     /// Stage identification on the designed stage.
@@ -51,10 +56,11 @@ pub enum Stage {
 
 impl Stage {
     /// Every stage, in order.
-    pub const ALL: [Stage; 7] = [
+    pub const ALL: [Stage; 8] = [
         Stage::Design,
         Stage::Export,
         Stage::Reduce,
+        Stage::Twin,
         Stage::Pea,
         Stage::IdentifyStage,
         Stage::Track,
@@ -67,6 +73,7 @@ impl Stage {
             Stage::Design => "design",
             Stage::Export => "export",
             Stage::Reduce => "reduce",
+            Stage::Twin => "twin",
             Stage::Pea => "pea",
             Stage::IdentifyStage => "identify-stage",
             Stage::Track => "track",
@@ -89,8 +96,10 @@ pub enum StageSummary {
     Export(ExportSummary),
     /// [`Stage::Reduce`].
     Reduce(Box<ReduceSummary>),
-    /// [`Stage::Pea`].
-    Pea(Box<PeaIdSummary>),
+    /// [`Stage::Twin`].
+    Twin(Box<TwinSummary>),
+    /// [`Stage::Pea`]: PEA1, then PEA2.
+    Pea(Vec<PeaIdSummary>),
     /// [`Stage::IdentifyStage`].
     IdentifyStage(Box<StageIdSummary>),
     /// [`Stage::Track`].
@@ -110,9 +119,11 @@ pub struct RunOptions {
     pub export: ExportOptions,
     /// The reduced model.
     pub reduce: ReduceOptions,
-    /// The simulated PEA record.
+    /// The twin's report data.
+    pub twin: TwinOptions,
+    /// The simulated PEA records (both PEAs are simulated; `pea.pea` is ignored by `run`).
     pub pea: PeaOptions,
-    /// Its identification (the record and PEA come from `pea`).
+    /// Their identification (the records and PEAs come from `pea`).
     pub identify_pea: PeaIdOptions,
     /// The stage identification.
     pub identify_stage: StageIdOptions,
@@ -126,6 +137,7 @@ impl RunOptions {
         self.design.validate()?;
         self.export.validate()?;
         self.reduce.validate()?;
+        self.twin.validate()?;
         self.pea.validate()?;
         self.identify_pea.validate()?;
         self.identify_stage.validate()?;
@@ -293,15 +305,27 @@ fn run_stage(
         }
         Stage::Export => StageSummary::Export(export(folder, &options.export)?),
         Stage::Reduce => StageSummary::Reduce(Box::new(reduce(folder, &options.reduce, progress)?)),
+        Stage::Twin => StageSummary::Twin(Box::new(write_twin(folder, &options.twin, progress)?)),
         Stage::Pea => {
-            let record = simulate_pea(folder.scenario(), &options.pea)?;
-            write_pea_record(folder, &record)?;
-            let id = PeaIdOptions {
-                pea: options.pea.pea,
-                data: None,
-                ..options.identify_pea.clone()
-            };
-            StageSummary::Pea(Box::new(identify_pea(folder, &id)?))
+            // Both PEAs: the compensation of `track` uses each one's identified parameters.
+            let mut summaries = Vec::with_capacity(2);
+            for pea in [1, 2] {
+                let record = simulate_pea(
+                    folder.scenario(),
+                    &PeaOptions {
+                        pea,
+                        ..options.pea.clone()
+                    },
+                )?;
+                write_pea_record(folder, &record)?;
+                let id = PeaIdOptions {
+                    pea,
+                    data: None,
+                    ..options.identify_pea.clone()
+                };
+                summaries.push(identify_pea(folder, &id)?);
+            }
+            StageSummary::Pea(summaries)
         }
         Stage::IdentifyStage => StageSummary::IdentifyStage(Box::new(identify_stage(
             folder,
@@ -333,6 +357,7 @@ mod tests {
                 "design",
                 "export",
                 "reduce",
+                "twin",
                 "pea",
                 "identify-stage",
                 "track",
@@ -340,7 +365,7 @@ mod tests {
             ]
         );
         assert_eq!(Stage::Design.number(), 1);
-        assert_eq!(Stage::Report.number(), 7);
+        assert_eq!(Stage::Report.number(), 8);
         RunOptions::default().validate().unwrap();
     }
 }
