@@ -96,8 +96,9 @@ pub enum StageSummary {
     Export(ExportSummary),
     /// [`Stage::Reduce`].
     Reduce(Box<ReduceSummary>),
-    /// [`Stage::Twin`].
-    Twin(Box<TwinSummary>),
+    /// [`Stage::Twin`] (`None`: the twin of this design could not be built; a warning said
+    /// why).
+    Twin(Option<Box<TwinSummary>>),
     /// [`Stage::Pea`]: PEA1, then PEA2.
     Pea(Vec<PeaIdSummary>),
     /// [`Stage::IdentifyStage`].
@@ -305,7 +306,19 @@ fn run_stage(
         }
         Stage::Export => StageSummary::Export(export(folder, &options.export)?),
         Stage::Reduce => StageSummary::Reduce(Box::new(reduce(folder, &options.reduce, progress)?)),
-        Stage::Twin => StageSummary::Twin(Box::new(write_twin(folder, &options.twin, progress)?)),
+        Stage::Twin => match write_twin(folder, &options.twin, progress) {
+            Ok(t) => StageSummary::Twin(Some(Box::new(t))),
+            // The twin is report data and `track`'s plant; a design it cannot model (e.g. solid
+            // islands of an unconverged design) must not stop the run: `track` then runs on
+            // the lumped model and says so.
+            Err(PipelineError::Twin(e)) => {
+                progress.note(&format!(
+                    "warning: the twin of this design could not be built: {e}"
+                ));
+                StageSummary::Twin(None)
+            }
+            Err(e) => return Err(e),
+        },
         Stage::Pea => {
             // Both PEAs: the compensation of `track` uses each one's identified parameters.
             let mut summaries = Vec::with_capacity(2);

@@ -283,7 +283,19 @@ fn simulated(
         return Ok(Simulated::Lumped);
     }
     progress.note("building the twin of the design (FE model, Craig–Bampton, nonlinear fit)");
-    let (twin, seconds) = crate::twin::build(folder)?;
+    let (twin, seconds) = match crate::twin::build(folder) {
+        Ok(t) => t,
+        // A design far from converged can leave solid islands that the twin (void removed
+        // as air) cannot hold; the lumped model still runs, and the warning says why.
+        Err(PipelineError::Twin(e)) => {
+            warnings.push(format!(
+                "the twin of this design could not be built ({e}), so tracking runs on the \
+                 lumped 8-state model"
+            ));
+            return Ok(Simulated::Lumped);
+        }
+        Err(e) => return Err(e),
+    };
     progress.note(&format!(
         "twin: {} modes, first resonance {:.0} Hz, built in {seconds:.1} s",
         twin.modal.modes.len(),
@@ -600,6 +612,68 @@ mod tests {
             "track/compensation-off_params-reduce_duration-0.5s"
         );
         std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn plant_names_round_trip_and_the_lumped_plant_gets_its_own_folder() {
+        // Goal: `--plant` values, `metrics.csv` labels and folder names agree.
+        for k in PlantKind::ALL {
+            assert_eq!(PlantKind::from_name(k.name()), Some(k));
+        }
+        assert_eq!(PlantKind::from_name("rig"), None);
+        assert_eq!(TrackOptions::default().plant, PlantKind::Twin);
+        let root = std::env::temp_dir().join(format!("flexstage-plant-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let folder =
+            RunFolder::open(crate::folder::preset("quick").unwrap(), &root, false).unwrap();
+        let lumped = TrackOptions {
+            plant: PlantKind::Lumped,
+            ..TrackOptions::default()
+        };
+        assert_eq!(lumped.conditions(&folder), "plant-lumped");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn a_trajectory_beyond_the_stroke_is_refused_before_the_run_naming_it() {
+        // Reference: issue #15 item 4 — refused with the trajectory, the value and the limit.
+        let mut s = crate::folder::preset("quick").unwrap();
+        let name = s.trajectories[0].name().to_string();
+        if let flexstage_scenario::Trajectory::Lissajous { amplitude, .. } = &mut s.trajectories[0]
+        {
+            amplitude[0] *= 5.0;
+        }
+        let setup = Setup::from_scenario(&s);
+        let options = TrackOptions {
+            trajectory: Some(name.clone()),
+            ..TrackOptions::default()
+        };
+        let mut warnings = Vec::new();
+        let e = plan(&s, &setup, &Simulated::Lumped, &options, &mut warnings)
+            .err()
+            .expect("refused");
+        let m = e.to_string();
+        assert!(
+            m.contains(&name) && m.contains("stroke") && m.contains("µm"),
+            "{m}"
+        );
+        // The defaults fit.
+        let all = TrackOptions::default();
+        let s = crate::folder::preset("quick").unwrap();
+        let setup = Setup::from_scenario(&s);
+        assert!(plan(&s, &setup, &Simulated::Lumped, &all, &mut warnings).is_ok());
+    }
+
+    #[test]
+    fn identified_pea_parameters_are_read_from_the_estimates() {
+        // Goal: the compensator takes `recommended_params`; a damaged file is an error.
+        let text = "data = \"x\"\n[recommended_params]\nd_p = 0.06\na_bw = 0.012\n\
+                    b_bw = 0.0019\ngamma_bw = 0.0016\ndelta_bw = 0.0005\n";
+        let p = read_estimates("identify/pea1/estimates.toml", text).unwrap();
+        assert_eq!(p.d_p, 0.06);
+        assert_eq!(p.delta_bw, 0.0005);
+        let e = read_estimates("identify/pea1/estimates.toml", "d_p = 1").unwrap_err();
+        assert!(e.to_string().contains("recommended_params"), "{e}");
     }
 
     #[test]

@@ -161,13 +161,14 @@ mod tests {
         let run = RunDir::create(&root).unwrap();
         let out = Tracking::main();
         let all = [row(Variant::Robust, 1e-9), row(Variant::NonRobust, 2e-9)];
-        write_metrics(&run, &out, &all, "inverse", "guess").unwrap();
+        write_metrics(&run, &out, &all, "inverse", "guess", "twin").unwrap();
         let keys = write_metrics(
             &run,
             &out,
             &[row(Variant::Robust, 3e-9)],
             "inverse",
             "guess",
+            "twin",
         )
         .unwrap();
         assert_eq!(
@@ -190,9 +191,22 @@ mod tests {
             &[row(Variant::Robust, 4e-9)],
             "inverse",
             "x.toml",
+            "twin",
         )
         .unwrap();
         assert_eq!(keys.len(), 1, "another model starts a new table");
+        let keys = write_metrics(
+            &run,
+            &out,
+            &[row(Variant::NonRobust, 5e-9)],
+            "inverse",
+            "x.toml",
+            "lumped",
+        )
+        .unwrap();
+        assert_eq!(keys.len(), 1, "another plant starts a new table");
+        let text = run.read_to_string(out.metrics()).unwrap();
+        assert!(text.contains(",x.toml,lumped,"), "the plant column: {text}");
         std::fs::remove_dir_all(&root).unwrap();
     }
 }
