@@ -374,7 +374,7 @@ pub struct IdentifyStageArgs {
     pub f_max: f64,
     /// Simulated actuator: "hysteretic" (Bouc–Wen PEAs, cross terms) or "linear" (x_nom
     /// applied directly, no cross terms: the model of Eq. 36).
-    #[arg(long, default_value = PLANTS[Simulation::default().linear as usize], value_parser = TRACK_PLANTS)]
+    #[arg(long, default_value = PLANTS[Simulation::default().linear as usize], value_parser = PLANTS)]
     pub plant: String,
     /// Switch the simulated sensor noise and quantization off.
     #[arg(long)]
