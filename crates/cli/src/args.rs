@@ -8,7 +8,8 @@ use std::str::FromStr;
 use anyhow::Context;
 use clap::Args;
 use flexstage_pipeline::{
-    DEFAULT_PRESET, PRESETS, RunFolder, Scenario, Variant, default_root, load_scenario,
+    DEFAULT_PRESET, PRESETS, PlantKind, RunFolder, Scenario, TwinValidation, Variant, default_root,
+    load_scenario,
 };
 
 /// Which scenario: a file, or a built-in preset.
@@ -111,4 +112,24 @@ impl fmt::Display for List {
 /// The controllers of `--variant`: one by name, or all.
 pub fn controllers(name: &str) -> Vec<Variant> {
     Variant::from_name(name).map_or(Variant::ALL.to_vec(), |v| vec![v])
+}
+
+/// The values of `--plant`.
+pub const TRACK_PLANTS: [&str; 2] = ["twin", "lumped"];
+
+/// The plant of a `--plant` value (checked by clap against [`TRACK_PLANTS`]).
+pub fn plant(name: &str) -> PlantKind {
+    PlantKind::from_name(name).unwrap_or_default()
+}
+
+/// The values of `--twin-validate`.
+pub const TWIN_VALIDATIONS: [&str; 3] = ["auto", "on", "off"];
+
+/// The check of a `--twin-validate` value (checked by clap against [`TWIN_VALIDATIONS`]).
+pub fn twin_validation(name: &str) -> TwinValidation {
+    match name {
+        "on" => TwinValidation::On,
+        "off" => TwinValidation::Off,
+        _ => TwinValidation::Auto,
+    }
 }

@@ -6,7 +6,7 @@ use std::path::Path;
 use flexstage_pipeline::pea::PeaRecord;
 use flexstage_pipeline::{
     AnalyzeSummary, DesignSummary, ExportSummary, PeaIdSummary, ReduceSummary, RunSummary,
-    StageIdSummary, StageSummary, TrackSummary,
+    StageIdSummary, StageSummary, TrackSummary, TwinSummary,
 };
 use flexstage_report::html::fmt_num;
 
@@ -27,6 +27,8 @@ pub fn stage(s: &StageSummary) {
         StageSummary::Design(d) => design(d),
         StageSummary::Export(e) => export(e),
         StageSummary::Reduce(r) => reduce(r),
+        StageSummary::Twin(Some(t)) => twin(t),
+        StageSummary::Twin(None) => outln!("twin: not built (see the warning)"),
         StageSummary::Pea(p) => p.iter().for_each(pea_identification),
         StageSummary::IdentifyStage(i) => stage_identification(i),
         StageSummary::Track(t) => track(t),
@@ -261,8 +263,61 @@ pub fn stage_identification(s: &StageIdSummary) {
 const TRACK_HEADER: &str = "trajectory     variant       RMS q1/q2 [nm]   RMS [% range]    \
 max q1/q2 [nm]   max [% range] settle[s] peak [V]   sat";
 
+/// The twin's modes and validity (`twin/`).
+pub fn twin(s: &TwinSummary) {
+    let v = &s.validity;
+    outln!(
+        "twin: {} modes ({} fixed-interface), built in {:.1} s, nonlinear correction {}",
+        v.order,
+        v.fixed_interface_modes,
+        v.build_seconds,
+        if v.nonlinear { "on" } else { "off" }
+    );
+    for m in &v.modes {
+        outln!(
+            "  mode {}: twin {:.1} Hz, FE {:.1} Hz ({:+.4} %)",
+            m.index,
+            m.twin,
+            m.fe,
+            100.0 * m.relative
+        );
+    }
+    let t = &v.transient;
+    if t.ran {
+        for c in &t.cases {
+            outln!(
+                "  {}: twin vs full nonlinear transient {:.3} / {:.3} % of range (q1 / q2); \
+                 full model {} DOF, {:.1} s",
+                c.name,
+                c.error_pct[0],
+                c.error_pct[1],
+                c.dofs,
+                c.reference_seconds
+            );
+        }
+    } else {
+        outln!("  full-transient check not run: {}", t.reason);
+    }
+    wrote(&s.dir, s.replaced);
+}
+
 pub fn track(s: &TrackSummary) {
-    outln!("plant: {}; controller's model: {}", s.plant, s.model);
+    outln!(
+        "plant: {} ({}); controller's model: {}",
+        s.simulated.name(),
+        match s.simulated {
+            flexstage_pipeline::PlantKind::Twin => {
+                "the digital twin of the design in the scenario's rig".to_string()
+            }
+            flexstage_pipeline::PlantKind::Lumped => format!("lumped model: {}", s.plant),
+        },
+        s.model
+    );
+    outln!(
+        "hysteresis compensator: PEA1 {}, PEA2 {}",
+        s.compensator[0],
+        s.compensator[1]
+    );
     outln!("{TRACK_HEADER}");
     for r in &s.rows {
         let m = &r.metrics;

@@ -8,13 +8,15 @@ use flexstage_pipeline::names::{self, COMPENSATIONS, SCHEMES, SHAPES, UNITS, nam
 use flexstage_pipeline::{
     AnalyzeOptions, DesignOptions, DesignSource, DesignStart, ExportOptions, LimitOverrides,
     PeaIdOptions, PeaOptions, ReduceOptions, RunFolder, Simulation, StageData, StageIdOptions,
-    TrackOptions, VerifyParams,
+    TrackOptions, TwinOptions, VerifyParams,
 };
 
 /// The simulated actuators of `identify stage`: index 1 is the linear one.
 const PLANTS: [&str; 2] = ["hysteretic", "linear"];
 
-use crate::args::{List, Pair, Target, controllers};
+use crate::args::{
+    List, Pair, TRACK_PLANTS, TWIN_VALIDATIONS, Target, controllers, plant, twin_validation,
+};
 use crate::bars::Bars;
 use crate::print;
 
@@ -462,10 +464,24 @@ pub struct TrackArgs {
     /// Duration [s] of every run (default: each trajectory's own).
     #[arg(long)]
     pub duration: Option<f64>,
+    /// The simulated stage: the digital twin of the run's design in the scenario's rig
+    /// (falls back to the lumped model before the run has a design), or the lumped 8-state
+    /// model in its minimal loop (results in track/plant-lumped/).
+    #[arg(long, default_value = TrackOptions::default().plant.name(), value_parser = TRACK_PLANTS)]
+    pub plant: String,
+    /// First write the twin's report data to <run>/twin/ (modes, Bode data and figures beside
+    /// the lumped model, validity.json), as `flexstage run` does.
+    #[arg(long)]
+    pub write_twin: bool,
+    /// With --write-twin: check the twin against the full nonlinear transient: auto (on up to
+    /// 5000 FE DOF, i.e. quick; off for paper, minutes per case), on, off.
+    #[arg(long, default_value = "auto", value_parser = TWIN_VALIDATIONS, requires = "write_twin")]
+    pub twin_validate: String,
 }
 
 pub fn track(a: TrackArgs) -> anyhow::Result<()> {
     let options = TrackOptions {
+        plant: plant(&a.plant),
         trajectory: (a.trajectory != "all").then_some(a.trajectory),
         controllers: controllers(&a.variant),
         compensation: parse(&COMPENSATIONS, &a.compensation).expect("clap checks it"),
@@ -474,6 +490,16 @@ pub fn track(a: TrackArgs) -> anyhow::Result<()> {
         duration: a.duration,
     };
     let folder = a.target.open()?;
+    if a.write_twin {
+        let o = TwinOptions {
+            validation: twin_validation(&a.twin_validate),
+        };
+        print::twin(&flexstage_pipeline::write_twin(
+            &folder,
+            &o,
+            &Bars::default(),
+        )?);
+    }
     print::track(&flexstage_pipeline::track(
         &folder,
         &options,

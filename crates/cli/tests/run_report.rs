@@ -140,7 +140,7 @@ fn run_writes_a_self_contained_report_with_every_section_and_resumes() {
     let (_, stderr) = run(&dir);
     assert_eq!(
         stderr.matches("done earlier, skipped").count(),
-        7,
+        8,
         "{stderr}"
     );
     let _ = std::fs::remove_dir_all(&dir);

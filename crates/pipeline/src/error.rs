@@ -131,6 +131,9 @@ pub enum PipelineError {
     /// Controllers and the simulated experiment.
     #[error(transparent)]
     Control(#[from] flexstage_control::ControlError),
+
+    #[error(transparent)]
+    Twin(#[from] flexstage_twin::TwinError),
     /// Writing results.
     #[error(transparent)]
     Write(#[from] flexstage_report::ReportError),

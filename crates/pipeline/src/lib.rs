@@ -4,8 +4,8 @@
 //! Mechanism for Precise Positioning* (Actuators 2022, 11(7), 179) chained on one run folder:
 //!
 //! ```text
-//! design ─► export ─► reduce ─► pea (simulate + identify) ─► identify stage ─► track ─► report
-//! (Alg. 1)  (§4.1)    (§3.2.1)   (App. B, Eq. 21)              (Eq. 54–56)       (§4)
+//! design ─► export ─► reduce ─► twin ─► pea (simulate + identify, ─► identify stage ─► track ─► report
+//! (Alg. 1)  (§4.1)    (§3.2.1)   (#15)    both PEAs; App. B, Eq. 21)   (Eq. 54–56)       (§4)
 //! ```
 //!
 //! * **One scenario per run, in memory.** [`RunFolder`] opens `runs/<scenario name>/` (or a
@@ -39,8 +39,10 @@
 //!   interrupted design continues from its checkpoint to the same bits as an uninterrupted
 //!   one (floats in checkpoint headers round-trip exactly: serde_json's `float_roundtrip`).
 //!
-//! The simulated experiments (stage identification, tracking) run on the *designed* stage
-//! once the run has a reduced model ([`Plant`]).
+//! The simulated experiments run on the *designed* stage: the stage identification on its
+//! lumped model once the run has a reduced model ([`Plant`]), tracking on the digital twin of
+//! the design in the scenario's rig ([`twin`], [`track`]; [`PlantKind::Lumped`] for the
+//! lumped model, also the fallback before a design exists).
 
 pub mod analyze;
 pub mod design;
@@ -64,6 +66,7 @@ pub mod stage_id;
 pub mod state;
 pub mod track;
 mod track_files;
+pub mod twin;
 
 pub use analyze::{AnalyzeOptions, AnalyzeSummary, analyze};
 pub use design::{
@@ -84,7 +87,8 @@ pub use run::{RunOptions, RunSummary, Stage, StageSummary, write_report};
 pub use source::DesignSource;
 pub use stage_id::{Simulation, StageData, StageIdOptions, StageIdSummary, identify_stage};
 pub use state::RunState;
-pub use track::{ModelSource, TrackOptions, TrackSummary, track};
+pub use track::{ModelSource, PlantKind, TrackOptions, TrackSummary, track};
+pub use twin::{TwinOptions, TwinSummary, TwinValidation, write_twin};
 
 /// The stage crates' types that appear in options and summaries.
 pub use flexstage_control::{actuator::Compensation, experiment::Variant};

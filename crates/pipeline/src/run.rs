@@ -1,5 +1,5 @@
-//! `run`: the paper's whole scheme on one scenario, design → export → reduce → PEA
-//! identification → stage identification → tracking → report, in one run folder.
+//! `run`: the paper's whole scheme on one scenario, design → export → reduce → twin → PEA
+//! identification (both PEAs) → stage identification → tracking → report, in one run folder.
 //!
 //! Every stage gets the scenario in memory (never the recorded `scenario.toml`) and reads
 //! what earlier stages wrote through [`flexstage_report::layout`]. Finished stages are
@@ -9,7 +9,9 @@
 //! scenario is refused with the list of changed fields; [`RunOptions::restart`] starts over,
 //! and says so through [`Progress::event`]. The folder is locked while `run` works in it.
 //!
-//! Stage identification and tracking run on the designed mechanism ([`crate::plant`]).
+//! Stage identification runs on the designed mechanism's lumped model ([`crate::plant`]);
+//! tracking on the digital twin of the design ([`crate::twin`], [`crate::track`]), with the
+//! compensator on the identified PEA parameters.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -27,6 +29,7 @@ use crate::reduce::{ReduceOptions, ReduceSummary, reduce};
 use crate::stage_id::{ParameterRow, StageIdOptions, StageIdSummary, identify_stage, read_table};
 use crate::state::{Mismatch, RunState, fnv1a};
 use crate::track::{TrackOptions, TrackSummary, track};
+use crate::twin::{TwinOptions, TwinSummary, write_twin};
 
 /// The stages of `run`, in order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -37,6 +40,8 @@ pub enum Stage {
     Export,
     /// Reduced model.
     Reduce,
+    /// The digital twin of the design: its modes, frequency response and validity.
+    Twin,
     /// Simulated records of both PEAs and their Bouc–Wen identification.
     Pea,
     /// Stage identification on the designed stage.
@@ -49,10 +54,11 @@ pub enum Stage {
 
 impl Stage {
     /// Every stage, in order.
-    pub const ALL: [Stage; 7] = [
+    pub const ALL: [Stage; 8] = [
         Stage::Design,
         Stage::Export,
         Stage::Reduce,
+        Stage::Twin,
         Stage::Pea,
         Stage::IdentifyStage,
         Stage::Track,
@@ -65,6 +71,7 @@ impl Stage {
             Stage::Design => "design",
             Stage::Export => "export",
             Stage::Reduce => "reduce",
+            Stage::Twin => "twin",
             Stage::Pea => "pea",
             Stage::IdentifyStage => "identify-stage",
             Stage::Track => "track",
@@ -82,12 +89,15 @@ impl Stage {
 #[derive(Debug, Clone)]
 pub enum StageSummary {
     /// [`Stage::Design`].
-    Design(DesignSummary),
+    Design(Box<DesignSummary>),
     /// [`Stage::Export`].
     Export(ExportSummary),
     /// [`Stage::Reduce`].
     Reduce(Box<ReduceSummary>),
-    /// [`Stage::Pea`]: one summary per PEA.
+    /// [`Stage::Twin`] (`None`: the twin of this design could not be built; a warning said
+    /// why).
+    Twin(Option<Box<TwinSummary>>),
+    /// [`Stage::Pea`]: PEA1, then PEA2.
     Pea(Vec<PeaIdSummary>),
     /// [`Stage::IdentifyStage`].
     IdentifyStage(Box<StageIdSummary>),
@@ -108,6 +118,8 @@ pub struct RunOptions {
     pub export: ExportOptions,
     /// The reduced model.
     pub reduce: ReduceOptions,
+    /// The twin's report data.
+    pub twin: TwinOptions,
     /// The simulated PEA records (one per PEA; `pea.pea` is not used).
     pub pea: PeaOptions,
     /// Their identification (`identify_pea.pea` and `.data` are not used).
@@ -124,6 +136,7 @@ impl RunOptions {
         self.design.validate()?;
         self.export.validate()?;
         self.reduce.validate()?;
+        self.twin.validate()?;
         self.pea.validate()?;
         self.identify_pea.validate()?;
         self.identify_stage.validate()?;
@@ -287,10 +300,23 @@ fn run_stage(
             } else {
                 DesignStart::Fresh { force: true }
             };
-            StageSummary::Design(design(folder, &options.design, start, progress)?)
+            StageSummary::Design(Box::new(design(folder, &options.design, start, progress)?))
         }
         Stage::Export => StageSummary::Export(export(folder, &options.export)?),
         Stage::Reduce => StageSummary::Reduce(Box::new(reduce(folder, &options.reduce, progress)?)),
+        Stage::Twin => match write_twin(folder, &options.twin, progress) {
+            Ok(t) => StageSummary::Twin(Some(Box::new(t))),
+            // The twin is report data and `track`'s plant; a design it cannot model (e.g. solid
+            // islands of an unconverged design) must not stop the run: `track` then runs on
+            // the lumped model and says so.
+            Err(PipelineError::Twin(e)) => {
+                progress.note(&format!(
+                    "warning: the twin of this design could not be built: {e}"
+                ));
+                StageSummary::Twin(None)
+            }
+            Err(e) => return Err(e),
+        },
         Stage::Pea => StageSummary::Pea(simulate_and_identify_each(
             folder,
             &options.pea,
@@ -326,6 +352,7 @@ mod tests {
                 "design",
                 "export",
                 "reduce",
+                "twin",
                 "pea",
                 "identify-stage",
                 "track",
@@ -333,7 +360,7 @@ mod tests {
             ]
         );
         assert_eq!(Stage::Design.number(), 1);
-        assert_eq!(Stage::Report.number(), 7);
+        assert_eq!(Stage::Report.number(), 8);
         RunOptions::default().validate().unwrap();
     }
 }

@@ -1,7 +1,22 @@
 //! `track`: the simulated tracking experiment (Section 4, Figures 9–11) on the run's stage.
 //!
-//! * **Plant**: the run's simulated stage ([`Plant::of_run`]): the designed mechanism once the
-//!   run has a reduced model, else the scenario's `stage.truth`.
+//! * **Plant** ([`TrackOptions::plant`]): by default the digital twin of the run's finished
+//!   design (`flexstage-twin`: the design's FE model reduced by Craig–Bampton, with the PEA
+//!   sets and the geometric nonlinearity) inside the scenario's rig (`[rig]`: delay,
+//!   amplifier limits, the plant's own Bouc–Wen PEAs with creep, sensor dynamics, white + 1/f
+//!   noise, quantization). Before the run has a design, `track` falls back to the lumped
+//!   8-state model and says so. [`PlantKind::Lumped`] asks for the lumped model (the run's
+//!   [`Plant::of_run`]: the reduced model of the design once it exists, else the scenario's
+//!   `stage.truth`) in its minimal loop, as before the twin.
+//! * **Trajectories** are checked before anything runs ([`Setup::check_reference`] with the
+//!   simulated plant's static gain): one that would need more than the controller's stroke,
+//!   voltages outside the amplifier range, more current or slew than the amplifier has, or
+//!   that reaches the Nyquist frequency is refused with a message naming it, the value and
+//!   the limit.
+//! * **Hysteresis compensation** uses the identified Bouc–Wen parameters of each PEA
+//!   (`identify/pea<N>/estimates.toml`, `recommended_params`) when the run has them, else the
+//!   scenario's `[hysteresis]`; the plant keeps its own (truth) PEAs, which only simulate
+//!   and score. [`TrackSummary::compensator`] says which were used.
 //! * **Controller's model**: [`TrackOptions::params`] if given; else the run's identified
 //!   parameters (`identify/stage/params.toml`) if the run has them; else the guess.
 //! * **Folder**: `track/` for the default conditions (inverse compensation, the default
@@ -15,8 +30,11 @@
 use std::path::{Path, PathBuf};
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::{Metrics, Record, Setup, Variant, experiment_with_progress};
+use flexstage_control::experiment::{
+    Metrics, Record, Setup, Variant, experiment_on, experiment_with_progress,
+};
 use flexstage_control::trajectory::Reference;
+use flexstage_piezo::BoucWenParams;
 use flexstage_report::layout::{self, Tracking};
 use flexstage_report::plot::{Figure, Series};
 use flexstage_report::{RunDir, csv_columns, read_csv_columns};
@@ -31,9 +49,40 @@ use crate::source::plain;
 /// The longest tracking run \[s\] (bounded work: 6·10⁶ samples at 10 kHz).
 pub const MAX_DURATION: f64 = 600.0;
 
+/// Which stage `track` simulates.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PlantKind {
+    /// The digital twin of the run's design in the scenario's rig (falls back to
+    /// [`PlantKind::Lumped`] before the run has a design). The default.
+    #[default]
+    Twin,
+    /// The lumped 8-state model (A13–A14) of the run in its minimal loop.
+    Lumped,
+}
+
+impl PlantKind {
+    /// Both, in the order of the CLI's `--plant` values.
+    pub const ALL: [PlantKind; 2] = [PlantKind::Twin, PlantKind::Lumped];
+
+    /// The name in `--plant`, tables and `metrics.csv`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PlantKind::Twin => "twin",
+            PlantKind::Lumped => "lumped",
+        }
+    }
+
+    /// The kind of a name.
+    pub fn from_name(name: &str) -> Option<PlantKind> {
+        PlantKind::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
 /// Options of `track`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TrackOptions {
+    /// The simulated stage. Default [`PlantKind::Twin`].
+    pub plant: PlantKind,
     /// One trajectory of the scenario by name; `None`: all.
     pub trajectory: Option<String>,
     /// The controllers to run. Default all ([`Variant::ALL`]).
@@ -53,6 +102,7 @@ pub struct TrackOptions {
 impl Default for TrackOptions {
     fn default() -> Self {
         TrackOptions {
+            plant: PlantKind::Twin,
             trajectory: None,
             controllers: Variant::ALL.to_vec(),
             compensation: Compensation::Inverse,
@@ -84,9 +134,13 @@ impl TrackOptions {
     }
 
     /// The folder name of the conditions: empty for the defaults, else the non-default
-    /// conditions joined by `_` (`compensation-off`, `params-<name>`, `duration-<d>s`).
+    /// conditions joined by `_` (`plant-lumped`, `compensation-off`, `params-<name>`,
+    /// `duration-<d>s`).
     pub fn conditions(&self, folder: &RunFolder) -> String {
         let mut parts = Vec::new();
+        if self.plant != PlantKind::Twin {
+            parts.push(format!("plant-{}", self.plant.name()));
+        }
         match self.compensation {
             Compensation::Inverse => {}
             Compensation::Off => parts.push("compensation-off".to_string()),
@@ -172,8 +226,13 @@ pub struct TrackRow {
 /// What `track` did.
 #[derive(Debug, Clone)]
 pub struct TrackSummary {
-    /// The simulated stage.
+    /// The stage that was simulated: the twin, or the lumped model.
+    pub simulated: PlantKind,
+    /// Where the lumped model's parameters come from (also the twin's Bode comparison).
     pub plant: PlantSource,
+    /// The Bouc–Wen parameters of the hysteresis compensation, per PEA: `identified
+    /// (<file>)` or `scenario [hysteresis]`.
+    pub compensator: [String; 2],
     /// The controller's model.
     pub model: ModelSource,
     /// Hysteresis compensation.
@@ -196,6 +255,87 @@ struct Job<'a> {
     controller: Variant,
 }
 
+/// The stage a `track` call simulates.
+enum Simulated {
+    /// The twin of the run's design (built once, a fresh rig plant per run).
+    Twin(Box<flexstage_twin::Twin>),
+    /// The lumped model in its minimal loop.
+    Lumped,
+}
+
+/// The plant of `options.plant`: the twin of the run's design, or the lumped model (also when
+/// the run has no finished design yet; a note says so).
+fn simulated(
+    folder: &RunFolder,
+    options: &TrackOptions,
+    progress: &dyn Progress,
+    warnings: &mut Vec<String>,
+) -> Result<Simulated> {
+    if options.plant == PlantKind::Lumped {
+        return Ok(Simulated::Lumped);
+    }
+    if !folder.dir().exists(layout::design::DESIGN) {
+        warnings.push(
+            "the run has no finished design yet, so tracking runs on the lumped 8-state model \
+             (`flexstage design` first for the twin of the designed stage)"
+                .into(),
+        );
+        return Ok(Simulated::Lumped);
+    }
+    progress.note("building the twin of the design (FE model, Craig–Bampton, nonlinear fit)");
+    let (twin, seconds) = match crate::twin::build(folder) {
+        Ok(t) => t,
+        // A design far from converged can leave solid islands that the twin (void removed
+        // as air) cannot hold; the lumped model still runs, and the warning says why.
+        Err(PipelineError::Twin(e)) => {
+            warnings.push(format!(
+                "the twin of this design could not be built ({e}), so tracking runs on the \
+                 lumped 8-state model"
+            ));
+            return Ok(Simulated::Lumped);
+        }
+        Err(e) => return Err(e),
+    };
+    progress.note(&format!(
+        "twin: {} modes, first resonance {:.0} Hz, built in {seconds:.1} s",
+        twin.modal.modes.len(),
+        twin.first_resonance()
+    ));
+    Ok(Simulated::Twin(Box::new(twin)))
+}
+
+/// Sets the compensator's Bouc–Wen parameters to the run's identified ones where they exist;
+/// returns what each PEA uses.
+fn identified_peas(folder: &RunFolder, setup: &mut Setup) -> Result<[String; 2]> {
+    let mut used = [String::new(), String::new()];
+    for n in [1u8, 2] {
+        let rel = layout::PeaIdentification { pea: n }.estimates();
+        let i = usize::from(n - 1);
+        used[i] = match folder.dir().read_to_string(&rel) {
+            Some(text) => {
+                setup.controller.actuator.hysteresis[i] = read_estimates(&rel, &text)?;
+                format!("identified ({rel})")
+            }
+            None => "scenario [hysteresis]".into(),
+        };
+    }
+    Ok(used)
+}
+
+/// The `recommended_params` of an `estimates.toml`.
+fn read_estimates(rel: &str, text: &str) -> Result<BoucWenParams> {
+    #[derive(serde::Deserialize)]
+    struct Recommended {
+        recommended_params: BoucWenParams,
+    }
+    let r: Recommended = toml::from_str(text).map_err(|e| PipelineError::Format {
+        path: rel.into(),
+        reason: format!("no valid recommended_params table: {e}"),
+    })?;
+    r.recommended_params.validate()?;
+    Ok(r.recommended_params)
+}
+
 /// Runs `track`.
 pub fn track(
     folder: &RunFolder,
@@ -209,7 +349,93 @@ pub fn track(
     if let ModelSource::File(p) | ModelSource::Identified(p) = &model {
         setup.controller.model = read_stage_params(p)?;
     }
-    let s = &plant.scenario;
+    let compensator = identified_peas(folder, &mut setup)?;
+    let mut warnings = Vec::new();
+    let sim = simulated(folder, options, progress, &mut warnings)?;
+    let kind = match sim {
+        Simulated::Twin(_) => PlantKind::Twin,
+        Simulated::Lumped => PlantKind::Lumped,
+    };
+    let jobs = plan(&plant.scenario, &setup, &sim, options, &mut warnings)?;
+    for w in &warnings {
+        progress.note(&format!("warning: {w}"));
+    }
+    let dt = plant.scenario.simulation.sample_time;
+    let samples: f64 = jobs.iter().map(|(j, _)| j.duration / dt).sum();
+    progress.start("track", samples.round() as u64);
+    let records: Vec<Result<Record>> = jobs
+        .par_iter()
+        .map(|(j, _)| run_job(&setup, &sim, options.compensation, j, progress))
+        .collect();
+    progress.finish();
+    let out = Tracking::variant(&options.conditions(folder));
+    let replaced = folder.has_results(out.dir());
+    let (rows, paths) = write_results(folder.dir(), &out, &jobs, records, dt)?;
+    let merged = crate::track_files::write_metrics(
+        folder.dir(),
+        &out,
+        &rows,
+        crate::names::compensation(options.compensation),
+        &model.label(),
+        kind.name(),
+    )?;
+    let trajectories = jobs_by_trajectory(&jobs);
+    crate::track_files::write_paths(folder.dir(), &out, &trajectories, &merged, &paths)?;
+    Ok(TrackSummary {
+        simulated: kind,
+        plant: plant.source,
+        compensator,
+        model,
+        compensation: options.compensation,
+        rows,
+        warnings,
+        dir: folder.dir().path(out.dir()),
+        replaced,
+    })
+}
+
+/// One (trajectory, controller) run on the simulated stage.
+fn run_job(
+    setup: &Setup,
+    sim: &Simulated,
+    compensation: Compensation,
+    j: &Job,
+    progress: &dyn Progress,
+) -> Result<Record> {
+    let advance = |n: usize| progress.advance(n as u64);
+    Ok(match sim {
+        Simulated::Twin(twin) => {
+            let mut p = twin.plant(&setup.rig)?;
+            experiment_on(
+                setup,
+                j.controller,
+                compensation,
+                j.reference,
+                j.duration,
+                &mut p,
+                advance,
+            )?
+        }
+        Simulated::Lumped => experiment_with_progress(
+            setup,
+            j.controller,
+            compensation,
+            j.reference,
+            j.duration,
+            advance,
+        )?,
+    })
+}
+
+/// The jobs of the selected trajectories and controllers, each trajectory checked against the
+/// rig and the simulated plant's static gain first (refused with the reason otherwise).
+fn plan<'a>(
+    s: &'a flexstage_scenario::Scenario,
+    setup: &Setup,
+    sim: &Simulated,
+    options: &TrackOptions,
+    warnings: &mut Vec<String>,
+) -> Result<Vec<(Job<'a>, f64)>> {
     let trajectories: Vec<_> = s
         .trajectories
         .iter()
@@ -225,11 +451,20 @@ pub fn track(
     }
     let dt = s.simulation.sample_time;
     let workspace = setup.workspace()?;
-    let mut warnings = Vec::new();
+    let gain = match sim {
+        Simulated::Twin(t) => Some(t.dc_gain()),
+        Simulated::Lumped => None,
+    };
     let mut jobs = Vec::new();
     for t in &trajectories {
         let (reference, d) = Reference::from_scenario(t);
         let duration = options.duration.unwrap_or(d);
+        setup
+            .check_reference(&reference, duration, gain)
+            .map_err(|e| PipelineError::Format {
+                path: format!("trajectory {:?}", t.name()),
+                reason: format!("refused before the run: {e}"),
+            })?;
         let usage = workspace.max_usage(&reference, duration, dt);
         if usage > 1.0 {
             warnings.push(format!(
@@ -251,48 +486,7 @@ pub fn track(
             ));
         }
     }
-    for w in &warnings {
-        progress.note(&format!("warning: {w}"));
-    }
-    let samples: f64 = jobs.iter().map(|(j, _)| j.duration / dt).sum();
-    progress.start("track", samples.round() as u64);
-    let records: Vec<Result<Record>> = jobs
-        .par_iter()
-        .map(|(j, _)| {
-            let advance = |n: usize| progress.advance(n as u64);
-            let rec = experiment_with_progress(
-                &setup,
-                j.controller,
-                options.compensation,
-                j.reference,
-                j.duration,
-                advance,
-            );
-            Ok(rec?)
-        })
-        .collect();
-    progress.finish();
-    let out = Tracking::variant(&options.conditions(folder));
-    let replaced = folder.has_results(out.dir());
-    let (rows, paths) = write_results(folder.dir(), &out, &jobs, records, dt)?;
-    let merged = crate::track_files::write_metrics(
-        folder.dir(),
-        &out,
-        &rows,
-        crate::names::compensation(options.compensation),
-        &model.label(),
-    )?;
-    let trajectories = jobs_by_trajectory(&jobs);
-    crate::track_files::write_paths(folder.dir(), &out, &trajectories, &merged, &paths)?;
-    Ok(TrackSummary {
-        plant: plant.source,
-        model,
-        compensation: options.compensation,
-        rows,
-        warnings,
-        dir: folder.dir().path(out.dir()),
-        replaced,
-    })
+    Ok(jobs)
 }
 
 /// The trajectories of the jobs, each with its reference, in order.
@@ -418,6 +612,68 @@ mod tests {
             "track/compensation-off_params-reduce_duration-0.5s"
         );
         std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn plant_names_round_trip_and_the_lumped_plant_gets_its_own_folder() {
+        // Goal: `--plant` values, `metrics.csv` labels and folder names agree.
+        for k in PlantKind::ALL {
+            assert_eq!(PlantKind::from_name(k.name()), Some(k));
+        }
+        assert_eq!(PlantKind::from_name("rig"), None);
+        assert_eq!(TrackOptions::default().plant, PlantKind::Twin);
+        let root = std::env::temp_dir().join(format!("flexstage-plant-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let folder =
+            RunFolder::open(crate::folder::preset("quick").unwrap(), &root, false).unwrap();
+        let lumped = TrackOptions {
+            plant: PlantKind::Lumped,
+            ..TrackOptions::default()
+        };
+        assert_eq!(lumped.conditions(&folder), "plant-lumped");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
+    fn a_trajectory_beyond_the_stroke_is_refused_before_the_run_naming_it() {
+        // Reference: issue #15 item 4 — refused with the trajectory, the value and the limit.
+        let mut s = crate::folder::preset("quick").unwrap();
+        let name = s.trajectories[0].name().to_string();
+        if let flexstage_scenario::Trajectory::Lissajous { amplitude, .. } = &mut s.trajectories[0]
+        {
+            amplitude[0] *= 5.0;
+        }
+        let setup = Setup::from_scenario(&s);
+        let options = TrackOptions {
+            trajectory: Some(name.clone()),
+            ..TrackOptions::default()
+        };
+        let mut warnings = Vec::new();
+        let e = plan(&s, &setup, &Simulated::Lumped, &options, &mut warnings)
+            .err()
+            .expect("refused");
+        let m = e.to_string();
+        assert!(
+            m.contains(&name) && m.contains("stroke") && m.contains("µm"),
+            "{m}"
+        );
+        // The defaults fit.
+        let all = TrackOptions::default();
+        let s = crate::folder::preset("quick").unwrap();
+        let setup = Setup::from_scenario(&s);
+        assert!(plan(&s, &setup, &Simulated::Lumped, &all, &mut warnings).is_ok());
+    }
+
+    #[test]
+    fn identified_pea_parameters_are_read_from_the_estimates() {
+        // Goal: the compensator takes `recommended_params`; a damaged file is an error.
+        let text = "data = \"x\"\n[recommended_params]\nd_p = 0.06\na_bw = 0.012\n\
+                    b_bw = 0.0019\ngamma_bw = 0.0016\ndelta_bw = 0.0005\n";
+        let p = read_estimates("identify/pea1/estimates.toml", text).unwrap();
+        assert_eq!(p.d_p, 0.06);
+        assert_eq!(p.delta_bw, 0.0005);
+        let e = read_estimates("identify/pea1/estimates.toml", "d_p = 1").unwrap_err();
+        assert!(e.to_string().contains("recommended_params"), "{e}");
     }
 
     #[test]

@@ -10,14 +10,14 @@ use crate::error::Result;
 use crate::track::{Path2D, TrackRow, read_paths};
 
 /// The header of `metrics.csv`.
-const HEADER: &str = "trajectory,variant,compensation,model,rms1_nm,rms2_nm,rms1_pct,rms2_pct,\
+const HEADER: &str = "trajectory,variant,compensation,model,plant,rms1_nm,rms2_nm,rms1_pct,rms2_pct,\
 max1_nm,max2_nm,max1_pct,max2_pct,settling_s,peak_voltage_V,saturated_samples,dropouts,\
 workspace_usage";
 
-fn line(r: &TrackRow, compensation: &str, model: &str) -> String {
+fn line(r: &TrackRow, compensation: &str, model: &str, plant: &str) -> String {
     let m = &r.metrics;
     format!(
-        "{},{},{compensation},{model},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{compensation},{model},{plant},{},{},{},{},{},{},{},{},{},{},{},{},{}",
         r.trajectory,
         r.controller.name(),
         m.rms[0] * 1e9,
@@ -37,8 +37,8 @@ fn line(r: &TrackRow, compensation: &str, model: &str) -> String {
 }
 
 /// Writes `metrics.csv` with the rows of this call. Rows of other (trajectory, controller)
-/// pairs already in the file are kept when they were made under the same compensation and
-/// model; the rows of this call replace theirs in place, new ones are appended. Returns the
+/// pairs already in the file are kept when they were made under the same compensation,
+/// model and plant (`twin` or `lumped`); the rows of this call replace theirs in place, new ones are appended. Returns the
 /// (trajectory, controller) pairs of the file, in order.
 pub(crate) fn write_metrics(
     run: &RunDir,
@@ -46,6 +46,7 @@ pub(crate) fn write_metrics(
     rows: &[TrackRow],
     compensation: &str,
     model: &str,
+    plant: &str,
 ) -> Result<Vec<(String, String)>> {
     let key = |l: &str| -> Option<(String, String)> {
         let mut c = l.split(',');
@@ -59,14 +60,16 @@ pub(crate) fn write_metrics(
             lines = it
                 .filter(|l| {
                     let c: Vec<&str> = l.split(',').collect();
-                    c.get(2) == Some(&compensation) && c.get(3) == Some(&model)
+                    c.get(2) == Some(&compensation)
+                        && c.get(3) == Some(&model)
+                        && c.get(4) == Some(&plant)
                 })
                 .map(str::to_string)
                 .collect();
         }
     }
     for r in rows {
-        let new = line(r, compensation, model);
+        let new = line(r, compensation, model, plant);
         let k = key(&new);
         match lines.iter_mut().find(|l| key(l) == k) {
             Some(l) => *l = new,
@@ -158,13 +161,14 @@ mod tests {
         let run = RunDir::create(&root).unwrap();
         let out = Tracking::main();
         let all = [row(Variant::Robust, 1e-9), row(Variant::NonRobust, 2e-9)];
-        write_metrics(&run, &out, &all, "inverse", "guess").unwrap();
+        write_metrics(&run, &out, &all, "inverse", "guess", "twin").unwrap();
         let keys = write_metrics(
             &run,
             &out,
             &[row(Variant::Robust, 3e-9)],
             "inverse",
             "guess",
+            "twin",
         )
         .unwrap();
         assert_eq!(
@@ -187,9 +191,22 @@ mod tests {
             &[row(Variant::Robust, 4e-9)],
             "inverse",
             "x.toml",
+            "twin",
         )
         .unwrap();
         assert_eq!(keys.len(), 1, "another model starts a new table");
+        let keys = write_metrics(
+            &run,
+            &out,
+            &[row(Variant::NonRobust, 5e-9)],
+            "inverse",
+            "x.toml",
+            "lumped",
+        )
+        .unwrap();
+        assert_eq!(keys.len(), 1, "another plant starts a new table");
+        let text = run.read_to_string(out.metrics()).unwrap();
+        assert!(text.contains(",x.toml,lumped,"), "the plant column: {text}");
         std::fs::remove_dir_all(&root).unwrap();
     }
 }

@@ -76,7 +76,7 @@ fn run_resumes_and_refuses_another_scenario_until_restarted() {
 
     let s = run(quick.clone(), &root, &options, &rec).unwrap();
     let ev = rec.take();
-    assert_eq!(started(&ev), 7, "{ev:?}");
+    assert_eq!(started(&ev), Stage::ALL.len(), "{ev:?}");
     assert!(s.report.is_file(), "report written");
     assert!(!s.headline.is_empty(), "headline numbers");
     let state = RunState::load(&RunDir::create(&root).unwrap())
@@ -86,8 +86,11 @@ fn run_resumes_and_refuses_another_scenario_until_restarted() {
 
     run(quick.clone(), &root, &options, &rec).unwrap();
     let ev = rec.take();
-    assert_eq!(ev[0], "resuming 7");
-    assert_eq!(ev.iter().filter(|e| e.starts_with("skip ")).count(), 7);
+    assert_eq!(ev[0], format!("resuming {}", Stage::ALL.len()));
+    assert_eq!(
+        ev.iter().filter(|e| e.starts_with("skip ")).count(),
+        Stage::ALL.len()
+    );
     assert_eq!(started(&ev), 0, "{ev:?}");
 
     let mut changed = quick.clone();
@@ -117,7 +120,7 @@ fn run_resumes_and_refuses_another_scenario_until_restarted() {
     run(changed.clone(), &root, &restart, &rec).unwrap();
     let ev = rec.take();
     assert_eq!(ev[0], "restart", "{ev:?}");
-    assert_eq!(started(&ev), 7, "{ev:?}");
+    assert_eq!(started(&ev), Stage::ALL.len(), "{ev:?}");
     let recorded = Scenario::load(&root.join("scenario.toml")).unwrap();
     assert_eq!(
         recorded, changed,

@@ -14,6 +14,7 @@
 //! analyze/<variant>/   cases.csv deformed.vtu summary.json workspace.svg
 //! export/     outline.{dxf,svg,stl}
 //! reduce/     params.toml summary.{toml,json} modes.{vtu,csv} validity{,_scale}.{csv,svg}
+//! twin/       modes.csv bode.csv bode_{magnitude,phase}.svg validity.json
 //! pea/        pea<N>.csv pea<N>_loop.svg
 //! identify/pea<N>/   estimates.toml convergence.{csv,svg} loop.{csv,svg} compensation.{csv,svg}
 //! identify/stage/    params.toml table.csv convergence.{csv,svg} record.csv
@@ -124,6 +125,25 @@ pub mod reduce {
     pub const VALIDITY_SVG: &str = "reduce/validity.svg";
     /// Figure: model error against stroke.
     pub const VALIDITY_SCALE_SVG: &str = "reduce/validity_scale.svg";
+}
+
+/// `twin/`: the digital twin of the designed stage (its modes, its frequency response beside
+/// the lumped model, its validity against the full nonlinear transient).
+pub mod twin {
+    /// The stage folder.
+    pub const DIR: &str = "twin";
+    /// The twin's modes: mode, frequency \[Hz\], FE frequency \[Hz\], relative difference.
+    pub const MODES: &str = "twin/modes.csv";
+    /// Frequency \[Hz\], then magnitude \[dB\] and phase \[deg\] of each input→output pair
+    /// (x_nom_j → q_i) of the twin and of the lumped model.
+    pub const BODE: &str = "twin/bode.csv";
+    /// Figure: Bode magnitude, twin beside the lumped model, both axes.
+    pub const BODE_MAGNITUDE_SVG: &str = "twin/bode_magnitude.svg";
+    /// Figure: Bode phase, twin beside the lumped model, both axes.
+    pub const BODE_PHASE_SVG: &str = "twin/bode_phase.svg";
+    /// Step and sine errors against the full transient (% of range), mode errors, the
+    /// twin's order and modes, build seconds (JSON).
+    pub const VALIDITY: &str = "twin/validity.json";
 }
 
 /// `pea/`: simulated PEA records.

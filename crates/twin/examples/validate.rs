@@ -12,8 +12,8 @@
 use flexstage_reduce::{ReduceParams, reduce, reduction_problem};
 use flexstage_scenario::{Preset, Scenario};
 use flexstage_topopt::DesignFile;
-use flexstage_twin::report::{bode_for, modes_table, validity_lines};
-use flexstage_twin::{Twin, ValidationParams, validate};
+use flexstage_twin::report::validity_lines;
+use flexstage_twin::{Twin, ValidationParams, report_data};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -28,34 +28,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let scenario = Scenario::preset(preset);
     let t0 = std::time::Instant::now();
     let twin = Twin::from_scenario(&scenario, &design.rho)?;
-    println!(
-        "twin of {} ({} × {} mesh): {} fixed-interface modes, {} modes, built in {:.2} s",
-        design.scenario,
-        design.nl,
-        design.nw,
-        twin.reduction.modes(),
-        twin.modal.modes.len(),
-        t0.elapsed().as_secs_f64()
-    );
-    if let Some(nl) = &twin.nonlinear {
-        println!(
-            "nonlinear effect over the fit grid: {:.2} / {:.2} nm (q1 / q2), fit residual {:.3} / {:.3} nm",
-            nl.max_effect[0] * 1e9,
-            nl.max_effect[1] * 1e9,
-            nl.max_residual[0] * 1e9,
-            nl.max_residual[1] * 1e9
-        );
-    }
-    let mut modes = String::from(
-        "mode,frequency_Hz,damping,common_participation,differential_participation,claimed\n",
-    );
-    for m in modes_table(&twin) {
-        modes.push_str(&format!(
-            "{},{},{},{},{},{}\n",
-            m.index, m.frequency, m.damping, m.common, m.differential, m.claimed
-        ));
-    }
-    std::fs::write(out.join("modes.csv"), modes)?;
+    let build_seconds = t0.elapsed().as_secs_f64();
     // The lumped model of the same design (flexstage reduce), beside the twin.
     let problem = reduction_problem(&scenario, false)?;
     let params = ReduceParams {
@@ -64,13 +37,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..ReduceParams::default()
     };
     let reduced = reduce(&scenario, &problem, &design.rho, &params)?;
-    let bode = bode_for(&twin, &reduced.params)?;
-    std::fs::write(out.join("bode.csv"), bode.csv())?;
-    let [mag, phase] = bode.svg()?;
-    std::fs::write(out.join("bode_magnitude.svg"), mag)?;
-    std::fs::write(out.join("bode_phase.svg"), phase)?;
-    let t0 = std::time::Instant::now();
-    let v = validate(&twin, &ValidationParams::default())?;
+    let check = Ok((ValidationParams::default(), "requested".to_string()));
+    let data = report_data(&twin, &reduced.params, build_seconds, check)?;
+    let v = &data.validity;
+    println!(
+        "twin of {} ({} × {} mesh): {} fixed-interface modes, {} modes, built in {:.2} s",
+        design.scenario, design.nl, design.nw, v.fixed_interface_modes, v.order, build_seconds
+    );
     for m in &v.modes {
         println!(
             "mode {}: twin {:.2} Hz, FE {:.2} Hz ({:+.4} %), ζ = {:.4}",
@@ -81,11 +54,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             m.damping
         );
     }
-    for line in validity_lines(&v) {
+    for line in data.full.iter().flat_map(validity_lines) {
         println!("{line}");
     }
-    println!("validation: {:.1} s", t0.elapsed().as_secs_f64());
-    std::fs::write(out.join("validity.json"), serde_json::to_string_pretty(&v)?)?;
+    println!("validation: {:.1} s", v.transient.seconds);
+    for (rel, text) in data.files()? {
+        let name = std::path::Path::new(rel).file_name().ok_or("file name")?;
+        std::fs::write(out.join(name), text)?;
+    }
     println!("wrote {}", out.display());
     Ok(())
 }

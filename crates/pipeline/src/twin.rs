@@ -1,0 +1,134 @@
+//! `twin`: the digital twin of the run's designed stage (`flexstage-twin`, issue #15) and its
+//! report data in `twin/` ([`layout::twin`]).
+//!
+//! * [`build`] makes the twin of the run's finished design with the scenario's `[twin]` group
+//!   (Craig–Bampton reduction of the design's FE model with the PEA sets of Eq. 1–3, Rayleigh
+//!   damping, the geometric-nonlinearity fit). `track` simulates on it ([`crate::plant`]).
+//! * [`write_twin`] writes what the report shows (`flexstage_twin::report_data`): the twin's modes against the FE modal
+//!   analysis of the same assembled stage (`modes.csv`), its frequency response x_nom → q
+//!   beside the lumped 8-state model of the run (`bode.csv`, `bode_magnitude.svg`,
+//!   `bode_phase.svg`), and its validity (`validity.json`): the mode errors and, when the
+//!   check runs, the step and 200 Hz sine errors against the full nonlinear transient
+//!   (`flexstage_twin::validate`) in % of the full model's range.
+//!
+//! The full transient costs minutes on the paper mesh (about 95 s of CPU per 20 ms case at
+//! 14 444 DOF), so [`TwinValidation::Auto`] runs it only on models up to
+//! [`AUTO_VALIDATION_DOFS`] free DOFs (the quick preset) and says why it did not otherwise;
+//! [`TwinValidation::On`] forces it. It is never skipped silently: `validity.json` records
+//! whether it ran and why.
+
+use std::time::Instant;
+
+use flexstage_report::layout;
+use flexstage_twin::{Twin, TwinValidity, ValidationParams, report_data};
+
+use crate::error::Result;
+use crate::folder::RunFolder;
+use crate::plant::Plant;
+use crate::progress::Progress;
+use crate::source::{DesignSource, load_design};
+
+/// Largest FE model (free DOFs) on which [`TwinValidation::Auto`] runs the full transient
+/// (the quick preset has 2 398, the paper preset 14 444).
+pub const AUTO_VALIDATION_DOFS: usize = 5_000;
+
+/// Whether to check the twin against the full nonlinear transient.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum TwinValidation {
+    /// On for FE models up to [`AUTO_VALIDATION_DOFS`] free DOFs, off (with the reason)
+    /// above. The default.
+    #[default]
+    Auto,
+    /// Always (minutes on the paper mesh).
+    On,
+    /// Never (the reason is recorded).
+    Off,
+}
+
+/// Options of the twin's report data.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct TwinOptions {
+    /// The check against the full transient. Default [`TwinValidation::Auto`].
+    pub validation: TwinValidation,
+}
+
+impl TwinOptions {
+    /// Checks every option (all values are valid).
+    pub fn validate(&self) -> Result<()> {
+        Ok(())
+    }
+}
+
+/// The twin of the run's finished design and the seconds it took to build.
+pub fn build(folder: &RunFolder) -> Result<(Twin, f64)> {
+    let t0 = Instant::now();
+    let s = folder.scenario();
+    let problem = flexstage_reduce::reduction_problem(s, false)?;
+    let rho = load_design(folder, &DesignSource::Run, &problem)?;
+    let twin = Twin::from_scenario(s, &rho)?;
+    Ok((twin, t0.elapsed().as_secs_f64()))
+}
+
+/// What [`write_twin`] did.
+#[derive(Debug, Clone)]
+pub struct TwinSummary {
+    /// The validity data (as written to `validity.json`).
+    pub validity: TwinValidity,
+    /// The folder written.
+    pub dir: std::path::PathBuf,
+    /// Whether earlier results were replaced.
+    pub replaced: bool,
+}
+
+/// Builds the twin of the run's design and writes its report data to `twin/`.
+pub fn write_twin(
+    folder: &RunFolder,
+    options: &TwinOptions,
+    progress: &dyn Progress,
+) -> Result<TwinSummary> {
+    options.validate()?;
+    progress.note("building the twin of the design (FE model, Craig–Bampton, nonlinear fit)");
+    let (twin, build_seconds) = build(folder)?;
+    let dofs = twin.fe.model.dofs().n_free();
+    let (run_it, reason) = match options.validation {
+        TwinValidation::On => (true, "requested".to_string()),
+        TwinValidation::Off => (false, "switched off".to_string()),
+        TwinValidation::Auto if dofs <= AUTO_VALIDATION_DOFS => (
+            true,
+            format!("on by default for FE models up to {AUTO_VALIDATION_DOFS} free DOF ({dofs})"),
+        ),
+        TwinValidation::Auto => (
+            false,
+            format!(
+                "off by default: the FE model has {dofs} free DOF (> {AUTO_VALIDATION_DOFS}), \
+                 where the full nonlinear transient costs minutes per 20 ms case; \
+                 `flexstage track --write-twin --twin-validate on` runs it"
+            ),
+        ),
+    };
+    progress.note(&format!(
+        "twin: {} modes, built in {build_seconds:.1} s; check against the full transient: {}",
+        twin.modal.modes.len(),
+        if run_it { "on" } else { "off" }
+    ));
+    if !run_it {
+        progress.note(&format!("twin: full-transient check {reason}"));
+    }
+    // The lumped model beside the twin: the reduced model of the design, else the truth.
+    let lumped = Plant::of_run(folder)?.scenario.stage.truth;
+    let transient = if run_it {
+        Ok((ValidationParams::default(), reason))
+    } else {
+        Err(reason)
+    };
+    let data = report_data(&twin, &lumped, build_seconds, transient)?;
+    let replaced = folder.has_results(layout::twin::DIR);
+    for (rel, text) in data.files()? {
+        folder.dir().write(rel, text.as_bytes())?;
+    }
+    Ok(TwinSummary {
+        validity: data.validity,
+        dir: folder.dir().path(layout::twin::DIR),
+        replaced,
+    })
+}
