@@ -15,9 +15,9 @@ pub struct Mesh {
     pub width: f64,
     /// Out-of-plane thickness t [m]. Table 3: 0.01.
     pub thickness: f64,
-    /// Elements along x, n_l ≥ 1. Table 3: 120.
+    /// Elements along x, n_l in [4, 4000]. Table 3: 120.
     pub nl: usize,
-    /// Elements along y, n_w ≥ 1. Table 3: 60.
+    /// Elements along y, n_w in [4, 4000]. Table 3: 60.
     pub nw: usize,
 }
 
@@ -27,8 +27,10 @@ impl Mesh {
         positive("mesh.length", self.length)?;
         positive("mesh.width", self.width)?;
         positive("mesh.thickness", self.thickness)?;
-        count("mesh.nl", self.nl, 1, 4000)?;
-        count("mesh.nw", self.nw, 1, 4000)?;
+        // At least 4 elements a side: the three ports must fall on distinct nodes away from
+        // the corners (a 1 × 1 mesh has a degenerate workspace of NaN area).
+        count("mesh.nl", self.nl, 4, 4000)?;
+        count("mesh.nw", self.nw, 4, 4000)?;
         Ok(())
     }
 
