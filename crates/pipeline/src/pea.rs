@@ -324,8 +324,13 @@ pub fn identify_pea(folder: &RunFolder, options: &PeaIdOptions) -> Result<PeaIdS
         record_every: (data.len() / 2000).max(1),
         ..flexstage_piezo::IdentifyParams::default()
     };
-    let online = flexstage_piezo::identify(&data, &params)?;
-    let batch = flexstage_piezo::fit_batch(&data)?;
+    // A record the estimators cannot use is a fault of the record: name it.
+    let of_record = |e: flexstage_piezo::PiezoError| PipelineError::Format {
+        path: path.display().to_string(),
+        reason: e.to_string(),
+    };
+    let online = flexstage_piezo::identify(&data, &params).map_err(of_record)?;
+    let batch = flexstage_piezo::fit_batch(&data).map_err(of_record)?;
     let (recommended, best) =
         if batch.rms_error <= online.rms_error || !online.rms_error.is_finite() {
             ("batch", batch.estimate)
@@ -334,7 +339,8 @@ pub fn identify_pea(folder: &RunFolder, options: &PeaIdOptions) -> Result<PeaIdS
         };
     let out = PeaIdentification { pea: options.pea };
     let replaced = folder.has_results(&out.dir());
-    let record = loop_metrics(data.u(), data.x())?;
+    let record = loop_metrics(data.u(), data.x()).map_err(of_record)?;
+    identifiable(&path, record.width_pct, &best)?;
     let reference = scenario_pea(folder.scenario(), options.pea);
     let summary = PeaIdSummary {
         pea: options.pea,
@@ -354,6 +360,17 @@ pub fn identify_pea(folder: &RunFolder, options: &PeaIdOptions) -> Result<PeaIdS
         dir: run.path(out.dir()),
         replaced,
     };
+    if summary.compensation.width_after_pct > summary.compensation.width_before_pct {
+        return Err(PipelineError::Format {
+            path: summary.data.display().to_string(),
+            reason: format!(
+                "the {recommended} estimate does not describe the actuator: compensation built \
+                 on it widens the loop from {:.2} % to {:.2} % of the range (a record too short \
+                 or too narrow to identify from)",
+                summary.compensation.width_before_pct, summary.compensation.width_after_pct
+            ),
+        });
+    }
     let files = crate::pea_files::Outputs {
         run,
         out,
@@ -366,6 +383,38 @@ pub fn identify_pea(folder: &RunFolder, options: &PeaIdOptions) -> Result<PeaIdS
     };
     files.write()?;
     Ok(summary)
+}
+
+/// Smallest loop width of a record to identify from [% of the displacement range].
+pub const MIN_RECORD_WIDTH_PCT: f64 = 0.1;
+
+/// Refuses a record without hysteresis and an estimate that is not a bounded Bouc–Wen model
+/// (finite, d_p > 0, B_bw ≥ 0, B_bw + Γ_bw > 0, as `hysteresis.pea*` in the scenario).
+fn identifiable(path: &Path, width_pct: f64, p: &BoucWenParams) -> Result<()> {
+    let fail = |reason: String| {
+        Err(PipelineError::Format {
+            path: path.display().to_string(),
+            reason,
+        })
+    };
+    if !(width_pct >= MIN_RECORD_WIDTH_PCT) {
+        return fail(format!(
+            "the record's hysteresis loop is {width_pct:.3} % of its range, below the \
+             {MIN_RECORD_WIDTH_PCT} % needed to identify a Bouc–Wen model (record at least one \
+             full cycle of the voltage range)"
+        ));
+    }
+    let values = [p.d_p, p.a_bw, p.b_bw, p.gamma_bw, p.delta_bw];
+    let bounded = p.d_p > 0.0 && p.b_bw >= 0.0 && p.b_bw + p.gamma_bw > 0.0;
+    if !values.iter().all(|v| v.is_finite()) || !bounded {
+        return fail(format!(
+            "the identification gives no valid Bouc–Wen model (d_p = {:e}, A_bw = {:e}, \
+             B_bw = {:e}, Γ_bw = {:e}, δ_bw = {:e}; needed: finite, d_p > 0, B_bw ≥ 0, \
+             B_bw + Γ_bw > 0)",
+            p.d_p, p.a_bw, p.b_bw, p.gamma_bw, p.delta_bw
+        ));
+    }
+    Ok(())
 }
 
 /// Hysteresis before and after inverse compensation (Section 3.3, Eq. 21): the scenario's PEA
