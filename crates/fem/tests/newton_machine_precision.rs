@@ -30,7 +30,14 @@ fn a_step_at_machine_precision_ends_a_linear_solve() {
     let (strict, u) = solve(1e-300).expect("round-off must not make a linear solve fail");
     assert!(strict.iterations <= 3, "{} corrections", strict.iterations);
     assert!(loose.iterations <= 3, "{} corrections", loose.iterations);
-    let diff: f64 = u.iter().zip(&u_ref).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    let diff: f64 = u
+        .iter()
+        .zip(&u_ref)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
     let scale: f64 = u_ref.iter().map(|a| a.abs()).fold(0.0, f64::max);
-    assert!(diff <= 1e-12 * scale, "solutions differ by {diff:e} of {scale:e}");
+    assert!(
+        diff <= 1e-12 * scale,
+        "solutions differ by {diff:e} of {scale:e}"
+    );
 }

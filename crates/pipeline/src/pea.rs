@@ -133,10 +133,15 @@ pub fn simulate_pea(s: &Scenario, options: &PeaOptions) -> Result<PeaRecord> {
     };
     let dt = options.dt.unwrap_or(s.simulation.sample_time);
     let samples = wave.duration() / dt;
+    // The record length is cycles / frequency / dt: name the option that made it too long.
+    let (option, value) = match options.dt {
+        Some(dt) => ("pea.dt", format!("{dt:e} s with {} cycles", options.cycles)),
+        None => ("pea.cycles", options.cycles.to_string()),
+    };
     require(
         samples <= MAX_RECORD_SAMPLES,
-        "pea.cycles",
-        options.cycles,
+        option,
+        value,
         &format!("at most {MAX_RECORD_SAMPLES:e} samples; this record would have {samples:.3e}"),
     )?;
     let seed = options.seed.unwrap_or(s.simulation.seed);
@@ -397,7 +402,7 @@ fn identifiable(path: &Path, width_pct: f64, p: &BoucWenParams) -> Result<()> {
             reason,
         })
     };
-    if !(width_pct >= MIN_RECORD_WIDTH_PCT) {
+    if width_pct.is_nan() || width_pct < MIN_RECORD_WIDTH_PCT {
         return fail(format!(
             "the record's hysteresis loop is {width_pct:.3} % of its range, below the \
              {MIN_RECORD_WIDTH_PCT} % needed to identify a Bouc–Wen model (record at least one \

@@ -397,8 +397,8 @@ fn rank3(rows: &[[f64; 3]]) -> usize {
         let p = m[rank];
         for r in m.iter_mut().skip(rank + 1) {
             let f = r[col] / p[col];
-            for k in 0..3 {
-                r[k] -= f * p[k];
+            for (x, pk) in r.iter_mut().zip(p) {
+                *x -= f * pk;
             }
         }
         rank += 1;

@@ -158,5 +158,10 @@ fn every_leaf_with_every_hostile_value() {
         }
     }
     failures.dedup();
-    assert!(failures.is_empty(), "{} mutants:\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} mutants:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
 }
