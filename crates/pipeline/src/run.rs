@@ -84,7 +84,7 @@ impl Stage {
 #[derive(Debug, Clone)]
 pub enum StageSummary {
     /// [`Stage::Design`].
-    Design(DesignSummary),
+    Design(Box<DesignSummary>),
     /// [`Stage::Export`].
     Export(ExportSummary),
     /// [`Stage::Reduce`].
@@ -289,7 +289,7 @@ fn run_stage(
             } else {
                 DesignStart::Fresh { force: true }
             };
-            StageSummary::Design(design(folder, &options.design, start, progress)?)
+            StageSummary::Design(Box::new(design(folder, &options.design, start, progress)?))
         }
         Stage::Export => StageSummary::Export(export(folder, &options.export)?),
         Stage::Reduce => StageSummary::Reduce(Box::new(reduce(folder, &options.reduce, progress)?)),
