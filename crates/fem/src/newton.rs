@@ -12,7 +12,10 @@
 //!   energy criterion `|Δuᵀ r(u + αΔu)| ≤ 0.8 |Δuᵀ r(u)|` holds.
 //! * Convergence of an increment needs, after at least one correction, **both**
 //!   `‖P_λ − R(u)‖ ≤ residual_tol · ‖P_λ‖` (free DOFs) **and**
-//!   `‖αΔu‖ ≤ displacement_tol · ‖u‖`.
+//!   `‖αΔu‖ ≤ displacement_tol · ‖u‖`. A full step (α = 1) whose increment is at machine
+//!   precision, `‖Δu‖ ≤ 64 ε ‖u‖` ([`MACHINE_INCREMENT`]), also ends the increment: no
+//!   further correction can change `u`, and the residual left is the round-off of the
+//!   internal forces (on slender or stiff meshes it can exceed `residual_tol · ‖P_λ‖`).
 //! * NaN/∞ anywhere or exhausted cutbacks return a [`NewtonError`] carrying the full history.
 //!
 //! Warm start: `u` on entry is the initial guess (e.g. the solution of the previous design
@@ -252,6 +255,10 @@ struct Counters {
     indefinite: bool,
 }
 
+/// A full Newton step smaller than this, relative to `‖u‖`, is at machine precision: the
+/// increment is converged whatever the residual (64 ε ≈ 1.4e-14).
+pub const MACHINE_INCREMENT: f64 = 64.0 * f64::EPSILON;
+
 /// Solve `R(u, ρ) = P` by incremental Newton–Raphson. `load` is the full external load vector
 /// (entries at fixed DOFs ignored); `u` holds the initial guess (warm start) and receives the
 /// solution. `precond` is only used with [`LinearStrategy::Pcg`].
@@ -475,12 +482,15 @@ fn increment(
     fill_rhs(&mut ws.rhs, &ws.r_full);
     let mut rn = norm(&ws.rhs);
     let mut last_du_rel = f64::INFINITY;
+    let mut last_alpha = 0.0;
     for it in 0..=params.max_iterations {
         let rel = rn / p_ref;
         if !rel.is_finite() {
             return Err(IncrementFailure::NotConverged(rel));
         }
-        if it > 0 && rel <= params.residual_tol && last_du_rel <= params.displacement_tol {
+        let at_tolerance = rel <= params.residual_tol && last_du_rel <= params.displacement_tol;
+        let at_machine_precision = last_alpha == 1.0 && last_du_rel <= MACHINE_INCREMENT;
+        if it > 0 && (at_tolerance || at_machine_precision) {
             return Ok(rel);
         }
         if it == params.max_iterations {
@@ -525,6 +535,7 @@ fn increment(
             }
         }
         let du_norm = alpha * norm(&ws.du);
+        last_alpha = if accepted { alpha } else { 0.0 };
         u.copy_from_slice(&ws.u_trial);
         let u_norm = norm(u);
         last_du_rel = if u_norm > 0.0 {

@@ -44,11 +44,23 @@ impl PeaData {
             )
             .into());
         }
-        for (name, col) in [("t", &t), ("U", &u), ("x", &x)] {
+        // Magnitudes beyond any PEA (|U| ≤ 1e5 V, |x| ≤ 1e6 µm, t within 1e9 s) would
+        // overflow the estimators' products: refused as the unit error they are.
+        for (name, col, limit) in [("t", &t, 1e9), ("U", &u, 1e5), ("x", &x, 1e6)] {
             if let Some(k) = col.iter().position(|v| !v.is_finite()) {
                 return Err(DataError::new(
                     "pea data",
                     format!("{name}[{k}] = {} is not a finite number", col[k]),
+                )
+                .into());
+            }
+            if let Some(k) = col.iter().position(|v| v.abs() > limit) {
+                return Err(DataError::new(
+                    "pea data",
+                    format!(
+                        "{name}[{k}] = {:e} is beyond ±{limit:e} (t in s, U in V, x in µm)",
+                        col[k]
+                    ),
                 )
                 .into());
             }

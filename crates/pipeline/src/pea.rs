@@ -133,10 +133,15 @@ pub fn simulate_pea(s: &Scenario, options: &PeaOptions) -> Result<PeaRecord> {
     };
     let dt = options.dt.unwrap_or(s.simulation.sample_time);
     let samples = wave.duration() / dt;
+    // The record length is cycles / frequency / dt: name the option that made it too long.
+    let (option, value) = match options.dt {
+        Some(dt) => ("pea.dt", format!("{dt:e} s with {} cycles", options.cycles)),
+        None => ("pea.cycles", options.cycles.to_string()),
+    };
     require(
         samples <= MAX_RECORD_SAMPLES,
-        "pea.cycles",
-        options.cycles,
+        option,
+        value,
         &format!("at most {MAX_RECORD_SAMPLES:e} samples; this record would have {samples:.3e}"),
     )?;
     let seed = options.seed.unwrap_or(s.simulation.seed);
@@ -324,8 +329,13 @@ pub fn identify_pea(folder: &RunFolder, options: &PeaIdOptions) -> Result<PeaIdS
         record_every: (data.len() / 2000).max(1),
         ..flexstage_piezo::IdentifyParams::default()
     };
-    let online = flexstage_piezo::identify(&data, &params)?;
-    let batch = flexstage_piezo::fit_batch(&data)?;
+    // A record the estimators cannot use is a fault of the record: name it.
+    let of_record = |e: flexstage_piezo::PiezoError| PipelineError::Format {
+        path: path.display().to_string(),
+        reason: e.to_string(),
+    };
+    let online = flexstage_piezo::identify(&data, &params).map_err(of_record)?;
+    let batch = flexstage_piezo::fit_batch(&data).map_err(of_record)?;
     let (recommended, best) =
         if batch.rms_error <= online.rms_error || !online.rms_error.is_finite() {
             ("batch", batch.estimate)
@@ -334,7 +344,8 @@ pub fn identify_pea(folder: &RunFolder, options: &PeaIdOptions) -> Result<PeaIdS
         };
     let out = PeaIdentification { pea: options.pea };
     let replaced = folder.has_results(&out.dir());
-    let record = loop_metrics(data.u(), data.x())?;
+    let record = loop_metrics(data.u(), data.x()).map_err(of_record)?;
+    identifiable(&path, record.width_pct, &best)?;
     let reference = scenario_pea(folder.scenario(), options.pea);
     let summary = PeaIdSummary {
         pea: options.pea,
@@ -354,6 +365,17 @@ pub fn identify_pea(folder: &RunFolder, options: &PeaIdOptions) -> Result<PeaIdS
         dir: run.path(out.dir()),
         replaced,
     };
+    if summary.compensation.width_after_pct > summary.compensation.width_before_pct {
+        return Err(PipelineError::Format {
+            path: summary.data.display().to_string(),
+            reason: format!(
+                "the {recommended} estimate does not describe the actuator: compensation built \
+                 on it widens the loop from {:.2} % to {:.2} % of the range (a record too short \
+                 or too narrow to identify from)",
+                summary.compensation.width_before_pct, summary.compensation.width_after_pct
+            ),
+        });
+    }
     let files = crate::pea_files::Outputs {
         run,
         out,
@@ -399,6 +421,38 @@ pub fn simulate_and_identify_each(
     };
     let (a, b) = rayon::join(|| one(PEAS[0]), || one(PEAS[1]));
     Ok(vec![a?, b?])
+}
+
+/// Smallest loop width of a record to identify from [% of the displacement range].
+pub const MIN_RECORD_WIDTH_PCT: f64 = 0.1;
+
+/// Refuses a record without hysteresis and an estimate that is not a bounded Bouc–Wen model
+/// (finite, d_p > 0, B_bw ≥ 0, B_bw + Γ_bw > 0, as `hysteresis.pea*` in the scenario).
+fn identifiable(path: &Path, width_pct: f64, p: &BoucWenParams) -> Result<()> {
+    let fail = |reason: String| {
+        Err(PipelineError::Format {
+            path: path.display().to_string(),
+            reason,
+        })
+    };
+    if width_pct.is_nan() || width_pct < MIN_RECORD_WIDTH_PCT {
+        return fail(format!(
+            "the record's hysteresis loop is {width_pct:.3} % of its range, below the \
+             {MIN_RECORD_WIDTH_PCT} % needed to identify a Bouc–Wen model (record at least one \
+             full cycle of the voltage range)"
+        ));
+    }
+    let values = [p.d_p, p.a_bw, p.b_bw, p.gamma_bw, p.delta_bw];
+    let bounded = p.d_p > 0.0 && p.b_bw >= 0.0 && p.b_bw + p.gamma_bw > 0.0;
+    if !values.iter().all(|v| v.is_finite()) || !bounded {
+        return fail(format!(
+            "the identification gives no valid Bouc–Wen model (d_p = {:e}, A_bw = {:e}, \
+             B_bw = {:e}, Γ_bw = {:e}, δ_bw = {:e}; needed: finite, d_p > 0, B_bw ≥ 0, \
+             B_bw + Γ_bw > 0)",
+            p.d_p, p.a_bw, p.b_bw, p.gamma_bw, p.delta_bw
+        ));
+    }
+    Ok(())
 }
 
 /// Hysteresis before and after inverse compensation (Section 3.3, Eq. 21): the scenario's PEA

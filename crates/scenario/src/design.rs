@@ -9,26 +9,29 @@ use crate::error::{Result, ScenarioError, check, count, non_negative, positive, 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Mesh {
-    /// Length l along x [m]. Table 3: 0.12.
+    /// Length l along x [m], in [1e-4, 10]. Table 3: 0.12.
     pub length: f64,
-    /// Width w along y [m]. Table 3: 0.06.
+    /// Width w along y [m], in [1e-4, 10]. Table 3: 0.06.
     pub width: f64,
-    /// Out-of-plane thickness t [m]. Table 3: 0.01.
+    /// Out-of-plane thickness t [m], in [1e-6, 1]. Table 3: 0.01.
     pub thickness: f64,
-    /// Elements along x, n_l ≥ 1. Table 3: 120.
+    /// Elements along x, n_l in [4, 4000]. Table 3: 120.
     pub nl: usize,
-    /// Elements along y, n_w ≥ 1. Table 3: 60.
+    /// Elements along y, n_w in [4, 4000]. Table 3: 60.
     pub nw: usize,
 }
 
 impl Mesh {
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
-        positive("mesh.length", self.length)?;
-        positive("mesh.width", self.width)?;
-        positive("mesh.thickness", self.thickness)?;
-        count("mesh.nl", self.nl, 1, 4000)?;
-        count("mesh.nw", self.nw, 1, 4000)?;
+        // A compliant stage is between a tenth of a millimetre and ten metres across.
+        within("mesh.length", self.length, 1e-4, 10.0)?;
+        within("mesh.width", self.width, 1e-4, 10.0)?;
+        within("mesh.thickness", self.thickness, 1e-6, 1.0)?;
+        // At least 4 elements a side: the three ports must fall on distinct nodes away from
+        // the corners (a 1 × 1 mesh has a degenerate workspace of NaN area).
+        count("mesh.nl", self.nl, 4, 4000)?;
+        count("mesh.nw", self.nw, 4, 4000)?;
         Ok(())
     }
 
@@ -132,7 +135,7 @@ impl Selector {
                     field: format!("{field}.{what}"),
                     value: format!("[{:e}, {:e}]", p[0], p[1]),
                     expected: format!(
-                        "a point inside the domain [0, {}] x [0, {}] m",
+                        "a point inside the domain [0, {:e}] x [0, {:e}] m",
                         mesh.length, mesh.width
                     ),
                 }))

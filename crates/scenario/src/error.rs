@@ -46,19 +46,22 @@ pub type Result<T> = std::result::Result<T, ScenarioError>;
 
 flexstage_numerics::range_checks!(ScenarioError);
 
-/// A name used in file and folder names: non-empty, ASCII letters, digits, `-` and `_`.
+/// A name used in file and folder names: 1 to 64 ASCII letters, digits, `-` and `_`.
 pub(crate) fn file_name(field: &str, name: &str) -> Result<()> {
     if !name.is_empty()
+        && name.len() <= crate::limit::NAME_CHARS
         && name
             .chars()
             .all(|c| c.is_ascii_alphanumeric() || c == '-' || c == '_')
     {
         Ok(())
     } else {
+        let shown: String = name.chars().take(80).collect();
+        let more = if name.chars().count() > 80 { "…" } else { "" };
         Err(RangeError::new(
             field,
-            format!("{name:?}"),
-            "a non-empty name of letters, digits, '-' and '_'",
+            format!("{shown:?}{more} ({} characters)", name.chars().count()),
+            "a name of 1 to 64 letters, digits, '-' and '_' (it names a folder)",
         )
         .into())
     }

@@ -16,6 +16,7 @@
 //! assert_eq!(back, Scenario::paper());
 //! ```
 
+mod bounds;
 mod design;
 mod docs;
 mod error;
@@ -26,6 +27,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
+pub use bounds::{DesignEstimate, LIMITS, limit};
 pub use design::{
     Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Limits, Material, Mesh,
     ObjectiveKind, Optimization, Output, Projection, Region, RegionKind, Selector, Support,
@@ -356,7 +358,7 @@ impl Scenario {
         for (i, t) in self.trajectories.iter().enumerate() {
             t.validate(&format!("trajectories[{i}]"))?;
         }
-        Ok(())
+        bounds::validate(self)
     }
 
     /// Parses and validates a scenario. `origin` names the source in error messages.

@@ -1,0 +1,295 @@
+//! Reference: issue #16, "kill -9 at any point of `run`, then rerun: bitwise-identical final
+//! design and identical report numbers". Goal: `run` on the quick preset (stages shortened:
+//! 16 design iterations with a checkpoint every 3, no modal analysis, a one-scale validity
+//! map, short identification and tracking) is killed with SIGKILL at seeded random points —
+//! two kills per seed, each a random fraction into a stage chosen by the seed, so every stage
+//! is hit across the seeds — and then run to its end. Every result file of the folder must
+//! equal, byte for byte, the one of an uninterrupted run; the only exceptions are wall-clock
+//! times (`run_state.json`, the design's timing fields, the report's time column, the DXF
+//! header's date, the last checkpoint's history) and the run folder's own path inside files.
+//! The rerun also takes over the killed process's lock and removes the temporaries of its
+//! interrupted writes, so the folder ends with neither.
+//!
+//! The runs are child processes of this test binary: the `child` test below does the run when
+//! `FLEXSTAGE_KILL_CHILD` names a folder (and nothing otherwise), printing one `EVENT` line
+//! per stage start and end.
+
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc::{Receiver, channel};
+use std::time::{Duration, Instant};
+
+use flexstage_pipeline::folder::preset;
+use flexstage_pipeline::{
+    Progress, ReduceOptions, RunEvent, RunOptions, Simulation, Stage, StageData, StageIdOptions,
+    TrackOptions, run::run,
+};
+
+const CHILD: &str = "FLEXSTAGE_KILL_CHILD";
+const SEEDS: u64 = 3;
+const KILLS_PER_SEED: usize = 2;
+/// Longest wait for a child's event or end.
+const PATIENCE: Duration = Duration::from_secs(120);
+
+fn options() -> RunOptions {
+    let mut o = RunOptions::default();
+    o.design.max_iterations = Some(16);
+    o.design.checkpoint_every = 3;
+    o.reduce = ReduceOptions {
+        modes: 0,
+        scales: vec![1.0],
+        ..ReduceOptions::default()
+    };
+    o.pea.cycles = 2;
+    o.identify_stage = StageIdOptions {
+        data: StageData::Simulate(Simulation {
+            duration: 0.2,
+            ..Simulation::default()
+        }),
+        ..StageIdOptions::default()
+    };
+    o.track = TrackOptions {
+        duration: Some(0.05),
+        ..TrackOptions::default()
+    };
+    o
+}
+
+/// Prints the stage events for the parent.
+struct Events;
+
+impl Progress for Events {
+    fn event(&self, e: &RunEvent) {
+        let line = match e {
+            RunEvent::Started(s) => format!("EVENT start {}", s.name()),
+            RunEvent::Finished { stage, seconds, .. } => {
+                format!("EVENT done {} {seconds}", stage.name())
+            }
+            _ => return,
+        };
+        let mut out = std::io::stdout().lock();
+        let _ = writeln!(out, "{line}");
+        let _ = out.flush();
+    }
+
+    fn note(&self, line: &str) {
+        let _ = writeln!(std::io::stdout().lock(), "NOTE {line}");
+    }
+}
+
+/// The child: one `run` into the folder `$FLEXSTAGE_KILL_CHILD`.
+#[test]
+fn child() {
+    let Some(root) = std::env::var_os(CHILD) else {
+        return;
+    };
+    run(
+        preset("quick").unwrap(),
+        Path::new(&root),
+        &options(),
+        &Events,
+    )
+    .unwrap();
+}
+
+fn spawn(root: &Path) -> (Child, Receiver<String>) {
+    let mut child = Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "child", "--nocapture", "--test-threads=1"])
+        .env(CHILD, root)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let stdout = child.stdout.take().unwrap();
+    let (tx, rx) = channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    (child, rx)
+}
+
+/// Runs a child to its end; the seconds of each stage.
+fn complete(root: &Path) -> BTreeMap<String, f64> {
+    let (mut child, rx) = spawn(root);
+    let mut seconds = BTreeMap::new();
+    for line in rx.iter() {
+        if let Some(rest) = line.strip_prefix("EVENT done ") {
+            let (stage, s) = rest.split_once(' ').unwrap();
+            seconds.insert(stage.to_string(), s.parse().unwrap());
+        }
+    }
+    assert!(
+        child.wait().unwrap().success(),
+        "the run failed in {root:?}"
+    );
+    seconds
+}
+
+/// Starts a child and kills it `delay` after `stage` (or a later one) starts; whether it was
+/// killed before finishing.
+fn kill_during(root: &Path, stage: Stage, delay: Duration) -> bool {
+    let (mut child, rx) = spawn(root);
+    let t0 = Instant::now();
+    loop {
+        match rx.recv_timeout(Duration::from_millis(20)) {
+            Ok(line) => {
+                let started = line
+                    .strip_prefix("EVENT start ")
+                    .and_then(|n| Stage::ALL.iter().position(|s| s.name() == n));
+                if started.is_some_and(|i| i + 1 >= stage.number()) {
+                    break;
+                }
+            }
+            Err(_) if child.try_wait().unwrap().is_some() => return false,
+            Err(_) => assert!(t0.elapsed() < PATIENCE, "no event from the child"),
+        }
+    }
+    std::thread::sleep(delay);
+    let killed = child.try_wait().unwrap().is_none();
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    killed
+}
+
+/// A small deterministic generator (64-bit LCG, Knuth's MMIX constants): a fraction in [0, 1).
+fn fraction(state: &mut u64) -> f64 {
+    *state = state
+        .wrapping_mul(6364136223846793005)
+        .wrapping_add(1442695040888963407);
+    (*state >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// Every file of a run folder, relative path → content with the folder's own path replaced
+/// and wall-clock times removed.
+fn results(root: &Path) -> BTreeMap<String, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut dirs = vec![root.to_path_buf()];
+    while let Some(d) = dirs.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                dirs.push(p);
+                continue;
+            }
+            let rel = p
+                .strip_prefix(root)
+                .unwrap()
+                .to_string_lossy()
+                .replace('\\', "/");
+            if let Some(bytes) = comparable(&rel, &p, root) {
+                out.insert(rel, bytes);
+            }
+        }
+    }
+    out
+}
+
+/// The content of one result file as compared, `None` for files of wall-clock times only.
+fn comparable(rel: &str, path: &Path, root: &Path) -> Option<Vec<u8>> {
+    let bytes = std::fs::read(path).unwrap();
+    match rel {
+        "run_state.json"
+        | "design/checkpoint.bin"
+        | "design/history.json"
+        | "report.html"
+        | "export/outline.dxf" => return None,
+        _ => {}
+    }
+    let Ok(text) = String::from_utf8(bytes.clone()) else {
+        return Some(bytes);
+    };
+    let text = text.replace(&root.display().to_string(), "<run>");
+    let text = match rel {
+        "design/summary.json" => {
+            let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            let m = v.as_object_mut().unwrap();
+            m.remove("seconds");
+            m.remove("seconds_per_iteration");
+            v.to_string()
+        }
+        "design/history.csv" => drop_column(&text, "time_s"),
+        _ => text,
+    };
+    Some(text.into_bytes())
+}
+
+fn drop_column(csv: &str, name: &str) -> String {
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let k = header.iter().position(|h| *h == name).unwrap();
+    std::iter::once(header)
+        .chain(lines.map(|l| l.split(',').collect()))
+        .map(|cells: Vec<&str>| {
+            let kept: Vec<&str> = cells
+                .iter()
+                .enumerate()
+                .filter(|(i, _)| *i != k)
+                .map(|(_, c)| *c)
+                .collect();
+            kept.join(",")
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("flexstage-kill9-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+#[test]
+fn kill_9_at_random_points_then_rerun_gives_the_uninterrupted_results() {
+    if std::env::var_os(CHILD).is_some() {
+        return;
+    }
+    let reference = tmp("reference");
+    let seconds = complete(&reference);
+    let expected = results(&reference);
+    assert!(
+        expected.contains_key("design/design.json")
+            && expected.contains_key("track/duration-0.05s/metrics.csv")
+    );
+    let mut killed = 0;
+    for seed in 0..SEEDS {
+        let root = tmp(&format!("seed{seed}"));
+        let mut rng = seed + 1;
+        for k in 0..KILLS_PER_SEED {
+            let stage = Stage::ALL[(seed as usize * KILLS_PER_SEED + 3 * k) % Stage::ALL.len()];
+            let f = fraction(&mut rng);
+            let delay = Duration::from_secs_f64(f * seconds[stage.name()]);
+            let hit = kill_during(&root, stage, delay);
+            killed += hit as usize;
+            println!(
+                "seed {seed}: kill {} in {} after {:.3} s: {}",
+                k + 1,
+                stage.name(),
+                delay.as_secs_f64(),
+                if hit { "killed" } else { "had finished" }
+            );
+        }
+        complete(&root);
+        let got = results(&root);
+        let names = |m: &BTreeMap<String, Vec<u8>>| m.keys().cloned().collect::<Vec<_>>();
+        assert_eq!(names(&got), names(&expected), "seed {seed}: other files");
+        for (rel, bytes) in &expected {
+            assert!(
+                &got[rel] == bytes,
+                "seed {seed}: {rel} differs from the uninterrupted run"
+            );
+        }
+        assert!(!root.join("run.lock").exists(), "seed {seed}: lock left");
+        let _ = std::fs::remove_dir_all(&root);
+    }
+    assert!(
+        killed >= SEEDS as usize,
+        "only {killed} kills hit a running process"
+    );
+    let _ = std::fs::remove_dir_all(&reference);
+}

@@ -1,0 +1,190 @@
+//! Reference: issue #16, "Two `run`s on one folder mix their results", "Random bit flips in
+//! `checkpoint.bin` resume with exit 0", "A killed run resumes a checkpoint made under a
+//! different scenario". Goal: on a real interrupted `run` (quick preset, killed with SIGKILL
+//! once its design has written a checkpoint), (1) a second `run` on a folder that another
+//! live process is working in is refused, naming that process; (2) a checkpoint with a flipped
+//! bit, a truncated checkpoint and the checkpoint of another scenario are each refused with
+//! an error naming the file, never resumed; (3) the intact checkpoint does resume.
+//!
+//! The runs to be killed are child processes of this test binary (`child` below, active only
+//! when `FLEXSTAGE_FAULT_CHILD` names a folder).
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use flexstage_pipeline::folder::preset;
+use flexstage_pipeline::{
+    PipelineError, ReduceOptions, RunOptions, Silent, Simulation, StageData, StageIdOptions,
+    TrackOptions, run::run,
+};
+
+const CHILD: &str = "FLEXSTAGE_FAULT_CHILD";
+const CHECKPOINT: &str = "design/checkpoint.bin";
+
+fn options() -> RunOptions {
+    let mut o = RunOptions::default();
+    o.design.max_iterations = Some(12);
+    o.design.checkpoint_every = 2;
+    o.reduce = ReduceOptions {
+        modes: 0,
+        scales: Vec::new(),
+        ..ReduceOptions::default()
+    };
+    o.pea.cycles = 2;
+    o.identify_stage = StageIdOptions {
+        data: StageData::Simulate(Simulation {
+            duration: 0.2,
+            ..Simulation::default()
+        }),
+        ..StageIdOptions::default()
+    };
+    o.track = TrackOptions {
+        duration: Some(0.05),
+        ..TrackOptions::default()
+    };
+    o
+}
+
+#[test]
+fn child() {
+    let Some(root) = std::env::var_os(CHILD) else {
+        return;
+    };
+    println!("started");
+    run(
+        preset("quick").unwrap(),
+        Path::new(&root),
+        &options(),
+        &Silent,
+    )
+    .unwrap();
+}
+
+fn spawn(root: &Path) -> Child {
+    let mut c = Command::new(std::env::current_exe().unwrap())
+        .args(["--exact", "child", "--nocapture", "--test-threads=1"])
+        .env(CHILD, root)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    // Drain the output so that the child never blocks on a full pipe.
+    let out = c.stdout.take().unwrap();
+    std::thread::spawn(move || BufReader::new(out).lines().for_each(drop));
+    c
+}
+
+/// Waits until `cond` holds (or the child ended, or 120 s passed).
+fn wait_for(child: &mut Child, cond: impl Fn() -> bool) -> bool {
+    let t0 = Instant::now();
+    while t0.elapsed() < Duration::from_secs(120) {
+        if cond() {
+            return true;
+        }
+        if child.try_wait().unwrap().is_some() {
+            return false;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    false
+}
+
+fn tmp(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("flexstage-faults-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn copy_dir(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            copy_dir(&p, &to.join(e.file_name()));
+        } else {
+            std::fs::copy(&p, to.join(e.file_name())).unwrap();
+        }
+    }
+}
+
+#[test]
+fn a_second_run_is_refused_and_damaged_or_foreign_checkpoints_are_never_resumed() {
+    if std::env::var_os(CHILD).is_some() {
+        return;
+    }
+    let root = tmp("killed");
+    let mut child = spawn(&root);
+    let ckpt = root.join(CHECKPOINT);
+    assert!(
+        wait_for(&mut child, || ckpt.is_file()),
+        "no checkpoint was written"
+    );
+
+    // (1) Two runs on one folder: the second is refused, naming the live holder.
+    let e = run(preset("quick").unwrap(), &root, &options(), &Silent).unwrap_err();
+    assert!(matches!(e, PipelineError::Locked { .. }), "{e}");
+    assert!(e.to_string().contains(&child.id().to_string()), "{e}");
+
+    child.kill().unwrap(); // SIGKILL
+    child.wait().unwrap();
+    let intact = std::fs::read(&ckpt).unwrap();
+
+    // (2a) A flipped bit in the middle of the payload, and (2b) a truncation.
+    let mut flipped = intact.clone();
+    let k = flipped.len() - 17;
+    flipped[k] ^= 0x10;
+    let cases: [(&str, Vec<u8>, &str); 2] = [
+        ("flipped", flipped, "CRC-32 mismatch"),
+        (
+            "truncated",
+            intact[..intact.len() / 2].to_vec(),
+            "truncated",
+        ),
+    ];
+    for (name, bytes, reason) in cases {
+        let r = tmp(name);
+        copy_dir(&root, &r);
+        std::fs::write(r.join(CHECKPOINT), &bytes).unwrap();
+        let e = run(preset("quick").unwrap(), &r, &options(), &Silent).unwrap_err();
+        let m = e.to_string();
+        assert!(matches!(e, PipelineError::Damaged { .. }), "{name}: {m}");
+        assert!(
+            m.contains("checkpoint.bin") && m.contains(reason),
+            "{name}: {m}"
+        );
+        assert!(
+            !r.join("design/design.json").exists(),
+            "{name}: a design was made"
+        );
+        let _ = std::fs::remove_dir_all(&r);
+    }
+
+    // (2c) The checkpoint of another scenario (penalty 2 instead of 3) in this run's folder.
+    let mut other = preset("quick").unwrap();
+    other.optimization.penalty = 2.0;
+    let o = tmp("other");
+    let foreign = {
+        // A checkpoint of `other`: a short design run of it, stopped after its first checkpoint.
+        let mut opts = options();
+        opts.design.max_iterations = Some(2);
+        let _ = run(other.clone(), &o, &opts, &Silent);
+        std::fs::read(o.join(CHECKPOINT)).unwrap()
+    };
+    let r = tmp("foreign");
+    copy_dir(&root, &r);
+    std::fs::write(r.join(CHECKPOINT), &foreign).unwrap();
+    let e = run(preset("quick").unwrap(), &r, &options(), &Silent).unwrap_err();
+    let m = e.to_string();
+    assert!(matches!(e, PipelineError::OtherScenario { .. }), "{m}");
+    assert!(m.contains("optimization.penalty: 2.0 → 3.0"), "{m}");
+    let _ = std::fs::remove_dir_all(&r);
+    let _ = std::fs::remove_dir_all(&o);
+
+    // (3) The intact checkpoint resumes to the end; the killed holder's lock is taken over.
+    run(preset("quick").unwrap(), &root, &options(), &Silent).unwrap();
+    assert!(root.join("design/design.json").is_file());
+    assert!(!root.join("run.lock").exists());
+    let _ = std::fs::remove_dir_all(&root);
+}

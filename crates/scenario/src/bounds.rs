@@ -1,0 +1,496 @@
+//! Checks that need more than one field: what the selectors pick on the mesh (ports on
+//! distinct nodes, no port on a support that blocks it, no selector that picks nothing), a
+//! structure held against rigid-body motion, unique trajectory names, trajectories the
+//! sampled loop can follow, and the memory and time a scenario would take, estimated before
+//! any work starts and refused over the documented limits ([`LIMITS`]).
+//!
+//! The selectors are resolved here exactly as the FE model resolves them (nodes at
+//! `(i·dx, j·dy)`, nearest node by rounding, boxes inclusive with a tolerance of 1e-9 element
+//! sizes; elements by centroid), so `flexstage check` refuses what `run` would refuse later.
+
+use crate::design::{Edge, Fix, Selector};
+use crate::error::{RangeError, Result, ScenarioError};
+use crate::{ObjectiveKind, Scenario, Trajectory};
+
+/// The documented limits of a scenario, in the order of [`LIMITS`].
+pub mod limit {
+    /// Longest name (scenario and trajectories), in characters: names become folder names.
+    pub const NAME_CHARS: usize = 64;
+    /// Elements of the design mesh (the fine preset has 28 800).
+    pub const ELEMENTS: usize = 250_000;
+    /// Estimated memory of the design stage [bytes] (8 GiB).
+    pub const DESIGN_BYTES: f64 = 8.0 * 1024.0 * 1024.0 * 1024.0;
+    /// Estimated linear-solve work of the design stage [floating-point operations]
+    /// (about a day at 10 GFLOP/s).
+    pub const DESIGN_FLOPS: f64 = 1e15;
+    /// Samples of one tracking record (`duration / sample_time`).
+    pub const TRACK_SAMPLES: f64 = 1e7;
+    /// Plant integration steps of one tracking record (`samples × substeps`).
+    pub const TRACK_STEPS: f64 = 2e8;
+    /// Shortest controller sample time [s] (a 10 MHz loop).
+    pub const MIN_SAMPLE_TIME: f64 = 1e-7;
+    /// Largest trajectory amplitude [m], whatever the stroke.
+    pub const MAX_AMPLITUDE: f64 = 1e-3;
+}
+
+/// The limits as (what, limit) rows, for documentation and messages.
+pub const LIMITS: [(&str, &str); 8] = [
+    (
+        "scenario and trajectory names",
+        "1 to 64 letters, digits, '-', '_'",
+    ),
+    ("design mesh elements nl × nw", "≤ 250 000, each side ≥ 4"),
+    ("design memory estimate", "≤ 8 GiB"),
+    ("design work estimate", "≤ 1e15 flop"),
+    ("samples of one tracking record", "≤ 1e7"),
+    ("plant steps of one record (samples × substeps)", "≤ 2e8"),
+    ("controller sample time", "≥ 1e-7 s"),
+    (
+        "trajectory frequency",
+        "< Nyquist 1/(2 T_s); amplitude ≤ α·max_stroke and ≤ 1 mm",
+    ),
+];
+
+/// Memory and work of the design stage, estimated from the mesh and the load cases.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DesignEstimate {
+    /// Degrees of freedom, 2 (nl + 1)(nw + 1).
+    pub dofs: f64,
+    /// Non-zeros of the Cholesky factor (nested-dissection fill of a 2D grid, 8·n·log2 n).
+    pub factor_nonzeros: f64,
+    /// Load cases solved per iteration (samples × 3 realizations when robust).
+    pub load_cases: f64,
+    /// Memory [bytes]: the factor (12 bytes a non-zero), 6 vectors per load case and 100
+    /// bytes of element data per element.
+    pub bytes: f64,
+    /// Work [flop]: per iteration and load case, 3 Newton steps of one factorization
+    /// (nnz(L)^1.5 / n flop, nested dissection) and a solve.
+    pub flops: f64,
+}
+
+impl DesignEstimate {
+    /// The estimate of a scenario's design stage.
+    pub fn of(s: &Scenario) -> DesignEstimate {
+        let (nl, nw) = (s.mesh.nl as f64, s.mesh.nw as f64);
+        let dofs = 2.0 * (nl + 1.0) * (nw + 1.0);
+        let factor_nonzeros = 8.0 * dofs * dofs.log2().max(1.0);
+        let o = &s.optimization;
+        let per_case = match o.objective {
+            ObjectiveKind::Workspace => o.samples as f64,
+            ObjectiveKind::Displacement => 1.0,
+        };
+        let load_cases = per_case * if o.robust { 3.0 } else { 1.0 };
+        let bytes = 12.0 * factor_nonzeros + 48.0 * dofs * load_cases + 100.0 * nl * nw;
+        let factor = factor_nonzeros.powf(1.5) / dofs;
+        let flops =
+            (o.max_iterations.max(1) as f64) * load_cases * 3.0 * (factor + 4.0 * factor_nonzeros);
+        DesignEstimate {
+            dofs,
+            factor_nonzeros,
+            load_cases,
+            bytes,
+            flops,
+        }
+    }
+}
+
+/// Every check of this module.
+pub(crate) fn validate(s: &Scenario) -> Result<()> {
+    mesh_size(s)?;
+    ports(s)?;
+    rigid_body_modes(s)?;
+    trajectories(s)
+}
+
+fn mesh_size(s: &Scenario) -> Result<()> {
+    let elements = s.mesh.nl * s.mesh.nw;
+    if elements > limit::ELEMENTS {
+        return Err(RangeError::new(
+            "mesh.nl × mesh.nw",
+            format!("{} × {} = {elements}", s.mesh.nl, s.mesh.nw),
+            format!("at most {} elements", limit::ELEMENTS),
+        )
+        .into());
+    }
+    let e = DesignEstimate::of(s);
+    if e.bytes > limit::DESIGN_BYTES {
+        return Err(RangeError::new(
+            "mesh.nl, mesh.nw, optimization.samples",
+            format!(
+                "{} × {} elements, {} load cases: an estimated {:.1} GiB",
+                s.mesh.nl,
+                s.mesh.nw,
+                e.load_cases,
+                e.bytes / 1024f64.powi(3)
+            ),
+            format!(
+                "at most {:.0} GiB of memory",
+                limit::DESIGN_BYTES / 1024f64.powi(3)
+            ),
+        )
+        .into());
+    }
+    if e.flops > limit::DESIGN_FLOPS {
+        return Err(RangeError::new(
+            "mesh.nl, mesh.nw, optimization.samples, optimization.max_iterations",
+            format!("an estimated {:.1e} flop of linear solves", e.flops),
+            format!("at most {:.0e} flop (about a day)", limit::DESIGN_FLOPS),
+        )
+        .into());
+    }
+    Ok(())
+}
+
+/// Node coordinates of the mesh grid, as the FE mesh numbers them (i along x, j along y).
+struct Grid {
+    nl: usize,
+    nw: usize,
+    dx: f64,
+    dy: f64,
+}
+
+impl Grid {
+    fn of(s: &Scenario) -> Grid {
+        let (dx, dy) = s.mesh.element_size();
+        Grid {
+            nl: s.mesh.nl,
+            nw: s.mesh.nw,
+            dx,
+            dy,
+        }
+    }
+
+    fn xy(&self, (i, j): (usize, usize)) -> [f64; 2] {
+        [i as f64 * self.dx, j as f64 * self.dy]
+    }
+
+    /// Nodes a selector picks, as (i, j).
+    fn nodes(&self, sel: &Selector) -> Vec<(usize, usize)> {
+        match sel {
+            Selector::Nearest { point } => {
+                let i = (point[0] / self.dx).round().clamp(0.0, self.nl as f64) as usize;
+                let j = (point[1] / self.dy).round().clamp(0.0, self.nw as f64) as usize;
+                vec![(i, j)]
+            }
+            Selector::Edge { edge } => match edge {
+                Edge::Left => (0..=self.nw).map(|j| (0, j)).collect(),
+                Edge::Right => (0..=self.nw).map(|j| (self.nl, j)).collect(),
+                Edge::Bottom => (0..=self.nl).map(|i| (i, 0)).collect(),
+                Edge::Top => (0..=self.nl).map(|i| (i, self.nw)).collect(),
+            },
+            Selector::Box { min, max } => {
+                let tol = 1e-9 * self.dx.min(self.dy);
+                let mut out = Vec::new();
+                for j in 0..=self.nw {
+                    for i in 0..=self.nl {
+                        let [x, y] = self.xy((i, j));
+                        if x >= min[0] - tol
+                            && x <= max[0] + tol
+                            && y >= min[1] - tol
+                            && y <= max[1] + tol
+                        {
+                            out.push((i, j));
+                        }
+                    }
+                }
+                out
+            }
+        }
+    }
+
+    /// Does a box pick at least one element centroid?
+    fn box_has_element(&self, min: [f64; 2], max: [f64; 2]) -> bool {
+        (0..self.nw).any(|j| {
+            let y = (j as f64 + 0.5) * self.dy;
+            y >= min[1]
+                && y <= max[1]
+                && (0..self.nl).any(|i| {
+                    let x = (i as f64 + 0.5) * self.dx;
+                    x >= min[0] && x <= max[0]
+                })
+        })
+    }
+}
+
+fn inconsistent(fields: impl Into<String>, reason: impl Into<String>) -> ScenarioError {
+    ScenarioError::Inconsistent {
+        fields: fields.into(),
+        reason: reason.into(),
+    }
+}
+
+fn finite_box(field: &str, sel: &Selector) -> Result<()> {
+    if let Selector::Box { min, max } = sel {
+        for (what, p) in [("min", min), ("max", max)] {
+            if !(p[0].is_finite() && p[1].is_finite()) {
+                return Err(RangeError::new(
+                    format!("{field}.{what}"),
+                    format!("[{:e}, {:e}]", p[0], p[1]),
+                    "a point of finite coordinates [m]",
+                )
+                .into());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The one node a port selector picks.
+fn port(grid: &Grid, field: &str, sel: &Selector) -> Result<(usize, usize)> {
+    finite_box(field, sel)?;
+    match grid.nodes(sel).as_slice() {
+        [n] => Ok(*n),
+        nodes => Err(RangeError::new(
+            field,
+            format!("a selector that picks {} nodes", nodes.len()),
+            "exactly one node (use kind = \"nearest\" or a box around one node)",
+        )
+        .into()),
+    }
+}
+
+fn ports(s: &Scenario) -> Result<()> {
+    let grid = Grid::of(s);
+    let p1 = port(&grid, "actuators.pea1", &s.actuators.pea1)?;
+    let p2 = port(&grid, "actuators.pea2", &s.actuators.pea2)?;
+    let out = port(&grid, "output.at", &s.output.at)?;
+    let at = |n| {
+        let [x, y] = grid.xy(n);
+        format!("the node at ({x:e}, {y:e}) m")
+    };
+    if p1 == p2 {
+        return Err(inconsistent(
+            "actuators.pea1, actuators.pea2",
+            format!("both inputs select {}", at(p1)),
+        ));
+    }
+    for (name, p) in [("actuators.pea1", p1), ("actuators.pea2", p2)] {
+        if out == p {
+            return Err(inconsistent(
+                format!("output.at, {name}"),
+                format!("the output selects the input node, {}", at(p)),
+            ));
+        }
+    }
+    for (i, sup) in s.supports.iter().enumerate() {
+        let field = format!("supports[{i}].at");
+        finite_box(&field, &sup.at)?;
+        let nodes = grid.nodes(&sup.at);
+        if nodes.is_empty() {
+            return Err(RangeError::new(
+                field,
+                "a box that picks no node",
+                "a selector that picks at least one node",
+            )
+            .into());
+        }
+        if nodes.contains(&out) {
+            return Err(inconsistent(
+                format!("{field}, output.at"),
+                format!("the support holds the output port, {}", at(out)),
+            ));
+        }
+        if matches!(sup.fix, Fix::X | Fix::Xy) {
+            for (name, p) in [("actuators.pea1", p1), ("actuators.pea2", p2)] {
+                if nodes.contains(&p) {
+                    return Err(inconsistent(
+                        format!("supports[{i}].fix, {name}"),
+                        format!(
+                            "the support fixes x at the input node {}, along which the PEA pushes",
+                            at(p)
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+    for (i, r) in s.regions.iter().enumerate() {
+        let field = format!("regions[{i}].at");
+        finite_box(&field, &r.at)?;
+        if let Selector::Box { min, max } = &r.at {
+            if !grid.box_has_element(*min, *max) {
+                return Err(RangeError::new(
+                    field,
+                    format!(
+                        "[{:e}, {:e}] .. [{:e}, {:e}]",
+                        min[0], min[1], max[0], max[1]
+                    ),
+                    "a box that holds at least one element centroid",
+                )
+                .into());
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Rank of the rigid-body motions (x, y translation, rotation) that the supports, the PEA
+/// springs and the output spring hold: a constraint on DOF x at (x, y) holds (1, 0, −y), on
+/// DOF y holds (0, 1, x). Fewer than 3 independent rows leaves a floating structure whose
+/// stiffness is singular.
+fn rigid_body_modes(s: &Scenario) -> Result<()> {
+    let grid = Grid::of(s);
+    let mut rows: Vec<[f64; 3]> = Vec::new();
+    let x_row = |[_, y]: [f64; 2]| [1.0, 0.0, -y / s.mesh.length];
+    let y_row = |[x, _]: [f64; 2]| [0.0, 1.0, x / s.mesh.length];
+    for sup in &s.supports {
+        for n in grid.nodes(&sup.at) {
+            let p = grid.xy(n);
+            if matches!(sup.fix, Fix::X | Fix::Xy) {
+                rows.push(x_row(p));
+            }
+            if matches!(sup.fix, Fix::Y | Fix::Xy) {
+                rows.push(y_row(p));
+            }
+        }
+    }
+    let node = |sel: &Selector| grid.xy(grid.nodes(sel)[0]);
+    let (p1, p2, out) = (
+        node(&s.actuators.pea1),
+        node(&s.actuators.pea2),
+        node(&s.output.at),
+    );
+    rows.push(x_row(p1));
+    rows.push(x_row(p2));
+    if s.optimization.output_spring > 0.0 {
+        rows.push(y_row(out));
+        let (a, b, c) = (x_row(out), x_row(p1), x_row(p2));
+        rows.push([0, 1, 2].map(|k| a[k] - 0.5 * b[k] - 0.5 * c[k]));
+    }
+    let rank = rank3(&rows);
+    if rank < 3 {
+        let free = [
+            "a translation",
+            "two rigid-body motions",
+            "every rigid-body motion",
+        ][2 - rank.min(2)];
+        return Err(inconsistent(
+            "supports, optimization.output_spring",
+            format!(
+                "the structure floats ({free} is held by nothing: singular stiffness); add \
+                 [[supports]] (e.g. fix = \"y\" at the input nodes) or set output_spring > 0"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Numerical rank of rows of 3 (Gaussian elimination with partial pivoting, relative
+/// tolerance 1e-9).
+fn rank3(rows: &[[f64; 3]]) -> usize {
+    let mut m: Vec<[f64; 3]> = rows.to_vec();
+    let scale = m.iter().flatten().fold(0.0f64, |a, v| a.max(v.abs()));
+    let tol = 1e-9 * scale.max(f64::MIN_POSITIVE);
+    let mut rank = 0;
+    for col in 0..3 {
+        let Some((piv, _)) = m
+            .iter()
+            .enumerate()
+            .skip(rank)
+            .map(|(i, r)| (i, r[col].abs()))
+            .filter(|(_, v)| *v > tol)
+            .max_by(|a, b| a.1.total_cmp(&b.1))
+        else {
+            continue;
+        };
+        m.swap(rank, piv);
+        let p = m[rank];
+        for r in m.iter_mut().skip(rank + 1) {
+            let f = r[col] / p[col];
+            for (x, pk) in r.iter_mut().zip(p) {
+                *x -= f * pk;
+            }
+        }
+        rank += 1;
+    }
+    rank
+}
+
+fn trajectories(s: &Scenario) -> Result<()> {
+    let ts = s.simulation.sample_time;
+    if ts < limit::MIN_SAMPLE_TIME {
+        return Err(RangeError::number(
+            "simulation.sample_time",
+            ts,
+            format!("a number in [{:e}, 0.1] s", limit::MIN_SAMPLE_TIME),
+        )
+        .into());
+    }
+    let nyquist = 0.5 / ts;
+    let stroke = s.stage.truth.alpha.abs() * s.actuators.max_stroke;
+    let max_amp = stroke.min(limit::MAX_AMPLITUDE);
+    let mut seen = std::collections::BTreeMap::new();
+    for (i, t) in s.trajectories.iter().enumerate() {
+        let field = format!("trajectories[{i}]");
+        if let Some(first) = seen.insert(t.name().to_string(), i) {
+            return Err(inconsistent(
+                format!("trajectories[{first}].name, {field}.name"),
+                format!(
+                    "both are named {:?}; names must be unique (they name the output files)",
+                    t.name()
+                ),
+            ));
+        }
+        let (fmax, amps, duration): (f64, Vec<(String, f64)>, f64) = match t {
+            Trajectory::Lissajous {
+                ratio,
+                amplitude,
+                frequency,
+                duration,
+                ..
+            } => (
+                frequency * ratio.max(1.0),
+                vec![
+                    (format!("{field}.amplitude[0]"), amplitude[0]),
+                    (format!("{field}.amplitude[1]"), amplitude[1]),
+                ],
+                *duration,
+            ),
+            Trajectory::Circle {
+                radius,
+                frequency,
+                duration,
+                ..
+            } => (
+                *frequency,
+                vec![(format!("{field}.radius"), *radius)],
+                *duration,
+            ),
+        };
+        if fmax >= nyquist {
+            return Err(RangeError::number(
+                format!("{field}.frequency"),
+                fmax,
+                format!("a highest frequency below the Nyquist frequency 1/(2 T_s) = {nyquist:e} Hz of simulation.sample_time"),
+            )
+            .into());
+        }
+        for (name, a) in amps {
+            if a > max_amp {
+                return Err(RangeError::number(
+                    name,
+                    a,
+                    format!("at most {max_amp:e} m (the stroke |stage.truth.alpha| · actuators.max_stroke, and at most 1 mm)"),
+                )
+                .into());
+            }
+        }
+        let samples = duration / ts;
+        if samples > limit::TRACK_SAMPLES
+            || samples * s.simulation.substeps as f64 > limit::TRACK_STEPS
+        {
+            return Err(RangeError::number(
+                format!("{field}.duration"),
+                duration,
+                format!(
+                    "a record of at most {:e} samples and {:e} plant steps; this one has {samples:.3e} samples × {} substeps",
+                    limit::TRACK_SAMPLES,
+                    limit::TRACK_STEPS,
+                    s.simulation.substeps
+                ),
+            )
+            .into());
+        }
+    }
+    Ok(())
+}
