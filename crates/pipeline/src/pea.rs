@@ -604,7 +604,7 @@ mod tests {
                 );
             }
             let out = PeaIdentification { pea: sum.pea };
-            assert!(folder.dir().exists(&out.estimates()), "PEA{}", sum.pea);
+            assert!(folder.dir().exists(out.estimates()), "PEA{}", sum.pea);
         }
         let records: Vec<String> = PEAS
             .iter()
