@@ -19,11 +19,11 @@ use crate::error::Result;
 /// Settings of the injection.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct InjectionParams {
-    /// Injected amplitude [m] (small: the nonlinear parts stay linear).
+    /// Injected amplitude \[m\] (small: the nonlinear parts stay linear).
     pub amplitude: f64,
-    /// Settling time before measuring [s] (plus three periods).
+    /// Settling time before measuring \[s\] (plus three periods).
     pub settle: f64,
-    /// Shortest measuring window [s] (at least four periods, whole periods).
+    /// Shortest measuring window \[s\] (at least four periods, whole periods).
     pub window: f64,
 }
 
@@ -52,7 +52,7 @@ fn closed_loop(
     Ok((ctrl, Box::new(plant)))
 }
 
-/// The measured return ratio of loop `axis` at `f` [Hz]; NaN when the loop diverges.
+/// The measured return ratio of loop `axis` at `f` \[Hz\]; NaN when the loop diverges.
 pub fn return_ratio(
     bench: &Bench,
     c: Candidate,
@@ -88,7 +88,7 @@ pub fn return_ratio(
 }
 
 /// Whether the closed loop of a candidate on the linear rig is asymptotically stable: after
-/// a 10 nm kick of both measurements, the output over the last fifth of `duration` [s] stays
+/// a 10 nm kick of both measurements, the output over the last fifth of `duration` \[s\] stays
 /// below a tenth of its peak and does not grow over the last tenth. (A slowly growing mode
 /// can still pass for a short `duration`; [`injected_margins`] also reports a loop that
 /// diverges under injection as unstable.)

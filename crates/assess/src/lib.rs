@@ -8,7 +8,7 @@
 //!   function and the twin's exact ZOH modal response ([`flexstage_control::tuning`]); the
 //!   backstepping controllers by sine injection at the sensor ([`inject`]), which needs no
 //!   linear model. Flagged below 6 dB / 40°.
-//! * [`bench`]: the candidates, including the PID + FF and PI + notch + FF baselines tuned
+//! * [`bench`](mod@bench): the candidates, including the PID + FF and PI + notch + FF baselines tuned
 //!   on the twin's frequency response by one documented procedure with equal search budget
 //!   ([`flexstage_control::tuning`]).
 //! * [`montecarlo`]: pass rate over ≥ 100 perturbed twins (K, M, α ± 20 %, damping 0.5–3 %,
@@ -49,7 +49,7 @@ pub struct AssessParams {
     pub montecarlo: montecarlo::MonteCarloParams,
     /// Scan-frequency sweep.
     pub sweep: sweep::SweepParams,
-    /// Duration of the nominal tracking run [s] (`None`: the scenario's).
+    /// Duration of the nominal tracking run \[s\] (`None`: the scenario's).
     pub duration: Option<f64>,
 }
 
@@ -71,9 +71,9 @@ impl Default for AssessParams {
 pub struct Assessment {
     /// The margins table (rig delay).
     pub margins: Vec<margins::MarginRow>,
-    /// Nominal tracking of the scenario's first trajectory: RMS per axis [m] per candidate.
+    /// Nominal tracking of the scenario's first trajectory: RMS per axis \[m\] per candidate.
     pub tracking: Vec<(Candidate, [f64; 2])>,
-    /// Standstill noise per candidate [m].
+    /// Standstill noise per candidate \[m\].
     pub standstill: Vec<(Candidate, [f64; 2])>,
     /// The Monte-Carlo study.
     pub montecarlo: montecarlo::MonteCarlo,

@@ -10,9 +10,9 @@ use crate::inject::{InjectionParams, injected_margins};
 /// Targets a shipped controller must meet (issue #18): 6 dB and 40°.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MarginTargets {
-    /// Gain margin [dB].
+    /// Gain margin \[dB\].
     pub gain_db: f64,
-    /// Phase margin [deg].
+    /// Phase margin \[deg\].
     pub phase_deg: f64,
 }
 
@@ -30,7 +30,7 @@ impl Default for MarginTargets {
 pub struct MarginRow {
     /// The controller.
     pub candidate: Candidate,
-    /// The rig delay [samples].
+    /// The rig delay \[samples\].
     pub delay: usize,
     /// How the margins were obtained ("transfer function" or "sine injection").
     pub method: &'static str,
@@ -78,8 +78,8 @@ pub fn margins_table(
     Ok(rows)
 }
 
-/// CSV of the table: controller, delay, loop, GM [dB], f_pc [Hz], PM [deg], f_gc [Hz],
-/// delay margin [samples], method, meets.
+/// CSV of the table: controller, delay, loop, GM \[dB\], f_pc \[Hz\], PM \[deg\], f_gc \[Hz\],
+/// delay margin \[samples\], method, meets.
 pub fn csv(rows: &[MarginRow], sample_time: f64) -> String {
     let mut s = String::from(
         "controller,delay_samples,loop,gain_margin_dB,phase_crossover_Hz,phase_margin_deg,gain_crossover_Hz,delay_margin_samples,method,meets_targets\n",

@@ -28,7 +28,7 @@ use crate::track::{diverged, track_on};
 pub struct MonteCarloParams {
     /// Number of plants, ≥ 1 (default 100).
     pub plants: usize,
-    /// Duration of each run [s], > 0 (default 0.5: one period of the default Lissajous).
+    /// Duration of each run \[s\], > 0 (default 0.5: one period of the default Lissajous).
     pub duration: f64,
     /// Pass bound on the RMS error per axis in % of its reference range, > 0 (default 0.5 %:
     /// 80/160 nm on the default 8/16 µm Lissajous).
@@ -41,7 +41,7 @@ pub struct MonteCarloParams {
     pub coupling: f64,
     /// Damping range (default 0.5–3 %).
     pub damping: [f64; 2],
-    /// Largest delay [samples] (default 2).
+    /// Largest delay \[samples\] (default 2).
     pub max_delay: usize,
 }
 
@@ -123,9 +123,9 @@ pub struct PlantResult {
     pub damping: f64,
     /// Couplings.
     pub coupling: [f64; 2],
-    /// Delay [samples].
+    /// Delay \[samples\].
     pub delay: usize,
-    /// Per candidate: RMS error per axis [m] and pass.
+    /// Per candidate: RMS error per axis \[m\] and pass.
     pub results: Vec<(Candidate, [f64; 2], bool)>,
 }
 

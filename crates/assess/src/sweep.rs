@@ -34,11 +34,11 @@ impl Default for SweepParams {
 pub struct SweepPoint {
     /// Fraction of the first resonance.
     pub fraction: f64,
-    /// Frequency of the fast component [Hz].
+    /// Frequency of the fast component \[Hz\].
     pub frequency: f64,
-    /// Amplitudes used (A1, A2) [m].
+    /// Amplitudes used (A1, A2) \[m\].
     pub amplitude: [f64; 2],
-    /// Per candidate: steady RMS error per axis [m] (∞: diverged), and in % of the range.
+    /// Per candidate: steady RMS error per axis \[m\] (∞: diverged), and in % of the range.
     pub results: Vec<(Candidate, [f64; 2], [f64; 2])>,
 }
 

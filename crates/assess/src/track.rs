@@ -32,7 +32,7 @@ pub fn diverged(m: &Metrics) -> bool {
 }
 
 /// The standstill noise of a candidate: RMS of the true output over the second half of
-/// `duration` with a zero reference in the full rig (sensor noise fed back) [m].
+/// `duration` with a zero reference in the full rig (sensor noise fed back) \[m\].
 pub fn standstill(bench: &Bench, c: Candidate, duration: f64) -> Result<[f64; 2]> {
     let r = Reference::new(Shape::Step { target: [0.0; 2] });
     let m = track_on(

@@ -37,9 +37,9 @@ pub struct IlcParams {
     pub period: usize,
     /// Learning gain γ in (0, 2) (monotone convergence needs |1 − γ T| < 1 where Q ≈ 1).
     pub gain: f64,
-    /// Phase lead λ [samples], < N: the delay of the closed loop to undo.
+    /// Phase lead λ \[samples\], < N: the delay of the closed loop to undo.
     pub lead: usize,
-    /// Half-width M of the Bartlett Q-filter [samples], 0 (no filter) ≤ M < N/2. The
+    /// Half-width M of the Bartlett Q-filter \[samples\], 0 (no filter) ≤ M < N/2. The
     /// first zero of Q is at f_s/(M + 1).
     pub q_half_width: usize,
 }
@@ -87,13 +87,13 @@ impl IlcParams {
 /// static array `[[f64; 2]; N]`, or a `Vec` where there is an allocator.
 #[derive(Debug, Clone)]
 pub struct IlcBuffers<S> {
-    /// c_j [m].
+    /// c_j \[m\].
     pub learned: S,
-    /// c_{j+1} [m].
+    /// c_{j+1} \[m\].
     pub applied: S,
-    /// e_j [m].
+    /// e_j \[m\].
     pub error: S,
-    /// e_{j+1} [m].
+    /// e_{j+1} \[m\].
     pub error_now: S,
 }
 
@@ -149,12 +149,12 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
         &self.params
     }
 
-    /// The correction learned over the last complete period, c_j [m] (one entry per sample).
+    /// The correction learned over the last complete period, c_j \[m\] (one entry per sample).
     pub fn learned(&self) -> &[[f64; 2]] {
         self.buf.learned.as_ref()
     }
 
-    /// The errors of the last complete period, e_j = q_d − y [m].
+    /// The errors of the last complete period, e_j = q_d − y \[m\].
     pub fn last_errors(&self) -> &[[f64; 2]] {
         self.buf.error.as_ref()
     }
@@ -169,7 +169,7 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
         self.learning = on;
     }
 
-    /// One sample: records e = q_d − y and returns the correction c [m] to subtract from the
+    /// One sample: records e = q_d − y and returns the correction c \[m\] to subtract from the
     /// measurement the feedback controller sees ([`Ilc::correction`] then [`Ilc::record`]).
     #[inline]
     pub fn step(&mut self, y: [f64; 2], reference: [f64; 2]) -> [f64; 2] {
@@ -178,7 +178,7 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
         c
     }
 
-    /// The correction c_{j+1}[k] [m] of the current sample k (module docs); call once per
+    /// The correction c_{j+1}\[k\] \[m\] of the current sample k (module docs); call once per
     /// sample, before [`Ilc::record`].
     #[inline]
     pub fn correction(&mut self) -> [f64; 2] {
@@ -208,7 +208,7 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
         c
     }
 
-    /// Records the measurement y [m] and the reference q_d [m] of the current sample and
+    /// Records the measurement y \[m\] and the reference q_d \[m\] of the current sample and
     /// moves to the next (a new period after N samples).
     #[inline]
     pub fn record(&mut self, y: [f64; 2], reference: [f64; 2]) {

@@ -14,7 +14,7 @@
 //! * [`Controller`]: the two together.
 //!
 //! The hysteresis compensation and the amplifier model stay outside: the command is the
-//! nominal actuator displacement x_nom [m] of Eq. (36) of Actuators 2022, 11(7), 179, which
+//! nominal actuator displacement x_nom \[m\] of Eq. (36) of Actuators 2022, 11(7), 179, which
 //! the target's inverse-hysteresis stage turns into volts.
 //!
 //! # Checking no_std
@@ -89,7 +89,7 @@ pub struct Controller<S> {
 }
 
 impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Controller<S> {
-    /// One sample: measurement y [m] and reference q_d [m] in, command x_nom [m] out.
+    /// One sample: measurement y \[m\] and reference q_d \[m\] in, command x_nom \[m\] out.
     #[inline]
     pub fn step(&mut self, y: [f64; 2], reference: [f64; 2]) -> [f64; 2] {
         let c = match &mut self.learning {

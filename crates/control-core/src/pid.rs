@@ -21,7 +21,7 @@ pub struct PidGains {
     pub kp: f64,
     /// Integral gain k_i [1/s], ≥ 0.
     pub ki: f64,
-    /// Derivative gain k_d [s], ≥ 0.
+    /// Derivative gain k_d \[s\], ≥ 0.
     pub kd: f64,
 }
 
@@ -50,7 +50,7 @@ pub struct PidLaw {
 
 impl PidLaw {
     /// A law with `gains`, the inverse static gain `g_inv` = G_dc⁻¹ (finite), sample time
-    /// `t` [s] (> 0) and the actuator stroke [m] (> 0) that clips x_nom.
+    /// `t` \[s\] (> 0) and the actuator stroke \[m\] (> 0) that clips x_nom.
     pub fn new(
         gains: PidGains,
         g_inv: [[f64; 2]; 2],
@@ -83,7 +83,7 @@ impl PidLaw {
         self.saturated
     }
 
-    /// One sample: measurement y [m], reference q_d [m] → x_nom [m] (module docs).
+    /// One sample: measurement y \[m\], reference q_d \[m\] → x_nom \[m\] (module docs).
     #[inline]
     pub fn step(&mut self, y_in: [f64; 2], r: [f64; 2]) -> [f64; 2] {
         let finite = y_in[0].is_finite() && y_in[1].is_finite();

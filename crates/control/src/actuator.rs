@@ -1,7 +1,7 @@
 //! The piezo actuators as the controller sees them: preload bias, inverse hysteresis
 //! compensation (Eq. 19–21, Figure 5, inside the loop as in Figure 7) and the amplifier range.
 //!
-//! The controller computes a desired nominal displacement x_nom,i [m] (the input u of
+//! The controller computes a desired nominal displacement x_nom,i \[m\] (the input u of
 //! Eq. 36, measured from the preload bias). The actuator stage turns it into a voltage:
 //!
 //! * [`Compensation::Inverse`]: x_pea = x_bias + x_nom is inverted through the Bouc–Wen model
@@ -37,11 +37,11 @@ pub enum Compensation {
 pub struct ActuatorParams {
     /// Bouc–Wen parameters of PEA1 and PEA2 (µm, V, s; Table A1).
     pub hysteresis: [BoucWenParams; 2],
-    /// Amplifier range [V] (DECISIONS.md: 0–1000).
+    /// Amplifier range \[V\] (DECISIONS.md: 0–1000).
     pub voltage_range: [f64; 2],
-    /// Preload bias voltage U_b [V] (default: the middle of the range).
+    /// Preload bias voltage U_b \[V\] (default: the middle of the range).
     pub bias_voltage: f64,
-    /// Largest |x_nom| the controller may ask for [m] (Section 4.1: the ±30 µm nominal stroke).
+    /// Largest |x_nom| the controller may ask for \[m\] (Section 4.1: the ±30 µm nominal stroke).
     pub stroke: f64,
     /// The compensation mode.
     pub compensation: Compensation,
@@ -69,14 +69,14 @@ impl ActuatorParams {
 }
 
 /// The state (U_b, h_b) of a virgin PEA after a slow (1 s) ramp from 0 V to `u_b`, and its
-/// displacement x_bias = d_p U_b − h_b [µm].
+/// displacement x_bias = d_p U_b − h_b \[µm\].
 pub fn preload(p: &BoucWenParams, u_b: f64) -> (f64, f64, f64) {
     let h = advance(p, 0.0, 0.0, u_b, 1.0);
     (u_b, h, p.d_p * u_b - h)
 }
 
 /// The nominal stroke the amplifier range delivers around the preloaded bias: `[up, down]`
-/// [m], the largest x_nom above and below x_bias that the PEA reaches on its major loop
+/// \[m\], the largest x_nom above and below x_bias that the PEA reaches on its major loop
 /// (bias → U_max → U_min → U_max → U_min with ramps of `ramp` seconds per half range; the
 /// smaller of the two visits of each end). With Table A1 and 0–1000 V this is less than the
 /// ±30 µm nominal stroke of Section 4.1.
@@ -102,9 +102,9 @@ pub fn mean_slope(p: &BoucWenParams, range: [f64; 2]) -> f64 {
 /// The result of one actuator command.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Actuated {
-    /// Voltages sent to the amplifiers [V], inside the range.
+    /// Voltages sent to the amplifiers \[V\], inside the range.
     pub voltage: [f64; 2],
-    /// The x_nom [m] the actuator model expects from them (the observer's input).
+    /// The x_nom \[m\] the actuator model expects from them (the observer's input).
     pub x_nom: [f64; 2],
     /// True when a voltage or the stroke limit clipped the request.
     pub saturated: bool,
@@ -152,12 +152,12 @@ impl Actuator {
         &self.params
     }
 
-    /// Rest displacements x_bias [µm] of the preloaded PEAs.
+    /// Rest displacements x_bias \[µm\] of the preloaded PEAs.
     pub fn x_bias(&self) -> [f64; 2] {
         self.x_bias
     }
 
-    /// Turns the desired x_nom [m] into voltages, held for `dt` [s].
+    /// Turns the desired x_nom \[m\] into voltages, held for `dt` \[s\].
     #[inline]
     pub fn command(&mut self, x_nom: [f64; 2], dt: f64) -> Actuated {
         let [lo, hi] = self.params.voltage_range;

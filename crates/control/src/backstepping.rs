@@ -87,7 +87,7 @@ pub struct LawParams {
     pub eta_bound: [f64; 2],
     /// Disturbance bounds ρ_ε = max|Δ_ε| [m/s], ≥ 0 (A36–A37).
     pub a_bound: [f64; 2],
-    /// Boundary layers (φ_s [m/s], φ_a [m]), ≥ 0: σ(x) = sat(x); 0 selects sgn (no layer).
+    /// Boundary layers (φ_s [m/s], φ_a \[m\]), ≥ 0: σ(x) = sat(x); 0 selects sgn (no layer).
     pub boundary_layer: [f64; 2],
 }
 

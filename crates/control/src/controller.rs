@@ -41,11 +41,11 @@ use crate::trajectory::{RefSample, Reference};
 /// One sample of controller output.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Command {
-    /// Amplifier voltages [V], always finite and inside the range.
+    /// Amplifier voltages \[V\], always finite and inside the range.
     pub voltage: [f64; 2],
-    /// The x_nom [m] the actuator model expects from the voltages (Eq. 36 input).
+    /// The x_nom \[m\] the actuator model expects from the voltages (Eq. 36 input).
     pub x_nom: [f64; 2],
-    /// The reference q_d at this sample [m].
+    /// The reference q_d at this sample \[m\].
     pub reference: [f64; 2],
     /// True when the stroke or the amplifier range clipped the command.
     pub saturated: bool,
@@ -55,10 +55,10 @@ pub struct Command {
 
 /// A sampled position controller: one call per sample.
 pub trait StageControl {
-    /// Takes the measured output y_k = [q_o1, q_o2] [m] and returns the command held until
+    /// Takes the measured output y_k = [q_o1, q_o2] \[m\] and returns the command held until
     /// the next sample.
     fn step(&mut self, y: [f64; 2]) -> Command;
-    /// The state estimate [ẑ, d̂] [SI] (zeros for controllers without an observer).
+    /// The state estimate [ẑ, d̂] \[SI\] (zeros for controllers without an observer).
     fn estimate(&self) -> [f64; 10];
 }
 
@@ -331,7 +331,7 @@ pub struct PidParams {
     pub kp: f64,
     /// Integral gain [1/s].
     pub ki: f64,
-    /// Derivative gain [s] (on the finite-difference derivative of e).
+    /// Derivative gain \[s\] (on the finite-difference derivative of e).
     pub kd: f64,
 }
 
@@ -363,7 +363,7 @@ pub struct PidController {
 }
 
 impl PidController {
-    /// Builds the baseline for the controller's model `model` and sample time `t` [s].
+    /// Builds the baseline for the controller's model `model` and sample time `t` \[s\].
     pub fn new(
         model: &StageParams,
         pid: PidParams,

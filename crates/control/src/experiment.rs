@@ -211,21 +211,21 @@ impl Setup {
 /// The time series of one run (one entry per sample).
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Record {
-    /// Time [s].
+    /// Time \[s\].
     pub t: Vec<f64>,
-    /// Reference q_d [m].
+    /// Reference q_d \[m\].
     pub reference: [Vec<f64>; 2],
-    /// Measured y [m].
+    /// Measured y \[m\].
     pub measured: [Vec<f64>; 2],
-    /// True output q_o [m].
+    /// True output q_o \[m\].
     pub truth: [Vec<f64>; 2],
-    /// Tracking error q_o − q_d [m].
+    /// Tracking error q_o − q_d \[m\].
     pub error: [Vec<f64>; 2],
-    /// Applied voltages [V].
+    /// Applied voltages \[V\].
     pub voltage: [Vec<f64>; 2],
-    /// Commanded x_nom [m].
+    /// Commanded x_nom \[m\].
     pub x_nom: [Vec<f64>; 2],
-    /// Estimated state ẑ and input disturbance d̂ [SI] (zeros for the PID baseline).
+    /// Estimated state ẑ and input disturbance d̂ \[SI\] (zeros for the PID baseline).
     pub estimate: [Vec<f64>; 10],
     /// Samples at which the command saturated.
     pub saturated: usize,
@@ -270,7 +270,7 @@ impl Record {
         c
     }
 
-    /// Metrics of the run; `half_range` per axis [m] (for % of range), as from
+    /// Metrics of the run; `half_range` per axis \[m\] (for % of range), as from
     /// [`Reference::half_range`].
     pub fn metrics(&self, half_range: [f64; 2]) -> Metrics {
         let n = self.len();
@@ -323,21 +323,21 @@ impl Record {
 /// Tracking metrics of one run (errors against the true output).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Metrics {
-    /// RMS error per axis [m].
+    /// RMS error per axis \[m\].
     pub rms: [f64; 2],
-    /// Max |error| per axis [m].
+    /// Max |error| per axis \[m\].
     pub max: [f64; 2],
     /// RMS error in % of the reference range (peak to peak).
     pub rms_pct: [f64; 2],
     /// Max error in % of the reference range.
     pub max_pct: [f64; 2],
-    /// RMS error over the second half of the run (after the transient) [m].
+    /// RMS error over the second half of the run (after the transient) \[m\].
     pub steady_rms: [f64; 2],
-    /// Settling time of the initial transient [s].
+    /// Settling time of the initial transient \[s\].
     pub settling: f64,
-    /// Highest applied voltage [V].
+    /// Highest applied voltage \[V\].
     pub peak_voltage: f64,
-    /// Lowest applied voltage [V].
+    /// Lowest applied voltage \[V\].
     pub min_voltage: f64,
     /// Saturated samples.
     pub saturated: usize,
@@ -346,7 +346,7 @@ pub struct Metrics {
 }
 
 impl Metrics {
-    /// The combined RMS error over both axes [m].
+    /// The combined RMS error over both axes \[m\].
     pub fn rms_total(&self) -> f64 {
         ((self.rms[0].powi(2) + self.rms[1].powi(2)) / 2.0).sqrt()
     }

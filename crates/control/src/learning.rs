@@ -175,7 +175,7 @@ fn dft_bin(x: impl Iterator<Item = f64>, k: usize, n: usize) -> Complex {
 
 /// Measures T_ii of the learning plant at every harmonic of the period (module docs):
 /// `periods` periods per run (the last one is analysed, the others let the transient of the
-/// smooth start and the injection settle), multisine of `amplitude` [m] RMS per axis.
+/// smooth start and the injection settle), multisine of `amplitude` \[m\] RMS per axis.
 pub fn measure_learning_plant(
     factory: &mut LoopFactory<'_>,
     period: usize,
@@ -277,7 +277,7 @@ pub struct DesignParams {
     pub max_factor: f64,
     /// Learning gains tried, each in (0, 2). Default 0.3, 0.5, 0.7.
     pub gains: [f64; 3],
-    /// Largest lead tried [samples]. Default 20.
+    /// Largest lead tried \[samples\]. Default 20.
     pub max_lead: usize,
 }
 
@@ -335,7 +335,7 @@ pub fn design(plant: &LearningPlant, settings: &DesignParams) -> Result<(Learnin
     })
 }
 
-/// RMS per axis [m] of the true-output error of each period of a record (q − q_d, the
+/// RMS per axis \[m\] of the true-output error of each period of a record (q − q_d, the
 /// `error` columns of [`crate::experiment::Record`]).
 pub fn rms_per_period(error: &[Vec<f64>; 2], period: usize) -> Vec<[f64; 2]> {
     let periods = error[0].len() / period;

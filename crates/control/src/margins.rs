@@ -30,9 +30,9 @@ use crate::error::{Result, check};
 /// Settings of the margin search.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MarginParams {
-    /// Lowest frequency searched [Hz], > 0.
+    /// Lowest frequency searched \[Hz\], > 0.
     pub f_min: f64,
-    /// Highest frequency searched [Hz], > f_min (for a sampled loop, below f_s/2).
+    /// Highest frequency searched \[Hz\], > f_min (for a sampled loop, below f_s/2).
     pub f_max: f64,
     /// Log-spaced grid points, ≥ 8.
     pub points: usize,
@@ -79,15 +79,15 @@ impl MarginParams {
 /// Margins of one loop.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Margins {
-    /// Gain margin [dB] (module docs); +∞ without phase crossover in the band.
+    /// Gain margin \[dB\] (module docs); +∞ without phase crossover in the band.
     pub gain_db: f64,
-    /// Frequency of that phase crossover [Hz] (NaN without).
+    /// Frequency of that phase crossover \[Hz\] (NaN without).
     pub phase_crossover: f64,
-    /// Phase margin [deg]; +∞ without gain crossover in the band.
+    /// Phase margin \[deg\]; +∞ without gain crossover in the band.
     pub phase_deg: f64,
-    /// Frequency of that gain crossover [Hz] (NaN without).
+    /// Frequency of that gain crossover \[Hz\] (NaN without).
     pub gain_crossover: f64,
-    /// Delay margin [s]; +∞ without gain crossover.
+    /// Delay margin \[s\]; +∞ without gain crossover.
     pub delay: f64,
 }
 

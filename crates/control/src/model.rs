@@ -60,9 +60,9 @@ pub struct StageModel {
     pub params: StageParams,
     /// Cross-coupling stiffness k_c of Eq. (30) [N/m] (0 for the design model).
     pub coupling: f64,
-    /// B = [β_ij], (A14).
+    /// B = \[β_ij\], (A14).
     pub b: Matrix8,
-    /// D = [d_ij], (A14).
+    /// D = \[d_ij\], (A14).
     pub d: Matrix2<f64>,
 }
 
@@ -164,7 +164,7 @@ impl StageModel {
         Ok(Matrix2::new(x[(0, 0)], x[(0, 1)], x[(1, 0)], x[(1, 1)]))
     }
 
-    /// Undamped natural frequencies [Hz] of the three mode families of the design model:
+    /// Undamped natural frequencies \[Hz\] of the three mode families of the design model:
     /// horizontal output (2K_qo1/M), vertical output (K_qo2/M) and the PEA / input plate
     /// ((K_in1 + K_pea1 + K_qo1)/m_in1), for documentation and checks.
     pub fn natural_frequencies(&self) -> [f64; 3] {

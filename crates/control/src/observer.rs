@@ -62,7 +62,7 @@ pub type Vector10 = SVector<f64, NX>;
 pub struct ObserverParams {
     /// Injection gains g₁, g₂ [1/s], > 0. Table 4: 1e5, 1e5.
     pub gain: [f64; 2],
-    /// Sample time T [s], > 0. Section 4.1: 1e-4.
+    /// Sample time T \[s\], > 0. Section 4.1: 1e-4.
     pub sample_time: f64,
     /// Bandwidth κ_d [1/s] of the input-disturbance estimate d̂, > 0 (see the module docs).
     pub disturbance_gain: f64,

@@ -30,7 +30,7 @@ use crate::trajectory::Reference;
 /// A notch filter N(s) = (s² + 2ζ_z ω s + ω²)/(s² + 2ζ_p ω s + ω²) at f = ω/2π.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Notch {
-    /// Centre frequency [Hz], 0 < f < f_s/2.
+    /// Centre frequency \[Hz\], 0 < f < f_s/2.
     pub frequency: f64,
     /// Damping of the zeros ζ_z, 0 ≤ ζ_z < ζ_p (depth at f: ζ_z/ζ_p).
     pub zero_damping: f64,
@@ -45,7 +45,7 @@ pub struct AxisGains {
     pub kp: f64,
     /// Integral gain [1/s], ≥ 0.
     pub ki: f64,
-    /// Derivative gain [s], ≥ 0.
+    /// Derivative gain \[s\], ≥ 0.
     pub kd: f64,
     /// Up to two notches in series (None: none).
     pub notches: [Option<Notch>; 2],
@@ -58,7 +58,7 @@ pub struct PiNotchParams {
     pub axes: [AxisGains; 2],
     /// Static gain G x_nom → q (row-major), invertible.
     pub static_gain: [[f64; 2]; 2],
-    /// Sample time T [s], > 0.
+    /// Sample time T \[s\], > 0.
     pub sample_time: f64,
 }
 
@@ -117,7 +117,7 @@ impl PiNotchParams {
         )
     }
 
-    /// The controller's frequency response per axis, c_i(e^{jωT}) at `f` [Hz] (error →
+    /// The controller's frequency response per axis, c_i(e^{jωT}) at `f` \[Hz\] (error →
     /// axis command before G⁻¹), for margin computations.
     pub fn axis_response(&self, f: f64) -> [Complex<f64>; 2] {
         let t = self.sample_time;

@@ -35,19 +35,19 @@ pub struct PlantParams {
     pub coupling: f64,
     /// Bouc–Wen parameters of the two PEAs (µm, V, s).
     pub hysteresis: [BoucWenParams; 2],
-    /// Amplifier range [V].
+    /// Amplifier range \[V\].
     pub voltage_range: [f64; 2],
-    /// Preload bias voltage [V].
+    /// Preload bias voltage \[V\].
     pub bias_voltage: f64,
-    /// Amplifier bandwidth [Hz] (first-order lag); 0 = ideal ZOH.
+    /// Amplifier bandwidth \[Hz\] (first-order lag); 0 = ideal ZOH.
     pub amplifier_bandwidth: f64,
-    /// Sensor quantization steps [m] (0: none).
+    /// Sensor quantization steps \[m\] (0: none).
     pub resolution: [f64; 2],
-    /// Sensor noise standard deviations [m].
+    /// Sensor noise standard deviations \[m\].
     pub noise_std: [f64; 2],
     /// Noise seed.
     pub seed: u64,
-    /// Controller sample time T [s].
+    /// Controller sample time T \[s\].
     pub sample_time: f64,
     /// Substeps per sample, ≥ 1.
     pub substeps: usize,
@@ -143,7 +143,7 @@ impl LumpedStage {
         &self.model
     }
 
-    /// The state z [SI].
+    /// The state z \[SI\].
     pub fn state(&self) -> [f64; 8] {
         let mut s = [0.0; 8];
         s.copy_from_slice(self.z.as_slice());
@@ -209,7 +209,7 @@ impl Plant {
         self.inner.mechanics().model()
     }
 
-    /// The true state z [SI].
+    /// The true state z \[SI\].
     pub fn state(&self) -> [f64; 8] {
         self.inner.mechanics().state()
     }
@@ -219,12 +219,12 @@ impl Plant {
         self.inner.mechanics_mut().set_state(z);
     }
 
-    /// The true output q_o [m].
+    /// The true output q_o \[m\].
     pub fn output(&self) -> [f64; 2] {
         self.inner.output()
     }
 
-    /// The actuators' current x_nom [m].
+    /// The actuators' current x_nom \[m\].
     pub fn x_nom(&self) -> [f64; 2] {
         self.inner.x_nom()
     }
@@ -239,7 +239,7 @@ impl Plant {
         self.inner.step(cmd);
     }
 
-    /// The voltages currently applied [V].
+    /// The voltages currently applied \[V\].
     pub fn voltage(&self) -> [f64; 2] {
         self.inner.voltage()
     }

@@ -42,14 +42,14 @@ pub enum PlantActuator {
 /// The high-voltage amplifier of one PEA.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AmplifierParams {
-    /// Small-signal bandwidth f_a [Hz] of a first-order response; 0 = ideal (the voltage
+    /// Small-signal bandwidth f_a \[Hz\] of a first-order response; 0 = ideal (the voltage
     /// jumps at the start of the sample).
     pub bandwidth: f64,
     /// Slew-rate limit [V/s]; 0 = none.
     pub slew_rate: f64,
-    /// Output current limit I_max [A]; 0 = none.
+    /// Output current limit I_max \[A\]; 0 = none.
     pub current_limit: f64,
-    /// PEA capacitance C_pea [F] (for `i = C dU/dt`), > 0 when a current limit is set.
+    /// PEA capacitance C_pea \[F\] (for `i = C dU/dt`), > 0 when a current limit is set.
     pub capacitance: f64,
 }
 
@@ -94,9 +94,9 @@ impl AmplifierParams {
 /// [`RigParams::noise_std`] and [`RigParams::resolution`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SensorParams {
-    /// First-order bandwidth of the sensor electronics [Hz]; 0 = ideal.
+    /// First-order bandwidth of the sensor electronics \[Hz\]; 0 = ideal.
     pub bandwidth: f64,
-    /// 1/f corner [Hz]: below it the 1/f part dominates the white noise; 0 = white only.
+    /// 1/f corner \[Hz\]: below it the 1/f part dominates the white noise; 0 = white only.
     pub flicker_corner: f64,
 }
 
@@ -124,7 +124,7 @@ pub struct CreepParams {
 pub struct FloorParams {
     /// RMS velocity per 1/3-octave band [m/s]; 0 = off. VC-C: 12.5e-6.
     pub velocity_rms: f64,
-    /// Lowest and highest band centre [Hz].
+    /// Lowest and highest band centre \[Hz\].
     pub bands: [f64; 2],
 }
 
@@ -141,21 +141,21 @@ pub struct RigParams {
     pub hysteresis: [BoucWenParams; 2],
     /// Creep.
     pub creep: CreepParams,
-    /// Amplifier output range [V].
+    /// Amplifier output range \[V\].
     pub voltage_range: [f64; 2],
-    /// Preload bias voltage [V].
+    /// Preload bias voltage \[V\].
     pub bias_voltage: f64,
     /// Floor vibration.
     pub floor: FloorParams,
     /// Sensor dynamics and spectrum.
     pub sensor: SensorParams,
-    /// Quantization steps [m] (0: none).
+    /// Quantization steps \[m\] (0: none).
     pub resolution: [f64; 2],
-    /// White-noise standard deviations [m].
+    /// White-noise standard deviations \[m\].
     pub noise_std: [f64; 2],
     /// Noise seed.
     pub seed: u64,
-    /// Controller sample time T [s].
+    /// Controller sample time T \[s\].
     pub sample_time: f64,
     /// Substeps per sample, ≥ 1.
     pub substeps: usize,
@@ -253,7 +253,7 @@ impl RigParams {
         )
     }
 
-    /// The substep h = T / substeps [s].
+    /// The substep h = T / substeps \[s\].
     pub fn substep(&self) -> f64 {
         self.sample_time / self.substeps as f64
     }
@@ -263,14 +263,14 @@ impl RigParams {
 /// [`Mechanics::substep_time`] with x_nom and the base acceleration varying linearly within
 /// the substep. No allocation.
 pub trait Mechanics: Send {
-    /// The substep h [s] the model was discretized for.
+    /// The substep h \[s\] the model was discretized for.
     fn substep_time(&self) -> f64;
-    /// Advances by h; `x_nom[0]` and `x_nom[1]` are the nominal PEA displacements [m] at the
+    /// Advances by h; `x_nom[0]` and `x_nom[1]` are the nominal PEA displacements \[m\] at the
     /// start and the end of the substep, `floor[0..2]` the base accelerations [m/s²] (x, y).
     fn advance(&mut self, x_nom: [[f64; 2]; 2], floor: [[f64; 2]; 2]);
-    /// The true output q [m] (relative to the base).
+    /// The true output q \[m\] (relative to the base).
     fn output(&self) -> [f64; 2];
-    /// The input-plate displacements x_in [m].
+    /// The input-plate displacements x_in \[m\].
     fn inputs(&self) -> [f64; 2];
 }
 
@@ -279,13 +279,13 @@ pub trait Mechanics: Send {
 pub trait StagePlant: Send {
     /// Samples the sensors at the current time.
     fn measure(&mut self) -> [f64; 2];
-    /// The true output q [m].
+    /// The true output q \[m\].
     fn output(&self) -> [f64; 2];
     /// Advances one sample with the command (after the rig's delay).
     fn apply(&mut self, cmd: &Command);
-    /// The voltages the amplifiers currently deliver [V].
+    /// The voltages the amplifiers currently deliver \[V\].
     fn voltage(&self) -> [f64; 2];
-    /// The PEAs' current nominal displacement x_nom [m] (creep included).
+    /// The PEAs' current nominal displacement x_nom \[m\] (creep included).
     fn x_nom(&self) -> [f64; 2];
 }
 

@@ -16,7 +16,7 @@ use crate::rig::AmplifierParams;
 /// q_d and its first three derivatives at one instant (SI).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct RefSample {
-    /// q_d [m].
+    /// q_d \[m\].
     pub q: [f64; 2],
     /// q̇_d [m/s].
     pub dq: [f64; 2],
@@ -33,22 +33,22 @@ pub enum Shape {
     Lissajous {
         /// Frequency ratio r of q1 to q2 (3 and 2 in the paper).
         ratio: f64,
-        /// Amplitudes (A1, A2) [m].
+        /// Amplitudes (A1, A2) \[m\].
         amplitude: [f64; 2],
-        /// Base frequency f [Hz].
+        /// Base frequency f \[Hz\].
         frequency: f64,
     },
     /// q = R (sin 2πf t, cos 2πf t): a circle of radius R about the rest position.
     Circle {
-        /// Radius R [m].
+        /// Radius R \[m\].
         radius: f64,
-        /// Frequency f [Hz].
+        /// Frequency f \[Hz\].
         frequency: f64,
     },
     /// A constant target (a step once the window is applied; the window's length is the
     /// rise time).
     Step {
-        /// Target q [m].
+        /// Target q \[m\].
         target: [f64; 2],
     },
     /// q = rate·t (a ramp).
@@ -63,7 +63,7 @@ pub enum Shape {
 pub struct Reference {
     /// The curve.
     pub shape: Shape,
-    /// Length t_s of the smooth start [s], ≥ 0 (0: none).
+    /// Length t_s of the smooth start \[s\], ≥ 0 (0: none).
     pub smooth_start: f64,
 }
 
@@ -84,7 +84,7 @@ impl Reference {
     }
 
     /// The reference of a scenario trajectory (with the default smooth start) and its
-    /// duration [s].
+    /// duration \[s\].
     pub fn from_scenario(t: &Trajectory) -> (Reference, f64) {
         match *t {
             Trajectory::Lissajous {
@@ -142,7 +142,7 @@ impl Reference {
         }
     }
 
-    /// q_d and derivatives at time `t` [s] (t < 0 gives the rest position). No allocation.
+    /// q_d and derivatives at time `t` \[s\] (t < 0 gives the rest position). No allocation.
     #[inline]
     pub fn sample(&self, t: f64) -> RefSample {
         if t <= 0.0 {
@@ -177,7 +177,7 @@ impl Reference {
 }
 
 impl Shape {
-    /// The highest frequency in the curve [Hz] (0 for steps and ramps).
+    /// The highest frequency in the curve \[Hz\] (0 for steps and ramps).
     pub fn highest_frequency(&self) -> f64 {
         match *self {
             Shape::Lissajous {
@@ -249,7 +249,7 @@ fn window(t: f64, ts: f64) -> [f64; 4] {
 pub struct Workspace {
     /// G_dc⁻¹ (maps q to the x_nom that holds it statically).
     pub inverse_gain: [[f64; 2]; 2],
-    /// Nominal stroke half-range x_max [m] (Section 4.1: 30 µm).
+    /// Nominal stroke half-range x_max \[m\] (Section 4.1: 30 µm).
     pub stroke: f64,
 }
 
@@ -275,18 +275,18 @@ impl Workspace {
 /// What following a reference takes from the rig ([`feasibility`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Feasibility {
-    /// Highest frequency of the reference [Hz].
+    /// Highest frequency of the reference \[Hz\].
     pub highest_frequency: f64,
-    /// Nyquist frequency of the controller [Hz].
+    /// Nyquist frequency of the controller \[Hz\].
     pub nyquist: f64,
     /// Largest fraction of the stroke the amplifier range delivers
     /// ([`deliverable_stroke`]) that the static inverse of the reference needs (≤ 1 to fit).
     pub stroke_usage: f64,
     /// Largest |x_nom| over the controller's stroke limit.
     pub controller_stroke_usage: f64,
-    /// Lowest and highest voltage of each PEA along the compensated reference [V].
+    /// Lowest and highest voltage of each PEA along the compensated reference \[V\].
     pub voltage: [[f64; 2]; 2],
-    /// Largest PEA current C·|dU/dt| [A] along the compensated reference.
+    /// Largest PEA current C·|dU/dt| \[A\] along the compensated reference.
     pub peak_current: f64,
     /// Largest |dU/dt| [V/s].
     pub peak_rate: f64,

@@ -28,9 +28,9 @@ use crate::pi_notch::{AxisGains, Notch, PiNotchParams};
 /// Settings of the tuning procedure (module docs).
 #[derive(Debug, Clone, PartialEq)]
 pub struct TuningParams {
-    /// Required gain margin [dB], ≥ 0 (default 6).
+    /// Required gain margin \[dB\], ≥ 0 (default 6).
     pub gain_margin_db: f64,
-    /// Required phase margin [deg], 0–90 (default 40).
+    /// Required phase margin \[deg\], 0–90 (default 40).
     pub phase_margin_deg: f64,
     /// Candidate PI zeros ω_z/ω_1 [-] (each > 0, ∞ = pure integral): kp = ki/ω_z.
     pub zero_ratios: Vec<f64>,
@@ -114,18 +114,18 @@ pub enum Structure {
 
 /// What the procedure needs to know about the plant.
 pub trait LoopPlant {
-    /// The plant's discrete response x_nom → y (2 × 2, with the rig's delay) at `f` [Hz].
+    /// The plant's discrete response x_nom → y (2 × 2, with the rig's delay) at `f` \[Hz\].
     fn response(&self, f: f64) -> [[Complex<f64>; 2]; 2];
     /// The static gain x_nom → q.
     fn static_gain(&self) -> [[f64; 2]; 2];
-    /// Resonances (frequency [Hz], damping) in ascending order.
+    /// Resonances (frequency \[Hz\], damping) in ascending order.
     fn modes(&self) -> Vec<(f64, f64)>;
-    /// The sample time [s].
+    /// The sample time \[s\].
     fn sample_time(&self) -> f64;
 }
 
 /// The two loop-at-a-time return ratios (output side: L = P G⁻¹ diag(c)) of a PI-notch
-/// controller on a plant, at `f` [Hz].
+/// controller on a plant, at `f` \[Hz\].
 pub fn loop_response(plant: &dyn LoopPlant, params: &PiNotchParams, f: f64) -> [Complex<f64>; 2] {
     let p = plant.response(f);
     let g = params.static_gain;
@@ -269,7 +269,7 @@ pub fn tune(plant: &dyn LoopPlant, structure: Structure, p: &TuningParams) -> Re
 /// One mode of a [`ModalPlant`]: `η̈ + 2ζωη̇ + ω²η = in·x_nom`, `q = out·η`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlantMode {
-    /// Natural frequency [Hz].
+    /// Natural frequency \[Hz\].
     pub frequency: f64,
     /// Damping ratio.
     pub damping: f64,
@@ -291,7 +291,7 @@ pub struct ModalPlant {
 }
 
 impl ModalPlant {
-    /// The plant of `modes` sampled at `t` [s] with `delay` samples of delay.
+    /// The plant of `modes` sampled at `t` \[s\] with `delay` samples of delay.
     pub fn new(modes: Vec<PlantMode>, t: f64, delay: usize) -> Result<ModalPlant> {
         check("sample_time", t, t > 0.0, "> 0 s")?;
         let mut discrete = Vec::with_capacity(modes.len());

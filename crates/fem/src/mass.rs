@@ -33,7 +33,7 @@ const CONSISTENT: [[f64; 4]; 4] = [
 pub struct DofMass {
     /// Full DOF index.
     pub dof: usize,
-    /// Mass [kg], ≥ 0.
+    /// Mass \[kg\], ≥ 0.
     pub mass: f64,
 }
 
@@ -47,7 +47,7 @@ fn slot(pattern: &crate::model::SparsityPattern, i: usize, j: usize) -> usize {
             .expect("consistent mass couples only DOFs of one element")
 }
 
-/// The consistent mass matrix of `model` with element masses `element_mass` [kg] (fem element
+/// The consistent mass matrix of `model` with element masses `element_mass` \[kg\] (fem element
 /// order) and point masses, in the model's pattern (reduced DOFs, lower triangle).
 pub fn consistent_mass(
     model: &Model,

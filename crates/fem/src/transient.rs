@@ -42,7 +42,7 @@ use crate::solver::{Factor, SolveWorkspace, SymbolicFactor};
 pub struct RayleighDamping {
     /// Mass-proportional coefficient `a_M` [1/s], ≥ 0.
     pub mass: f64,
-    /// Stiffness-proportional coefficient `b_K` [s], ≥ 0.
+    /// Stiffness-proportional coefficient `b_K` \[s\], ≥ 0.
     pub stiffness: f64,
 }
 
@@ -52,7 +52,7 @@ impl RayleighDamping {
         Self::default()
     }
 
-    /// The coefficients that give damping ratio `zeta[i]` at frequency `freq[i]` [Hz]
+    /// The coefficients that give damping ratio `zeta[i]` at frequency `freq[i]` \[Hz\]
     /// (`ζ(ω) = a_M/(2ω) + b_K ω/2`). `freq[0] < freq[1]`, both > 0; ratios in [0, 1).
     pub fn from_ratios(freq: [f64; 2], zeta: [f64; 2]) -> Result<Self, ParamError> {
         check_range(
@@ -83,7 +83,7 @@ impl RayleighDamping {
         })
     }
 
-    /// Damping ratio at frequency `f` [Hz].
+    /// Damping ratio at frequency `f` \[Hz\].
     pub fn ratio(&self, f: f64) -> f64 {
         let w = std::f64::consts::TAU * f;
         self.mass / (2.0 * w) + self.stiffness * w / 2.0
@@ -100,7 +100,7 @@ pub fn newmark_frequency(omega: f64, dt: f64) -> f64 {
 /// Parameters of the transient solver.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TransientParams {
-    /// Time step Δt [s], in (0, 1].
+    /// Time step Δt \[s\], in (0, 1].
     pub dt: f64,
     /// HHT parameter α, in [−⅓, 0]. 0 (default) = Newmark average acceleration.
     pub hht_alpha: f64,
@@ -175,7 +175,7 @@ pub enum TransientError {
          after {iterations} iterations (tolerance {tolerance:.1e}); reduce the time step"
     )]
     NotConverged {
-        /// Time at the end of the failed step [s].
+        /// Time at the end of the failed step \[s\].
         time: f64,
         /// Last relative residual.
         residual: f64,
@@ -545,7 +545,7 @@ impl<'a> Transient<'a> {
         Ok(())
     }
 
-    /// Current time [s].
+    /// Current time \[s\].
     pub fn time(&self) -> f64 {
         self.time
     }
@@ -574,7 +574,7 @@ impl<'a> Transient<'a> {
         &self.k0
     }
 
-    /// Mechanical energy `½vᵀMv + W(u) + Σ ½ k u_dof²` (kinetic + strain + spring) [J].
+    /// Mechanical energy `½vᵀMv + W(u) + Σ ½ k u_dof²` (kinetic + strain + spring) \[J\].
     pub fn energy(&mut self) -> f64 {
         let dofs = self.model.dofs();
         dofs.gather(&self.v, &mut self.red_a);

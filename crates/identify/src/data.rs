@@ -1,6 +1,6 @@
 //! Logged stage records (t, x_nom or U, x_in1, x_in2, q1, q2) and their CSV form.
 //!
-//! Units are SI: t [s], x_nom, x_in, q [m], U [V]. The record must be sampled uniformly
+//! Units are SI: t \[s\], x_nom, x_in, q \[m\], U \[V\]. The record must be sampled uniformly
 //! (the regression of Eq. 54–56 is written at a fixed sample time T_s).
 
 use std::io::Read;
@@ -22,15 +22,15 @@ pub const MIN_SAMPLES: usize = 200;
 /// samples, every value finite, time strictly increasing and uniform within the tolerance.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StageRecord {
-    /// Time [s].
+    /// Time \[s\].
     pub t: Vec<f64>,
-    /// Nominal PEA displacements x_nom1, x_nom2 [m] (the input u of Eq. 36).
+    /// Nominal PEA displacements x_nom1, x_nom2 \[m\] (the input u of Eq. 36).
     pub x_nom: [Vec<f64>; 2],
-    /// Input plate displacements x_in1, x_in2 [m].
+    /// Input plate displacements x_in1, x_in2 \[m\].
     pub x_in: [Vec<f64>; 2],
-    /// Output displacements q1, q2 [m].
+    /// Output displacements q1, q2 \[m\].
     pub q: [Vec<f64>; 2],
-    /// Amplifier voltages U1, U2 [V], when the record has them.
+    /// Amplifier voltages U1, U2 \[V\], when the record has them.
     pub voltage: Option<[Vec<f64>; 2]>,
 }
 
@@ -38,9 +38,9 @@ pub struct StageRecord {
 /// the PEA model turns into x_nom.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Input {
-    /// x_nom1, x_nom2 [m].
+    /// x_nom1, x_nom2 \[m\].
     Nominal([Vec<f64>; 2]),
-    /// U1, U2 [V].
+    /// U1, U2 \[V\].
     Voltage([Vec<f64>; 2]),
 }
 
@@ -115,7 +115,7 @@ impl StageRecord {
         self.t.is_empty()
     }
 
-    /// The sample time T_s [s]: the mean time step.
+    /// The sample time T_s \[s\]: the mean time step.
     pub fn sample_time(&self) -> f64 {
         (self.t[self.t.len() - 1] - self.t[0]) / (self.t.len() - 1) as f64
     }
@@ -233,13 +233,13 @@ impl StageRecord {
 /// The measured columns of a CSV record.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Columns {
-    /// x_in1, x_in2 [m].
+    /// x_in1, x_in2 \[m\].
     pub x_in: [Vec<f64>; 2],
-    /// q1, q2 [m].
+    /// q1, q2 \[m\].
     pub q: [Vec<f64>; 2],
 }
 
-/// x_nom [m] of a PEA driven by the voltage samples `u` [V] (linear between samples),
+/// x_nom \[m\] of a PEA driven by the voltage samples `u` \[V\] (linear between samples),
 /// starting from the preloaded state at `bias_voltage`.
 pub fn voltage_to_x_nom(t: &[f64], u: &[f64], p: &BoucWenParams, bias_voltage: f64) -> Vec<f64> {
     let (ub, hb, x_bias) = preload(p, bias_voltage);

@@ -38,7 +38,7 @@ pub struct IdentifyParams {
     pub forgetting: f64,
     /// Initial covariance c of Cov(0) = c·I (positions in µm), > 0. Default 1e6.
     pub initial_covariance: f64,
-    /// Prefilter cut-off [Hz] (second-order Butterworth, applied to every signal), ≥ 0 and
+    /// Prefilter cut-off \[Hz\] (second-order Butterworth, applied to every signal), ≥ 0 and
     /// below the Nyquist frequency of the record; 0 switches it off. Default 300 Hz.
     pub prefilter: f64,
     /// Decimation d ≥ 1: the regression runs at d·T_s. Default 1.
@@ -130,7 +130,7 @@ pub struct Biquad {
 }
 
 impl Biquad {
-    /// Cut-off `fc` [Hz] at sample time `ts` [s]; `fc` = 0 gives the identity.
+    /// Cut-off `fc` \[Hz\] at sample time `ts` \[s\]; `fc` = 0 gives the identity.
     pub fn lowpass(fc: f64, ts: f64) -> Biquad {
         if fc <= 0.0 {
             return Biquad {
@@ -187,7 +187,7 @@ pub struct StageIdentifier {
 }
 
 impl StageIdentifier {
-    /// An identifier for records sampled at `sample_time` [s], starting from `guess` (its
+    /// An identifier for records sampled at `sample_time` \[s\], starting from `guess` (its
     /// masses and α are the weighed / Eq. 27 values kept fixed; its stiffnesses and dampings
     /// the initial θ) with an initial coupling `k_c0` [N/m].
     pub fn new(
@@ -246,7 +246,7 @@ impl StageIdentifier {
         })
     }
 
-    /// The regression's sample time d·T_s [s].
+    /// The regression's sample time d·T_s \[s\].
     pub fn regression_time(&self) -> f64 {
         self.ts
     }
@@ -410,7 +410,7 @@ fn condition<const P: usize>(m: &[[f64; P]; P]) -> f64 {
 /// One point of the convergence history.
 #[derive(Debug, Clone, PartialEq)]
 pub struct HistoryPoint {
-    /// Time of the record [s].
+    /// Time of the record \[s\].
     pub t: f64,
     /// The estimates then.
     pub estimate: Physical,
@@ -419,9 +419,9 @@ pub struct HistoryPoint {
 /// The result of [`identify`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct Identification {
-    /// The record's sample time T_s [s].
+    /// The record's sample time T_s \[s\].
     pub sample_time: f64,
-    /// The regression's sample time d·T_s [s].
+    /// The regression's sample time d·T_s \[s\].
     pub regression_time: f64,
     /// Regression updates.
     pub updates: u64,

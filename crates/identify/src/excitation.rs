@@ -30,17 +30,17 @@ use crate::error::{Result, check};
 /// Settings of the excitation.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Excitation {
-    /// Duration [s], > 0. Default 4 s (the length the noisy 5 % requirement needs, see the
+    /// Duration \[s\], > 0. Default 4 s (the length the noisy 5 % requirement needs, see the
     /// crate docs).
     pub duration: f64,
-    /// Frequency resolution f₀ [Hz], > 0 (lines at k·f₀). Default 5 Hz.
+    /// Frequency resolution f₀ \[Hz\], > 0 (lines at k·f₀). Default 5 Hz.
     pub f_min: f64,
-    /// Highest line [Hz], ≥ 2 f₀. Default 150 Hz (crate docs: K_in needs the plate's
+    /// Highest line \[Hz\], ≥ 2 f₀. Default 150 Hz (crate docs: K_in needs the plate's
     /// damping and inertial forces, which grow with frequency, to stay small).
     pub f_max: f64,
-    /// Peak of each x_nom [m], > 0. Default 27 µm (90 % of the 30 µm stroke).
+    /// Peak of each x_nom \[m\], > 0. Default 27 µm (90 % of the 30 µm stroke).
     pub amplitude: f64,
-    /// Fade-in time [s], ≥ 0. Default 20 ms.
+    /// Fade-in time \[s\], ≥ 0. Default 20 ms.
     pub ramp: f64,
 }
 
@@ -141,7 +141,7 @@ impl Multisine {
             .sum()
     }
 
-    /// x_nom1, x_nom2 [m] at time `t` [s].
+    /// x_nom1, x_nom2 \[m\] at time `t` \[s\].
     pub fn value(&self, t: f64) -> [f64; 2] {
         let w = if self.ramp > 0.0 && t < self.ramp {
             0.5 * (1.0 - (std::f64::consts::PI * t.max(0.0) / self.ramp).cos())
@@ -161,7 +161,7 @@ pub struct SimulationParams {
     pub excitation: Excitation,
     /// Plant steps per record sample, ≥ 1. Default 10.
     pub oversample: usize,
-    /// Input-plate sensors: [resolution, noise std] [m], both ≥ 0.
+    /// Input-plate sensors: [resolution, noise std] \[m\], both ≥ 0.
     pub plate_sensor: [f64; 2],
     /// Mean slope κ [µm/V] of the PEAs, used to turn the x_nom excitation into voltages
     /// around the bias for the hysteretic actuator, > 0.

@@ -25,11 +25,11 @@ use crate::model::{BoucWen, BoucWenParams, advance};
 /// Settings of the compensator.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct CompensatorParams {
-    /// Lowest amplifier voltage [V]. Default 0 (DECISIONS.md).
+    /// Lowest amplifier voltage \[V\]. Default 0 (DECISIONS.md).
     pub u_min: f64,
-    /// Highest amplifier voltage [V], > u_min. Default 1000 (DECISIONS.md).
+    /// Highest amplifier voltage \[V\], > u_min. Default 1000 (DECISIONS.md).
     pub u_max: f64,
-    /// Accepted |d_p U − h − x_nom_d| [µm], > 0. Default 1e-9 (1 fm).
+    /// Accepted |d_p U − h − x_nom_d| \[µm\], > 0. Default 1e-9 (1 fm).
     pub tolerance: f64,
     /// Most evaluations of the model step per sample, ≥ 2. Default 20.
     pub max_iterations: u32,
@@ -74,9 +74,9 @@ impl CompensatorParams {
 /// Output of one compensation step.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Compensated {
-    /// Voltage to apply [V], within [u_min, u_max].
+    /// Voltage to apply \[V\], within [u_min, u_max].
     pub u: f64,
-    /// The model's hysteretic state after applying it [µm].
+    /// The model's hysteretic state after applying it \[µm\].
     pub h: f64,
     /// True when the desired displacement needed a voltage outside the amplifier range.
     pub saturated: bool,
@@ -106,13 +106,13 @@ impl InverseCompensator {
         &self.model
     }
 
-    /// Resets the model state (U [V], h [µm]), e.g. to match the actuator at start-up.
+    /// Resets the model state (U \[V\], h \[µm\]), e.g. to match the actuator at start-up.
     pub fn set_state(&mut self, u: f64, h: f64) {
         self.model.set_state(u, h);
     }
 
     /// One sample of Eq. (21): the voltage that makes the model's x_nom equal `x_desired`
-    /// [µm] when the drive ramps to it over `dt` [s]. No allocation.
+    /// \[µm\] when the drive ramps to it over `dt` \[s\]. No allocation.
     #[inline]
     pub fn step(&mut self, x_desired: f64, dt: f64) -> Compensated {
         let p = *self.model.params();
@@ -186,8 +186,8 @@ impl InverseCompensator {
         }
     }
 
-    /// Compensates a whole desired trajectory `x_desired` [µm] sampled every `dt` [s];
-    /// returns the voltages [V].
+    /// Compensates a whole desired trajectory `x_desired` \[µm\] sampled every `dt` \[s\];
+    /// returns the voltages \[V\].
     pub fn run(&mut self, x_desired: &[f64], dt: f64) -> Vec<f64> {
         x_desired.iter().map(|&x| self.step(x, dt).u).collect()
     }
@@ -196,15 +196,15 @@ impl InverseCompensator {
 /// A compensated actuator driven around a periodic desired displacement.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CompensatedLoop {
-    /// Desired displacement over the last period [µm].
+    /// Desired displacement over the last period \[µm\].
     pub x_desired: Vec<f64>,
-    /// Voltage applied [V].
+    /// Voltage applied \[V\].
     pub u: Vec<f64>,
-    /// Displacement of the actuator [µm].
+    /// Displacement of the actuator \[µm\].
     pub x: Vec<f64>,
     /// Loop metrics of x against x_desired (the residual nonlinearity).
     pub metrics: LoopMetrics,
-    /// Largest |x − x_desired| [µm].
+    /// Largest |x − x_desired| \[µm\].
     pub max_error: f64,
     /// Samples at which the amplifier saturated.
     pub saturated: usize,
@@ -212,8 +212,8 @@ pub struct CompensatedLoop {
 
 /// Residual nonlinearity of the compensated actuator: the compensator built on `model` drives
 /// an actuator `plant` (the same parameters for "compensation on the model itself", different
-/// ones to study model error) along `waveform` [µm] for `periods` periods at sample time `dt`
-/// [s]. The metrics are of the last period, plant output against desired displacement.
+/// ones to study model error) along `waveform` \[µm\] for `periods` periods at sample time `dt`
+/// \[s\]. The metrics are of the last period, plant output against desired displacement.
 pub fn compensated_loop(
     plant: &BoucWenParams,
     model: &BoucWenParams,

@@ -11,7 +11,7 @@ use crate::error::{PiezoError, Result};
 /// The columns of a PEA record, in the order of [`PeaData::new`].
 const COLUMNS: [&str; 3] = ["t", "U", "x"];
 
-/// A record of one actuator: time t [s], voltage U [V] and displacement x [µm].
+/// A record of one actuator: time t \[s\], voltage U \[V\] and displacement x \[µm\].
 ///
 /// Invariants (checked by [`PeaData::new`]): equal lengths, at least 3 samples, every value
 /// finite, time strictly increasing.
@@ -80,7 +80,7 @@ impl PeaData {
         Ok(PeaData { t, u, x })
     }
 
-    /// Reads CSV text with a header naming the columns `t` [s], `U` [V] and `x` [µm] (any
+    /// Reads CSV text with a header naming the columns `t` \[s\], `U` \[V\] and `x` \[µm\] (any
     /// order, names case-insensitive, extra columns ignored, `#` comment lines skipped).
     /// `origin` (usually the file name) prefixes error messages, which give the 1-based line
     /// number for a missing or non-numeric cell, a NaN or infinity, and non-increasing time.
@@ -116,17 +116,17 @@ impl PeaData {
         self.t.is_empty()
     }
 
-    /// Time [s].
+    /// Time \[s\].
     pub fn t(&self) -> &[f64] {
         &self.t
     }
 
-    /// Voltage [V].
+    /// Voltage \[V\].
     pub fn u(&self) -> &[f64] {
         &self.u
     }
 
-    /// Displacement [µm].
+    /// Displacement \[µm\].
     pub fn x(&self) -> &[f64] {
         &self.x
     }

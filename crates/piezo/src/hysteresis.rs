@@ -31,7 +31,7 @@ impl WaveShape {
     }
 }
 
-/// A periodic waveform (voltage [V] or desired displacement [µm]) of frequency [Hz].
+/// A periodic waveform (voltage \[V\] or desired displacement \[µm\]) of frequency \[Hz\].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Waveform {
     /// Shape.
@@ -40,7 +40,7 @@ pub struct Waveform {
     pub low: f64,
     /// Highest value, > low.
     pub high: f64,
-    /// Frequency [Hz], > 0.
+    /// Frequency \[Hz\], > 0.
     pub frequency: f64,
     /// Number of periods, ≥ 1 (only [`WaveShape::Decaying`] uses it for its envelope).
     pub cycles: u32,
@@ -70,12 +70,12 @@ impl Waveform {
         )
     }
 
-    /// Duration of `cycles` periods [s].
+    /// Duration of `cycles` periods \[s\].
     pub fn duration(&self) -> f64 {
         self.cycles as f64 / self.frequency
     }
 
-    /// Value at time `t` [s].
+    /// Value at time `t` \[s\].
     pub fn value(&self, t: f64) -> f64 {
         let phase = (t * self.frequency).rem_euclid(1.0);
         let unit = match self.shape {
@@ -104,7 +104,7 @@ impl Waveform {
 pub struct HysteresisLoop {
     /// Input samples over one period.
     pub input: Vec<f64>,
-    /// Output samples [µm].
+    /// Output samples \[µm\].
     pub output: Vec<f64>,
     /// Periods simulated until the loop repeated.
     pub periods: u32,
@@ -113,13 +113,13 @@ pub struct HysteresisLoop {
 /// Shape measures of a loop. Percentages are of the output range (max − min of the output).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct LoopMetrics {
-    /// Output range (stroke) [µm].
+    /// Output range (stroke) \[µm\].
     pub range: f64,
-    /// Largest vertical gap between the branches at equal input [µm].
+    /// Largest vertical gap between the branches at equal input \[µm\].
     pub width: f64,
     /// `width` as % of `range`.
     pub width_pct: f64,
-    /// Largest distance of the output from its least-squares straight line in the input [µm].
+    /// Largest distance of the output from its least-squares straight line in the input \[µm\].
     pub max_deviation: f64,
     /// `max_deviation` as % of `range`.
     pub max_deviation_pct: f64,
@@ -220,7 +220,7 @@ pub(crate) fn min_max(v: &[f64]) -> (f64, f64) {
 /// Settings of [`steady_state_loop`].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LoopParams {
-    /// Sample time [s], > 0. Default 1e-4 (the 10 kHz controller rate).
+    /// Sample time \[s\], > 0. Default 1e-4 (the 10 kHz controller rate).
     pub dt: f64,
     /// Stop when one period's output differs from the previous one by less than this
     /// fraction of the output range, > 0. Default 1e-9.
@@ -259,7 +259,7 @@ impl LoopParams {
 }
 
 /// The steady-state hysteresis loop of a virgin actuator driven by a periodic voltage
-/// `waveform(t)` [V] of period `period` [s]: periods are simulated until one repeats the
+/// `waveform(t)` \[V\] of period `period` \[s\]: periods are simulated until one repeats the
 /// previous one (to `tolerance` of the range); the last one is returned.
 pub fn steady_state_loop(
     params: &BoucWenParams,

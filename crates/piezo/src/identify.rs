@@ -220,11 +220,11 @@ impl IdentifyParams {
 /// One point of the convergence history (Figure A2).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct HistoryPoint {
-    /// Time into the identification [s] (continuing across passes).
+    /// Time into the identification \[s\] (continuing across passes).
     pub t: f64,
     /// The estimates at that time.
     pub estimate: BoucWenParams,
-    /// A priori error of the θ estimator ε⁰ on the level x (before this sample's update) [µm].
+    /// A priori error of the θ estimator ε⁰ on the level x (before this sample's update) \[µm\].
     pub error: f64,
 }
 
@@ -235,7 +235,7 @@ pub struct Identification {
     pub estimate: BoucWenParams,
     /// Convergence history.
     pub history: Vec<HistoryPoint>,
-    /// RMS of x − x_model when the identified model is simulated along the record [µm].
+    /// RMS of x − x_model when the identified model is simulated along the record \[µm\].
     pub rms_error: f64,
 }
 
@@ -381,13 +381,13 @@ impl ParallelRls {
         }
     }
 
-    /// The estimated offset x_0 of the current record [µm] (x at its first sample, without
+    /// The estimated offset x_0 of the current record \[µm\] (x at its first sample, without
     /// the sensor noise).
     pub fn offset(&self) -> f64 {
         self.theta[TH_X0]
     }
 
-    /// The hysteretic state h = d̂_p U − x [µm] at the last sample.
+    /// The hysteretic state h = d̂_p U − x \[µm\] at the last sample.
     pub fn h(&self) -> f64 {
         self.h
     }
@@ -416,8 +416,8 @@ impl ParallelRls {
         ]
     }
 
-    /// One sample (t [s], U [V], x [µm]) of Algorithm A1. Returns the a priori error ε⁰ of
-    /// the θ estimator on the level x [µm].
+    /// One sample (t \[s\], U \[V\], x \[µm\]) of Algorithm A1. Returns the a priori error ε⁰ of
+    /// the θ estimator on the level x \[µm\].
     #[inline]
     pub fn update(&mut self, t: f64, u: f64, x: f64) -> f64 {
         let (_, d_p) = self.projected();
@@ -621,7 +621,7 @@ fn sweep(
     }
 }
 
-/// RMS of x − x_model [µm] when `params` is simulated along the record's voltage from a
+/// RMS of x − x_model \[µm\] when `params` is simulated along the record's voltage from a
 /// virgin state (h = 0 at the first sample).
 pub fn rms_model_error(data: &PeaData, params: &BoucWenParams) -> f64 {
     let xm = crate::model::simulate(params, data.t(), data.u(), 0.0);
@@ -638,9 +638,9 @@ pub fn rms_model_error(data: &PeaData, params: &BoucWenParams) -> f64 {
 pub struct BatchFit {
     /// The least-squares estimates.
     pub estimate: BoucWenParams,
-    /// RMS residual of the summed regression (on x) [µm].
+    /// RMS residual of the summed regression (on x) \[µm\].
     pub rms_residual: f64,
-    /// RMS of x − x_model when the fitted model is simulated along the record [µm].
+    /// RMS of x − x_model when the fitted model is simulated along the record \[µm\].
     pub rms_error: f64,
 }
 
@@ -690,7 +690,7 @@ fn projected(
     Ok((theta, rss))
 }
 
-/// The variable-projection profile of the batch fit: the residual sum of squares [µm²] of the
+/// The variable-projection profile of the batch fit: the residual sum of squares \[µm²\] of the
 /// summed (A8) with [x_0, θ] solved by least squares at the given d_p [µm/V] (module docs).
 /// [`fit_batch`] minimizes it over d_p; exposed for diagnostics and tests.
 pub fn profile_rss(data: &PeaData, d_p: f64) -> Result<f64> {
@@ -849,7 +849,7 @@ fn global_dp(data: &PeaData, slope: f64) -> Result<f64> {
 
 /// Batch least-squares fit of Eq. (18) to a record by variable projection (module docs).
 /// d_p is searched globally in [0.8, 5]× the slope of the least-squares line x(U)
-/// ([`locate_dp`]), then refined by golden section on the exact profile.
+/// (`locate_dp`), then refined by golden section on the exact profile.
 pub fn fit_batch(data: &PeaData) -> Result<BatchFit> {
     let (_, slope) = line_fit(data.u(), data.x());
     if slope.is_nan() || slope <= 0.0 {

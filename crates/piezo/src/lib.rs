@@ -6,7 +6,7 @@
 //!   voltage-driven integrator ([`advance`], [`BoucWen`]), steady-state loops and loop
 //!   metrics ([`hysteresis`]);
 //! * [`compensate`]: the inverse multiplicative compensation of Eq. (19)–(21), Figure 5;
-//! * [`identify`]: the parallel RLS of Algorithm A1 (A8, A12) on the summed regression, and a
+//! * [`identify`](mod@identify): the parallel RLS of Algorithm A1 (A8, A12) on the summed regression, and a
 //!   batch fit of the same model; it runs on the generic recursive least squares of
 //!   `flexstage-numerics` (Eq. (A9)–(A11): [`Rls`], its information form [`WeightedMoments`],
 //!   [`batch_least_squares`]), re-exported here;

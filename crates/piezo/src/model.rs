@@ -113,7 +113,7 @@ impl BoucWenParams {
         }
     }
 
-    /// Bound of |h| for δ_bw = 0 when starting inside it: A_bw/(B_bw + Γ_bw) [µm].
+    /// Bound of |h| for δ_bw = 0 when starting inside it: A_bw/(B_bw + Γ_bw) \[µm\].
     pub fn h_bound(&self) -> f64 {
         self.a_bw.abs() / (self.b_bw + self.gamma_bw)
     }
@@ -126,7 +126,7 @@ impl BoucWenParams {
     }
 
     /// The virgin loading curve from (U, h) = (0, 0) for δ_bw = 0, U ≥ 0:
-    /// h(U) = A/(B+Γ)·(1 − e^{−(B+Γ)U}) [µm].
+    /// h(U) = A/(B+Γ)·(1 − e^{−(B+Γ)U}) \[µm\].
     pub fn virgin_h(&self, u: f64) -> f64 {
         let k = self.b_bw + self.gamma_bw;
         -self.a_bw * (-k * u).exp_m1() / k
@@ -281,7 +281,7 @@ impl BoucWen {
         BoucWen::with_state(params, 0.0, 0.0)
     }
 
-    /// An actuator at voltage `u` [V] with hysteretic state `h` [µm].
+    /// An actuator at voltage `u` \[V\] with hysteretic state `h` \[µm\].
     pub fn with_state(params: BoucWenParams, u: f64, h: f64) -> Self {
         BoucWen { params, u, h }
     }
@@ -291,28 +291,28 @@ impl BoucWen {
         &self.params
     }
 
-    /// Current voltage U [V].
+    /// Current voltage U \[V\].
     pub fn u(&self) -> f64 {
         self.u
     }
 
-    /// Current hysteretic state h [µm].
+    /// Current hysteretic state h \[µm\].
     pub fn h(&self) -> f64 {
         self.h
     }
 
-    /// Current displacement x_nom = d_p U − h [µm].
+    /// Current displacement x_nom = d_p U − h \[µm\].
     pub fn x(&self) -> f64 {
         self.params.d_p * self.u - self.h
     }
 
-    /// Sets the state (U [V], h [µm]).
+    /// Sets the state (U \[V\], h \[µm\]).
     pub fn set_state(&mut self, u: f64, h: f64) {
         self.u = u;
         self.h = h;
     }
 
-    /// Ramps the voltage linearly to `u` [V] over `dt` [s] and returns the new x_nom [µm].
+    /// Ramps the voltage linearly to `u` \[V\] over `dt` \[s\] and returns the new x_nom \[µm\].
     /// Exact for any `dt` (see the module docs); no allocation.
     #[inline]
     pub fn step(&mut self, u: f64, dt: f64) -> f64 {
@@ -322,8 +322,8 @@ impl BoucWen {
     }
 }
 
-/// Simulates x_nom [µm] for the voltage samples `u` [V] at times `t` [s] (linear between
-/// samples), starting at (u[0], `h0`). `t` and `u` have equal length.
+/// Simulates x_nom \[µm\] for the voltage samples `u` \[V\] at times `t` \[s\] (linear between
+/// samples), starting at (u\[0\], `h0`). `t` and `u` have equal length.
 pub fn simulate(params: &BoucWenParams, t: &[f64], u: &[f64], h0: f64) -> Vec<f64> {
     assert_eq!(t.len(), u.len(), "one time per voltage sample");
     let Some(&u_first) = u.first() else {

@@ -21,7 +21,7 @@ pub fn identification_drive() -> Waveform {
     identification_drive_at(1.0)
 }
 
-/// The decaying 0–1000 V sine drive of [`identification_drive`] at `frequency` [Hz].
+/// The decaying 0–1000 V sine drive of [`identification_drive`] at `frequency` \[Hz\].
 pub fn identification_drive_at(frequency: f64) -> Waveform {
     Waveform {
         shape: WaveShape::Decaying,
@@ -52,7 +52,7 @@ pub struct IdentificationProblem {
     pub data: PeaData,
 }
 
-/// `truth` driven by [`identification_drive`] at 10 kHz, with `noise_std` [µm] of Gaussian
+/// `truth` driven by [`identification_drive`] at 10 kHz, with `noise_std` \[µm\] of Gaussian
 /// sensor noise on x (seeded).
 pub fn identification_problem(
     truth: BoucWenParams,

@@ -8,8 +8,8 @@ use crate::error::{Result, check};
 use crate::hysteresis::Waveform;
 use crate::model::{BoucWenParams, simulate};
 
-/// A synthetic record: the virgin actuator `params` driven by `waveform` [V] sampled every
-/// `dt` [s], with Gaussian noise of standard deviation `noise_std` [µm] added to x.
+/// A synthetic record: the virgin actuator `params` driven by `waveform` \[V\] sampled every
+/// `dt` \[s\], with Gaussian noise of standard deviation `noise_std` \[µm\] added to x.
 pub fn synthesize(
     params: &BoucWenParams,
     waveform: &Waveform,

@@ -40,15 +40,15 @@ pub struct ExportOptions {
 /// the scenario's value). Lengths in metres, stresses in pascals.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct LimitOverrides {
-    /// Fatigue strength [Pa] (else `limits.fatigue_strength`).
+    /// Fatigue strength \[Pa\] (else `limits.fatigue_strength`).
     pub fatigue_strength: Option<f64>,
     /// Safety factor (else `limits.safety_factor`).
     pub safety_factor: Option<f64>,
-    /// Minimum ligament [m] (else `limits.min_hinge_thickness`).
+    /// Minimum ligament \[m\] (else `limits.min_hinge_thickness`).
     pub min_ligament: Option<f64>,
-    /// Minimum gap [m] (else `limits.min_slot_width`).
+    /// Minimum gap \[m\] (else `limits.min_slot_width`).
     pub min_gap: Option<f64>,
-    /// Wire-EDM start-hole diameter [m] (else [`VerifyParams`]' default, 1 mm).
+    /// Wire-EDM start-hole diameter \[m\] (else [`VerifyParams`]' default, 1 mm).
     pub start_hole_diameter: Option<f64>,
 }
 

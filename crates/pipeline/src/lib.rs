@@ -41,7 +41,7 @@
 //!
 //! The simulated experiments run on the *designed* stage: the stage identification on its
 //! lumped model once the run has a reduced model ([`Plant`]), tracking on the digital twin of
-//! the design in the scenario's rig ([`twin`], [`track`]; [`PlantKind::Lumped`] for the
+//! the design in the scenario's rig ([`twin`], [`track`](mod@track); [`PlantKind::Lumped`] for the
 //! lumped model, also the fallback before a design exists).
 
 pub mod analyze;

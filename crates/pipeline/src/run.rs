@@ -10,7 +10,7 @@
 //! and says so through [`Progress::event`]. The folder is locked while `run` works in it.
 //!
 //! Stage identification runs on the designed mechanism's lumped model ([`crate::plant`]);
-//! tracking on the digital twin of the design ([`crate::twin`], [`crate::track`]), with the
+//! tracking on the digital twin of the design ([`crate::twin`], [`crate::track`](mod@crate::track)), with the
 //! compensator on the identified PEA parameters.
 
 use std::path::{Path, PathBuf};

@@ -104,7 +104,7 @@ impl Condensation {
         let a = &self.alpha;
         (a[0][0] - a[0][1]) / (a[1][0] - a[1][1])
     }
-    /// Tilt θ [rad] (Eq. 26).
+    /// Tilt θ \[rad\] (Eq. 26).
     pub fn theta(&self) -> f64 {
         self.tan_theta().atan()
     }

@@ -22,9 +22,9 @@ pub enum ReduceError {
     /// A nonlinear solve did not converge.
     #[error("nonlinear solve at x_nom = [{x1:e}, {x2:e}] m did not converge")]
     Newton {
-        /// Nominal stroke of input 1 [m].
+        /// Nominal stroke of input 1 \[m\].
         x1: f64,
-        /// Nominal stroke of input 2 [m].
+        /// Nominal stroke of input 2 \[m\].
         x2: f64,
         /// Cause.
         #[source]

@@ -5,7 +5,7 @@
 //! The paper approximates the transfer matrix by hand from the maximum output (Eq. 26–28);
 //! here it is computed from the FE model and checked.
 //!
-//! * [`condense`] — **transfer matrix** `α` by static condensation of the tangent stiffness
+//! * [`condense`](mod@condense) — **transfer matrix** `α` by static condensation of the tangent stiffness
 //!   onto the two input displacements (Eq. 23–25), at the undeformed state or an operating
 //!   point; tilt θ (Eq. 26), scalar `α` (Eq. 27), `A(θ)` (Eq. 29); output stiffness with the
 //!   inputs held. **Frame convention**: [`Condensation::alpha_abs`] maps `x_in` to the FE output

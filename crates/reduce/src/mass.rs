@@ -31,7 +31,7 @@ use flexstage_fem::{Mesh, Model};
 
 use crate::error::{Result, check, within};
 
-/// `Σ_e ρ_e ρ0 V_e` [kg].
+/// `Σ_e ρ_e ρ0 V_e` \[kg\].
 pub fn design_mass(mesh: &Mesh, rho: &[f64], density: f64) -> f64 {
     let v = mesh.dx() * mesh.dy() * mesh.thickness;
     rho.iter().sum::<f64>() * density * v
@@ -93,7 +93,7 @@ impl MassInterpolation {
 pub struct PointMass {
     /// Node id.
     pub node: usize,
-    /// Mass [kg], ≥ 0.
+    /// Mass \[kg\], ≥ 0.
     pub mass: f64,
 }
 
@@ -222,7 +222,7 @@ impl MassMatrix {
         self.row_ptr.len() - 1
     }
 
-    /// Total mass represented (elements + point masses, including fixed DOFs' share) [kg].
+    /// Total mass represented (elements + point masses, including fixed DOFs' share) \[kg\].
     pub fn total_mass(&self) -> f64 {
         self.total
     }

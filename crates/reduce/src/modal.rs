@@ -67,7 +67,7 @@ impl ModalParams {
 pub struct Modes {
     /// `ω²` [rad²/s²].
     pub omega2: Vec<f64>,
-    /// `f = ω/2π` [Hz].
+    /// `f = ω/2π` \[Hz\].
     pub frequencies: Vec<f64>,
     /// Mode shapes as full displacement vectors, `φᵀMφ = 1`.
     pub shapes: Vec<Vec<f64>>,
@@ -75,7 +75,7 @@ pub struct Modes {
     pub residuals: Vec<f64>,
     /// Lanczos steps taken.
     pub steps: usize,
-    /// Total mass in the mass matrix [kg].
+    /// Total mass in the mass matrix \[kg\].
     pub total_mass: f64,
 }
 

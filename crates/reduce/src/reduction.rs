@@ -32,7 +32,7 @@ pub fn reduction_problem(scenario: &Scenario, keep_output_spring: bool) -> Resul
 /// Parameters of [`reduce`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ReduceParams {
-    /// Operating point `x_nom` [m] at which the tangent is taken (`None`: undeformed state).
+    /// Operating point `x_nom` \[m\] at which the tangent is taken (`None`: undeformed state).
     /// Each |x_nom| ≤ 1 mm.
     pub operating_point: Option<[f64; 2]>,
     /// Modal analysis (`None`: skipped).
@@ -85,9 +85,9 @@ impl ReduceParams {
 /// The Assumption-2 check (design resonance ≫ input frequency).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Assumption2 {
-    /// Lowest natural frequency [Hz].
+    /// Lowest natural frequency \[Hz\].
     pub first_frequency: f64,
-    /// Highest input frequency of the scenario's trajectories [Hz] (Lissajous: the faster
+    /// Highest input frequency of the scenario's trajectories \[Hz\] (Lissajous: the faster
     /// axis, `ratio · f`).
     pub input_frequency: f64,
     /// `first_frequency / input_frequency`.
@@ -113,7 +113,7 @@ impl Assumption2 {
     }
 }
 
-/// Highest input frequency of the trajectories [Hz] (0 without trajectories).
+/// Highest input frequency of the trajectories \[Hz\] (0 without trajectories).
 pub fn input_frequency(scenario: &Scenario) -> f64 {
     scenario
         .trajectories
@@ -134,9 +134,9 @@ pub struct Reduction {
     pub condensation: Condensation,
     /// Operating point used (`None`: undeformed).
     pub operating_point: Option<[f64; 2]>,
-    /// FE output displacement at the operating point [m] (zero when undeformed).
+    /// FE output displacement at the operating point \[m\] (zero when undeformed).
     pub operating_output: [f64; 2],
-    /// Mass `M` [kg].
+    /// Mass `M` \[kg\].
     pub mass: f64,
     /// Volume fraction `Σρ/N`.
     pub volume_fraction: f64,

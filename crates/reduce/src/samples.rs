@@ -35,7 +35,7 @@ pub fn cantilever_strip(
     )?)
 }
 
-/// Euler–Bernoulli frequency of mode `k` [Hz] of a clamped–free strip with `β_k L`:
+/// Euler–Bernoulli frequency of mode `k` \[Hz\] of a clamped–free strip with `β_k L`:
 /// `f = (β_k L)² / (2π L²) · √(E I / (ρ A))`, `I = t h³/12`, `A = t h`.
 pub fn euler_bernoulli_frequency(
     beta_l: f64,

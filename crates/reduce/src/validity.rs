@@ -78,15 +78,15 @@ impl ValidityParams {
 pub struct ValiditySample {
     /// Stroke scale.
     pub scale: f64,
-    /// Nominal strokes [m].
+    /// Nominal strokes \[m\].
     pub x_nom: [f64; 2],
-    /// FE input displacements [m].
+    /// FE input displacements \[m\].
     pub x_in: [f64; 2],
-    /// Nonlinear FE output [m].
+    /// Nonlinear FE output \[m\].
     pub q_fe: [f64; 2],
-    /// Kinematic reduced prediction `α_abs x_in` [m].
+    /// Kinematic reduced prediction `α_abs x_in` \[m\].
     pub q_reduced: [f64; 2],
-    /// Linear FE under the same loads [m].
+    /// Linear FE under the same loads \[m\].
     pub q_linear: [f64; 2],
     /// `|q_reduced − q_fe| / R_s`.
     pub error: f64,
@@ -99,9 +99,9 @@ pub struct ValiditySample {
 pub struct ScaleSummary {
     /// Stroke scale.
     pub scale: f64,
-    /// Stroke amplitude `s·a` [m].
+    /// Stroke amplitude `s·a` \[m\].
     pub amplitude: f64,
-    /// Workspace radius `R_s` [m].
+    /// Workspace radius `R_s` \[m\].
     pub radius: f64,
     /// Largest kinematic error.
     pub max_error: f64,

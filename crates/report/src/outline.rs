@@ -56,12 +56,12 @@ impl Unit {
 }
 
 /// The iso-contour of a density field on a regular grid of `nl × nw` elements of size
-/// `dx × dy` [m].
+/// `dx × dy` \[m\].
 #[derive(Debug, Clone)]
 pub struct Outline {
     /// Closed loops (first point not repeated), metres, solid on the left.
     pub loops: Vec<Vec<[f64; 2]>>,
-    /// Domain size [m] (`nl·dx`, `nw·dy`).
+    /// Domain size \[m\] (`nl·dx`, `nw·dy`).
     pub domain: [f64; 2],
     /// Cap triangles of the solid region (unit-free indices into `cap_points`), counter-
     /// clockwise, for the STL extrusion.
@@ -308,7 +308,7 @@ impl Outline {
     }
 
     /// The outline with every loop replaced by the centripetal Catmull–Rom curve through its
-    /// vertices, sampled so that no chord is much longer than `max_chord` [m] (each polygon
+    /// vertices, sampled so that no chord is much longer than `max_chord` \[m\] (each polygon
     /// edge is split into `⌈length / max_chord⌉` pieces). The curve passes through every
     /// vertex, is C¹ (no kinks, so no artificial stress raisers at the vertices of the
     /// marching-squares polygon) and, with the centripetal parametrization (Yuksel, Schaefer &
@@ -387,12 +387,12 @@ impl Outline {
         }
     }
 
-    /// Signed area of each loop [m²] (positive: outer boundary, negative: hole).
+    /// Signed area of each loop \[m²\] (positive: outer boundary, negative: hole).
     pub fn signed_areas(&self) -> Vec<f64> {
         self.loops.iter().map(|l| signed_area(l)).collect()
     }
 
-    /// Area of the solid region enclosed by the loops [m²].
+    /// Area of the solid region enclosed by the loops \[m²\].
     pub fn area(&self) -> f64 {
         self.signed_areas().iter().sum()
     }
@@ -469,7 +469,7 @@ impl Outline {
         )
     }
 
-    /// The solid region extruded by `thickness` [m] as a binary STL in `unit`: top and bottom
+    /// The solid region extruded by `thickness` \[m\] as a binary STL in `unit`: top and bottom
     /// caps from the marching-squares cells and side walls along every loop. The mesh is
     /// closed (every edge is shared by two triangles) and normals point outwards.
     pub fn to_stl(&self, thickness: f64, unit: Unit) -> Vec<u8> {
@@ -693,7 +693,7 @@ mod tests {
     #[test]
     fn dxf_reads_back_closed_lwpolylines_with_the_bounding_box() {
         // Goal: the DXF opens with a DXF reader (the dxf crate) and holds closed LWPOLYLINEs
-        // in millimetres spanning the disc (RUST-NOTES: R12 would silently drop them).
+        // in millimetres spanning the disc (an R12 reader would silently drop them).
         let (n, h, r) = (40, 1e-3, 0.015);
         let o = Outline::extract(n, n, h, h, 0.5, 5, disc(n, h, r));
         let bytes = o.to_dxf(Unit::Millimetres).unwrap();

@@ -18,7 +18,7 @@ pub mod limit {
     pub const NAME_CHARS: usize = 64;
     /// Elements of the design mesh (the fine preset has 28 800).
     pub const ELEMENTS: usize = 250_000;
-    /// Estimated memory of the design stage [bytes] (8 GiB).
+    /// Estimated memory of the design stage \[bytes\] (8 GiB).
     pub const DESIGN_BYTES: f64 = 8.0 * 1024.0 * 1024.0 * 1024.0;
     /// Estimated linear-solve work of the design stage [floating-point operations]
     /// (about a day at 10 GFLOP/s).
@@ -27,9 +27,9 @@ pub mod limit {
     pub const TRACK_SAMPLES: f64 = 1e7;
     /// Plant integration steps of one tracking record (`samples × substeps`).
     pub const TRACK_STEPS: f64 = 2e8;
-    /// Shortest controller sample time [s] (a 10 MHz loop).
+    /// Shortest controller sample time \[s\] (a 10 MHz loop).
     pub const MIN_SAMPLE_TIME: f64 = 1e-7;
-    /// Largest trajectory amplitude [m], whatever the stroke.
+    /// Largest trajectory amplitude \[m\], whatever the stroke.
     pub const MAX_AMPLITUDE: f64 = 1e-3;
 }
 
@@ -60,10 +60,10 @@ pub struct DesignEstimate {
     pub factor_nonzeros: f64,
     /// Load cases solved per iteration (samples × 3 realizations when robust).
     pub load_cases: f64,
-    /// Memory [bytes]: the factor (12 bytes a non-zero), 6 vectors per load case and 100
+    /// Memory \[bytes\]: the factor (12 bytes a non-zero), 6 vectors per load case and 100
     /// bytes of element data per element.
     pub bytes: f64,
-    /// Work [flop]: per iteration and load case, 3 Newton steps of one factorization
+    /// Work \[flop\]: per iteration and load case, 3 Newton steps of one factorization
     /// (nnz(L)^1.5 / n flop, nested dissection) and a solve.
     pub flops: f64,
 }

@@ -9,11 +9,11 @@ use crate::error::{Result, ScenarioError, check, count, non_negative, positive, 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Mesh {
-    /// Length l along x [m], in [1e-4, 10]. Table 3: 0.12.
+    /// Length l along x \[m\], in [1e-4, 10]. Table 3: 0.12.
     pub length: f64,
-    /// Width w along y [m], in [1e-4, 10]. Table 3: 0.06.
+    /// Width w along y \[m\], in [1e-4, 10]. Table 3: 0.06.
     pub width: f64,
-    /// Out-of-plane thickness t [m], in [1e-6, 1]. Table 3: 0.01.
+    /// Out-of-plane thickness t \[m\], in [1e-6, 1]. Table 3: 0.01.
     pub thickness: f64,
     /// Elements along x, n_l in [4, 4000]. Table 3: 120.
     pub nl: usize,
@@ -35,7 +35,7 @@ impl Mesh {
         Ok(())
     }
 
-    /// Element side lengths (dx, dy) [m].
+    /// Element side lengths (dx, dy) \[m\].
     pub fn element_size(&self) -> (f64, f64) {
         (self.length / self.nl as f64, self.width / self.nw as f64)
     }
@@ -54,9 +54,9 @@ impl Mesh {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Material {
-    /// Young's modulus E0 of the solid [Pa]. Table 3: 73e9 (aluminium 6061).
+    /// Young's modulus E0 of the solid \[Pa\]. Table 3: 73e9 (aluminium 6061).
     pub youngs_modulus: f64,
-    /// Young's modulus E_min given to void [Pa], 0 < E_min < E0. Table 3: 1e3.
+    /// Young's modulus E_min given to void \[Pa\], 0 < E_min < E0. Table 3: 1e3.
     pub min_modulus: f64,
     /// Poisson ratio ν, in (−1, 0.5). Table 3: 0.33.
     pub poisson_ratio: f64,
@@ -92,9 +92,9 @@ impl Material {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Selector {
-    /// The node nearest to a point [m].
+    /// The node nearest to a point \[m\].
     Nearest {
-        /// (x, y) [m].
+        /// (x, y) \[m\].
         point: [f64; 2],
     },
     /// Every node on one edge of the domain.
@@ -102,11 +102,11 @@ pub enum Selector {
         /// Which edge.
         edge: Edge,
     },
-    /// Every node (or element centroid) inside an axis-aligned box [m].
+    /// Every node (or element centroid) inside an axis-aligned box \[m\].
     Box {
-        /// Lower-left corner (x, y) [m].
+        /// Lower-left corner (x, y) \[m\].
         min: [f64; 2],
-        /// Upper-right corner (x, y) [m].
+        /// Upper-right corner (x, y) \[m\].
         max: [f64; 2],
     },
 }
@@ -198,11 +198,11 @@ pub enum Configuration {
 pub struct Actuators {
     /// PEA stiffness K_pea [N/m]. Table 1: 250 N/µm = 2.5e8.
     pub stiffness: f64,
-    /// Maximum nominal stroke max x_nom [m]. Table 1: 60e-6.
+    /// Maximum nominal stroke max x_nom \[m\]. Table 1: 60e-6.
     pub max_stroke: f64,
-    /// Blocking force f_block [N]. Table 1: 1.5e4.
+    /// Blocking force f_block \[N\]. Table 1: 1.5e4.
     pub blocking_force: f64,
-    /// Half range of the preloaded nominal stroke [m]: x_nom ∈ [−a, a]. Section 4.1: 30e-6.
+    /// Half range of the preloaded nominal stroke \[m\]: x_nom ∈ [−a, a]. Section 4.1: 30e-6.
     pub stroke_amplitude: f64,
     /// Table 2 configuration.
     pub configuration: Configuration,
@@ -238,7 +238,7 @@ impl Actuators {
 pub struct Output {
     /// The output node.
     pub at: Selector,
-    /// Tilt θ of the target output frame [deg] (Figure 4b, Eq. 22); 0 is the normal setup.
+    /// Tilt θ of the target output frame \[deg\] (Figure 4b, Eq. 22); 0 is the normal setup.
     pub tilt_deg: f64,
 }
 
@@ -320,18 +320,18 @@ pub struct Optimization {
     /// transmits force, not only motion (without a load the workspace optimum moves the output
     /// through void "hinges"). DECISIONS.md, "Output load".
     pub output_spring: f64,
-    /// Strain-energy bound Σ0 [J] of Eq. (5), ≥ 0; 0 = derived from the allowable stress:
+    /// Strain-energy bound Σ0 \[J\] of Eq. (5), ≥ 0; 0 = derived from the allowable stress:
     /// `Σ0 = (1 − ν) σ_a² V* / E0` with `σ_a = limits.fatigue_strength / limits.safety_factor`
     /// and `V*` the material volume — the most energy the material can store without exceeding
     /// σ_a anywhere (DECISIONS.md, "Strain-energy bound").
     pub strain_energy_limit: f64,
-    /// Largest angle [deg] between the differential output and the tilted target axis θ
+    /// Largest angle \[deg\] between the differential output and the tilted target axis θ
     /// (`output.tilt_deg`), in (0, 45]; only used when θ ≠ 0.
     pub tilt_tolerance_deg: f64,
     /// Stop when additionally the KKT residual of the MMA problem is below this, > 0
     /// (Svanberg's kktcheck max norm of the scaled problem per unit max(1, |f0|)).
     pub kkt_tolerance: f64,
-    /// Stagnation window W [iterations], in [0, 10000]; 0 = off. At the final β the run also
+    /// Stagnation window W \[iterations\], in [0, 10000]; 0 = off. At the final β the run also
     /// stops when, over the last W iterations, the objective varied by at most
     /// `stagnation_tolerance` (relative), every update's mean |Δx| was below
     /// `change_tolerance`, the constraints hold and (without the robust formulation) the KKT
@@ -515,11 +515,11 @@ impl Optimization {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Limits {
-    /// Fatigue strength of the solid material [Pa], > 0: the fully reversed stress amplitude
+    /// Fatigue strength of the solid material \[Pa\], > 0: the fully reversed stress amplitude
     /// it survives for the design life. Al 6061-T6: 96.5e6 (5·10⁸ cycles, R. R. Moore
     /// rotating beam; ASM Handbook Vol. 2, 1990, and the Aluminum Association's data).
     pub fatigue_strength: f64,
-    /// Tensile yield strength [Pa], ≥ fatigue_strength. Al 6061-T6: 276e6 (same sources).
+    /// Tensile yield strength \[Pa\], ≥ fatigue_strength. Al 6061-T6: 276e6 (same sources).
     pub yield_strength: f64,
     /// Safety factor on the fatigue strength, in [1, 10]: the allowable stress is
     /// `fatigue_strength / safety_factor`. Default 1.5.
@@ -529,9 +529,9 @@ pub struct Limits {
     /// (measured 2–3× between the 1 mm design mesh and refined re-analyses of hinges); the
     /// body-fitted re-analysis of the exported outline checks it.
     pub mesh_stress_factor: f64,
-    /// Smallest solid member (hinge) thickness the workshop can make [m], > 0. Default 0.5 mm.
+    /// Smallest solid member (hinge) thickness the workshop can make \[m\], > 0. Default 0.5 mm.
     pub min_hinge_thickness: f64,
-    /// Smallest void (slot) width [m], > 0, e.g. the wire-EDM kerf. Default 0.4 mm.
+    /// Smallest void (slot) width \[m\], > 0, e.g. the wire-EDM kerf. Default 0.4 mm.
     pub min_slot_width: f64,
 }
 
@@ -549,7 +549,7 @@ impl Default for Limits {
 }
 
 impl Limits {
-    /// The allowable stress `fatigue_strength / safety_factor` [Pa].
+    /// The allowable stress `fatigue_strength / safety_factor` \[Pa\].
     pub fn allowable_stress(&self) -> f64 {
         self.fatigue_strength / self.safety_factor
     }

@@ -14,13 +14,13 @@ use crate::stage::BoucWen;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Amplifier {
-    /// Small-signal bandwidth with the PEA as load [Hz], first order; 0 = ideal.
+    /// Small-signal bandwidth with the PEA as load \[Hz\], first order; 0 = ideal.
     pub bandwidth: f64,
     /// Slew-rate limit [V/s]; 0 = none.
     pub slew_rate: f64,
-    /// Peak output current [A]; 0 = none. With `capacitance` it limits |dU/dt| to I/C.
+    /// Peak output current \[A\]; 0 = none. With `capacitance` it limits |dU/dt| to I/C.
     pub current_limit: f64,
-    /// Capacitance of one PEA [F].
+    /// Capacitance of one PEA \[F\].
     pub capacitance: f64,
 }
 
@@ -29,9 +29,9 @@ pub struct Amplifier {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensorDynamics {
-    /// Bandwidth of the sensor electronics [Hz], first order; 0 = ideal.
+    /// Bandwidth of the sensor electronics \[Hz\], first order; 0 = ideal.
     pub bandwidth: f64,
-    /// 1/f corner [Hz] (where the 1/f and white spectra are equal); 0 = white only.
+    /// 1/f corner \[Hz\] (where the 1/f and white spectra are equal); 0 = white only.
     pub flicker_corner: f64,
 }
 
@@ -49,7 +49,7 @@ pub struct Creep {
 pub struct FloorVibration {
     /// RMS velocity per 1/3-octave band [m/s]; 0 = off.
     pub velocity_rms: f64,
-    /// Lowest and highest 1/3-octave band centre [Hz].
+    /// Lowest and highest 1/3-octave band centre \[Hz\].
     pub bands: [f64; 2],
 }
 

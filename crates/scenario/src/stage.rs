@@ -46,9 +46,9 @@ impl BoucWen {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Hysteresis {
-    /// Lowest amplifier voltage [V]. DECISIONS.md: 0.
+    /// Lowest amplifier voltage \[V\]. DECISIONS.md: 0.
     pub voltage_min: f64,
-    /// Highest amplifier voltage [V]. DECISIONS.md: 1000.
+    /// Highest amplifier voltage \[V\]. DECISIONS.md: 1000.
     pub voltage_max: f64,
     /// PEA1, Table A1.
     pub pea1: BoucWen,
@@ -84,7 +84,7 @@ pub struct StageParams {
     pub k_qo1: f64,
     /// Vertical output stiffness K_qo2 [N/m].
     pub k_qo2: f64,
-    /// Moving mass of the mechanism M [kg].
+    /// Moving mass of the mechanism M \[kg\].
     pub mass: f64,
     /// Amplification ratio α, Eq. (27).
     pub alpha: f64,
@@ -96,9 +96,9 @@ pub struct StageParams {
     pub k_in1: f64,
     /// Input plate 2 stiffness K_in2 [N/m].
     pub k_in2: f64,
-    /// Input plate 1 mass m_in1 [kg].
+    /// Input plate 1 mass m_in1 \[kg\].
     pub m_in1: f64,
-    /// Input plate 2 mass m_in2 [kg].
+    /// Input plate 2 mass m_in2 \[kg\].
     pub m_in2: f64,
     /// Horizontal output damping C_qo1 [N·s/m].
     pub c_qo1: f64,
@@ -223,16 +223,16 @@ pub struct Controller {
     /// Disturbance bounds max|Δ_ε| of Eq. (A36–A37) [m/s].
     #[serde(default = "default_a_bound")]
     pub a_bound: [f64; 2],
-    /// Boundary layers (φ_s [m/s], φ_a [m]) of the robust terms; 0 selects sgn().
+    /// Boundary layers (φ_s [m/s], φ_a \[m\]) of the robust terms; 0 selects sgn().
     #[serde(default = "default_boundary_layer")]
     pub boundary_layer: [f64; 2],
     /// Take q̇ from the observer instead of finite differences of the positions.
     #[serde(default)]
     pub observer_velocity: bool,
-    /// Largest nominal displacement |x_nom| the controller may command [m].
+    /// Largest nominal displacement |x_nom| the controller may command \[m\].
     #[serde(default = "default_stroke")]
     pub stroke: f64,
-    /// PID baseline gains [kp, ki [1/s], kd [s]] on the output error.
+    /// PID baseline gains [kp, ki [1/s], kd \[s\]] on the output error.
     #[serde(default = "default_pid")]
     pub pid: [f64; 3],
 }
@@ -304,9 +304,9 @@ impl Controller {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Sensors {
-    /// Quantization step of the q1 and q2 sensors [m]. Section 4.1: 7.5e-9, 10e-9.
+    /// Quantization step of the q1 and q2 sensors \[m\]. Section 4.1: 7.5e-9, 10e-9.
     pub resolution: [f64; 2],
-    /// Standard deviation of white measurement noise [m].
+    /// Standard deviation of white measurement noise \[m\].
     pub noise_std: [f64; 2],
 }
 
@@ -325,13 +325,13 @@ impl Sensors {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Simulation {
-    /// Controller sample time T_s [s]. Section 4.1: 1e-4.
+    /// Controller sample time T_s \[s\]. Section 4.1: 1e-4.
     pub sample_time: f64,
     /// Plant integration substeps per sample (DECISIONS.md: much finer than T_s).
     pub substeps: usize,
     /// Seed of the noise generator, for reproducible runs.
     pub seed: u64,
-    /// Amplifier bandwidth [Hz] (first-order lag of the voltage); 0 = ideal zero-order hold.
+    /// Amplifier bandwidth \[Hz\] (first-order lag of the voltage); 0 = ideal zero-order hold.
     #[serde(default)]
     pub amplifier_bandwidth: f64,
 }
@@ -360,22 +360,22 @@ pub enum Trajectory {
         name: String,
         /// Frequency ratio r of q1 to q2 (3 and 2 in the paper).
         ratio: f64,
-        /// Amplitudes (A1, A2) [m].
+        /// Amplitudes (A1, A2) \[m\].
         amplitude: [f64; 2],
-        /// Base frequency f [Hz].
+        /// Base frequency f \[Hz\].
         frequency: f64,
-        /// Duration [s].
+        /// Duration \[s\].
         duration: f64,
     },
     /// A circle of the given radius.
     Circle {
         /// Name used for output files.
         name: String,
-        /// Radius [m].
+        /// Radius \[m\].
         radius: f64,
-        /// Frequency [Hz].
+        /// Frequency \[Hz\].
         frequency: f64,
-        /// Duration [s].
+        /// Duration \[s\].
         duration: f64,
     },
 }

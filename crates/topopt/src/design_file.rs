@@ -27,9 +27,9 @@ pub struct DesignFile {
     pub rho: Vec<f64>,
     /// Design iterations performed.
     pub iterations: usize,
-    /// Workspace area of the initial design, final nonlinear analysis [m²].
+    /// Workspace area of the initial design, final nonlinear analysis \[m²\].
     pub area_initial: f64,
-    /// Workspace area of this design, final nonlinear analysis [m²].
+    /// Workspace area of this design, final nonlinear analysis \[m²\].
     pub area: f64,
     /// Fraction of design elements with 0.1 < ρ < 0.9.
     pub grey_fraction: f64,
@@ -65,7 +65,7 @@ impl DesignFile {
 }
 
 /// Density CSV with header `i,j,x,y,rho` (element column/row from the bottom-left, centroid
-/// [m], density), one row per element in fem order.
+/// \[m\], density), one row per element in fem order.
 pub fn density_csv(nl: usize, nw: usize, dx: f64, dy: f64, rho: &[f64]) -> String {
     let mut s = String::from("i,j,x,y,rho\n");
     for i in 0..nl {

@@ -33,9 +33,9 @@ pub enum TopoptError {
     LoadCase {
         /// Load case index.
         case: usize,
-        /// Nominal stroke of input 1 [m].
+        /// Nominal stroke of input 1 \[m\].
         x1: f64,
-        /// Nominal stroke of input 2 [m] (0 if there is one input).
+        /// Nominal stroke of input 2 \[m\] (0 if there is one input).
         x2: f64,
         /// Attempts made.
         attempts: usize,

@@ -20,7 +20,7 @@ pub struct Field<'a> {
     pub nl: usize,
     /// Elements along y.
     pub nw: usize,
-    /// Element sizes (dx, dy) [m].
+    /// Element sizes (dx, dy) \[m\].
     pub h: (f64, f64),
     /// Densities, fem order.
     pub rho: &'a [f64],
@@ -210,9 +210,9 @@ fn refined(f: &Field, refine: usize) -> (Vec<f64>, usize, usize, f64) {
 /// A size measured on the design and where it occurs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Measured {
-    /// The size [m].
+    /// The size \[m\].
     pub size: f64,
-    /// Where: (x, y) [m] from the domain's lower-left corner.
+    /// Where: (x, y) \[m\] from the domain's lower-left corner.
     pub at: [f64; 2],
 }
 

@@ -155,11 +155,11 @@ fn bisect(f: impl Fn(f64) -> f64, mut a: f64, mut b: f64) -> f64 {
 /// What the mapping needs: the sizes asked for and the mesh.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LengthScaleParams {
-    /// Minimum solid (hinge) size asked for [m], > 0.
+    /// Minimum solid (hinge) size asked for \[m\], > 0.
     pub min_solid: f64,
-    /// Minimum void (slot) size asked for [m], > 0.
+    /// Minimum void (slot) size asked for \[m\], > 0.
     pub min_void: f64,
-    /// Element size h [m] (the geometric mean of dx and dy), > 0.
+    /// Element size h \[m\] (the geometric mean of dx and dy), > 0.
     pub element_size: f64,
     /// Smallest filter radius in element sizes, in [1.5, 20].
     pub min_radius_elements: f64,
@@ -215,7 +215,7 @@ impl LengthScaleParams {
 /// The filter radius and thresholds of the robust formulation, with the sizes they guarantee.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct LengthScale {
-    /// Filter radius R [m].
+    /// Filter radius R \[m\].
     pub radius: f64,
     /// Filter radius in element sizes.
     pub radius_elements: f64,
@@ -223,13 +223,13 @@ pub struct LengthScale {
     pub eta_eroded: f64,
     /// Dilation threshold η_d < ½.
     pub eta_dilated: f64,
-    /// Guaranteed minimum solid size of the blueprint, `R·m(η_e)` [m].
+    /// Guaranteed minimum solid size of the blueprint, `R·m(η_e)` \[m\].
     pub solid_size: f64,
-    /// Guaranteed minimum void size of the blueprint, `R·m(1 − η_d)` [m].
+    /// Guaranteed minimum void size of the blueprint, `R·m(1 − η_d)` \[m\].
     pub void_size: f64,
-    /// Distance a straight boundary moves from the blueprint to the eroded design [m].
+    /// Distance a straight boundary moves from the blueprint to the eroded design \[m\].
     pub erosion_depth: f64,
-    /// Distance a straight boundary moves from the blueprint to the dilated design [m].
+    /// Distance a straight boundary moves from the blueprint to the dilated design \[m\].
     pub dilation_depth: f64,
 }
 

@@ -76,9 +76,9 @@ pub enum Objective {
 /// `d = (sin θ, cos θ)`: `(D·n)² ≤ tan²(tolerance)·(D·d)²`, `n = (cos θ, −sin θ)`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Tilt {
-    /// θ [rad].
+    /// θ \[rad\].
     pub theta: f64,
-    /// Tolerance angle [rad].
+    /// Tolerance angle \[rad\].
     pub tolerance: f64,
 }
 
@@ -91,13 +91,13 @@ pub struct Problem {
     pub inputs: Vec<Port>,
     /// Output node.
     pub output: usize,
-    /// Load cases: nominal strokes `x_nom` per input [m].
+    /// Load cases: nominal strokes `x_nom` per input \[m\].
     pub cases: Vec<Vec<f64>>,
     /// Objective.
     pub objective: Objective,
-    /// Strain-energy bound Σ0 [J] (None = no constraint).
+    /// Strain-energy bound Σ0 \[J\] (None = no constraint).
     pub energy_limit: Option<f64>,
-    /// Largest allowed |input displacement| [m] (None = no constraint).
+    /// Largest allowed |input displacement| \[m\] (None = no constraint).
     pub max_stroke: Option<f64>,
     /// Volume-fraction bound (None = no constraint).
     pub volume_fraction: Option<f64>,

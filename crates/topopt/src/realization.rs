@@ -106,7 +106,7 @@ pub struct RealizationEvaluation {
     pub values: PerResponse<f64>,
     /// Gradients of the evaluated responses w.r.t. the design variables.
     pub gradients: PerResponse<Option<Vec<f64>>>,
-    /// Shoelace area J of the output polygon [m²] (Eq. 4; 0 for the displacement objective).
+    /// Shoelace area J of the output polygon \[m²\] (Eq. 4; 0 for the displacement objective).
     pub area: f64,
     /// Largest relaxed stress over the stress cases, in units of the design allowable (stress
     /// evaluated only).

@@ -26,7 +26,7 @@ pub const AGGREGATION_P: f64 = 8.0;
 pub enum ResponseKind {
     /// The maximized objective Φ: signed workspace area `sign·J` (Eq. 4) or `d·u_out`.
     Objective,
-    /// p-norm aggregate of the per-case strain energies [J] (≈ Σ of Eq. 15).
+    /// p-norm aggregate of the per-case strain energies \[J\] (≈ Σ of Eq. 15).
     Energy,
     /// p-norm aggregate of |u_in| / max stroke (1 = at the stroke limit).
     Stroke,

@@ -28,7 +28,7 @@ use crate::responses::{CaseCoefficients, ResponseCoefficients};
 /// The stress constraint of a problem.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StressConstraint {
-    /// Design allowable σ_a [Pa] on the design mesh: fatigue strength / safety factor /
+    /// Design allowable σ_a \[Pa\] on the design mesh: fatigue strength / safety factor /
     /// mesh stress factor (`limits` of the scenario).
     pub allowable: f64,
     /// Load cases evaluated: the four corners of the stroke square (Table 2). The von Mises

@@ -23,7 +23,7 @@ pub const GEOMETRY_REFINE: usize = 4;
 /// What a design delivers (module docs). Areas in m², lengths in m, stresses in Pa.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DesignSummary {
-    /// Workspace area J of the blueprint (Eq. 4) [m²].
+    /// Workspace area J of the blueprint (Eq. 4) \[m²\].
     pub area: f64,
     /// `J / (2a)²`: the workspace in units of the input stroke square (≈ |det A| ≈ |α| in the
     /// floating set-up).
@@ -32,49 +32,49 @@ pub struct DesignSummary {
     /// `Δ = (x_in1 − x_in2)(+a,−a) − (x_in1 − x_in2)(−a,+a)` (actual input displacements, Eq.
     /// 24–27), positive when D points along the target axis of the configuration.
     pub alpha: f64,
-    /// Direction of the differential output's axis from +y towards +x [deg], in (−90, 90].
+    /// Direction of the differential output's axis from +y towards +x \[deg\], in (−90, 90].
     pub theta_deg: f64,
-    /// Target θ of the scenario [deg].
+    /// Target θ of the scenario \[deg\].
     pub theta_target_deg: f64,
-    /// Mass of the blueprint [kg]: Σ ρ_e V_e ρ0 over all elements.
+    /// Mass of the blueprint \[kg\]: Σ ρ_e V_e ρ0 over all elements.
     pub mass: f64,
     /// Volume fraction of the design elements of the blueprint.
     pub volume_fraction: f64,
-    /// Workspace area of the eroded design [m²] (robust formulation).
+    /// Workspace area of the eroded design \[m²\] (robust formulation).
     pub area_eroded: Option<f64>,
-    /// Workspace area of the dilated design [m²] (robust formulation).
+    /// Workspace area of the dilated design \[m²\] (robust formulation).
     pub area_dilated: Option<f64>,
     /// Largest Gauss-point von Mises stress of the blueprint's solid (ρ ≥ ½) design elements at
-    /// the four corners of the stroke square, on the design mesh [Pa].
+    /// the four corners of the stroke square, on the design mesh \[Pa\].
     pub peak_stress: f64,
     /// What the stress constraint bounds: the largest relaxed (ρ^q) Gauss-point von Mises
     /// stress of the eroded design (the blueprint without the robust formulation) at the four
-    /// corners [Pa]; lower than `peak_stress` by the relaxation of grey boundary elements.
+    /// corners \[Pa\]; lower than `peak_stress` by the relaxation of grey boundary elements.
     #[serde(default)]
     pub constrained_stress: Option<f64>,
-    /// Allowable stress `fatigue_strength / safety_factor` [Pa].
+    /// Allowable stress `fatigue_strength / safety_factor` \[Pa\].
     pub allowable_stress: f64,
-    /// The design-mesh bound `allowable / mesh_stress_factor` the optimizer enforced [Pa].
+    /// The design-mesh bound `allowable / mesh_stress_factor` the optimizer enforced \[Pa\].
     pub design_allowable: f64,
     /// Number of one-node hinges at ρ = ½ ([`crate::geometry`]).
     pub one_node_hinges: usize,
-    /// Thinnest solid member of the blueprint at ρ = ½ (local thickness) [m].
+    /// Thinnest solid member of the blueprint at ρ = ½ (local thickness) \[m\].
     pub thinnest_member: Option<f64>,
-    /// Where the thinnest member is: (x, y) [m].
+    /// Where the thinnest member is: (x, y) \[m\].
     #[serde(default)]
     pub thinnest_member_at: Option<[f64; 2]>,
-    /// Narrowest void gap of the blueprint at ρ = ½ (local thickness) [m].
+    /// Narrowest void gap of the blueprint at ρ = ½ (local thickness) \[m\].
     pub narrowest_gap: Option<f64>,
-    /// Where the narrowest gap is: (x, y) [m].
+    /// Where the narrowest gap is: (x, y) \[m\].
     #[serde(default)]
     pub narrowest_gap_at: Option<[f64; 2]>,
-    /// Minimum solid size the length scale guarantees [m] (robust formulation).
+    /// Minimum solid size the length scale guarantees \[m\] (robust formulation).
     pub guaranteed_member: Option<f64>,
-    /// Minimum void size the length scale guarantees [m] (robust formulation).
+    /// Minimum void size the length scale guarantees \[m\] (robust formulation).
     pub guaranteed_gap: Option<f64>,
     /// Largest |ρ − ρ_mirror| about x = l/2.
     pub mirror_asymmetry: f64,
-    /// Lowest natural frequency of the design [Hz] (computed by the reduced model, if run).
+    /// Lowest natural frequency of the design \[Hz\] (computed by the reduced model, if run).
     #[serde(default)]
     pub first_frequency_hz: Option<f64>,
 }

@@ -31,15 +31,15 @@ use crate::structure::{INTERFACE, StageFe};
 /// The Craig–Bampton reduced stage.
 #[derive(Debug, Clone)]
 pub struct CraigBampton {
-    /// `M_r = Tᵀ M T` [kg] (order 4 + m).
+    /// `M_r = Tᵀ M T` \[kg\] (order 4 + m).
     pub mass: DMatrix<f64>,
     /// `K_r = Tᵀ K T` [N/m].
     pub stiffness: DMatrix<f64>,
-    /// `Tᵀ M r` for unit base accelerations in x and y [kg].
+    /// `Tᵀ M r` for unit base accelerations in x and y \[kg\].
     pub floor: [DVector<f64>; 2],
     /// The basis as full displacement vectors: 4 constraint modes, then m fixed-interface modes.
     pub basis: Vec<Vec<f64>>,
-    /// Frequencies of the fixed-interface modes [Hz].
+    /// Frequencies of the fixed-interface modes \[Hz\].
     pub fixed_interface_frequencies: Vec<f64>,
 }
 

@@ -33,9 +33,9 @@ pub enum TwinError {
     /// A nonlinear static solve did not converge.
     #[error("nonlinear static solve at x_nom = [{x1:e}, {x2:e}] m did not converge: {source}")]
     Newton {
-        /// Nominal stroke of PEA1 [m].
+        /// Nominal stroke of PEA1 \[m\].
         x1: f64,
-        /// Nominal stroke of PEA2 [m].
+        /// Nominal stroke of PEA2 \[m\].
         x2: f64,
         /// Cause.
         #[source]

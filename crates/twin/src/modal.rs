@@ -26,7 +26,7 @@ use crate::error::{Result, TwinError};
 /// One mode of the twin.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Mode {
-    /// Natural frequency ω/2π [Hz].
+    /// Natural frequency ω/2π \[Hz\].
     pub frequency: f64,
     /// Damping ratio ζ.
     pub damping: f64,
@@ -111,7 +111,7 @@ impl ModalStage {
         g
     }
 
-    /// Frequency response x_nom → q at `f` [Hz]: `G(jω) = Σ_k out_k in_kᵀ / (ω_k² − ω² +
+    /// Frequency response x_nom → q at `f` \[Hz\]: `G(jω) = Σ_k out_k in_kᵀ / (ω_k² − ω² +
     /// 2jζ_kω_kω)`, as (re, im) per entry.
     pub fn frequency_response(&self, f: f64) -> [[(f64, f64); 2]; 2] {
         let w = std::f64::consts::TAU * f;

@@ -46,28 +46,28 @@ pub const TERMS: usize = 7;
 /// One grid point of the fit.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct StaticSample {
-    /// Nominal strokes [m].
+    /// Nominal strokes \[m\].
     pub x_nom: [f64; 2],
-    /// Linear input-plate displacements [m].
+    /// Linear input-plate displacements \[m\].
     pub x_in: [f64; 2],
-    /// Linear output [m].
+    /// Linear output \[m\].
     pub q_linear: [f64; 2],
-    /// Nonlinear (Total Lagrangian) output [m].
+    /// Nonlinear (Total Lagrangian) output \[m\].
     pub q_nonlinear: [f64; 2],
 }
 
 /// The fitted correction (module docs).
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct NonlinearMap {
-    /// Scale s of the regressors [m].
+    /// Scale s of the regressors \[m\].
     pub scale: f64,
-    /// Coefficients of q1 and q2 [m].
+    /// Coefficients of q1 and q2 \[m\].
     pub coefficients: [[f64; TERMS]; 2],
     /// The grid.
     pub samples: Vec<StaticSample>,
-    /// Largest |q_TL − q_lin| over the grid, per axis [m].
+    /// Largest |q_TL − q_lin| over the grid, per axis \[m\].
     pub max_effect: [f64; 2],
-    /// Largest |fit − (q_TL − q_lin)| over the grid, per axis [m].
+    /// Largest |fit − (q_TL − q_lin)| over the grid, per axis \[m\].
     pub max_residual: [f64; 2],
     /// `∂(ω_k²)/∂x_in` per mode of the twin (modal order) [1/(s² m)] (module docs).
     pub stiffening: Vec<[f64; 2]>,
@@ -88,7 +88,7 @@ fn terms(x: [f64; 2]) -> [f64; TERMS] {
 }
 
 impl NonlinearMap {
-    /// The correction `d(x_in)` [m] to add to the linear output. No allocation.
+    /// The correction `d(x_in)` \[m\] to add to the linear output. No allocation.
     #[inline]
     pub fn correction(&self, x_in: [f64; 2]) -> [f64; 2] {
         let t = terms([x_in[0] / self.scale, x_in[1] / self.scale]);

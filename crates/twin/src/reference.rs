@@ -32,11 +32,11 @@ use crate::twin::Twin;
 /// A time series of the output and the input plates.
 #[derive(Debug, Clone, Default, PartialEq, Serialize)]
 pub struct Series {
-    /// Time [s].
+    /// Time \[s\].
     pub t: Vec<f64>,
-    /// Output q1, q2 [m].
+    /// Output q1, q2 \[m\].
     pub q: [Vec<f64>; 2],
-    /// Input plates x_in1, x_in2 [m].
+    /// Input plates x_in1, x_in2 \[m\].
     pub x_in: [Vec<f64>; 2],
 }
 
@@ -62,7 +62,7 @@ impl Series {
 /// Settings of the full transient reference.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ReferenceParams {
-    /// Time step [s], in (0, 1e-4]. Default 2 µs (a 3 kHz mode's period error (ωΔt)²/12 is
+    /// Time step \[s\], in (0, 1e-4]. Default 2 µs (a 3 kHz mode's period error (ωΔt)²/12 is
     /// 1.2e-4).
     pub dt: f64,
     /// HHT α, in [−⅓, 0]. Default 0 (average acceleration).
@@ -90,7 +90,7 @@ pub struct ReferenceCost {
     pub iterations: usize,
     /// Factorizations of the effective matrix.
     pub factorizations: usize,
-    /// Wall-clock time [s].
+    /// Wall-clock time \[s\].
     pub seconds: f64,
     /// Free DOFs of the model.
     pub dofs: usize,
@@ -186,9 +186,9 @@ pub fn twin_response(
 /// Agreement of two responses sampled at the same times.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Agreement {
-    /// Largest |q_other − q_reference| per axis [m].
+    /// Largest |q_other − q_reference| per axis \[m\].
     pub max_error: [f64; 2],
-    /// Range (max − min) of the reference per axis [m].
+    /// Range (max − min) of the reference per axis \[m\].
     pub range: [f64; 2],
 }
 
@@ -224,9 +224,9 @@ pub fn agreement(reference: &Series, other: &Series) -> Agreement {
 pub struct ModeCheck {
     /// Mode number (1-based).
     pub index: usize,
-    /// Twin [Hz].
+    /// Twin \[Hz\].
     pub twin: f64,
-    /// FE modal analysis of the assembled stage [Hz].
+    /// FE modal analysis of the assembled stage \[Hz\].
     pub fe: f64,
     /// (twin − fe)/fe.
     pub relative: f64,
@@ -278,16 +278,16 @@ pub fn mode_check(twin: &Twin) -> Result<Vec<ModeCheck>> {
 /// The test inputs of [`validate`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct ValidationParams {
-    /// Stroke scale a [m]: the step goes to (a, −a/2), the sine has amplitude a. Default 24 µm.
+    /// Stroke scale a \[m\]: the step goes to (a, −a/2), the sine has amplitude a. Default 24 µm.
     pub amplitude: f64,
-    /// Rise time of the step and ramp-in time of the sine [s] (the C² window
+    /// Rise time of the step and ramp-in time of the sine \[s\] (the C² window
     /// `10x³ − 15x⁴ + 6x⁵`). Default 0.5 ms.
     pub rise: f64,
-    /// Rise time of the additional fast step [s] (0: not run). Default 50 µs.
+    /// Rise time of the additional fast step \[s\] (0: not run). Default 50 µs.
     pub fast_rise: f64,
-    /// Sine frequency [Hz]. Default 200.
+    /// Sine frequency \[Hz\]. Default 200.
     pub frequency: f64,
-    /// Duration of each run [s]. Default 20 ms.
+    /// Duration of each run \[s\]. Default 20 ms.
     pub duration: f64,
     /// The full reference.
     pub reference: ReferenceParams,

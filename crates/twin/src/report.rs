@@ -22,7 +22,7 @@ use crate::twin::Twin;
 pub struct ModeRow {
     /// Mode number (1-based).
     pub index: usize,
-    /// Frequency [Hz].
+    /// Frequency \[Hz\].
     pub frequency: f64,
     /// Damping ratio.
     pub damping: f64,
@@ -55,7 +55,7 @@ pub fn modes_table(twin: &Twin) -> Vec<ModeRow> {
         .collect()
 }
 
-/// Frequency response of the lumped model x_nom → q at `f` [Hz]: `C (jωI − B)⁻¹ b`.
+/// Frequency response of the lumped model x_nom → q at `f` \[Hz\]: `C (jωI − B)⁻¹ b`.
 pub fn lumped_response(model: &StageModel, f: f64) -> Result<[[(f64, f64); 2]; 2]> {
     let w = std::f64::consts::TAU * f;
     let b = model.b_dyn();
@@ -84,7 +84,7 @@ pub fn bode_for(twin: &Twin, lumped: &flexstage_scenario::StageParams) -> Result
 /// Bode data of the twin and the lumped model.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Bode {
-    /// Frequencies [Hz], log-spaced.
+    /// Frequencies \[Hz\], log-spaced.
     pub frequency: Vec<f64>,
     /// Twin x_nom → q, per frequency, row-major 2 × 2 of (re, im).
     pub twin: Vec<[[(f64, f64); 2]; 2]>,
@@ -106,7 +106,7 @@ fn mag_phase(z: (f64, f64)) -> (f64, f64) {
 }
 
 impl Bode {
-    /// `points` log-spaced frequencies from `f_min` to `f_max` [Hz].
+    /// `points` log-spaced frequencies from `f_min` to `f_max` \[Hz\].
     pub fn new(
         twin: &Twin,
         lumped: &StageModel,
@@ -138,7 +138,7 @@ impl Bode {
         })
     }
 
-    /// CSV: f, then magnitude [dB] and phase [deg] of the eight entries.
+    /// CSV: f, then magnitude \[dB\] and phase \[deg\] of the eight entries.
     pub fn csv(&self) -> String {
         let mut out = String::from("f_Hz");
         for who in ["twin", "lumped"] {

@@ -5,7 +5,7 @@ use flexstage_topopt::Problem;
 
 use crate::error::Result;
 
-/// A rhombus amplifier on the scenario's domain: solid bars of `width` [m] along the four
+/// A rhombus amplifier on the scenario's domain: solid bars of `width` \[m\] along the four
 /// edges of the rhombus spanned by the two PEA ports (left and right mid-height), the output
 /// (top centre) and the bottom centre, void elsewhere (ρ_min), the passive port patches
 /// solid. Pushing the ports inwards lifts the top vertex: the classic bridge-type

@@ -112,7 +112,7 @@ fn dot2(a: &[f64], b: &[f64], eta: &[f64]) -> [f64; 2] {
 }
 
 impl TwinStage {
-    /// The mechanics of `modal` (and the nonlinear correction, if any) for substep `h` [s],
+    /// The mechanics of `modal` (and the nonlinear correction, if any) for substep `h` \[s\],
     /// at rest.
     pub fn new(modal: &ModalStage, nonlinear: Option<NonlinearMap>, h: f64) -> TwinStage {
         let mut m = Modes::default();
@@ -171,7 +171,7 @@ impl TwinStage {
         }
     }
 
-    /// The mechanical energy `Σ ½(η̇² + ω² η²)` of the reduced system [J] (modes are
+    /// The mechanical energy `Σ ½(η̇² + ω² η²)` of the reduced system \[J\] (modes are
     /// mass-normalized).
     pub fn energy(&self) -> f64 {
         (0..self.order())
@@ -179,7 +179,7 @@ impl TwinStage {
             .sum()
     }
 
-    /// The linear output (without the nonlinear correction) [m].
+    /// The linear output (without the nonlinear correction) \[m\].
     #[inline]
     pub fn linear_output(&self) -> [f64; 2] {
         dot2(&self.modes.output[0], &self.modes.output[1], &self.eta)

@@ -42,7 +42,7 @@ pub struct StageFe {
     pub model: Model,
     /// Physical element densities.
     pub rho: Vec<f64>,
-    /// Element masses [kg] (interpolated).
+    /// Element masses \[kg\] (interpolated).
     pub element_mass: Vec<f64>,
     /// The input plates as point masses on the input DOFs.
     pub point_masses: Vec<DofMass>,
@@ -54,7 +54,7 @@ pub struct StageFe {
     pub k_pea: [f64; 2],
     /// Input-plate stiffnesses K_in [N/m].
     pub k_in: [f64; 2],
-    /// Input-plate masses m_in [kg].
+    /// Input-plate masses m_in \[kg\].
     pub m_in: [f64; 2],
     /// Material density ρ0 [kg/m³].
     pub density: f64,
@@ -240,7 +240,7 @@ impl StageFe {
         p
     }
 
-    /// The structure's mass (element masses + plates) [kg].
+    /// The structure's mass (element masses + plates) \[kg\].
     pub fn total_mass(&self) -> f64 {
         self.element_mass.iter().sum::<f64>() + self.m_in[0] + self.m_in[1]
     }

@@ -27,7 +27,7 @@ pub struct TwinParams {
     pub nonlinear: bool,
     /// Grid points per axis of the nonlinear fit, in [3, 15].
     pub fit_points: usize,
-    /// Half-width of the fit's stroke square [m], in (0, 1e-3].
+    /// Half-width of the fit's stroke square \[m\], in (0, 1e-3].
     pub fit_amplitude: f64,
 }
 
@@ -167,12 +167,12 @@ impl Twin {
         Ok(RigPlant::new(rig.clone(), self.stage(rig.substep()))?)
     }
 
-    /// The first resonance [Hz].
+    /// The first resonance \[Hz\].
     pub fn first_resonance(&self) -> f64 {
         self.modal.modes[0].frequency
     }
 
-    /// The natural frequencies of the twin [Hz], lowest first.
+    /// The natural frequencies of the twin \[Hz\], lowest first.
     pub fn frequencies(&self) -> Vec<f64> {
         self.modal.modes.iter().map(|m| m.frequency).collect()
     }

@@ -17,18 +17,18 @@ use crate::verify::{StressPeak, Transfer};
 pub struct DesignMeshValues {
     /// Elements of the design mesh.
     pub elements: usize,
-    /// Element size [m] (the larger side).
+    /// Element size \[m\] (the larger side).
     pub element_size: f64,
-    /// Mass of the densities `Σ ρ_e ρ0 V_e` [kg].
+    /// Mass of the densities `Σ ρ_e ρ0 V_e` \[kg\].
     pub mass: f64,
     /// Peak element-average von Mises stress (SIMP modulus, what the optimizer sees) over the
     /// elements with ρ ≥ 0.5, geometrically nonlinear, at the worst stroke corner.
     pub stress: StressPeak,
-    /// The same peak with linear kinematics [Pa].
+    /// The same peak with linear kinematics \[Pa\].
     pub stress_linear: f64,
     /// Transfer matrix (undeformed state).
     pub transfer: Transfer,
-    /// First natural frequency [Hz].
+    /// First natural frequency \[Hz\].
     pub first_frequency: f64,
 }
 

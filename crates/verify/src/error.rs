@@ -27,11 +27,11 @@ pub enum VerifyError {
     Port {
         /// Which port.
         what: String,
-        /// x [mm].
+        /// x \[mm\].
         x_mm: f64,
-        /// y [mm].
+        /// y \[mm\].
         y_mm: f64,
-        /// Search radius [mm].
+        /// Search radius \[mm\].
         radius_mm: f64,
     },
     /// A solid part that carries a port or support is not held against rigid motion.
@@ -40,9 +40,9 @@ pub enum VerifyError {
          the outline is a mechanism, not a compliant structure"
     )]
     Mechanism {
-        /// x of the part's centroid [mm].
+        /// x of the part's centroid \[mm\].
         x_mm: f64,
-        /// y of the part's centroid [mm].
+        /// y of the part's centroid \[mm\].
         y_mm: f64,
         /// "translation" or "rotation".
         motion: &'static str,

@@ -36,7 +36,7 @@ use crate::t6::{self, PlaneStress};
 pub struct Attachment {
     /// What it is ("PEA1", "output", …), for messages.
     pub name: String,
-    /// The port's point [m].
+    /// The port's point \[m\].
     pub point: [f64; 2],
     /// Boundary nodes.
     pub nodes: Vec<usize>,
@@ -455,7 +455,7 @@ impl FeModel {
         SymCsc::from_entries(self.n, entries)
     }
 
-    /// Consistent mass matrix with density `rho0` [kg/m³] and point masses `masses[a]` [kg]
+    /// Consistent mass matrix with density `rho0` [kg/m³] and point masses `masses[a]` \[kg\]
     /// moving with the ports' mean displacements.
     pub fn mass(&self, rho0: f64, masses: &[f64]) -> SymCsc {
         let ne = self.mesh.elements.len();
@@ -480,7 +480,7 @@ impl FeModel {
         SymCsc::from_entries(self.n, entries)
     }
 
-    /// Mass of the meshed solid [kg].
+    /// Mass of the meshed solid \[kg\].
     pub fn solid_mass(&self, rho0: f64) -> f64 {
         rho0 * self.material.thickness * self.mesh.area()
     }

@@ -25,7 +25,7 @@ pub const ACROSS_COS: f64 = -0.5;
 /// Dense samples of every loop with normals into the solid.
 #[derive(Debug, Clone)]
 pub struct Boundary {
-    /// Sample points [m].
+    /// Sample points \[m\].
     pub points: Vec<[f64; 2]>,
     /// Unit normals into the solid (left of the loop direction).
     pub normals: Vec<[f64; 2]>,
@@ -33,9 +33,9 @@ pub struct Boundary {
     pub loop_of: Vec<usize>,
     /// Samples of loop `k` are `start[k]..start[k + 1]`.
     pub start: Vec<usize>,
-    /// Arc length of each sample from its loop's first sample [m].
+    /// Arc length of each sample from its loop's first sample \[m\].
     pub arc: Vec<f64>,
-    /// Length of each loop [m].
+    /// Length of each loop \[m\].
     pub length: Vec<f64>,
 }
 
@@ -104,9 +104,9 @@ impl Boundary {
 /// A maximal disc tangent to the boundary at one sample.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Ball {
-    /// Radius [m] (`r_cap` if nothing limited it).
+    /// Radius \[m\] (`r_cap` if nothing limited it).
     pub radius: f64,
-    /// Centre [m].
+    /// Centre \[m\].
     pub center: [f64; 2],
     /// The other sample it touches (`None`: capped).
     pub contact: Option<usize>,

@@ -11,16 +11,16 @@ pub struct Part {
     pub outer: usize,
     /// Indices of its holes (clockwise loops).
     pub holes: Vec<usize>,
-    /// Area [m²] (outer minus holes).
+    /// Area \[m²\] (outer minus holes).
     pub area: f64,
-    /// Area centroid [m].
+    /// Area centroid \[m\].
     pub centroid: [f64; 2],
 }
 
 /// The outline: loops and the parts they bound.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Geometry {
-    /// Closed loops (first point not repeated) [m], solid on the left.
+    /// Closed loops (first point not repeated) \[m\], solid on the left.
     pub loops: Vec<Vec<[f64; 2]>>,
     /// Connected solid parts.
     pub parts: Vec<Part>,
@@ -42,7 +42,7 @@ fn moments(p: &[[f64; 2]]) -> (f64, [f64; 2]) {
     (0.5 * a, [sx / 6.0, sy / 6.0])
 }
 
-/// Shoelace signed area of a closed polygon [m²] (positive counter-clockwise).
+/// Shoelace signed area of a closed polygon \[m²\] (positive counter-clockwise).
 pub fn signed_area(p: &[[f64; 2]]) -> f64 {
     moments(p).0
 }
@@ -159,7 +159,7 @@ impl Geometry {
             == 1
     }
 
-    /// Solid area [m²].
+    /// Solid area \[m²\].
     pub fn area(&self) -> f64 {
         self.parts.iter().map(|p| p.area).sum()
     }

@@ -45,9 +45,9 @@ pub struct Finding {
     pub kind: FindingKind,
     /// How serious.
     pub severity: Severity,
-    /// Where [mm].
+    /// Where \[mm\].
     pub at_mm: [f64; 2],
-    /// The measured size: width [mm] for ligaments and gaps, area [mm²] for islands and
+    /// The measured size: width \[mm\] for ligaments and gaps, area \[mm²\] for islands and
     /// pockets.
     pub size: f64,
     /// The message for the user.
@@ -57,9 +57,9 @@ pub struct Finding {
 /// A measured width.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Width {
-    /// Width [m].
+    /// Width \[m\].
     pub width: f64,
-    /// Centre of the spanning disc [m].
+    /// Centre of the spanning disc \[m\].
     pub at: [f64; 2],
 }
 
@@ -85,7 +85,7 @@ impl Manufacturability {
     }
 }
 
-/// Limits of [`check`] [m].
+/// Limits of [`check`] \[m\].
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Limits {
     /// Minimum ligament.
@@ -201,8 +201,8 @@ fn mm(p: [f64; 2]) -> [f64; 2] {
 }
 
 /// Runs the checks on the kept parts (`geometry`, sampled as `b` with discs `balls`) and
-/// reports `islands` (parts of the full outline that no port or support holds: area [m²] and
-/// centroid [m]).
+/// reports `islands` (parts of the full outline that no port or support holds: area \[m²\] and
+/// centroid \[m\]).
 pub fn check(
     geometry: &Geometry,
     b: &Boundary,

@@ -32,15 +32,15 @@ use crate::feature::{Balls, Boundary};
 pub struct Sizing {
     /// Elements across a ligament.
     pub elements_across: f64,
-    /// Smallest element [m].
+    /// Smallest element \[m\].
     pub min_element: f64,
-    /// Largest element [m].
+    /// Largest element \[m\].
     pub max_element: f64,
-    /// Largest turn of one boundary segment [rad].
+    /// Largest turn of one boundary segment \[rad\].
     pub segment_angle: f64,
     /// Growth of the size per unit length along the boundary.
     pub gradation: f64,
-    /// Minimum angle of the refined mesh [deg].
+    /// Minimum angle of the refined mesh \[deg\].
     pub angle_limit_deg: f64,
     /// Node budget (T6 nodes).
     pub max_nodes: usize,
@@ -49,7 +49,7 @@ pub struct Sizing {
 /// A mesh of quadratic triangles.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TriMesh {
-    /// Node coordinates [m]: the triangle vertices first, then the mid-side nodes.
+    /// Node coordinates \[m\]: the triangle vertices first, then the mid-side nodes.
     pub nodes: Vec<[f64; 2]>,
     /// Number of vertex nodes (the first `n_vertices` of `nodes`).
     pub n_vertices: usize,
@@ -61,18 +61,18 @@ pub struct TriMesh {
 }
 
 impl TriMesh {
-    /// Area of element `e` [m²].
+    /// Area of element `e` \[m²\].
     pub fn element_area(&self, e: usize) -> f64 {
         let [a, b, c, ..] = self.elements[e].map(|i| self.nodes[i]);
         0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]))
     }
 
-    /// Total area [m²].
+    /// Total area \[m²\].
     pub fn area(&self) -> f64 {
         (0..self.elements.len()).map(|e| self.element_area(e)).sum()
     }
 
-    /// Shortest and longest element edge [m].
+    /// Shortest and longest element edge \[m\].
     pub fn edge_range(&self) -> (f64, f64) {
         let mut lo = f64::INFINITY;
         let mut hi: f64 = 0.0;
@@ -140,7 +140,7 @@ pub fn size_field(b: &Boundary, balls: &Balls, s: &Sizing) -> Vec<f64> {
     h
 }
 
-/// Boundary samples where the outline turns by more than this [rad] (30°) are corners: they
+/// Boundary samples where the outline turns by more than this \[rad\] (30°) are corners: they
 /// are kept as mesh vertices, so resampling never cuts a sharp corner.
 pub const CORNER_TURN: f64 = std::f64::consts::FRAC_PI_6;
 

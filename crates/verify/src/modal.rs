@@ -12,11 +12,11 @@ fn dot(a: &[f64], b: &[f64]) -> f64 {
     a.iter().zip(b).map(|(x, y)| x * y).sum()
 }
 
-/// Natural frequencies [Hz] (lowest first) and the relative residual `‖Kφ − ω²Mφ‖/‖Kφ‖` of
+/// Natural frequencies \[Hz\] (lowest first) and the relative residual `‖Kφ − ω²Mφ‖/‖Kφ‖` of
 /// each mode.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Frequencies {
-    /// `f = ω / 2π` [Hz].
+    /// `f = ω / 2π` \[Hz\].
     pub hz: Vec<f64>,
     /// Residuals.
     pub residuals: Vec<f64>,

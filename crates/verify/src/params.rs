@@ -2,13 +2,13 @@
 
 use crate::error::{Result, check};
 
-/// Al 6061-T6 fatigue strength [Pa]: 96.5 MPa at 5·10⁸ cycles, completely reversed stress
+/// Al 6061-T6 fatigue strength \[Pa\]: 96.5 MPa at 5·10⁸ cycles, completely reversed stress
 /// (ASM Aerospace Specification Metals, "Aluminum 6061-T6; 6061-T651" data sheet; the same
 /// value as MatWeb's). The stress at the stroke corners is fully reversed (the corner
 /// `(−a, +a)` is the negative of `(+a, −a)` in a linear model), so the amplitude is the peak.
 pub const AL6061_T6_FATIGUE_STRENGTH: f64 = 96.5e6;
 
-/// Al 6061-T6 tensile yield strength [Pa]: 276 MPa (same source).
+/// Al 6061-T6 tensile yield strength \[Pa\]: 276 MPa (same source).
 pub const AL6061_T6_YIELD_STRENGTH: f64 = 276e6;
 
 /// Default safety factor on the fatigue strength: 1.5, the lower end of the range that
@@ -16,45 +16,45 @@ pub const AL6061_T6_YIELD_STRENGTH: f64 = 276e6;
 /// & Marshek, *Fundamentals of Machine Component Design*, Sec. 6.12: 1.25–1.5).
 pub const DEFAULT_SAFETY_FACTOR: f64 = 1.5;
 
-/// Parameters of [`crate::verify`]: the sign-off limits and the body-fitted mesh.
+/// Parameters of [`crate::verify()`]: the sign-off limits and the body-fitted mesh.
 ///
 /// All lengths in metres, stresses in pascals.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VerifyParams {
-    /// Fatigue strength of the material [Pa], in (0, 10 GPa]. Default
+    /// Fatigue strength of the material \[Pa\], in (0, 10 GPa]. Default
     /// [`AL6061_T6_FATIGUE_STRENGTH`].
     pub fatigue_strength: f64,
-    /// Yield strength of the material [Pa], in (0, 10 GPa]; reported beside the peak stress.
+    /// Yield strength of the material \[Pa\], in (0, 10 GPa]; reported beside the peak stress.
     /// Default [`AL6061_T6_YIELD_STRENGTH`].
     pub yield_strength: f64,
     /// Safety factor, in [1, 10]: allowable = fatigue strength / safety factor. Default
     /// [`DEFAULT_SAFETY_FACTOR`].
     pub safety_factor: f64,
-    /// Minimum hinge (ligament) thickness [m], in [0, 50 mm]. Default 0.5 mm.
+    /// Minimum hinge (ligament) thickness \[m\], in [0, 50 mm]. Default 0.5 mm.
     pub min_ligament: f64,
-    /// Minimum slot (gap) width [m], e.g. the wire-EDM kerf, in [0, 50 mm]. Default 0.4 mm.
+    /// Minimum slot (gap) width \[m\], e.g. the wire-EDM kerf, in [0, 50 mm]. Default 0.4 mm.
     pub min_gap: f64,
-    /// Diameter of a wire-EDM start hole [m], in (0, 20 mm]: a pocket (a hole inside the part)
+    /// Diameter of a wire-EDM start hole \[m\], in (0, 20 mm]: a pocket (a hole inside the part)
     /// must fit one. Default 1 mm.
     pub start_hole_diameter: f64,
     /// Elements across the thinnest part of a ligament (quadratic triangles), in [1, 32].
     /// Default 4.
     pub elements_across: f64,
-    /// Smallest element edge [m], in [1 µm, 10 mm] (bounds the work at very thin necks).
+    /// Smallest element edge \[m\], in [1 µm, 10 mm] (bounds the work at very thin necks).
     /// Default 20 µm.
     pub min_element: f64,
-    /// Largest element edge [m], in [min_element, 100 mm]; `None`: the design mesh's element
+    /// Largest element edge \[m\], in [min_element, 100 mm]; `None`: the design mesh's element
     /// size. Default `None`.
     pub max_element: Option<f64>,
-    /// Largest angle a boundary segment may turn through [deg], in [2, 45]: sets the element
+    /// Largest angle a boundary segment may turn through \[deg\], in [2, 45]: sets the element
     /// size along curved boundaries (fillets, notches). Default 15.
     pub segment_angle_deg: f64,
     /// Size gradation along the boundary: neighbouring segment lengths differ by at most this
     /// fraction of their distance, in [0.05, 1]. Default 0.3.
     pub gradation: f64,
-    /// Minimum angle of the refined Delaunay mesh [deg], in [5, 30]. Default 25.
+    /// Minimum angle of the refined Delaunay mesh \[deg\], in [5, 30]. Default 25.
     pub angle_limit_deg: f64,
-    /// Radius [m] around a port's point within which the outline boundary is loaded by (or
+    /// Radius \[m\] around a port's point within which the outline boundary is loaded by (or
     /// attached to) the port, in (0, 50 mm]; `None`: 1.5 design elements (the passive port
     /// patches are 3 elements wide). Default `None`.
     pub port_radius: Option<f64>,
@@ -113,7 +113,7 @@ impl VerifyParams {
         }
     }
 
-    /// Allowable von Mises stress [Pa]: fatigue strength / safety factor.
+    /// Allowable von Mises stress \[Pa\]: fatigue strength / safety factor.
     pub fn allowable_stress(&self) -> f64 {
         self.fatigue_strength / self.safety_factor
     }

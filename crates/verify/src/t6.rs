@@ -14,11 +14,11 @@
 /// Isotropic linear-elastic plane-stress material.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PlaneStress {
-    /// Young's modulus [Pa].
+    /// Young's modulus \[Pa\].
     pub youngs_modulus: f64,
     /// Poisson ratio.
     pub poisson_ratio: f64,
-    /// Thickness [m].
+    /// Thickness \[m\].
     pub thickness: f64,
 }
 
@@ -122,7 +122,7 @@ pub fn mass(x: &Corners, density: f64, thickness: f64) -> [[f64; 6]; 6] {
     M.map(|row| row.map(|v| v * s))
 }
 
-/// Stress `σ = D B u` [Pa] (σxx, σyy, τxy) at area coordinates `l`.
+/// Stress `σ = D B u` \[Pa\] (σxx, σyy, τxy) at area coordinates `l`.
 pub fn stress(x: &Corners, m: &PlaneStress, u: &[f64; 12], l: [f64; 3]) -> [f64; 3] {
     let b = b_matrix(x, l);
     let d = m.d();

@@ -20,11 +20,11 @@ use crate::t6::{PlaneStress, von_mises};
 /// The largest von Mises stress over the stroke corners and where it is.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct StressPeak {
-    /// Von Mises stress [Pa] (body-fitted: nodal average over the elements at the node).
+    /// Von Mises stress \[Pa\] (body-fitted: nodal average over the elements at the node).
     pub von_mises: f64,
-    /// Where [m].
+    /// Where \[m\].
     pub at: [f64; 2],
-    /// The stroke corner `(x_nom1, x_nom2)` [m].
+    /// The stroke corner `(x_nom1, x_nom2)` \[m\].
     pub case: [f64; 2],
 }
 
@@ -37,7 +37,7 @@ pub struct Transfer {
     pub alpha: [[f64; 2]; 2],
     /// Scalar `α = ½(α21 − α22)` (Eq. 27–29).
     pub alpha_scalar: f64,
-    /// Tilt `θ = atan((α11 − α12)/(α21 − α22))` [deg] (Eq. 26).
+    /// Tilt `θ = atan((α11 − α12)/(α21 − α22))` \[deg\] (Eq. 26).
     pub theta_deg: f64,
 }
 
@@ -66,11 +66,11 @@ pub struct BodyFitted {
     pub elements: usize,
     /// Unknowns after supports and couplings.
     pub dofs: usize,
-    /// Shortest and longest element edge [m].
+    /// Shortest and longest element edge \[m\].
     pub edge_range: [f64; 2],
-    /// Meshed area [m²].
+    /// Meshed area \[m²\].
     pub area: f64,
-    /// Mass `ρ0 · t · area` [kg].
+    /// Mass `ρ0 · t · area` \[kg\].
     pub mass: f64,
     /// Peak von Mises at the stroke corners.
     pub stress: StressPeak,
@@ -81,7 +81,7 @@ pub struct BodyFitted {
     pub refined_elements: usize,
     /// Transfer matrix.
     pub transfer: Transfer,
-    /// Lowest natural frequencies [Hz].
+    /// Lowest natural frequencies \[Hz\].
     pub frequencies: Vec<f64>,
 }
 
@@ -111,9 +111,9 @@ pub struct Verdict {
 /// Everything [`verify`] finds.
 #[derive(Debug, Clone, Serialize)]
 pub struct Verification {
-    /// Allowable stress = fatigue strength / safety factor [Pa].
+    /// Allowable stress = fatigue strength / safety factor \[Pa\].
     pub allowable: f64,
-    /// Yield strength [Pa] (for reference).
+    /// Yield strength \[Pa\] (for reference).
     pub yield_strength: f64,
     /// Body-fitted re-analysis.
     pub body_fitted: BodyFitted,
@@ -126,10 +126,10 @@ pub struct Verification {
     /// The body-fitted mesh (for the VTU file).
     #[serde(skip)]
     pub mesh: TriMesh,
-    /// Nodal displacement at the worst corner [m].
+    /// Nodal displacement at the worst corner \[m\].
     #[serde(skip)]
     pub displacement: Vec<[f64; 2]>,
-    /// Nodal von Mises stress at the worst corner [Pa].
+    /// Nodal von Mises stress at the worst corner \[Pa\].
     #[serde(skip)]
     pub nodal_von_mises: Vec<f64>,
 }

@@ -6,7 +6,7 @@ use std::fmt::Write as _;
 
 use crate::mesh::TriMesh;
 
-/// The mesh with nodal `displacement` [m] and `von_mises` [Pa] as a VTU document.
+/// The mesh with nodal `displacement` \[m\] and `von_mises` \[Pa\] as a VTU document.
 pub fn to_vtu(mesh: &TriMesh, displacement: &[[f64; 2]], von_mises: &[f64]) -> String {
     let (np, nc) = (mesh.nodes.len(), mesh.elements.len());
     let mut s = String::with_capacity(96 * np + 64 * nc);

@@ -2,13 +2,13 @@
 //! sensitivities of the named responses (Algorithm 1, "Finite element analysis" and "Objective
 //! and constraints evaluation").
 //!
-//! * [`equilibrium`]: the load cases in lock-step groups, `R(u_k, ρ) = P_k` (Eq. 6), started from
-//!   a quadratic load-path prediction ([`predictor`]), with the shared factor of `K(ρ)` at
+//! * `equilibrium`: the load cases in lock-step groups, `R(u_k, ρ) = P_k` (Eq. 6), started from
+//!   a quadratic load-path prediction (`predictor`), with the shared factor of `K(ρ)` at
 //!   `u = 0` (the centroid of the tangents of the ± symmetric stroke square) as preconditioner.
-//! * [`adjoint`]: `K_T(u_k) λ_k = ∂Q/∂u_k` for every response and case, and
+//! * `adjoint`: `K_T(u_k) λ_k = ∂Q/∂u_k` for every response and case, and
 //!   `dQ/dρ = ∂Q/∂ρ − Σ_k λ_kᵀ ∂R_k/∂ρ` with the exact `∂R/∂ρ` of the fem crate (including the
 //!   additive material's `(1 − ρ^p)` factor).
-//! * [`workspace`]: warm starts per case, heavy buffers per group, shared between designs.
+//! * `workspace`: warm starts per case, heavy buffers per group, shared between designs.
 //!
 //! One factorization per design and evaluation, of `K(ρ)` at `u = 0`, shared read-only by all
 //! cases (DECISIONS.md "Loading": warm starts, reuse factorizations). The density chain and the
@@ -45,13 +45,13 @@ pub struct AnalysisParams {
     /// Number of retries after a failed first attempt, in [0, 4].
     pub retries: usize,
     /// Lock-step preconditioned Richardson sweeps per design iteration before a case falls back
-    /// to Newton (0: Newton for every case, see [`solve_group`]).
+    /// to Newton (0: Newton for every case, see `solve_group`).
     pub lockstep_iterations: usize,
     /// Adjoint solves: PCG on the converged tangent preconditioned by the shared factor, to
     /// this tolerance (`None`: a factorization of the tangent per case). A PCG failure falls
     /// back to the factorization.
     pub adjoint: Option<PcgParams>,
-    /// Start every case from the quadratic load-path prediction ([`predictor`]) instead of its
+    /// Start every case from the quadratic load-path prediction (`predictor`) instead of its
     /// warm start.
     pub predictor: bool,
     /// Adjoints with the tangent at the converged state (true), or, for a case that converged
@@ -135,11 +135,11 @@ impl AnalysisParams {
 /// Per-case results of one analysis.
 #[derive(Debug, Clone, Default)]
 pub struct CaseResults {
-    /// Output-node displacement `u_o = L_oᵀ u` per case [m] (Eq. 7).
+    /// Output-node displacement `u_o = L_oᵀ u` per case \[m\] (Eq. 7).
     pub outputs: Vec<[f64; 2]>,
-    /// Input-port displacements per case [m].
+    /// Input-port displacements per case \[m\].
     pub inputs: Vec<Vec<f64>>,
-    /// Structural strain energy per case [J] (empty when the evaluator skips it).
+    /// Structural strain energy per case \[J\] (empty when the evaluator skips it).
     pub energies: Vec<f64>,
     /// Newton iterations (lock-step sweeps plus fallback Newton iterations) per case.
     pub newton_iterations: Vec<usize>,

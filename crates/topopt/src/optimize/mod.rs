@@ -100,17 +100,17 @@ pub const INACTIVE_BELOW: f64 = -0.5;
 pub struct IterationRecord {
     /// Design iteration k (0 = initial design).
     pub iteration: usize,
-    /// Shoelace area J of the blueprint's output polygon [m²] (workspace objective; 0
+    /// Shoelace area J of the blueprint's output polygon \[m²\] (workspace objective; 0
     /// otherwise).
     pub area: f64,
-    /// Maximized objective Φ (signed area [m²] or output displacement [m]); with the robust
+    /// Maximized objective Φ (signed area \[m²\] or output displacement \[m\]); with the robust
     /// formulation the worst case over the realizations.
     pub objective: f64,
     /// Normalized MMA objective f0.
     pub f0: f64,
     /// Normalized constraints (≤ 0 feasible), named in [`Optimizer::constraint_names`].
     pub constraints: Vec<f64>,
-    /// Aggregated strain energy of the blueprint [J].
+    /// Aggregated strain energy of the blueprint \[J\].
     pub energy: f64,
     /// Aggregated input stroke / max stroke of the blueprint.
     pub stroke: f64,
@@ -134,15 +134,15 @@ pub struct IterationRecord {
     pub newton_max: usize,
     /// Load cases that needed a cutback retry (logged).
     pub retried_cases: Vec<usize>,
-    /// Wall time of this iteration [s].
+    /// Wall time of this iteration \[s\].
     pub time: f64,
-    /// Area of the eroded design's output polygon [m²] (robust formulation).
+    /// Area of the eroded design's output polygon \[m²\] (robust formulation).
     #[serde(default)]
     pub area_eroded: Option<f64>,
-    /// Area of the dilated design's output polygon [m²] (robust formulation).
+    /// Area of the dilated design's output polygon \[m²\] (robust formulation).
     #[serde(default)]
     pub area_dilated: Option<f64>,
-    /// Largest relaxed von Mises stress on the design mesh at the stress cases [Pa] (stress
+    /// Largest relaxed von Mises stress on the design mesh at the stress cases \[Pa\] (stress
     /// constraint).
     #[serde(default)]
     pub stress: Option<f64>,
@@ -165,9 +165,9 @@ pub enum StopReason {
 pub struct Scales {
     /// |Φ⁰| of the blueprint.
     pub objective: f64,
-    /// Σ0 [J].
+    /// Σ0 \[J\].
     pub energy_limit: f64,
-    /// |D⁰|² [m²] at the initial design (diagnostic; the tilt constraint is normalized by the
+    /// |D⁰|² \[m²\] at the initial design (diagnostic; the tilt constraint is normalized by the
     /// current |D|²).
     pub tilt: f64,
     /// Range T of the bound τ = T·ξ of the robust formulation (units of |Φ⁰|; 0 without it).
