@@ -24,13 +24,17 @@ trap 'rm -rf "$tmp"' EXIT
 bash .ci/report-check "$tmp/quick/report.html" 20 "$tmp/report.png"
 mv "$tmp/report.png" docs/report.png
 
-# The tracking table of the quick run.
+# The tracking table of the quick run: on the twin (the default plant), then on the lumped
+# plant (`track --plant lumped`).
+"$bin" track --out "$tmp/quick" --plant lumped > /dev/null
 {
-  echo "| trajectory | controller | RMS q1 / q2 [nm] | max q1 / q2 [nm] |"
-  echo "|---|---|---|---|"
-  awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
-    { printf "| %s | %s | %.1f / %.1f | %.1f / %.1f |\n", $c["trajectory"], $c["variant"],
-      $c["rms1_nm"], $c["rms2_nm"], $c["max1_nm"], $c["max2_nm"] }' "$tmp/quick/track/metrics.csv"
+  echo "| plant | trajectory | controller | RMS q1 / q2 [nm] | max q1 / q2 [nm] |"
+  echo "|---|---|---|---|---|"
+  for f in "$tmp/quick/track/metrics.csv" "$tmp/quick/track/plant-lumped/metrics.csv"; do
+    awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+      { printf "| %s | %s | %s | %.1f / %.1f | %.1f / %.1f |\n", $c["plant"], $c["trajectory"],
+        $c["variant"], $c["rms1_nm"], $c["rms2_nm"], $c["max1_nm"], $c["max2_nm"] }' "$f"
+  done
 } > "$tmp/tracking.md"
 
 size_kb() { echo $(( ($(stat -c %s "$1") + 512) / 1024 )); }

@@ -8,19 +8,7 @@ use serde_json::Value;
 
 use super::{Builder, Width, fmt_num, num};
 
-/// The twin's files (the same names as the run-folder layout's `twin` module).
-pub mod files {
-    /// The stage folder.
-    pub const DIR: &str = "twin";
-    /// Modes: `mode,frequency_Hz,fe_frequency_Hz,relative_difference`.
-    pub const MODES: &str = "twin/modes.csv";
-    /// Bode magnitude figure.
-    pub const BODE_MAGNITUDE_SVG: &str = "twin/bode_magnitude.svg";
-    /// Bode phase figure.
-    pub const BODE_PHASE_SVG: &str = "twin/bode_phase.svg";
-    /// The validity record.
-    pub const VALIDITY: &str = "twin/validity.json";
-}
+use crate::layout::twin as files;
 
 /// Key figures of `validity.json` as (quantity, value) rows.
 pub(super) fn validity_rows(v: &Value) -> Vec<(String, String)> {
