@@ -214,9 +214,26 @@ fn comparable(rel: &str, path: &Path, root: &Path) -> Option<Vec<u8>> {
             v.to_string()
         }
         "design/history.csv" => drop_column(&text, "time_s"),
+        "twin/validity.json" => {
+            let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+            drop_seconds(&mut v);
+            v.to_string()
+        }
         _ => text,
     };
     Some(text.into_bytes())
+}
+
+/// Removes every wall-clock field (`build_seconds`, `seconds`, `reference_seconds`, …).
+fn drop_seconds(v: &mut serde_json::Value) {
+    match v {
+        serde_json::Value::Object(m) => {
+            m.retain(|k, _| !k.ends_with("seconds"));
+            m.values_mut().for_each(drop_seconds);
+        }
+        serde_json::Value::Array(a) => a.iter_mut().for_each(drop_seconds),
+        _ => {}
+    }
 }
 
 fn drop_column(csv: &str, name: &str) -> String {
