@@ -245,3 +245,53 @@ pub(crate) fn require_converged_tracking(rows: &[crate::track::TrackRow]) -> Res
 pub(crate) fn to_json(value: &impl serde::Serialize) -> String {
     serde_json::to_string_pretty(value).expect("summaries serialize to JSON")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flexstage_control::experiment::{Metrics, Variant};
+
+    #[test]
+    fn issue16_area_refused_when_nan_infinite_or_negative() {
+        // Reference: issue #16 ("`analyze` on it exits 0 with a negative area", "a 1 × 1 mesh
+        // gives a NaN area with exit 0"). Goal: only a finite area ≥ 0 passes.
+        for ok in [0.0, 1e-12, 3.5e-9] {
+            require_area("analyze", ok).unwrap();
+        }
+        for bad in [f64::NAN, f64::INFINITY, -1e-12, -2.0e-9] {
+            let m = require_area("analyze", bad).unwrap_err().to_string();
+            assert!(
+                m.contains("analyze: workspace area") && m.contains("≥ 0"),
+                "{m}"
+            );
+        }
+    }
+
+    #[test]
+    fn issue16_diverged_tracking_rows_are_named() {
+        // Reference: issue #16 ("metrics show a maximum error of 0 when the series is NaN").
+        // Goal: a row whose metrics diverged fails the command, naming it; finite rows pass.
+        let row = |t: &str, v: Variant, non_finite: usize, max: f64| crate::track::TrackRow {
+            trajectory: t.into(),
+            controller: v,
+            metrics: Metrics {
+                max: [max, 1e-9],
+                non_finite,
+                ..Metrics::default()
+            },
+            usage: 0.5,
+        };
+        let good = [row("circle", Variant::Robust, 0, 2e-9)];
+        require_converged_tracking(&good).unwrap();
+        let bad = [
+            row("circle", Variant::Robust, 0, 2e-9),
+            row("lissajous-2", Variant::PidFeedforward, 7, f64::NAN),
+        ];
+        let m = require_converged_tracking(&bad).unwrap_err().to_string();
+        assert!(
+            m.contains("lissajous-2") && m.contains("7 non-finite"),
+            "{m}"
+        );
+        assert!(!m.contains("circle/"), "{m}");
+    }
+}
