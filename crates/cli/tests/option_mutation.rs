@@ -36,7 +36,14 @@ const REFUSED_WITHIN: Duration = Duration::from_secs(10);
 
 /// (subcommand words, option, names that count as naming it, accepted classes left out).
 /// Pair options (`X1,X2`) get the value as their first element.
-const OPTIONS: &[(&[&str], &str, &[&str], &[&str])] = &[
+type OptionRow = (
+    &'static [&'static str],
+    &'static str,
+    &'static [&'static str],
+    &'static [&'static str],
+);
+
+const OPTIONS: &[OptionRow] = &[
     (
         &["design"],
         "--checkpoint-every",
