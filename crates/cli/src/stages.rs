@@ -349,7 +349,7 @@ pub struct IdentifyPeaArgs {
     /// Which PEA the record belongs to (1 or 2).
     #[arg(long, default_value_t = PeaIdOptions::default().pea)]
     pub pea: u8,
-    /// Forgetting factor λ_f of both RLS estimators, in (0, 1] (1 converges to the batch
+    /// Forgetting factor λ_f of both RLS estimators, in [0.9, 1] (1 converges to the batch
     /// fit; below 1 the memory is about 1/(1 − λ_f) samples).
     #[arg(long, default_value_t = PeaIdOptions::default().forgetting)]
     pub forgetting: f64,
@@ -382,7 +382,7 @@ pub struct IdentifyStageArgs {
     /// Switch the simulated sensor noise and quantization off.
     #[arg(long)]
     pub noise_free: bool,
-    /// Forgetting factor λ_f of the RLS rows, in (0, 1].
+    /// Forgetting factor λ_f of the RLS rows, in [0.9, 1].
     #[arg(long, default_value_t = StageIdOptions::default().estimator.forgetting)]
     pub forgetting: f64,
     /// Prefilter cut-off [Hz] applied to every signal (0: off).

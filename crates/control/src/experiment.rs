@@ -272,6 +272,10 @@ impl Record {
 
     /// Metrics of the run; `half_range` per axis \[m\] (for % of range), as from
     /// [`Reference::half_range`].
+    ///
+    /// A non-finite sample (NaN or ∞: a diverged simulation) is never hidden: it is counted in
+    /// [`Metrics::non_finite`], and the RMS, maximum and settling of its axis become NaN or ∞
+    /// (the maximum propagates NaN, unlike `f64::max`, which would drop it and report 0).
     pub fn metrics(&self, half_range: [f64; 2]) -> Metrics {
         let n = self.len();
         let mut m = Metrics::default();
@@ -282,18 +286,11 @@ impl Record {
         for i in 0..2 {
             let e = &self.error[i];
             m.rms[i] = (e.iter().map(|x| x * x).sum::<f64>() / n as f64).sqrt();
-            m.max[i] = e.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+            m.max[i] = max_abs(e);
             let range = 2.0 * half_range[i];
-            m.rms_pct[i] = if range > 0.0 {
-                100.0 * m.rms[i] / range
-            } else {
-                0.0
-            };
-            m.max_pct[i] = if range > 0.0 {
-                100.0 * m.max[i] / range
-            } else {
-                0.0
-            };
+            let pct = |x: f64| if range > 0.0 { 100.0 * x / range } else { 0.0 };
+            m.rms_pct[i] = pct(m.rms[i]);
+            m.max_pct[i] = pct(m.max[i]);
             // Settling of the initial transient: the last sample whose error exceeds five
             // times the RMS error of the second half of the run.
             let tail = &e[n / 2..];
@@ -303,21 +300,44 @@ impl Record {
                 settle = settle.max(k + 1);
             }
         }
-        m.settling = if settle < n {
+        m.non_finite = [&self.error, &self.truth, &self.voltage]
+            .iter()
+            .flat_map(|g| g.iter().flatten())
+            .filter(|x| !x.is_finite())
+            .count();
+        m.settling = if m.non_finite > 0 {
+            f64::NAN
+        } else if settle < n {
             self.t[settle.min(n - 1)]
         } else {
             self.t[n - 1]
         };
-        m.peak_voltage = self.voltage.iter().flatten().fold(0.0f64, |a, v| a.max(*v));
-        m.min_voltage = self
-            .voltage
-            .iter()
-            .flatten()
-            .fold(f64::INFINITY, |a, v| a.min(*v));
+        m.peak_voltage = fold_nan(self.voltage.iter().flatten().copied(), 0.0, f64::max);
+        m.min_voltage = fold_nan(
+            self.voltage.iter().flatten().copied(),
+            f64::INFINITY,
+            f64::min,
+        );
         m.saturated = self.saturated;
         m.dropouts = self.dropouts;
         m
     }
+}
+
+/// `max |x|` over `x`, NaN if any element is NaN (where `f64::max` would skip it).
+fn max_abs(x: &[f64]) -> f64 {
+    fold_nan(x.iter().map(|v| v.abs()), 0.0, f64::max)
+}
+
+/// Folds with `f`, but any NaN element makes the result NaN.
+fn fold_nan(x: impl Iterator<Item = f64>, init: f64, f: fn(f64, f64) -> f64) -> f64 {
+    x.fold(init, |a, v| {
+        if a.is_nan() || v.is_nan() {
+            f64::NAN
+        } else {
+            f(a, v)
+        }
+    })
 }
 
 /// Tracking metrics of one run (errors against the true output).
@@ -343,9 +363,23 @@ pub struct Metrics {
     pub saturated: usize,
     /// Sensor dropouts.
     pub dropouts: usize,
+    /// Non-finite samples (NaN or ∞) in the error, true output and voltage series: a
+    /// diverged run. Its metrics are NaN or ∞, never a finite-looking number.
+    pub non_finite: usize,
 }
 
 impl Metrics {
+    /// Whether the run diverged: a non-finite sample, or a non-finite RMS or maximum.
+    pub fn diverged(&self) -> bool {
+        self.non_finite > 0
+            || self
+                .rms
+                .iter()
+                .chain(&self.max)
+                .chain(&self.steady_rms)
+                .any(|x| !x.is_finite())
+    }
+
     /// The combined RMS error over both axes \[m\].
     pub fn rms_total(&self) -> f64 {
         ((self.rms[0].powi(2) + self.rms[1].powi(2)) / 2.0).sqrt()

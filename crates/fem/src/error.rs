@@ -63,11 +63,31 @@ pub enum SolverError {
     /// Both the LLᵀ and the pivoted LBLᵀ factorization failed or produced non-finite values.
     #[error(
         "matrix could not be factorized: LLᵀ failed at pivot {llt_pivot} (matrix not positive \
-         definite) and the LBLᵀ fallback produced non-finite factors (singular matrix?)"
+         definite) and the LBLᵀ fallback produced non-finite factors: the matrix is singular. \
+         For a stiffness matrix, the structure floats or has an unconnected part; fix the \
+         supports ([[supports]]) or add a spring (optimization.output_spring > 0)"
     )]
     Singular {
         /// Pivot index (in the permuted ordering) at which LLᵀ failed.
         llt_pivot: usize,
+    },
+    /// A pivot of the factorization is zero within round-off: the matrix is singular. For a
+    /// stiffness matrix this means the structure floats (a rigid-body motion is held by no
+    /// support or spring) or a part of it is not connected.
+    #[error(
+        "the stiffness matrix is singular: pivot {pivot} (permuted order) is {value:.3e}, at or \
+         below the round-off level {threshold:.3e} (n·ε·max diagonal). The structure floats or \
+         has an unconnected part: a rigid-body motion is held by no support or spring. Fix the \
+         supports (in a scenario: [[supports]], e.g. fix = \"y\" at the input nodes) or add a \
+         spring (optimization.output_spring > 0)"
+    )]
+    SingularStiffness {
+        /// Pivot index (in the permuted ordering).
+        pivot: usize,
+        /// Its magnitude (`L_kk²` for LLᵀ, `|B_kk|` or a 2×2 block's smaller `|λ|` for LBLᵀ).
+        value: f64,
+        /// The singularity threshold `n·ε·max |a_ii|`.
+        threshold: f64,
     },
     /// LLᵀ failed and the caller disallowed the indefinite fallback.
     #[error(

@@ -101,7 +101,7 @@ pub use model::{
 pub use newton::{LinearStrategy, NewtonParams, NewtonReport, NewtonWorkspace};
 pub use solver::{
     BlockPcgWorkspace, ColumnOutcome, Factor, FactorKind, PcgParams, PcgReport, PcgWorkspace,
-    SolveWorkspace, SymbolicFactor, pcg, pcg_block,
+    SolveWorkspace, SymbolicFactor, pcg, pcg_block, singular_pivot_threshold,
 };
 pub use stress::STRESS_POINTS;
 pub use transient::{

@@ -235,7 +235,17 @@ fn norm(v: &[f64]) -> f64 {
 /// Reason an increment failed (internal).
 enum IncrementFailure {
     NotConverged(f64),
-    Linear(SolverError),
+    /// The solver error, and whether it came from the tangent at the converged state (the
+    /// first iteration of the increment), which a cutback would only factorize again.
+    Linear(SolverError, bool),
+}
+
+/// A factorization found the matrix singular (a zero pivot), not merely indefinite.
+fn is_singular(e: &SolverError) -> bool {
+    matches!(
+        e,
+        SolverError::SingularStiffness { .. } | SolverError::Singular { .. }
+    )
 }
 
 enum Fail {
@@ -379,17 +389,22 @@ pub fn solve(
                     dlam = (2.0 * dlam).min(dlam0);
                 }
                 Err(fail) => {
-                    if let IncrementFailure::Linear(e @ SolverError::PatternMismatch { .. }) = fail
-                    {
-                        break 'outer Err(Fail::Linear(e));
+                    // A pattern mismatch, or a singular tangent at the converged state (a
+                    // floating structure), is the same after any cutback.
+                    if let IncrementFailure::Linear(e, at_start) = &fail {
+                        if matches!(e, SolverError::PatternMismatch { .. })
+                            || (*at_start && is_singular(e))
+                        {
+                            break 'outer Err(Fail::Linear(e.clone()));
+                        }
                     }
                     let rel = match &fail {
                         IncrementFailure::NotConverged(r) => *r,
-                        IncrementFailure::Linear(_) => f64::NAN,
+                        IncrementFailure::Linear(..) => f64::NAN,
                     };
                     if cutbacks >= params.max_cutbacks {
-                        if let IncrementFailure::Linear(source) = fail {
-                            if params.max_cutbacks == 0 {
+                        if let IncrementFailure::Linear(source, _) = fail {
+                            if params.max_cutbacks == 0 || is_singular(&source) {
                                 break 'outer Err(Fail::Linear(source));
                             }
                         }
@@ -497,7 +512,8 @@ fn increment(
             return Err(IncrementFailure::NotConverged(rel));
         }
         // Linear solve K_T du = rhs.
-        let lin_its = linear_solve(params, ws, precond, cnt).map_err(IncrementFailure::Linear)?;
+        let lin_its = linear_solve(params, ws, precond, cnt)
+            .map_err(|e| IncrementFailure::Linear(e, it == 0))?;
         cnt.iterations += 1;
         cnt.linear_iterations += lin_its;
         // Line search.

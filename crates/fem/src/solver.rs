@@ -15,8 +15,8 @@ use std::sync::Arc;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::cholesky::{
-    CholeskySymbolicParams, IntranodeLbltRef, LltRef, SymbolicCholesky, SymmetricOrdering,
-    factorize_symbolic_cholesky,
+    CholeskySymbolicParams, IntranodeLbltRef, LltRef, SymbolicCholesky, SymbolicCholeskyRaw,
+    SymmetricOrdering, factorize_symbolic_cholesky,
 };
 use faer::{ColMut, Conj, Par, Side};
 
@@ -116,6 +116,18 @@ impl SymbolicFactor {
     }
 }
 
+/// Pivot magnitude at or below which a factorization of `a` is numerically singular:
+/// `n · ε · max_i |a_ii|`, the round-off level of an elimination on a matrix of that scale
+/// (Golub & Van Loan, *Matrix Computations*, 4th ed., §3.3 and §4.2.6). A stiffness matrix
+/// with a rigid-body motion held by nothing has an exactly zero pivot, which round-off turns
+/// into one of about `ε · max |a_ii|`; a supported structure's smallest pivots (void material,
+/// `E_min`) stay orders of magnitude above this.
+pub fn singular_pivot_threshold(a: &SparseMatrix) -> f64 {
+    let n = a.n();
+    let max_diag = (0..n).map(|i| a.diag(i).abs()).fold(0.0, f64::max);
+    n as f64 * f64::EPSILON * max_diag
+}
+
 /// Which numeric factorization is stored.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum FactorKind {
@@ -167,6 +179,8 @@ pub struct Factor {
     perm_inv: Vec<usize>,
     mem: MemBuffer,
     kind: Option<FactorKind>,
+    /// Diagonal of the stored factor (scratch of the singularity check).
+    pivots: Vec<f64>,
     /// Allow the LBLᵀ fallback when LLᵀ fails (default `true`).
     pub allow_indefinite: bool,
 }
@@ -198,6 +212,7 @@ impl Factor {
             perm_inv: vec![0; n],
             mem: MemBuffer::new(req),
             kind: None,
+            pivots: vec![0.0; n],
             allow_indefinite: true,
             symbolic,
         }
@@ -238,8 +253,17 @@ impl Factor {
             stack,
             Default::default(),
         );
+        let threshold = singular_pivot_threshold(a);
         let pivot = match llt {
             Ok(_) => {
+                // A singular (floating) stiffness often passes LLᵀ with a round-off pivot.
+                if let Some((pivot, value)) = self.smallest_pivot(threshold, false) {
+                    return Err(SolverError::SingularStiffness {
+                        pivot,
+                        value,
+                        threshold,
+                    });
+                }
                 self.kind = Some(FactorKind::Llt);
                 return Ok(FactorKind::Llt);
             }
@@ -268,11 +292,80 @@ impl Factor {
         {
             return Err(SolverError::Singular { llt_pivot: pivot });
         }
+        if let Some((pivot, value)) = self.smallest_pivot(threshold, true) {
+            return Err(SolverError::SingularStiffness {
+                pivot,
+                value,
+                threshold,
+            });
+        }
         let kind = FactorKind::Lblt {
             llt_failed_at: pivot,
         };
         self.kind = Some(kind);
         Ok(kind)
+    }
+
+    /// The first pivot (permuted index, value) of the stored factor whose magnitude is at most
+    /// `threshold`, if any. LLᵀ pivots are `L_kk²`; LBLᵀ pivots are the 1×1 entries of `B` and
+    /// the smaller eigenvalue magnitude of its 2×2 blocks (`lblt`). Reads the diagonal of each
+    /// column of faer's simplicial layout (diagonal stored first) or of each supernode's dense
+    /// diagonal block (column-major, `rows × cols`).
+    fn smallest_pivot(&mut self, threshold: f64, lblt: bool) -> Option<(usize, f64)> {
+        let n = self.symbolic.n();
+        let diag = &mut self.pivots;
+        match self.symbolic.inner.raw() {
+            SymbolicCholeskyRaw::Simplicial(s) => {
+                for (j, d) in diag.iter_mut().enumerate() {
+                    *d = self.values[s.col_ptr()[j]];
+                }
+            }
+            SymbolicCholeskyRaw::Supernodal(s) => {
+                let begin = s.supernode_begin();
+                let end = s.supernode_end();
+                for k in 0..s.n_supernodes() {
+                    let cols = end[k] - begin[k];
+                    let rows = cols + s.col_ptr_for_row_idx()[k + 1] - s.col_ptr_for_row_idx()[k];
+                    let block = &self.values[s.col_ptr_for_val()[k]..];
+                    for j in 0..cols {
+                        diag[begin[k] + j] = block[j * rows + j];
+                    }
+                }
+            }
+        }
+        let mut k = 0;
+        while k < n {
+            let e = if lblt && k + 1 < n {
+                self.subdiag[k]
+            } else {
+                0.0
+            };
+            if e == 0.0 {
+                let v = if lblt {
+                    diag[k].abs()
+                } else {
+                    diag[k] * diag[k]
+                };
+                if v <= threshold {
+                    return Some((k, v));
+                }
+                k += 1;
+            } else {
+                // 2×2 block [[a, e], [e, b]]: smallest |λ| = |det| / largest |λ|.
+                let (a, b) = (diag[k], diag[k + 1]);
+                let big = 0.5 * (a + b).abs() + (0.25 * (a - b) * (a - b) + e * e).sqrt();
+                let small = if big > 0.0 {
+                    (a * b - e * e).abs() / big
+                } else {
+                    0.0
+                };
+                if small <= threshold {
+                    return Some((k, small));
+                }
+                k += 2;
+            }
+        }
+        None
     }
 
     /// Solve `A x = b` in place (`rhs` holds `b` on entry, `x` on exit), reduced numbering.

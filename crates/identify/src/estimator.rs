@@ -73,14 +73,37 @@ impl Default for IdentifyParams {
     }
 }
 
+/// Lowest non-zero prefilter cut-off \[Hz\]: below it the filter removes the excitation.
+pub const MIN_PREFILTER: f64 = 1.0;
+
 impl IdentifyParams {
+    /// Checks the fields that depend on the record's `sample_time` \[s\] (the prefilter
+    /// below the Nyquist frequency), before a record is simulated or read.
+    pub fn validate_sampling(&self, sample_time: f64) -> Result<()> {
+        check(
+            "sample_time",
+            sample_time,
+            sample_time > 0.0,
+            "a finite time step > 0 [s]",
+        )?;
+        check(
+            "identify.prefilter",
+            self.prefilter,
+            self.prefilter < 0.5 / sample_time,
+            &format!(
+                "a frequency below the Nyquist frequency {} Hz",
+                0.5 / sample_time
+            ),
+        )
+    }
+
     /// Checks the fields.
     pub fn validate(&self) -> Result<()> {
         check(
             "identify.forgetting",
             self.forgetting,
-            self.forgetting > 0.0 && self.forgetting <= 1.0,
-            "a number in (0, 1]",
+            self.forgetting >= flexstage_piezo::identify::MIN_FORGETTING && self.forgetting <= 1.0,
+            "a number in [0.9, 1] (the memory 1/(1 − λ_f) of at least 10 samples)",
         )?;
         check(
             "identify.initial_covariance",
@@ -91,8 +114,9 @@ impl IdentifyParams {
         check(
             "identify.prefilter",
             self.prefilter,
-            self.prefilter >= 0.0,
-            "a frequency ≥ 0 [Hz] (0: off) below the Nyquist frequency",
+            self.prefilter == 0.0 || self.prefilter >= MIN_PREFILTER,
+            "0 (off) or a frequency ≥ 1 Hz below the Nyquist frequency [Hz] (a lower cut-off \
+             removes the excitation itself)",
         )?;
         check(
             "identify.decimation",
@@ -200,21 +224,7 @@ impl StageIdentifier {
         guess
             .validate("guess")
             .map_err(|e| DataError::new("initial guess", e.to_string()))?;
-        check(
-            "sample_time",
-            sample_time,
-            sample_time > 0.0,
-            "a finite time step > 0 [s]",
-        )?;
-        check(
-            "identify.prefilter",
-            params.prefilter,
-            params.prefilter < 0.5 / sample_time,
-            &format!(
-                "a frequency below the Nyquist frequency {} Hz",
-                0.5 / sample_time
-            ),
-        )?;
+        params.validate_sampling(sample_time)?;
         let ts = sample_time * params.decimation as f64;
         let k_c0 = if params.coupling { k_c0 } else { 0.0 };
         let theta = Theta::from_params(guess, k_c0, ts);
@@ -446,9 +456,107 @@ pub struct Identification {
     pub warnings: Vec<String>,
 }
 
+/// Largest factor by which an identified stiffness may differ from its guess (either way).
+/// The guess comes from the reduced model of the design (Section 3.2.1), which predicts the
+/// stiffnesses within tens of percent; an estimate a thousand times off means the record does
+/// not identify the model (wrong units, a sensor on the wrong axis), not a different stage.
+pub const PLAUSIBLE_FACTOR: f64 = 1e3;
+
+/// The exit guard of [`identify`]: every estimate finite; every stiffness positive and within
+/// [`PLAUSIBLE_FACTOR`] of its guess; and θ not stuck at its initial value (every component
+/// equal to the guess's within round-off, 1e-12 relative), which means the record carried no
+/// information the estimator could use.
+fn check_estimate(
+    raw: &Physical,
+    guess: &StageParams,
+    theta: &Theta,
+    theta0: &Theta,
+) -> Result<()> {
+    let p = &raw.params;
+    let rows = |t: &Theta| -> [Vec<f64>; 4] {
+        [
+            t.output1.to_vec(),
+            t.output2.to_vec(),
+            t.plate[0].to_vec(),
+            t.plate[1].to_vec(),
+        ]
+    };
+    let (now, start) = (rows(theta), rows(theta0));
+    let finite = now.iter().flatten().all(|v| v.is_finite());
+    if !finite || raw.coupling.iter().any(|v| !v.is_finite()) {
+        return Err(IdentifyError::Estimate {
+            what: "stage identification".into(),
+            reason: "the estimator diverged (a non-finite θ or coupling): the record does not \
+                     identify the model (check the columns' units [m], the sample time and the \
+                     excitation)"
+                .into(),
+        });
+    }
+    // Stuck: every row's θ within round-off of its start, ‖θ − θ₀‖ ≤ 1e-12 ‖θ₀‖.
+    let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
+    let stuck = now.iter().zip(&start).all(|(a, b)| {
+        norm(&mut a.iter().zip(b).map(|(x, y)| x - y)) <= 1e-12 * norm(&mut b.iter().copied())
+    });
+    if stuck {
+        return Err(IdentifyError::Estimate {
+            what: "stage identification".into(),
+            reason: "every estimate equals its initial guess to round-off (1e-12 relative): the \
+                     record carried no information the estimator used (a constant or too short \
+                     record, inputs that do not move the stage, or an initial covariance too \
+                     small to let the estimates move)"
+                .into(),
+        });
+    }
+    for (name, v, g) in [
+        ("k_qo1", p.k_qo1, guess.k_qo1),
+        ("k_qo2", p.k_qo2, guess.k_qo2),
+        ("k_pea1", p.k_pea1, guess.k_pea1),
+        ("k_pea2", p.k_pea2, guess.k_pea2),
+        ("k_in1", p.k_in1, guess.k_in1),
+        ("k_in2", p.k_in2, guess.k_in2),
+    ] {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(IdentifyError::Estimate {
+                what: name.into(),
+                reason: format!(
+                    "the estimate {v:e} N/m is not a positive stiffness: the record does not \
+                     identify the model (check the columns' units [m] and the excitation)"
+                ),
+            });
+        }
+        if !(v <= g * PLAUSIBLE_FACTOR && v >= g / PLAUSIBLE_FACTOR) {
+            return Err(IdentifyError::Estimate {
+                what: name.into(),
+                reason: format!(
+                    "the estimate {v:e} N/m is outside [{:e}, {:e}], {PLAUSIBLE_FACTOR:e} times \
+                     either side of the guess {g:e} N/m: the record does not identify the \
+                     model (check the columns' units [m] and the excitation)",
+                    g / PLAUSIBLE_FACTOR,
+                    g * PLAUSIBLE_FACTOR
+                ),
+            });
+        }
+    }
+    for (name, v) in [
+        ("c_qo1", p.c_qo1),
+        ("c_qo2", p.c_qo2),
+        ("c_in1", p.c_in1),
+        ("c_in2", p.c_in2),
+    ] {
+        if !v.is_finite() {
+            return Err(IdentifyError::Estimate {
+                what: name.into(),
+                reason: format!("the damping estimate {v:e} N·s/m is not finite"),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// Identifies the stage parameters from a record, starting from `guess` (masses and α
-/// fixed, see [`StageIdentifier::new`]). Errors when a regressor is not excited or a
-/// stiffness estimate is not positive; warns when the information matrix is ill-conditioned.
+/// fixed, see [`StageIdentifier::new`]). Errors when a regressor is not excited, an estimate
+/// is not finite, a stiffness is not positive or more than [`PLAUSIBLE_FACTOR`] from its
+/// guess, or the estimate is stuck at the guess; warns when the information matrix is ill-conditioned.
 pub fn identify(
     record: &StageRecord,
     guess: &StageParams,
@@ -488,25 +596,13 @@ pub fn identify(
         }
     }
     let raw = id.estimate();
+    check_estimate(
+        &raw,
+        guess,
+        &id.theta(),
+        &Theta::from_params(guess, 0.0, id.ts),
+    )?;
     let p = &raw.params;
-    for (name, v) in [
-        ("k_qo1", p.k_qo1),
-        ("k_qo2", p.k_qo2),
-        ("k_pea1", p.k_pea1),
-        ("k_pea2", p.k_pea2),
-        ("k_in1", p.k_in1),
-        ("k_in2", p.k_in2),
-    ] {
-        if !(v > 0.0 && v.is_finite()) {
-            return Err(IdentifyError::Estimate {
-                what: name.into(),
-                reason: format!(
-                    "the estimate {v:e} N/m is not a positive stiffness: the record does not \
-                     identify the model (check the columns' units [m] and the excitation)"
-                ),
-            });
-        }
-    }
     let mut out = p.clone();
     for (name, v, g, slot) in [
         ("c_qo1", p.c_qo1, guess.c_qo1, &mut out.c_qo1),

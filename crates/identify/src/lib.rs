@@ -76,5 +76,5 @@ pub mod samples;
 
 pub use data::StageRecord;
 pub use error::{IdentifyError, Result};
-pub use estimator::{Identification, IdentifyParams, StageIdentifier, identify};
+pub use estimator::{Identification, IdentifyParams, PLAUSIBLE_FACTOR, StageIdentifier, identify};
 pub use excitation::{Excitation, Multisine, SimulationParams, simulate};

@@ -170,14 +170,18 @@ impl Default for IdentifyParams {
     }
 }
 
+/// Smallest forgetting factor: below it the estimator remembers fewer than 10 samples, too
+/// few for the parameters it estimates (a factor of 1e-20 once overflowed the covariance).
+pub const MIN_FORGETTING: f64 = 0.9;
+
 impl IdentifyParams {
     /// Checks the fields.
     pub fn validate(&self) -> Result<()> {
         check(
             "forgetting",
             self.forgetting,
-            self.forgetting > 0.0 && self.forgetting <= 1.0,
-            "a number in (0, 1]",
+            self.forgetting >= MIN_FORGETTING && self.forgetting <= 1.0,
+            "a number in [0.9, 1] (the memory 1/(1 − λ_f) of at least 10 samples)",
         )?;
         check(
             "initial_covariance",

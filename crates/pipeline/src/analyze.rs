@@ -130,6 +130,9 @@ pub fn analyze(folder: &RunFolder, options: &AnalyzeOptions) -> Result<AnalyzeSu
     let t = Instant::now();
     let mut ev = Evaluator::new(&problem, AnalysisParams::default())?;
     let r = ev.solve_cases(&rho, None)?;
+    if workspace {
+        crate::error::require_area("analyze", shoelace(&r.outputs))?;
+    }
     let seconds = t.elapsed().as_secs_f64();
     run.write(out.cases(), cases_csv(&problem, &r).as_bytes())?;
     // The deformed mesh at the compressive corner (workspace) or the first given case.

@@ -316,6 +316,7 @@ fn finish(
     let last = h.last().expect("at least one iteration");
     let rho = &opt.last().expect("at least one iteration").0.physical;
     let (fin, r0, analysis) = final_analyses(s, opt)?;
+    crate::error::require_area("design", analysis.summary.area)?;
     let (r, u) = (&analysis.response, &analysis.corner_displacement);
     let mesh = problem.mesh();
     let summary = DesignSummary {

@@ -113,6 +113,19 @@ pub enum PipelineError {
         /// The tolerance on the relative error.
         tolerance: f64,
     },
+    /// A computed result is not physical (NaN, ∞ or outside its possible range): the command
+    /// fails rather than report it.
+    #[error("{what} = {value} is not a valid result (expected {expected}); {hint}")]
+    Unphysical {
+        /// The result, with the command that computed it.
+        what: String,
+        /// Its value, formatted.
+        value: String,
+        /// The possible range in words.
+        expected: &'static str,
+        /// The likely cause and how to go on.
+        hint: String,
+    },
     /// Scenario errors (also of the derived plant).
     #[error(transparent)]
     Scenario(#[from] flexstage_scenario::ScenarioError),
@@ -176,7 +189,109 @@ pub(crate) fn require(
     }
 }
 
+/// `Ok` when the workspace `area` \[m²\] of `what` (e.g. `analyze`) is finite and ≥ 0, else
+/// [`PipelineError::Unphysical`]. A NaN area comes from non-finite outputs (a singular
+/// structure); a negative one from an output polygon traversed backwards, i.e. a mechanism
+/// that inverts or mirrors the input square, or outputs dominated by round-off.
+pub(crate) fn require_area(what: &str, area: f64) -> Result<()> {
+    if area.is_finite() && area >= 0.0 {
+        return Ok(());
+    }
+    Err(PipelineError::Unphysical {
+        what: format!("{what}: workspace area"),
+        value: format!("{area:e} m²"),
+        expected: "a finite area ≥ 0",
+        hint: "the outputs of the stroke-square corners are not a workspace: check that the \
+               structure is held (`flexstage check` on the scenario: [[supports]], \
+               optimization.output_spring) and that the design connects the inputs to the \
+               output"
+            .into(),
+    })
+}
+
+/// `Ok` when no tracking row diverged, else [`PipelineError::Unphysical`] naming the first
+/// (trajectory, controller) pair whose series hold NaN or ∞. Called after every record and
+/// the metrics table are written, so the diverged series can be inspected.
+pub(crate) fn require_converged_tracking(rows: &[crate::track::TrackRow]) -> Result<()> {
+    let mut diverged = rows.iter().filter(|r| r.metrics.diverged());
+    let Some(first) = diverged.next() else {
+        return Ok(());
+    };
+    let names = std::iter::once(first)
+        .chain(diverged)
+        .map(|r| format!("{}/{}", r.trajectory, r.controller.name()))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let m = &first.metrics;
+    Err(PipelineError::Unphysical {
+        what: format!(
+            "track: {}, {}: max error",
+            first.trajectory,
+            first.controller.name()
+        ),
+        value: format!(
+            "[{:e}, {:e}] m ({} non-finite samples)",
+            m.max[0], m.max[1], m.non_finite
+        ),
+        expected: "finite errors",
+        hint: format!(
+            "the simulation diverged in {names} (their series and metrics.csv are written, \
+             marked NaN/inf); check the controller gains, the sample time and the trajectory"
+        ),
+    })
+}
+
 /// A serialization failure of our own summary types is a bug, not an input error.
 pub(crate) fn to_json(value: &impl serde::Serialize) -> String {
     serde_json::to_string_pretty(value).expect("summaries serialize to JSON")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flexstage_control::experiment::{Metrics, Variant};
+
+    #[test]
+    fn issue16_area_refused_when_nan_infinite_or_negative() {
+        // Reference: issue #16 ("`analyze` on it exits 0 with a negative area", "a 1 × 1 mesh
+        // gives a NaN area with exit 0"). Goal: only a finite area ≥ 0 passes.
+        for ok in [0.0, 1e-12, 3.5e-9] {
+            require_area("analyze", ok).unwrap();
+        }
+        for bad in [f64::NAN, f64::INFINITY, -1e-12, -2.0e-9] {
+            let m = require_area("analyze", bad).unwrap_err().to_string();
+            assert!(
+                m.contains("analyze: workspace area") && m.contains("≥ 0"),
+                "{m}"
+            );
+        }
+    }
+
+    #[test]
+    fn issue16_diverged_tracking_rows_are_named() {
+        // Reference: issue #16 ("metrics show a maximum error of 0 when the series is NaN").
+        // Goal: a row whose metrics diverged fails the command, naming it; finite rows pass.
+        let row = |t: &str, v: Variant, non_finite: usize, max: f64| crate::track::TrackRow {
+            trajectory: t.into(),
+            controller: v,
+            metrics: Metrics {
+                max: [max, 1e-9],
+                non_finite,
+                ..Metrics::default()
+            },
+            usage: 0.5,
+        };
+        let good = [row("circle", Variant::Robust, 0, 2e-9)];
+        require_converged_tracking(&good).unwrap();
+        let bad = [
+            row("circle", Variant::Robust, 0, 2e-9),
+            row("lissajous-2", Variant::PidFeedforward, 7, f64::NAN),
+        ];
+        let m = require_converged_tracking(&bad).unwrap_err().to_string();
+        assert!(
+            m.contains("lissajous-2") && m.contains("7 non-finite"),
+            "{m}"
+        );
+        assert!(!m.contains("circle/"), "{m}");
+    }
 }

@@ -134,10 +134,13 @@ pub fn simulate_pea(s: &Scenario, options: &PeaOptions) -> Result<PeaRecord> {
     let dt = options.dt.unwrap_or(s.simulation.sample_time);
     let samples = wave.duration() / dt;
     // The record length is cycles / frequency / dt: name the option that made it too long.
-    let (option, value) = match options.dt {
-        Some(dt) => ("pea.dt", format!("{dt:e} s with {} cycles", options.cycles)),
-        None => ("pea.cycles", options.cycles.to_string()),
-    };
+    let (option, value) = (
+        "pea.cycles, pea.frequency, pea.dt",
+        format!(
+            "{} cycles at {:e} Hz every {dt:e} s",
+            options.cycles, options.frequency
+        ),
+    );
     require(
         samples <= MAX_RECORD_SAMPLES,
         option,
@@ -242,10 +245,10 @@ impl PeaIdOptions {
         check_pea("identify_pea.pea", self.pea)?;
         let l = self.forgetting;
         require(
-            l.is_finite() && l > 0.0 && l <= 1.0,
+            l.is_finite() && (flexstage_piezo::identify::MIN_FORGETTING..=1.0).contains(&l),
             "identify_pea.forgetting",
             l,
-            "a factor in (0, 1]",
+            "a factor in [0.9, 1]",
         )?;
         require(
             (1..=100).contains(&self.passes),

@@ -2,6 +2,7 @@
 //! dampings (Section 4.2, Eq. 54–56, Table 4) from a logged record or from the simulated
 //! stage of the run ([`Plant::of_run`]).
 
+use flexstage_scenario::RecordEstimate;
 use std::path::PathBuf;
 
 use flexstage_control::experiment::Setup;
@@ -148,6 +149,13 @@ pub fn identify_stage(
         }) => {
             let mut sim = samples::simulation(&plant.scenario, *duration, *linear, *noise);
             sim.excitation.f_max = *f_max;
+            // time, x_nom, x_in, q per axis, before the simulation allocates them.
+            RecordEstimate::new(*duration, sim.plant.sample_time, sim.oversample, 0, 7).check(
+                "identify_stage.duration",
+                *duration,
+                flexstage_identify::data::MIN_SAMPLES as f64,
+            )?;
+            options.estimator.validate_sampling(sim.plant.sample_time)?;
             if !linear {
                 sim.plant.actuator = PlantActuator::Hysteretic;
             }

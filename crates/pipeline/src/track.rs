@@ -27,6 +27,7 @@
 //!
 //! Every (trajectory, controller) pair is independent and runs in parallel (rayon).
 
+use flexstage_scenario::RecordEstimate;
 use std::path::{Path, PathBuf};
 
 use flexstage_control::actuator::Compensation;
@@ -344,6 +345,10 @@ pub fn track(
 ) -> Result<TrackSummary> {
     options.validate()?;
     let plant = Plant::of_run(folder)?;
+    if let Some(d) = options.duration {
+        let min = flexstage_scenario::limit::MIN_TRACK_SAMPLES;
+        RecordEstimate::track(&plant.scenario, d).check("track.duration", d, min)?;
+    }
     let mut setup = Setup::from_scenario(&plant.scenario);
     let model = model_source(folder, options)?;
     if let ModelSource::File(p) | ModelSource::Identified(p) = &model {
@@ -381,6 +386,7 @@ pub fn track(
     )?;
     let trajectories = jobs_by_trajectory(&jobs);
     crate::track_files::write_paths(folder.dir(), &out, &trajectories, &merged, &paths)?;
+    crate::error::require_converged_tracking(&rows)?;
     Ok(TrackSummary {
         simulated: kind,
         plant: plant.source,

@@ -1,18 +1,21 @@
 //! Reference: issue #16, "kill -9 at any point of `run`, then rerun: bitwise-identical final
-//! design and identical report numbers". Goal: `run` on the quick preset (stages shortened:
-//! 16 design iterations with a checkpoint every 3, no modal analysis, a one-scale validity
-//! map, short identification and tracking) is killed with SIGKILL at seeded random points —
-//! two kills per seed, each a random fraction into a stage chosen by the seed, so every stage
-//! is hit across the seeds — and then run to its end. Every result file of the folder must
-//! equal, byte for byte, the one of an uninterrupted run; the only exceptions are wall-clock
-//! times (`run_state.json`, the design's timing fields, the report's time column, the DXF
-//! header's date, the last checkpoint's history) and the run folder's own path inside files.
-//! The rerun also takes over the killed process's lock and removes the temporaries of its
-//! interrupted writes, so the folder ends with neither.
+//! design and identical report numbers". Goal: `run` on a tiny version of the quick preset
+//! (`common::tiny`, `common::short`: 16 design iterations with a checkpoint every 3, a
+//! one-scale validity map, short identification and tracking) is killed with SIGKILL in every
+//! stage in turn — each rerun resumes the finished stages and is killed a seeded random
+//! fraction into the next one, so one chain of kills hits all eight stages for about the cost
+//! of two runs — and then run to its end; two chains with other fractions. Every result file
+//! of the folder must equal, byte for byte, the one of an uninterrupted run; the only
+//! exceptions are wall-clock times (`run_state.json`, the design's timing fields, the report's
+//! time column, the DXF header's date, the last checkpoint's history) and the run folder's own
+//! path inside files. The rerun also takes over the killed process's lock and removes the
+//! temporaries of its interrupted writes, so the folder ends with neither.
 //!
 //! The runs are child processes of this test binary: the `child` test below does the run when
 //! `FLEXSTAGE_KILL_CHILD` names a folder (and nothing otherwise), printing one `EVENT` line
 //! per stage start and end.
+
+mod common;
 
 use std::collections::BTreeMap;
 use std::io::{BufRead, BufReader, Write};
@@ -21,41 +24,13 @@ use std::process::{Child, Command, Stdio};
 use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
-use flexstage_pipeline::folder::preset;
-use flexstage_pipeline::{
-    Progress, ReduceOptions, RunEvent, RunOptions, Simulation, Stage, StageData, StageIdOptions,
-    TrackOptions, run::run,
-};
+use flexstage_pipeline::{Progress, RunEvent, Stage, run::run};
 
 const CHILD: &str = "FLEXSTAGE_KILL_CHILD";
-const SEEDS: u64 = 3;
-const KILLS_PER_SEED: usize = 2;
+/// Chains of kills, each with its own fractions.
+const SEEDS: u64 = 2;
 /// Longest wait for a child's event or end.
 const PATIENCE: Duration = Duration::from_secs(120);
-
-fn options() -> RunOptions {
-    let mut o = RunOptions::default();
-    o.design.max_iterations = Some(16);
-    o.design.checkpoint_every = 3;
-    o.reduce = ReduceOptions {
-        modes: 0,
-        scales: vec![1.0],
-        ..ReduceOptions::default()
-    };
-    o.pea.cycles = 2;
-    o.identify_stage = StageIdOptions {
-        data: StageData::Simulate(Simulation {
-            duration: 0.2,
-            ..Simulation::default()
-        }),
-        ..StageIdOptions::default()
-    };
-    o.track = TrackOptions {
-        duration: Some(0.05),
-        ..TrackOptions::default()
-    };
-    o
-}
 
 /// Prints the stage events for the parent.
 struct Events;
@@ -86,9 +61,9 @@ fn child() {
         return;
     };
     run(
-        preset("quick").unwrap(),
+        common::tiny(),
         Path::new(&root),
-        &options(),
+        &common::short(16, 3, true),
         &Events,
     )
     .unwrap();
@@ -277,15 +252,13 @@ fn kill_9_at_random_points_then_rerun_gives_the_uninterrupted_results() {
     for seed in 0..SEEDS {
         let root = tmp(&format!("seed{seed}"));
         let mut rng = seed + 1;
-        for k in 0..KILLS_PER_SEED {
-            let stage = Stage::ALL[(seed as usize * KILLS_PER_SEED + 3 * k) % Stage::ALL.len()];
+        for stage in Stage::ALL {
             let f = fraction(&mut rng);
             let delay = Duration::from_secs_f64(f * seconds[stage.name()]);
             let hit = kill_during(&root, stage, delay);
             killed += hit as usize;
             println!(
-                "seed {seed}: kill {} in {} after {:.3} s: {}",
-                k + 1,
+                "seed {seed}: kill in {} after {:.3} s: {}",
                 stage.name(),
                 delay.as_secs_f64(),
                 if hit { "killed" } else { "had finished" }
@@ -304,8 +277,9 @@ fn kill_9_at_random_points_then_rerun_gives_the_uninterrupted_results() {
         assert!(!root.join("run.lock").exists(), "seed {seed}: lock left");
         let _ = std::fs::remove_dir_all(&root);
     }
+    // Most kills hit a running stage (a kill can come after a short stage has ended).
     assert!(
-        killed >= SEEDS as usize,
+        killed >= SEEDS as usize * Stage::ALL.len() / 2,
         "only {killed} kills hit a running process"
     );
     let _ = std::fs::remove_dir_all(&reference);

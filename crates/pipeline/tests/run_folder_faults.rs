@@ -1,6 +1,6 @@
 //! Reference: issue #16, "Two `run`s on one folder mix their results", "Random bit flips in
 //! `checkpoint.bin` resume with exit 0", "A killed run resumes a checkpoint made under a
-//! different scenario". Goal: on a real interrupted `run` (quick preset, killed with SIGKILL
+//! different scenario". Goal: on a real interrupted `run` (tiny quick preset, killed with SIGKILL
 //! once its design has written a checkpoint), (1) a second `run` on a folder that another
 //! live process is working in is refused, naming that process; (2) a checkpoint with a flipped
 //! bit, a truncated checkpoint and the checkpoint of another scenario are each refused with
@@ -14,38 +14,20 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use flexstage_pipeline::folder::preset;
 use flexstage_pipeline::{
-    PipelineError, ReduceOptions, RunOptions, Silent, Simulation, StageData, StageIdOptions,
-    TrackOptions, run::run,
+    DesignStart, PipelineError, RunFolder, RunOptions, Silent, design, run::run,
 };
+
+mod common;
+
+/// 12 design iterations with a checkpoint every 2, every later stage short
+/// ([`common::short`]) on [`common::tiny`].
+fn options() -> RunOptions {
+    common::short(12, 2, false)
+}
 
 const CHILD: &str = "FLEXSTAGE_FAULT_CHILD";
 const CHECKPOINT: &str = "design/checkpoint.bin";
-
-fn options() -> RunOptions {
-    let mut o = RunOptions::default();
-    o.design.max_iterations = Some(12);
-    o.design.checkpoint_every = 2;
-    o.reduce = ReduceOptions {
-        modes: 0,
-        scales: Vec::new(),
-        ..ReduceOptions::default()
-    };
-    o.pea.cycles = 2;
-    o.identify_stage = StageIdOptions {
-        data: StageData::Simulate(Simulation {
-            duration: 0.2,
-            ..Simulation::default()
-        }),
-        ..StageIdOptions::default()
-    };
-    o.track = TrackOptions {
-        duration: Some(0.05),
-        ..TrackOptions::default()
-    };
-    o
-}
 
 #[test]
 fn child() {
@@ -53,13 +35,7 @@ fn child() {
         return;
     };
     println!("started");
-    run(
-        preset("quick").unwrap(),
-        Path::new(&root),
-        &options(),
-        &Silent,
-    )
-    .unwrap();
+    run(common::tiny(), Path::new(&root), &options(), &Silent).unwrap();
 }
 
 fn spawn(root: &Path) -> Child {
@@ -123,7 +99,7 @@ fn a_second_run_is_refused_and_damaged_or_foreign_checkpoints_are_never_resumed(
     );
 
     // (1) Two runs on one folder: the second is refused, naming the live holder.
-    let e = run(preset("quick").unwrap(), &root, &options(), &Silent).unwrap_err();
+    let e = run(common::tiny(), &root, &options(), &Silent).unwrap_err();
     assert!(matches!(e, PipelineError::Locked { .. }), "{e}");
     assert!(e.to_string().contains(&child.id().to_string()), "{e}");
 
@@ -147,7 +123,7 @@ fn a_second_run_is_refused_and_damaged_or_foreign_checkpoints_are_never_resumed(
         let r = tmp(name);
         copy_dir(&root, &r);
         std::fs::write(r.join(CHECKPOINT), &bytes).unwrap();
-        let e = run(preset("quick").unwrap(), &r, &options(), &Silent).unwrap_err();
+        let e = run(common::tiny(), &r, &options(), &Silent).unwrap_err();
         let m = e.to_string();
         assert!(matches!(e, PipelineError::Damaged { .. }), "{name}: {m}");
         assert!(
@@ -162,20 +138,22 @@ fn a_second_run_is_refused_and_damaged_or_foreign_checkpoints_are_never_resumed(
     }
 
     // (2c) The checkpoint of another scenario (penalty 2 instead of 3) in this run's folder.
-    let mut other = preset("quick").unwrap();
+    let mut other = common::tiny();
     other.optimization.penalty = 2.0;
     let o = tmp("other");
     let foreign = {
-        // A checkpoint of `other`: a short design run of it, stopped after its first checkpoint.
-        let mut opts = options();
-        opts.design.max_iterations = Some(2);
-        let _ = run(other.clone(), &o, &opts, &Silent);
+        // A checkpoint of `other`: a two-iteration design of it (the design stage alone).
+        let mut opts = options().design;
+        opts.max_iterations = Some(2);
+        let folder = RunFolder::open(other.clone(), &o, false).unwrap();
+        design(&folder, &opts, DesignStart::Fresh { force: false }, &Silent).unwrap();
+        drop(folder);
         std::fs::read(o.join(CHECKPOINT)).unwrap()
     };
     let r = tmp("foreign");
     copy_dir(&root, &r);
     std::fs::write(r.join(CHECKPOINT), &foreign).unwrap();
-    let e = run(preset("quick").unwrap(), &r, &options(), &Silent).unwrap_err();
+    let e = run(common::tiny(), &r, &options(), &Silent).unwrap_err();
     let m = e.to_string();
     assert!(matches!(e, PipelineError::OtherScenario { .. }), "{m}");
     assert!(m.contains("optimization.penalty: 2.0 → 3.0"), "{m}");
@@ -183,7 +161,7 @@ fn a_second_run_is_refused_and_damaged_or_foreign_checkpoints_are_never_resumed(
     let _ = std::fs::remove_dir_all(&o);
 
     // (3) The intact checkpoint resumes to the end; the killed holder's lock is taken over.
-    run(preset("quick").unwrap(), &root, &options(), &Silent).unwrap();
+    run(common::tiny(), &root, &options(), &Silent).unwrap();
     assert!(root.join("design/design.json").is_file());
     assert!(!root.join("run.lock").exists());
     let _ = std::fs::remove_dir_all(&root);

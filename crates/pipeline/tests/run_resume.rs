@@ -2,16 +2,16 @@
 //! ("running it again resumes") and issue #16 (a mismatch refuses to resume, saying what
 //! changed). Goal: on a short version of the quick scenario, `run` finishes every stage; a
 //! second call with the same scenario skips all seven; a changed scenario is refused with the
-//! changed field and leaves the folder as it was; other options are refused; `restart` starts
+//! changed field and leaves the folder as it was (on the tiny quick preset of `common`); other options are refused; `restart` starts
 //! over on request. The events come through the `Progress` trait, in order.
 
 use std::sync::Mutex;
 
-use flexstage_pipeline::folder::preset;
 use flexstage_pipeline::{
-    Progress, ReduceOptions, RunEvent, RunOptions, RunState, Scenario, Simulation, Stage,
-    StageData, StageIdOptions, StartOver, TrackOptions, run::run,
+    Progress, RunEvent, RunOptions, RunState, Scenario, Stage, StartOver, run::run,
 };
+
+mod common;
 use flexstage_report::RunDir;
 
 /// Records the run events as short strings.
@@ -37,29 +37,10 @@ impl Recorder {
     }
 }
 
-/// Every stage, made short: 4 design iterations, no modes or validity map, 0.2 s of
-/// identification, 0.05 s of tracking.
+/// Every stage, made short ([`common::short`]): 4 design iterations, no modes or validity
+/// map, no full-transient twin check, 0.2 s of identification, 0.05 s of tracking.
 fn short() -> RunOptions {
-    let mut o = RunOptions::default();
-    o.design.max_iterations = Some(4);
-    o.reduce = ReduceOptions {
-        modes: 0,
-        scales: Vec::new(),
-        ..ReduceOptions::default()
-    };
-    o.pea.cycles = 2;
-    o.identify_stage = StageIdOptions {
-        data: StageData::Simulate(Simulation {
-            duration: 0.2,
-            ..Simulation::default()
-        }),
-        ..StageIdOptions::default()
-    };
-    o.track = TrackOptions {
-        duration: Some(0.05),
-        ..TrackOptions::default()
-    };
-    o
+    common::short(4, 10, false)
 }
 
 fn started(events: &[String]) -> usize {
@@ -70,7 +51,7 @@ fn started(events: &[String]) -> usize {
 fn run_resumes_and_refuses_another_scenario_until_restarted() {
     let root = std::env::temp_dir().join(format!("flexstage-run-resume-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&root);
-    let quick: Scenario = preset("quick").unwrap();
+    let quick: Scenario = common::tiny();
     let rec = Recorder::default();
     let options = short();
 

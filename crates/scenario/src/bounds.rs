@@ -27,14 +27,23 @@ pub mod limit {
     pub const TRACK_SAMPLES: f64 = 1e7;
     /// Plant integration steps of one tracking record (`samples × substeps`).
     pub const TRACK_STEPS: f64 = 2e8;
+    /// Fewest samples of one tracking record (its settling and error figures need a few).
+    pub const MIN_TRACK_SAMPLES: f64 = 10.0;
     /// Shortest controller sample time \[s\] (a 10 MHz loop).
     pub const MIN_SAMPLE_TIME: f64 = 1e-7;
     /// Largest trajectory amplitude \[m\], whatever the stroke.
     pub const MAX_AMPLITUDE: f64 = 1e-3;
+    /// Modal work of one record on the digital twin (`samples × substeps × modes`, modes at
+    /// least `twin.min_modes`): about five minutes at the twin's measured 3·10⁷ mode-steps a
+    /// second (16 modes, 20 substeps, 10 kHz: 98 ms per simulated second, README).
+    pub const TWIN_MODE_STEPS: f64 = 1e10;
+    /// Estimated memory of one simulated record (its columns, 8 bytes a value) \[bytes\]
+    /// (2 GiB).
+    pub const RECORD_BYTES: f64 = 2.0 * 1024.0 * 1024.0 * 1024.0;
 }
 
 /// The limits as (what, limit) rows, for documentation and messages.
-pub const LIMITS: [(&str, &str); 8] = [
+pub const LIMITS: [(&str, &str); 11] = [
     (
         "scenario and trajectory names",
         "1 to 64 letters, digits, '-', '_'",
@@ -42,8 +51,26 @@ pub const LIMITS: [(&str, &str); 8] = [
     ("design mesh elements nl × nw", "≤ 250 000, each side ≥ 4"),
     ("design memory estimate", "≤ 8 GiB"),
     ("design work estimate", "≤ 1e15 flop"),
-    ("samples of one tracking record", "≤ 1e7"),
-    ("plant steps of one record (samples × substeps)", "≤ 2e8"),
+    (
+        "samples of one record (tracking, stage identification)",
+        "≤ 1e7",
+    ),
+    (
+        "plant steps of one record (samples × substeps, × oversampling)",
+        "≤ 2e8",
+    ),
+    (
+        "twin work of one tracking record (samples × substeps × modes)",
+        "≤ 1e10",
+    ),
+    (
+        "memory of one record (samples × columns × 8 bytes)",
+        "≤ 2 GiB",
+    ),
+    (
+        "samples of one record, at least",
+        "10 (tracking), 200 (stage identification)",
+    ),
     ("controller sample time", "≥ 1e-7 s"),
     (
         "trajectory frequency",
@@ -60,8 +87,9 @@ pub struct DesignEstimate {
     pub factor_nonzeros: f64,
     /// Load cases solved per iteration (samples × 3 realizations when robust).
     pub load_cases: f64,
-    /// Memory \[bytes\]: the factor (12 bytes a non-zero), 6 vectors per load case and 100
-    /// bytes of element data per element.
+    /// Memory \[bytes\]: the factor (12 bytes a non-zero), 16 vectors per load case and 100
+    /// bytes of element data per element. (Measured: 3.0 GB resident, still growing, for
+    /// 12 000 load cases on the quick mesh, about 13 vectors a case; 6 under-counted it.)
     pub bytes: f64,
     /// Work \[flop\]: per iteration and load case, 3 Newton steps of one factorization
     /// (nnz(L)^1.5 / n flop, nested dissection) and a solve.
@@ -80,7 +108,7 @@ impl DesignEstimate {
             ObjectiveKind::Displacement => 1.0,
         };
         let load_cases = per_case * if o.robust { 3.0 } else { 1.0 };
-        let bytes = 12.0 * factor_nonzeros + 48.0 * dofs * load_cases + 100.0 * nl * nw;
+        let bytes = 12.0 * factor_nonzeros + 128.0 * dofs * load_cases + 100.0 * nl * nw;
         let factor = factor_nonzeros.powf(1.5) / dofs;
         let flops =
             (o.max_iterations.max(1) as f64) * load_cases * 3.0 * (factor + 4.0 * factor_nonzeros);
@@ -93,6 +121,107 @@ impl DesignEstimate {
         }
     }
 }
+
+/// Work and memory of one simulated record (a tracking run or the stage-identification
+/// excitation), estimated before it is simulated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RecordEstimate {
+    /// Samples, `duration / sample_time`.
+    pub samples: f64,
+    /// Plant integration steps, `samples × substeps`.
+    pub steps: f64,
+    /// Modal work on the digital twin, `steps × modes` (0 on a lumped plant).
+    pub mode_steps: f64,
+    /// Memory of the record \[bytes\], `samples × columns × 8`.
+    pub bytes: f64,
+}
+
+/// Columns of a tracking record (time, reference, measured, true output, error, voltage and
+/// nominal stroke per axis, ten estimates).
+pub const TRACK_COLUMNS: usize = 23;
+
+impl RecordEstimate {
+    /// The estimate of a record of `duration` \[s\] sampled every `sample_time` \[s\], with
+    /// `substeps` plant steps a sample, `modes` twin modes (0 for a lumped plant) and
+    /// `columns` recorded series.
+    pub fn new(
+        duration: f64,
+        sample_time: f64,
+        substeps: usize,
+        modes: usize,
+        columns: usize,
+    ) -> Self {
+        let samples = duration / sample_time;
+        let steps = samples * substeps.max(1) as f64;
+        RecordEstimate {
+            samples,
+            steps,
+            mode_steps: steps * modes as f64,
+            bytes: samples * columns as f64 * 8.0,
+        }
+    }
+
+    /// A tracking record of `duration` \[s\] of scenario `s` on its twin (modes at least
+    /// `twin.min_modes`).
+    pub fn track(s: &Scenario, duration: f64) -> Self {
+        let sim = &s.simulation;
+        Self::new(
+            duration,
+            sim.sample_time,
+            sim.substeps,
+            s.twin.min_modes,
+            TRACK_COLUMNS,
+        )
+    }
+
+    /// `Ok` when the record has at least `min_samples` samples and every figure is within its
+    /// limit ([`limit`]); else a [`RangeError`] on `field` (the option or field that set
+    /// `duration`) that gives the estimate.
+    pub fn check(&self, field: &str, duration: f64, min_samples: f64) -> Result<()> {
+        if self.samples.is_nan() || self.samples < min_samples {
+            return Err(RangeError::number(
+                field,
+                duration,
+                format!(
+                    "a record of at least {min_samples} samples; this one has {:.3e}",
+                    self.samples
+                ),
+            )
+            .into());
+        }
+        let finite = [self.samples, self.steps, self.mode_steps, self.bytes]
+            .iter()
+            .all(|x| x.is_finite());
+        if finite
+            && self.samples <= limit::TRACK_SAMPLES
+            && self.steps <= limit::TRACK_STEPS
+            && self.mode_steps <= limit::TWIN_MODE_STEPS
+            && self.bytes <= limit::RECORD_BYTES
+        {
+            return Ok(());
+        }
+        Err(RangeError::number(
+            field,
+            duration,
+            format!(
+                "a record within the limits of {:e} samples, {:e} plant steps, {:e} twin \
+                 mode-steps and {} GiB; this one needs {:.3e} samples, {:.3e} plant steps, \
+                 {:.3e} mode-steps and {:.3} GiB",
+                limit::TRACK_SAMPLES,
+                limit::TRACK_STEPS,
+                limit::TWIN_MODE_STEPS,
+                limit::RECORD_BYTES / GIB,
+                self.samples,
+                self.steps,
+                self.mode_steps,
+                self.bytes / GIB
+            ),
+        )
+        .into())
+    }
+}
+
+const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 
 /// Every check of this module.
 pub(crate) fn validate(s: &Scenario) -> Result<()> {
@@ -360,14 +489,14 @@ fn rigid_body_modes(s: &Scenario) -> Result<()> {
     let rank = rank3(&rows);
     if rank < 3 {
         let free = [
-            "a translation",
-            "two rigid-body motions",
-            "every rigid-body motion",
+            "one rigid-body motion is",
+            "two rigid-body motions are",
+            "all three rigid-body motions are",
         ][2 - rank.min(2)];
         return Err(inconsistent(
             "supports, optimization.output_spring",
             format!(
-                "the structure floats ({free} is held by nothing: singular stiffness); add \
+                "the structure floats ({free} held by nothing: singular stiffness); add \
                  [[supports]] (e.g. fix = \"y\" at the input nodes) or set output_spring > 0"
             ),
         ));
@@ -475,22 +604,11 @@ fn trajectories(s: &Scenario) -> Result<()> {
                 .into());
             }
         }
-        let samples = duration / ts;
-        if samples > limit::TRACK_SAMPLES
-            || samples * s.simulation.substeps as f64 > limit::TRACK_STEPS
-        {
-            return Err(RangeError::number(
-                format!("{field}.duration"),
-                duration,
-                format!(
-                    "a record of at most {:e} samples and {:e} plant steps; this one has {samples:.3e} samples × {} substeps",
-                    limit::TRACK_SAMPLES,
-                    limit::TRACK_STEPS,
-                    s.simulation.substeps
-                ),
-            )
-            .into());
-        }
+        RecordEstimate::track(s, duration).check(
+            &format!("{field}.duration"),
+            duration,
+            limit::MIN_TRACK_SAMPLES,
+        )?;
     }
     Ok(())
 }

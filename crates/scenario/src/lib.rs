@@ -27,7 +27,7 @@ use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
-pub use bounds::{DesignEstimate, LIMITS, limit};
+pub use bounds::{DesignEstimate, LIMITS, RecordEstimate, TRACK_COLUMNS, limit};
 pub use design::{
     Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Limits, Material, Mesh,
     ObjectiveKind, Optimization, Output, Projection, Region, RegionKind, Selector, Support,
