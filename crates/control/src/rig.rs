@@ -470,6 +470,8 @@ struct Rig {
     white: [GaussianNoise; 2],
     flicker: [Flicker; 2],
     amp_decay: f64,
+    /// `amp_decay^k`, k = 0..=substeps.
+    amp_powers: Vec<f64>,
     /// The amplifier's largest |dU/dt| [V/s] ([`AmplifierParams::max_rate`]).
     amp_rate: f64,
     /// Whether the amplifier ramps within a substep (bandwidth or rate limit set).
@@ -545,6 +547,9 @@ impl Rig {
             white,
             flicker,
             amp_decay,
+            amp_powers: (0..=params.substeps as i32)
+                .map(|k| amp_decay.powi(k))
+                .collect(),
             amp_rate: params.amplifier.max_rate(),
             amp_ramps: params.amplifier.bandwidth > 0.0 || params.amplifier.max_rate().is_finite(),
             sensor_decay,
@@ -612,10 +617,21 @@ impl Rig {
             let goal = target.0[i].clamp(lo, hi);
             let u_start = self.voltage[i];
             let mut u = u_start;
-            for uk in &mut self.u_path[1..=n] {
-                let u1 = goal + (u - goal) * self.amp_decay;
-                u = u1.clamp(u - max_step, u + max_step).clamp(lo, hi);
-                *uk = u;
+            if (goal - u_start).abs() * (1.0 - self.amp_decay) <= max_step {
+                // The first substep has the largest increment of the exponential approach: no
+                // substep reaches the rate limit, and the approach stays between U and the
+                // (in-range) target.
+                let gap = u_start - goal;
+                for (uk, e) in self.u_path[1..=n].iter_mut().zip(&self.amp_powers[1..=n]) {
+                    *uk = goal + gap * e;
+                }
+                u = self.u_path[n];
+            } else {
+                for uk in &mut self.u_path[1..=n] {
+                    let u1 = goal + (u - goal) * self.amp_decay;
+                    u = u1.clamp(u - max_step, u + max_step).clamp(lo, hi);
+                    *uk = u;
+                }
             }
             let x_bw0 = self.pea[i].x();
             let x_bw1 = self.pea[i].step(u, if jump { 0.0 } else { t });

@@ -9,7 +9,7 @@
 use divan::{Bencher, black_box};
 use flexstage_control::controller::Command;
 use flexstage_control::experiment::Setup;
-use flexstage_control::rig::{RigParams, StagePlant};
+use flexstage_control::rig::{Mechanics, RigParams, StagePlant};
 use flexstage_fem::{Transient, TransientParams};
 use flexstage_scenario::{Preset, Scenario};
 use flexstage_twin::{StageFe, Twin, TwinParams, samples};
@@ -63,6 +63,40 @@ fn twin_plant_one_second(b: Bencher, preset: Preset) {
             }
             black_box(p.output())
         });
+}
+
+/// The twin's mechanics alone, without the rig: one simulated second of
+/// `TwinStage::advance` at the scenario's substeps (10 000 samples × 20), x_nom a 3:1
+/// Lissajous of ±10 µm linear within each sample, no floor motion.
+#[divan::bench(args = [Preset::Quick, Preset::Paper], sample_count = 10)]
+fn twin_mechanics_one_second(b: Bencher, preset: Preset) {
+    let (s, t) = twin(preset);
+    let rig = RigParams::from_scenario(&s);
+    let (n, h) = (rig.substeps, rig.substep());
+    let x: Vec<[f64; 2]> = (0..=10_000)
+        .map(|k| {
+            let t = k as f64 * 1e-4;
+            let a = 5e-6 * (std::f64::consts::TAU * 6.0 * t).sin();
+            let b = 5e-6 * (std::f64::consts::TAU * 2.0 * t).sin();
+            [a + b, a - b]
+        })
+        .collect();
+    b.with_inputs(|| t.stage(h)).bench_local_values(|mut m| {
+        for w in x.windows(2) {
+            let d = [
+                (w[1][0] - w[0][0]) / n as f64,
+                (w[1][1] - w[0][1]) / n as f64,
+            ];
+            let mut x0 = w[0];
+            for k in 1..=n {
+                let x1 = [w[0][0] + d[0] * k as f64, w[0][1] + d[1] * k as f64];
+                m.advance([x0, x1], [[0.0; 2]; 2]);
+                x0 = x1;
+            }
+            black_box(m.output());
+        }
+        black_box(m.output())
+    });
 }
 
 /// The same second on the lumped 8-state plant in the same rig.

@@ -6,7 +6,7 @@ use flexstage_control::rig::Mechanics;
 use multiversion::multiversion;
 
 use crate::modal::{DiscreteMode, ModalStage};
-use crate::nonlinear::NonlinearMap;
+use crate::nonlinear::{Correction, NonlinearMap};
 
 /// Modes per block: one AVX2 register of f64.
 const LANES: usize = 4;
@@ -51,7 +51,8 @@ pub struct TwinStage {
     order: usize,
     blocks: Vec<Block>,
     state: Vec<BlockState>,
-    nonlinear: Option<NonlinearMap>,
+    /// The geometric-nonlinearity correction of the output (`None`: linear twin).
+    correction: Option<Correction>,
     /// `[q1, q2, x_in1, x_in2]` of the current modal state (linear output and input plates),
     /// kept up to date by every state change so that [`Mechanics::output`] and
     /// [`Mechanics::inputs`] cost no pass over the modes.
@@ -61,7 +62,9 @@ pub struct TwinStage {
 /// One substep of every mode, `s₊ = Φ s + Γ p₀ + Λ (p₁ − p₀)` with `p = in·u` minus the
 /// operating-point stiffening `(s·x_in)(η − p₀/ω²)` held over the substep
 /// ([`crate::nonlinear`]); returns the probe `[q1, q2, x_in1, x_in2]` of the new state,
-/// accumulated in the same pass (four partial sums per probe, one per lane).
+/// accumulated in the same pass (four partial sums per probe, one per lane). Fused
+/// multiply-adds (`mul_add`, correctly rounded on every target, so the result does not depend
+/// on the CPU the loop was dispatched for).
 #[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"))]
 fn advance_modes(
     blocks: &[Block],
@@ -74,20 +77,28 @@ fn advance_modes(
     for (b, st) in blocks.iter().zip(state.iter_mut()) {
         for l in 0..LANES {
             let i = [b.input[0][l], b.input[1][l], b.input[2][l], b.input[3][l]];
-            let mut p0 = i[0] * u0[0] + i[1] * u0[1] + i[2] * u0[2] + i[3] * u0[3];
-            let mut p1 = i[0] * u1[0] + i[1] * u1[1] + i[2] * u1[2] + i[3] * u1[3];
+            let force = |u: [f64; 4]| {
+                i[0].mul_add(u[0], i[1].mul_add(u[1], i[2].mul_add(u[2], i[3] * u[3])))
+            };
+            let (mut p0, mut p1) = (force(u0), force(u1));
             let (e, v) = (st.eta[l], st.rate[l]);
-            let g = (b.stiffening[0][l] * x_in[0] + b.stiffening[1][l] * x_in[1])
-                * (e - p0 * b.compliance[l]);
+            let sigma = b.stiffening[0][l].mul_add(x_in[0], b.stiffening[1][l] * x_in[1]);
+            let g = sigma * (-p0).mul_add(b.compliance[l], e);
             p0 -= g;
             p1 -= g;
             let dp = p1 - p0;
-            let e1 = b.phi[0][l] * e + b.phi[1][l] * v + b.gamma[0][l] * p0 + b.lambda[0][l] * dp;
-            let v1 = b.phi[2][l] * e + b.phi[3][l] * v + b.gamma[1][l] * p0 + b.lambda[1][l] * dp;
+            let e1 = b.phi[0][l].mul_add(
+                e,
+                b.phi[1][l].mul_add(v, b.gamma[0][l].mul_add(p0, b.lambda[0][l] * dp)),
+            );
+            let v1 = b.phi[2][l].mul_add(
+                e,
+                b.phi[3][l].mul_add(v, b.gamma[1][l].mul_add(p0, b.lambda[1][l] * dp)),
+            );
             st.eta[l] = e1;
             st.rate[l] = v1;
             for (a, row) in acc.iter_mut().zip(&b.probe) {
-                a[l] += row[l] * e1;
+                a[l] = row[l].mul_add(e1, a[l]);
             }
         }
     }
@@ -140,7 +151,7 @@ impl TwinStage {
             order,
             blocks,
             state,
-            nonlinear,
+            correction: nonlinear.as_ref().map(NonlinearMap::evaluator),
             probe: [0.0; 4],
         }
     }
@@ -198,7 +209,7 @@ impl Mechanics for TwinStage {
     fn advance(&mut self, x_nom: [[f64; 2]; 2], floor: [[f64; 2]; 2]) {
         let u0 = [x_nom[0][0], x_nom[0][1], floor[0][0], floor[0][1]];
         let u1 = [x_nom[1][0], x_nom[1][1], floor[1][0], floor[1][1]];
-        let x_in = if self.nonlinear.is_some() {
+        let x_in = if self.correction.is_some() {
             self.inputs()
         } else {
             [0.0; 2]
@@ -209,8 +220,8 @@ impl Mechanics for TwinStage {
     #[inline]
     fn output(&self) -> [f64; 2] {
         let mut q = self.linear_output();
-        if let Some(nl) = &self.nonlinear {
-            let d = nl.correction(self.inputs());
+        if let Some(c) = &self.correction {
+            let d = c.eval(self.inputs());
             q[0] += d[0];
             q[1] += d[1];
         }
