@@ -273,6 +273,38 @@ pub trait Mechanics: Send {
     fn output(&self) -> [f64; 2];
     /// The input-plate displacements x_in \[m\].
     fn inputs(&self) -> [f64; 2];
+
+    /// Advances one sample of `n = path.len() − 1` substeps: x_nom at the substep nodes
+    /// `path`, the base acceleration linear from `floor[0]` to `floor[1]` over the sample;
+    /// the output after substep k into `q[k]` when `q` is given (length ≥ n). The provided
+    /// method calls [`Mechanics::advance`] per substep; a mechanics may override it with one
+    /// loop that gives the same result.
+    fn advance_sample(
+        &mut self,
+        path: &[[f64; 2]],
+        floor: [[f64; 2]; 2],
+        mut q: Option<&mut [[f64; 2]]>,
+    ) {
+        let n = path.len() - 1;
+        for k in 0..n {
+            self.advance([path[k], path[k + 1]], floor_at(floor, k, n));
+            if let Some(q) = q.as_deref_mut() {
+                q[k] = self.output();
+            }
+        }
+    }
+}
+
+/// The base acceleration at the start and the end of substep `k` of `n`, linear from
+/// `floor[0]` to `floor[1]` over the sample (every mechanics interpolates it alike).
+#[inline]
+pub fn floor_at(floor: [[f64; 2]; 2], k: usize, n: usize) -> [[f64; 2]; 2] {
+    let [f0, f1] = floor;
+    let (s0, s1) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
+    [
+        [f0[0] + s0 * (f1[0] - f0[0]), f0[1] + s0 * (f1[1] - f0[1])],
+        [f0[0] + s1 * (f1[0] - f0[0]), f0[1] + s1 * (f1[1] - f0[1])],
+    ]
 }
 
 /// A simulated stage as the experiment runner sees it: sensors sampled at t_k, a command
@@ -482,6 +514,8 @@ struct Rig {
     path: Vec<[f64; 2]>,
     /// The amplifier voltage at the substep boundaries (preallocated).
     u_path: Vec<f64>,
+    /// The true output after every substep (preallocated).
+    q_path: Vec<[f64; 2]>,
 }
 
 impl Rig {
@@ -556,6 +590,7 @@ impl Rig {
             sensor_ramp,
             path: vec![[0.0; 2]; params.substeps + 1],
             u_path: vec![0.0; params.substeps + 1],
+            q_path: vec![[0.0; 2]; params.substeps],
             params,
         })
     }
@@ -741,19 +776,20 @@ impl<M: Mechanics> RigPlant<M> {
             [0.0; 2]
         };
         self.rig.actuate(target, h);
-        for k in 0..n {
-            let x = [self.rig.path[k], self.rig.path[k + 1]];
-            let (s0, s1) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
-            let floor = [
-                [f0[0] + s0 * (f1[0] - f0[0]), f0[1] + s0 * (f1[1] - f0[1])],
-                [f0[0] + s1 * (f1[0] - f0[0]), f0[1] + s1 * (f1[1] - f0[1])],
-            ];
-            self.mechanics.advance(x, floor);
-            if filtered {
-                let q1 = self.mechanics.output();
+        if filtered {
+            self.mechanics.advance_sample(
+                &self.rig.path,
+                [f0, f1],
+                Some(&mut self.rig.q_path[..n]),
+            );
+            for k in 0..n {
+                let q1 = self.rig.q_path[k];
                 self.rig.sense(q0, q1);
                 q0 = q1;
             }
+        } else {
+            self.mechanics
+                .advance_sample(&self.rig.path, [f0, f1], None);
         }
     }
 }

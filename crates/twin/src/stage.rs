@@ -1,8 +1,15 @@
 //! The twin as a real-time [`Mechanics`]: every mode advanced with its exact first-order-hold
 //! discretization per substep ([`crate::modal`]), the output recovered from the modes and
 //! corrected for the geometric nonlinearity ([`crate::nonlinear`]). No allocation per step.
+//!
+//! Layout and cost: the modes are stored in blocks of four (one AVX2 register per
+//! coefficient), the output and input-plate sums are accumulated in the same pass as the
+//! update, the modal force at a substep node is computed once (p₁ of one substep, p₀ of the
+//! next), and [`Mechanics::advance_sample`] runs the substeps of a whole sample in one call
+//! dispatched once to the CPU's widest instruction set (`multiversion`). Fused multiply-adds
+//! keep the results identical on every target. `cargo bench -p flexstage-twin`.
 
-use flexstage_control::rig::Mechanics;
+use flexstage_control::rig::{Mechanics, floor_at};
 use multiversion::multiversion;
 
 use crate::modal::{DiscreteMode, ModalStage};
@@ -37,11 +44,13 @@ struct Block {
     stiffening: [Lanes; 2],
 }
 
-/// The modal state (η, η̇) of one block.
+/// The modal state (η, η̇) of one block, and the scratch slot of the modal force at the
+/// current substep node.
 #[derive(Debug, Clone, Copy, Default)]
 struct BlockState {
     eta: Lanes,
     rate: Lanes,
+    force: Lanes,
 }
 
 /// The twin's mechanics for substeps of `h` (module docs).
@@ -59,28 +68,39 @@ pub struct TwinStage {
     probe: [f64; 4],
 }
 
+/// The modal forces `p = in·u` of every mode for the load `u` (x_nom1, x_nom2, base
+/// acceleration x, y) into the state's force slot: the p₀ of the next substep.
+#[inline(always)]
+fn load_forces(blocks: &[Block], state: &mut [BlockState], u: [f64; 4]) {
+    for (b, st) in blocks.iter().zip(state.iter_mut()) {
+        for l in 0..LANES {
+            st.force[l] = modal_force(b, l, u);
+        }
+    }
+}
+
+/// `in·u` of lane `l` of block `b`.
+#[inline(always)]
+fn modal_force(b: &Block, l: usize, u: [f64; 4]) -> f64 {
+    let i = [b.input[0][l], b.input[1][l], b.input[2][l], b.input[3][l]];
+    i[0].mul_add(u[0], i[1].mul_add(u[1], i[2].mul_add(u[2], i[3] * u[3])))
+}
+
 /// One substep of every mode, `s₊ = Φ s + Γ p₀ + Λ (p₁ − p₀)` with `p = in·u` minus the
 /// operating-point stiffening `(s·x_in)(η − p₀/ω²)` held over the substep
-/// ([`crate::nonlinear`]); returns the probe `[q1, q2, x_in1, x_in2]` of the new state,
-/// accumulated in the same pass (four partial sums per probe, one per lane). Fused
-/// multiply-adds (`mul_add`, correctly rounded on every target, so the result does not depend
-/// on the CPU the loop was dispatched for).
-#[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"))]
-fn advance_modes(
-    blocks: &[Block],
-    state: &mut [BlockState],
-    u0: [f64; 4],
-    u1: [f64; 4],
-    x_in: [f64; 2],
-) -> [f64; 4] {
+/// ([`crate::nonlinear`]); p₀ is the force slot of the state ([`load_forces`]), p₁ = in·u₁
+/// replaces it. Returns the probe `[q1, q2, x_in1, x_in2]` of the new state, accumulated in
+/// the same pass (four partial sums per probe, one per lane). Fused multiply-adds (`mul_add`,
+/// correctly rounded on every target, so the result does not depend on the CPU the loop was
+/// dispatched for).
+#[inline(always)]
+fn substep(blocks: &[Block], state: &mut [BlockState], u1: [f64; 4], x_in: [f64; 2]) -> [f64; 4] {
     let mut acc = [[0.0; LANES]; 4];
     for (b, st) in blocks.iter().zip(state.iter_mut()) {
         for l in 0..LANES {
-            let i = [b.input[0][l], b.input[1][l], b.input[2][l], b.input[3][l]];
-            let force = |u: [f64; 4]| {
-                i[0].mul_add(u[0], i[1].mul_add(u[1], i[2].mul_add(u[2], i[3] * u[3])))
-            };
-            let (mut p0, mut p1) = (force(u0), force(u1));
+            let mut p0 = st.force[l];
+            let mut p1 = modal_force(b, l, u1);
+            st.force[l] = p1;
             let (e, v) = (st.eta[l], st.rate[l]);
             let sigma = b.stiffening[0][l].mul_add(x_in[0], b.stiffening[1][l] * x_in[1]);
             let g = sigma * (-p0).mul_add(b.compliance[l], e);
@@ -105,7 +125,50 @@ fn advance_modes(
     acc.map(|a| (a[0] + a[1]) + (a[2] + a[3]))
 }
 
-/// The probe `[q1, q2, x_in1, x_in2]` of a state (as accumulated by [`advance_modes`]).
+/// The substeps of one sample ([`Mechanics::advance_sample`]): x_nom at the nodes `path`,
+/// the floor by [`floor_at`]; the output after each substep into `q` if given. One call (one
+/// CPU dispatch) per sample; the forces at a node are computed once, as p₁ of one substep
+/// and p₀ of the next. Returns the final probe.
+#[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"))]
+fn advance_path(
+    blocks: &[Block],
+    state: &mut [BlockState],
+    correction: Option<&Correction>,
+    mut probe: [f64; 4],
+    path: &[[f64; 2]],
+    floor: [[f64; 2]; 2],
+    mut q: Option<&mut [[f64; 2]]>,
+) -> [f64; 4] {
+    let n = path.len() - 1;
+    let load = |k: usize, f: [f64; 2]| [path[k][0], path[k][1], f[0], f[1]];
+    load_forces(blocks, state, load(0, floor_at(floor, 0, n)[0]));
+    for k in 0..n {
+        let x_in = if correction.is_some() {
+            [probe[2], probe[3]]
+        } else {
+            [0.0; 2]
+        };
+        probe = substep(blocks, state, load(k + 1, floor_at(floor, k, n)[1]), x_in);
+        if let Some(q) = q.as_deref_mut() {
+            q[k] = output_of(correction, probe);
+        }
+    }
+    probe
+}
+
+/// The output of a probe: the linear output plus the correction at its x_in.
+#[inline(always)]
+fn output_of(correction: Option<&Correction>, probe: [f64; 4]) -> [f64; 2] {
+    let mut q = [probe[0], probe[1]];
+    if let Some(c) = correction {
+        let d = c.eval([probe[2], probe[3]]);
+        q[0] += d[0];
+        q[1] += d[1];
+    }
+    q
+}
+
+/// The probe `[q1, q2, x_in1, x_in2]` of a state (as accumulated by [`substep`]).
 fn probe_of(blocks: &[Block], state: &[BlockState]) -> [f64; 4] {
     let mut acc = [[0.0; LANES]; 4];
     for (b, st) in blocks.iter().zip(state) {
@@ -207,25 +270,30 @@ impl Mechanics for TwinStage {
 
     #[inline]
     fn advance(&mut self, x_nom: [[f64; 2]; 2], floor: [[f64; 2]; 2]) {
-        let u0 = [x_nom[0][0], x_nom[0][1], floor[0][0], floor[0][1]];
-        let u1 = [x_nom[1][0], x_nom[1][1], floor[1][0], floor[1][1]];
-        let x_in = if self.correction.is_some() {
-            self.inputs()
-        } else {
-            [0.0; 2]
-        };
-        self.probe = advance_modes(&self.blocks, &mut self.state, u0, u1, x_in);
+        // One substep is a sample of one substep: the floor's ends are the substep's.
+        self.advance_sample(&x_nom, floor, None);
     }
 
     #[inline]
     fn output(&self) -> [f64; 2] {
-        let mut q = self.linear_output();
-        if let Some(c) = &self.correction {
-            let d = c.eval(self.inputs());
-            q[0] += d[0];
-            q[1] += d[1];
-        }
-        q
+        output_of(self.correction.as_ref(), self.probe)
+    }
+
+    fn advance_sample(
+        &mut self,
+        path: &[[f64; 2]],
+        floor: [[f64; 2]; 2],
+        q: Option<&mut [[f64; 2]]>,
+    ) {
+        self.probe = advance_path(
+            &self.blocks,
+            &mut self.state,
+            self.correction.as_ref(),
+            self.probe,
+            path,
+            floor,
+            q,
+        );
     }
 
     #[inline]
