@@ -16,13 +16,11 @@ use flexstage_control::controller::Command;
 use flexstage_control::rig::{RigParams, StagePlant};
 use flexstage_twin::{Twin, samples};
 
+/// Voltages per sample.
+type Drive<'a> = &'a dyn Fn(usize) -> [f64; 2];
+
 /// True outputs and measurements of `n` samples with the voltages `v(k)`.
-fn run(
-    twin: &Twin,
-    rig: &RigParams,
-    v: &dyn Fn(usize) -> [f64; 2],
-    n: usize,
-) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
+fn run(twin: &Twin, rig: &RigParams, v: Drive, n: usize) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
     let mut p = twin.plant(rig).unwrap();
     let (mut q, mut y) = (Vec::with_capacity(n), Vec::with_capacity(n));
     for k in 0..n {
@@ -48,7 +46,7 @@ fn twin_in_the_rig_converges_in_the_substeps() {
         let a = 200.0 * (std::f64::consts::TAU * 200.0 * k as f64 * 1e-4).sin();
         [500.0 + a, 500.0 - a]
     };
-    let cases: [(&str, &dyn Fn(usize) -> [f64; 2]); 3] = [
+    let cases: [(&str, Drive); 3] = [
         ("step 100 V", &|k| {
             if k < 5 { [500.0; 2] } else { [600.0, 550.0] }
         }),
