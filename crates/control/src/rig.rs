@@ -341,8 +341,9 @@ struct Flicker {
     x: [f64; Flicker::N],
     a: [f64; Flicker::N],
     b: [f64; Flicker::N],
-    /// Update stride of each process in samples (a power of two).
-    stride: [u32; Flicker::N],
+    /// Update stride of each process in samples (a power of two) minus one: the process is
+    /// updated when `count & mask == 0`.
+    mask: [u32; Flicker::N],
     /// Σ x (of the held values).
     sum: f64,
     /// Samples drawn so far (mod the largest stride).
@@ -362,7 +363,7 @@ impl Flicker {
             x: [0.0; Flicker::N],
             a: [0.0; Flicker::N],
             b: [0.0; Flicker::N],
-            stride: [1; Flicker::N],
+            mask: [0; Flicker::N],
             sum: 0.0,
             count: 0,
             n: 0,
@@ -384,7 +385,7 @@ impl Flicker {
             let a = (-lambda * stride as f64 * t).exp();
             f.a[f.n] = a;
             f.b[f.n] = (v * (1.0 - a * a)).sqrt();
-            f.stride[f.n] = stride;
+            f.mask[f.n] = stride - 1;
             f.x[f.n] = v.sqrt() * f.noise.sample();
             f.sum += f.x[f.n];
             f.n += 1;
@@ -400,7 +401,7 @@ impl Flicker {
         }
         let mut changed = false;
         for k in 0..self.n {
-            if self.count % self.stride[k] == 0 {
+            if self.count & self.mask[k] == 0 {
                 self.x[k] = self.a[k] * self.x[k] + self.b[k] * self.noise.sample();
                 changed = true;
             }
@@ -408,7 +409,7 @@ impl Flicker {
         if changed {
             self.sum = self.x[..self.n].iter().sum();
         }
-        self.count = (self.count + 1) % Flicker::MAX_STRIDE;
+        self.count = (self.count + 1) & (Flicker::MAX_STRIDE - 1);
         self.sum
     }
 }

@@ -99,14 +99,14 @@ fn substep(blocks: &[Block], state: &mut [BlockState], u1: [f64; 4], x_in: [f64;
     for (b, st) in blocks.iter().zip(state.iter_mut()) {
         for l in 0..LANES {
             let mut p0 = st.force[l];
-            let mut p1 = modal_force(b, l, u1);
+            let p1 = modal_force(b, l, u1);
             st.force[l] = p1;
             let (e, v) = (st.eta[l], st.rate[l]);
             let sigma = b.stiffening[0][l].mul_add(x_in[0], b.stiffening[1][l] * x_in[1]);
             let g = sigma * (-p0).mul_add(b.compliance[l], e);
-            p0 -= g;
-            p1 -= g;
+            // The held term shifts p₀ and p₁ alike: the ramp p₁ − p₀ is unchanged.
             let dp = p1 - p0;
+            p0 -= g;
             let e1 = b.phi[0][l].mul_add(
                 e,
                 b.phi[1][l].mul_add(v, b.gamma[0][l].mul_add(p0, b.lambda[0][l] * dp)),
