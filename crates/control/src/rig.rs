@@ -21,8 +21,9 @@
 //!    electronics), white noise (`sensors.noise_std`) plus 1/f noise above the corner where
 //!    both spectra are equal, then quantization to the resolution (Section 4.1).
 //!
-//! Each sample is split into `substeps`; the amplifier, the PEAs, the creep, the mechanics and
-//! the sensor filter advance per substep. No allocation per sample.
+//! Each sample is split into `substeps`; the amplifier, the mechanics and the sensor filter
+//! advance per substep, the PEAs' Bouc–Wen state and the creep once per sample (exactly for
+//! their inputs within it, and interpolated at the substeps). No allocation per sample.
 
 use flexstage_piezo::{BoucWen, BoucWenParams, GaussianNoise, MICROMETRE};
 
@@ -272,6 +273,38 @@ pub trait Mechanics: Send {
     fn output(&self) -> [f64; 2];
     /// The input-plate displacements x_in \[m\].
     fn inputs(&self) -> [f64; 2];
+
+    /// Advances one sample of `n = path.len() − 1` substeps: x_nom at the substep nodes
+    /// `path`, the base acceleration linear from `floor[0]` to `floor[1]` over the sample;
+    /// the output after substep k into `q[k]` when `q` is given (length ≥ n). The provided
+    /// method calls [`Mechanics::advance`] per substep; a mechanics may override it with one
+    /// loop that gives the same result.
+    fn advance_sample(
+        &mut self,
+        path: &[[f64; 2]],
+        floor: [[f64; 2]; 2],
+        mut q: Option<&mut [[f64; 2]]>,
+    ) {
+        let n = path.len() - 1;
+        for k in 0..n {
+            self.advance([path[k], path[k + 1]], floor_at(floor, k, n));
+            if let Some(q) = q.as_deref_mut() {
+                q[k] = self.output();
+            }
+        }
+    }
+}
+
+/// The base acceleration at the start and the end of substep `k` of `n`, linear from
+/// `floor[0]` to `floor[1]` over the sample (every mechanics interpolates it alike).
+#[inline]
+pub fn floor_at(floor: [[f64; 2]; 2], k: usize, n: usize) -> [[f64; 2]; 2] {
+    let [f0, f1] = floor;
+    let (s0, s1) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
+    [
+        [f0[0] + s0 * (f1[0] - f0[0]), f0[1] + s0 * (f1[1] - f0[1])],
+        [f0[0] + s1 * (f1[0] - f0[0]), f0[1] + s1 * (f1[1] - f0[1])],
+    ]
 }
 
 /// A simulated stage as the experiment runner sees it: sensors sampled at t_k, a command
@@ -295,17 +328,34 @@ const CREEP_TAU: [f64; 4] = [0.1, 1.0, 10.0, 100.0];
 /// 1/f noise: a sum of Ornstein–Uhlenbeck processes with corner frequencies two per decade
 /// from 0.01 Hz to ten times the 1/f corner and equal variances; their Lorentzian spectra add
 /// up to `S(f) ≈ v/(f ln r)` (r the corner ratio), matched to the white level at the corner.
+///
+/// Multi-rate: process k is advanced exactly (`x ← a x + b z`, the OU transition over its
+/// own step) only every `stride_k` samples, the largest power of two with
+/// `f_k·stride_k·T ≤ 1/64`, and held in between. Holding a process whose corner lies that far
+/// below its update rate changes its spectrum by < 0.1 % below the corner and adds images of
+/// relative level ≈ (f_k·stride_k·T)² ≈ 2e-4 near multiples of the update rate, where the white
+/// noise dominates by orders of magnitude; it draws ≈ 0.2 normal numbers per sample instead of
+/// one per process.
 #[derive(Debug, Clone)]
 struct Flicker {
     x: [f64; Flicker::N],
     a: [f64; Flicker::N],
     b: [f64; Flicker::N],
+    /// Update stride of each process in samples (a power of two) minus one: the process is
+    /// updated when `count & mask == 0`.
+    mask: [u32; Flicker::N],
+    /// Σ x (of the held values).
+    sum: f64,
+    /// Samples drawn so far (mod the largest stride).
+    count: u32,
     n: usize,
     noise: GaussianNoise,
 }
 
 impl Flicker {
     const N: usize = 16;
+    /// Largest update stride \[samples\].
+    const MAX_STRIDE: u32 = 1 << 12;
 
     /// `white_std` [m] over the Nyquist band of sample time `t`, corner `fc` [Hz].
     fn new(white_std: f64, fc: f64, t: f64, seed: u64) -> Flicker {
@@ -313,6 +363,9 @@ impl Flicker {
             x: [0.0; Flicker::N],
             a: [0.0; Flicker::N],
             b: [0.0; Flicker::N],
+            mask: [0; Flicker::N],
+            sum: 0.0,
+            count: 0,
             n: 0,
             noise: GaussianNoise::new(1.0, seed),
         };
@@ -324,11 +377,17 @@ impl Flicker {
         let v = s_white * fc * ratio.ln();
         let mut corner = 0.01;
         while f.n < Flicker::N && corner <= (10.0 * fc).min(0.25 / t) {
+            let mut stride = 1;
+            while stride < Flicker::MAX_STRIDE && corner * (2 * stride) as f64 * t <= 1.0 / 64.0 {
+                stride *= 2;
+            }
             let lambda = std::f64::consts::TAU * corner;
-            let a = (-lambda * t).exp();
+            let a = (-lambda * stride as f64 * t).exp();
             f.a[f.n] = a;
             f.b[f.n] = (v * (1.0 - a * a)).sqrt();
+            f.mask[f.n] = stride - 1;
             f.x[f.n] = v.sqrt() * f.noise.sample();
+            f.sum += f.x[f.n];
             f.n += 1;
             corner *= ratio;
         }
@@ -337,12 +396,21 @@ impl Flicker {
 
     #[inline]
     fn sample(&mut self) -> f64 {
-        let mut s = 0.0;
-        for k in 0..self.n {
-            self.x[k] = self.a[k] * self.x[k] + self.b[k] * self.noise.sample();
-            s += self.x[k];
+        if self.n == 0 {
+            return 0.0;
         }
-        s
+        let mut changed = false;
+        for k in 0..self.n {
+            if self.count & self.mask[k] == 0 {
+                self.x[k] = self.a[k] * self.x[k] + self.b[k] * self.noise.sample();
+                changed = true;
+            }
+        }
+        if changed {
+            self.sum = self.x[..self.n].iter().sum();
+        }
+        self.count = (self.count + 1) & (Flicker::MAX_STRIDE - 1);
+        self.sum
     }
 }
 
@@ -425,19 +493,30 @@ struct Rig {
     pea: [BoucWen; 2],
     x_bias: [f64; 2],
     creep: [[f64; CREEP_TAU.len()]; 2],
+    /// Per creep relaxation over one sample: e = exp(−T/τ).
     creep_decay: [f64; CREEP_TAU.len()],
+    /// Per creep relaxation: the response to a unit ramp over one sample, 1 − (1 − e)τ/T.
+    creep_ramp: [f64; CREEP_TAU.len()],
     x_nom: [f64; 2],
     floor: Floor,
     sensed: [f64; 2],
     white: [GaussianNoise; 2],
     flicker: [Flicker; 2],
     amp_decay: f64,
+    /// `amp_decay^k`, k = 0..=substeps.
+    amp_powers: Vec<f64>,
+    /// The amplifier's largest |dU/dt| [V/s] ([`AmplifierParams::max_rate`]).
+    amp_rate: f64,
+    /// Whether the amplifier ramps within a substep (bandwidth or rate limit set).
+    amp_ramps: bool,
     sensor_decay: f64,
     sensor_ramp: f64,
     /// x_nom at the substep boundaries of the current sample (preallocated).
     path: Vec<[f64; 2]>,
     /// The amplifier voltage at the substep boundaries (preallocated).
     u_path: Vec<f64>,
+    /// The true output after every substep (preallocated).
+    q_path: Vec<[f64; 2]>,
 }
 
 impl Rig {
@@ -495,17 +574,24 @@ impl Rig {
             pea,
             x_bias,
             creep: [[0.0; CREEP_TAU.len()]; 2],
-            creep_decay: CREEP_TAU.map(|tau| (-h / tau).exp()),
+            creep_decay: CREEP_TAU.map(|tau| (-t / tau).exp()),
+            creep_ramp: CREEP_TAU.map(|tau| 1.0 + (-t / tau).exp_m1() * tau / t),
             x_nom: [0.0; 2],
             floor,
             sensed: [0.0; 2],
             white,
             flicker,
             amp_decay,
+            amp_powers: (0..=params.substeps as i32)
+                .map(|k| amp_decay.powi(k))
+                .collect(),
+            amp_rate: params.amplifier.max_rate(),
+            amp_ramps: params.amplifier.bandwidth > 0.0 || params.amplifier.max_rate().is_finite(),
             sensor_decay,
             sensor_ramp,
             path: vec![[0.0; 2]; params.substeps + 1],
             u_path: vec![0.0; params.substeps + 1],
+            q_path: vec![[0.0; 2]; params.substeps],
             params,
         })
     }
@@ -521,46 +607,36 @@ impl Rig {
         now
     }
 
-    /// Amplifier output after one substep towards `target` (module docs); returns the new
-    /// voltage and whether it ramped (false: an ideal jump at the substep start).
+    /// Creep over one sample with the PEA displacement deviation moving linearly from `dx0` to
+    /// `dx1` \[m\]: every relaxation `ż = (dx − z)/τ` advanced exactly,
+    /// `z₊ = e z + (1 − e) dx0 + (dx1 − dx0)(1 − (1 − e)τ/T)`, `e = exp(−T/τ)`. Returns the
+    /// creep `γ Σ z` at the start and the end of the sample.
     #[inline]
-    fn amplify(&self, u0: f64, target: f64, h: f64) -> (f64, bool) {
-        let a = &self.params.amplifier;
-        let [lo, hi] = self.params.voltage_range;
-        let target = target.clamp(lo, hi);
-        let mut u1 = target + (u0 - target) * self.amp_decay;
-        let rate = a.max_rate();
-        let ramped = a.bandwidth > 0.0 || rate.is_finite();
-        if rate.is_finite() {
-            let step = rate * h;
-            u1 = u1.clamp(u0 - step, u0 + step);
-        }
-        (u1.clamp(lo, hi), ramped)
-    }
-
-    /// Creep increment after one substep of the PEA displacement deviation `dx` [m].
-    #[inline]
-    fn creep(&mut self, i: usize, dx: f64) -> f64 {
+    fn creep(&mut self, i: usize, dx0: f64, dx1: f64) -> (f64, f64) {
         let g = self.params.creep.factor;
         if g == 0.0 {
-            return 0.0;
+            return (0.0, 0.0);
         }
-        let mut c = 0.0;
-        for k in 0..CREEP_TAU.len() {
-            let z = &mut self.creep[i][k];
-            *z = dx + (*z - dx) * self.creep_decay[k];
-            c += *z;
+        let (mut c0, mut c1) = (0.0, 0.0);
+        for (k, z) in self.creep[i].iter_mut().enumerate() {
+            let e = self.creep_decay[k];
+            c0 += *z;
+            *z = e * *z + (1.0 - e) * dx0 + (dx1 - dx0) * self.creep_ramp[k];
+            c1 += *z;
         }
-        g * c
+        (g * c0, g * c1)
     }
 
     /// The actuators over one sample: x_nom at every substep boundary into `self.path`
-    /// (`path[0]` = now). The amplifier's voltage is followed substep by substep; within a
-    /// sample it moves monotonically towards its target (first-order response, rate limit),
-    /// and the rate-independent part of Bouc–Wen depends only on the voltage path, not its
-    /// timing, so one exact Bouc–Wen step over the sample gives the end state and x_nom in
-    /// between is interpolated in U along the branch (error ≈ h''(U)·ΔU²/8: picometres for
-    /// the voltage steps of a sample). An ideal amplifier jumps at the start of the sample.
+    /// (`path[0]` = now). The amplifier's voltage is followed substep by substep (first-order
+    /// response `U₊ = U_f + (U − U_f)e^{−2πf_a h}`, then the rate limit, then the range);
+    /// within a sample it moves monotonically towards its target, and the rate-independent
+    /// part of Bouc–Wen depends only on the voltage path, not its timing, so one exact
+    /// Bouc–Wen step over the sample gives the end state and x_nom in between is interpolated
+    /// in U along the branch (error ≈ h''(U)·ΔU²/8: picometres for the voltage steps of a
+    /// sample). The creep (time constants ≥ 0.1 s ≫ T) is advanced once per sample
+    /// ([`Rig::creep`]) and interpolated linearly in time within it. An ideal amplifier jumps
+    /// at the start of the sample.
     fn actuate(&mut self, target: ([f64; 2], [f64; 2]), h: f64) {
         let n = self.params.substeps;
         if self.params.actuator == PlantActuator::Ideal {
@@ -569,30 +645,48 @@ impl Rig {
             return;
         }
         let t = self.params.sample_time;
+        let [lo, hi] = self.params.voltage_range;
+        let jump = !self.amp_ramps;
+        let max_step = self.amp_rate * h;
         let x_start = self.x_nom;
-        let mut jump = false;
         for i in 0..2 {
+            let goal = target.0[i].clamp(lo, hi);
             let u_start = self.voltage[i];
             let mut u = u_start;
-            for k in 1..=n {
-                let (u1, ramped) = self.amplify(u, target.0[i], h);
-                jump |= !ramped;
-                u = u1;
-                self.u_path[k] = u1;
+            if (goal - u_start).abs() * (1.0 - self.amp_decay) <= max_step {
+                // The first substep has the largest increment of the exponential approach: no
+                // substep reaches the rate limit, and the approach stays between U and the
+                // (in-range) target.
+                let gap = u_start - goal;
+                for (uk, e) in self.u_path[1..=n].iter_mut().zip(&self.amp_powers[1..=n]) {
+                    *uk = goal + gap * e;
+                }
+                u = self.u_path[n];
+            } else {
+                for uk in &mut self.u_path[1..=n] {
+                    let u1 = goal + (u - goal) * self.amp_decay;
+                    u = u1.clamp(u - max_step, u + max_step).clamp(lo, hi);
+                    *uk = u;
+                }
             }
             let x_bw0 = self.pea[i].x();
             let x_bw1 = self.pea[i].step(u, if jump { 0.0 } else { t });
             self.voltage[i] = u;
             let du = u - u_start;
-            for k in 1..=n {
-                let xb = if du != 0.0 && !jump {
-                    x_bw0 + (x_bw1 - x_bw0) * (self.u_path[k] - u_start) / du
-                } else {
-                    x_bw1
-                };
-                let dx = (xb - self.x_bias[i]) * MICROMETRE;
-                let c = self.creep(i, dx);
-                self.path[k][i] = dx + c;
+            let start = (x_bw0 - self.x_bias[i]) * MICROMETRE;
+            let end = (x_bw1 - self.x_bias[i]) * MICROMETRE;
+            let (c0, c1) = self.creep(i, if jump { end } else { start }, end);
+            let dc = (c1 - c0) / n as f64;
+            if du != 0.0 && !jump {
+                let slope = (end - start) / du;
+                for k in 1..=n {
+                    self.path[k][i] =
+                        start + slope * (self.u_path[k] - u_start) + c0 + dc * k as f64;
+                }
+            } else {
+                for k in 1..=n {
+                    self.path[k][i] = end + c0 + dc * k as f64;
+                }
             }
             self.path[0][i] = if jump { self.path[1][i] } else { x_start[i] };
             self.x_nom[i] = self.path[n][i];
@@ -683,19 +777,20 @@ impl<M: Mechanics> RigPlant<M> {
             [0.0; 2]
         };
         self.rig.actuate(target, h);
-        for k in 0..n {
-            let x = [self.rig.path[k], self.rig.path[k + 1]];
-            let (s0, s1) = (k as f64 / n as f64, (k + 1) as f64 / n as f64);
-            let floor = [
-                [f0[0] + s0 * (f1[0] - f0[0]), f0[1] + s0 * (f1[1] - f0[1])],
-                [f0[0] + s1 * (f1[0] - f0[0]), f0[1] + s1 * (f1[1] - f0[1])],
-            ];
-            self.mechanics.advance(x, floor);
-            if filtered {
-                let q1 = self.mechanics.output();
+        if filtered {
+            self.mechanics.advance_sample(
+                &self.rig.path,
+                [f0, f1],
+                Some(&mut self.rig.q_path[..n]),
+            );
+            for k in 0..n {
+                let q1 = self.rig.q_path[k];
                 self.rig.sense(q0, q1);
                 q0 = q1;
             }
+        } else {
+            self.mechanics
+                .advance_sample(&self.rig.path, [f0, f1], None);
         }
     }
 }

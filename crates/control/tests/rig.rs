@@ -147,6 +147,40 @@ fn creep_follows_the_logarithmic_law_per_decade() {
     }
 }
 
+/// Reference: the exact solution of the creep relaxations `ż_j = (Δx − z_j)/τ_j`,
+/// τ_j = 0.1, 1, 10, 100 s (module docs), for a displacement step Δx at t = 0 (ideal
+/// amplifier: the voltage jumps): `x_nom(t) = Δx (1 + γ Σ_j (1 − e^{−t/τ_j}))`. Goal: the rig's
+/// per-sample creep update reproduces it to round-off at every sample.
+#[test]
+fn creep_after_a_step_is_the_exact_sum_of_relaxations() {
+    let gamma = 0.02;
+    let mut r = quiet();
+    r.creep = CreepParams { factor: 0.0 };
+    let mut plain = plant(r.clone(), false);
+    r.creep = CreepParams { factor: gamma };
+    let t = r.sample_time;
+    let mut creeping = plant(r, false);
+    for k in 1..=2000 {
+        let cmd = command([700.0, 400.0], [0.0; 2]);
+        plain.apply(&cmd);
+        creeping.apply(&cmd);
+        let tk = k as f64 * t;
+        let law: f64 = [0.1, 1.0, 10.0, 100.0]
+            .iter()
+            .map(|tau| -(-tk / tau).exp_m1())
+            .sum::<f64>()
+            * gamma;
+        for i in 0..2 {
+            let dx = plain.x_nom()[i];
+            let got = creeping.x_nom()[i] / dx - 1.0;
+            assert!(
+                (got - law).abs() < 1e-12,
+                "sample {k}, PEA {i}: {got:e} vs {law:e}"
+            );
+        }
+    }
+}
+
 #[test]
 fn sensor_is_first_order_and_its_noise_is_white_plus_one_over_f() {
     let mut r = quiet();

@@ -91,7 +91,32 @@ impl NonlinearMap {
     /// The correction `d(x_in)` \[m\] to add to the linear output. No allocation.
     #[inline]
     pub fn correction(&self, x_in: [f64; 2]) -> [f64; 2] {
-        let t = terms([x_in[0] / self.scale, x_in[1] / self.scale]);
+        self.evaluator().eval(x_in)
+    }
+
+    /// The polynomial alone, in a small copyable form for the real-time loop.
+    pub fn evaluator(&self) -> Correction {
+        Correction {
+            inv_scale: 1.0 / self.scale,
+            coefficients: self.coefficients,
+        }
+    }
+}
+
+/// The fitted polynomial `d(ξ)`, `ξ = x_in/s` (module docs), with `1/s` precomputed.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Correction {
+    /// 1/s \[1/m\].
+    pub inv_scale: f64,
+    /// Coefficients of q1 and q2 \[m\] in the order of the module docs.
+    pub coefficients: [[f64; TERMS]; 2],
+}
+
+impl Correction {
+    /// `d(x_in)` \[m\].
+    #[inline]
+    pub fn eval(&self, x_in: [f64; 2]) -> [f64; 2] {
+        let t = terms([x_in[0] * self.inv_scale, x_in[1] * self.inv_scale]);
         let mut d = [0.0; 2];
         for j in 0..2 {
             for k in 0..TERMS {
