@@ -81,7 +81,8 @@ pub struct Scenario {
     /// How the digital twin is built from the design.
     #[serde(default)]
     pub twin: Twin,
-    /// Supports.
+    /// Supports (default: none; the checks refuse a structure nothing holds).
+    #[serde(default)]
     pub supports: Vec<Support>,
     /// Passive regions (default: none).
     #[serde(default)]
