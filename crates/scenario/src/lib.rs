@@ -9,6 +9,35 @@
 //! `DECISIONS.md` where the paper is silent. Every group has a `validate()` that names the field,
 //! the value and the accepted range; unknown keys are rejected when parsing.
 //!
+//! # General mechanism problems
+//! `[[ports]]` replace the two PEAs for other compliant mechanisms (Sigmund's displacement
+//! inverter, a gripper; `examples/scenarios/`): each [`Port`] is one node, a direction along
+//! x or y, an input spring `k_in` and either a `force` f or a free `displacement` x_nom of the
+//! source (`f = k_in · x_nom`). `output.direction` ([`Output::direction`]) is the direction d
+//! whose output displacement `d · u_out` the `displacement` objective maximizes, against
+//! `optimization.output_spring` acting along d. Constraints switch off with
+//! `optimization.energy_constraint`, `stress_constraint` (must be off with ports: it is
+//! evaluated at the Table 2 corners of the two-PEA stage), `mirror_symmetry`, `robust` and
+//! `volume_fraction = 1`. Groups a mechanism does not use (actuators, hysteresis, stage,
+//! controller, sensors, simulation, trajectories) may be omitted; supports and regions default
+//! to none. Validation names the field, value and range for a zero or oblique direction, a
+//! non-positive spring, a missing or doubled load, more than two ports, and (in `bounds`) a
+//! port on a support that fixes its DOF, an output held along d, coinciding nodes and a
+//! floating structure.
+//!
+//! ```toml
+//! [output]
+//! tilt_deg = 0.0
+//! direction = [-1.0, 0.0]
+//! at = { kind = "nearest", point = [4.0, 2.0] }
+//!
+//! [[ports]]
+//! at = { kind = "nearest", point = [0.0, 2.0] }
+//! direction = [1.0, 0.0]
+//! spring = 0.1
+//! force = 1.0
+//! ```
+//!
 //! ```
 //! use flexstage_scenario::{Preset, Scenario};
 //! let text = Scenario::preset(Preset::Paper).to_commented_toml();

@@ -22,6 +22,14 @@
 //! * `optimization.mirror_symmetry` → [`Problem::mirror_symmetry`], checked against the
 //!   supports, springs, ports and passive regions.
 //!
+//! # General mechanism problems
+//! A scenario with `[[ports]]` (inverter, gripper) builds the same [`Problem`] as the hand-made
+//! [`crate::samples::inverter`]: one [`Port`] per scenario port (a grounded spring `k_in` on
+//! the driven DOF, the load `k_in·x_nom`), one load case, the objective
+//! [`Objective::Displacement`] along the unit `output.direction`, the output spring grounded
+//! along it (a plain spring on an axis, a link spring on `d·u_out` otherwise), no stroke,
+//! tilt or stress constraint, the energy bound only with `optimization.energy_constraint`.
+//!
 //! # Load cases (DECISIONS.md)
 //! The `p_m` samples walk the perimeter of the stroke square `[−a, a]²` in `(x_nom1, x_nom2)`,
 //! `p_m/4` per side, starting at the corner `(+a, +a)`:
