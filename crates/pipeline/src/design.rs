@@ -575,6 +575,25 @@ pub fn gradient_check(scenario: &Scenario) -> Result<GradientReport> {
     Ok(GradientReport { setup, checks })
 }
 
+/// Refuses a stage that models the two-PEA stage on a general mechanism scenario
+/// (`[[ports]]`: inverter, gripper), whose stages are `design`, `export` (outline) and
+/// `check`.
+pub(crate) fn two_pea_stage(s: &Scenario, stage: &str) -> Result<()> {
+    if Problem::is_mechanism(s) {
+        return Err(flexstage_scenario::ScenarioError::Inconsistent {
+            fields: "ports".into(),
+            reason: format!(
+                "scenario '{}' states a general mechanism ([[ports]]); `{stage}` models the \
+                 two-PEA positioning stage (workspace, reduced model, twin, control). For a \
+                 mechanism run `flexstage design` and `flexstage export`",
+                s.name
+            ),
+        }
+        .into());
+    }
+    Ok(())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -614,23 +633,4 @@ mod tests {
         let e = r.verdict().unwrap_err().to_string();
         assert!(e.contains("2 of 3"), "{e}");
     }
-}
-
-/// Refuses a stage that models the two-PEA stage on a general mechanism scenario
-/// (`[[ports]]`: inverter, gripper), whose stages are `design`, `export` (outline) and
-/// `check`.
-pub(crate) fn two_pea_stage(s: &Scenario, stage: &str) -> Result<()> {
-    if Problem::is_mechanism(s) {
-        return Err(flexstage_scenario::ScenarioError::Inconsistent {
-            fields: "ports".into(),
-            reason: format!(
-                "scenario '{}' states a general mechanism ([[ports]]); `{stage}` models the \
-                 two-PEA positioning stage (workspace, reduced model, twin, control). For a \
-                 mechanism run `flexstage design` and `flexstage export`",
-                s.name
-            ),
-        }
-        .into());
-    }
-    Ok(())
 }

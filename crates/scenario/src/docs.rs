@@ -117,9 +117,18 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
         "An input port of a general mechanism problem (inverter, gripper), replacing the PEAs: one node, a direction along x or y, an input spring and a force or a free displacement.",
     ),
     ("ports.at", "The input node (exactly one)."),
-    ("ports.direction", "Load direction along x or y: [±1, 0] or [0, ±1]."),
-    ("ports.spring", "Input spring k_in [N/m], > 0 (the source's stiffness)."),
-    ("ports.force", "Input force f [N] along direction (or give displacement)."),
+    (
+        "ports.direction",
+        "Load direction along x or y: [±1, 0] or [0, ±1].",
+    ),
+    (
+        "ports.spring",
+        "Input spring k_in [N/m], > 0 (the source's stiffness).",
+    ),
+    (
+        "ports.force",
+        "Input force f [N] along direction (or give displacement).",
+    ),
     (
         "ports.displacement",
         "Free stroke x_nom [m] of the source along direction; the load is spring · x_nom (or give force).",

@@ -59,8 +59,7 @@ use serde::{Deserialize, Serialize};
 pub use bounds::{DesignEstimate, LIMITS, limit};
 pub use design::{
     Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Limits, Material, Mesh,
-    ObjectiveKind, Optimization, Output, Port, Projection, Region, RegionKind, Selector,
-    Support,
+    ObjectiveKind, Optimization, Output, Port, Projection, Region, RegionKind, Selector, Support,
 };
 pub use error::{RangeError, Result, ScenarioError};
 pub use rig::{Amplifier, Creep, FloorVibration, Rig, SensorDynamics, Twin};

@@ -96,7 +96,10 @@ fn bad_mechanism_fields_name_the_field_value_and_range() {
         // a port on a support that fixes its driven DOF (the clamped bottom-left nodes)
         (
             inverter_with("point = [0.0, 2.0]", "point = [0.0, 0.0]"),
-            vec!["supports[1].fix, ports[0]", "fixes the DOF that port 0 drives"],
+            vec![
+                "supports[1].fix, ports[0]",
+                "fixes the DOF that port 0 drives",
+            ],
         ),
         // the output held along its direction by a support
         (
@@ -120,7 +123,8 @@ fn bad_mechanism_fields_name_the_field_value_and_range() {
 #[test]
 fn a_floating_mechanism_is_refused() {
     // Only the input spring (x at one node) holds it: the supports removed.
-    let clamp = "[[supports]]\nfix = \"xy\"\nat = { kind = \"box\", min = [0.0, 0.0], max = [0.0, 0.1] }\n";
+    let clamp =
+        "[[supports]]\nfix = \"xy\"\nat = { kind = \"box\", min = [0.0, 0.0], max = [0.0, 0.1] }\n";
     let roller = "[[supports]]\nfix = \"y\"\nat = { kind = \"edge\", edge = \"top\" }\n";
     let text = inverter_with(clamp, "")
         .replace(roller, "")

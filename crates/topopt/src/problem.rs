@@ -392,9 +392,10 @@ impl Problem {
                 stiffness: p.spring,
             });
         }
-        let direction = s.output.unit_direction().ok_or_else(|| {
-            TopoptError::Problem("[[ports]] need output.direction".into())
-        })?;
+        let direction = s
+            .output
+            .unit_direction()
+            .ok_or_else(|| TopoptError::Problem("[[ports]] need output.direction".into()))?;
         if o.output_spring > 0.0 {
             // A grounded spring on d·u_out: a plain spring when d is along an axis.
             let [dx, dy] = direction;

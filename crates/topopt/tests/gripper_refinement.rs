@@ -46,7 +46,9 @@ fn gripper_toml_output_is_mesh_independent() {
     fine.validate().unwrap();
     let (c_opt, c) = gripper(&coarse);
     let (f_opt, f) = gripper(&fine);
-    println!("gripper d·u_out: 40 × 20 {c_opt:.4} (thresholded {c:.4}), 60 × 30 {f_opt:.4} (thresholded {f:.4})");
+    println!(
+        "gripper d·u_out: 40 × 20 {c_opt:.4} (thresholded {c:.4}), 60 × 30 {f_opt:.4} (thresholded {f:.4})"
+    );
     assert!(c > 0.0 && f > 0.0, "the jaw does not close: {c}, {f}");
     assert!(
         (c - f).abs() <= 0.10 * f,
