@@ -112,6 +112,7 @@ pub struct AnalyzeSummary {
 pub fn analyze(folder: &RunFolder, options: &AnalyzeOptions) -> Result<AnalyzeSummary> {
     options.validate()?;
     let s = folder.scenario();
+    crate::design::two_pea_stage(s, "analyze")?;
     let mut problem = Problem::from_scenario(s, Some(Kinematics::TotalLagrangian))?;
     let workspace = options.inputs.is_empty();
     if !workspace {

@@ -170,7 +170,12 @@ pub fn design(
         folder,
         options,
         s.optimization.max_iterations,
-        (2.0 * s.actuators.stroke_amplitude).powi(2),
+        // 0 marks a general mechanism (no input stroke square).
+        if Problem::is_mechanism(&s) {
+            0.0
+        } else {
+            (2.0 * s.actuators.stroke_amplitude).powi(2)
+        },
         progress,
     )?;
     let seconds = t0.elapsed().as_secs_f64();
@@ -262,6 +267,16 @@ fn iteration_message(names: &[&str], rec: &IterationRecord, input_square: f64) -
         .zip(&rec.constraints)
         .map(|(n, v)| format!("{n} {v:+.3}"))
         .collect();
+    if input_square == 0.0 {
+        // A general mechanism: the objective is the output displacement d · u_out.
+        return format!(
+            "d·u_out {:.4e} m  {}  grey {:.2}  β {}",
+            rec.objective,
+            g.join(" "),
+            rec.grey,
+            rec.beta
+        );
+    }
     format!(
         "J {:.0} µm² ({:.2} × input square)  {}  grey {:.2}  β {}",
         rec.area * 1e12,
@@ -276,12 +291,21 @@ fn iteration_message(names: &[&str], rec: &IterationRecord, input_square: f64) -
 /// [`final_analysis`], with the first natural frequency added) and the uniform start design's
 /// (nonlinear, no additive material, the p_m workspace samples). Returns the final-analysis
 /// problem, the start design's response and the design's analysis.
+/// A general mechanism (`[[ports]]`) has its one load case with its own kinematics and no
+/// PEA-held modal analysis.
 fn final_analyses(s: &Scenario, opt: &Optimizer) -> Result<(Problem, CaseResults, FinalAnalysis)> {
     let (dens, _) = opt.last().expect("at least one iteration");
     let mut fin = final_analysis(s, dens, opt.params().robust)?;
-    fin.summary.first_frequency_hz = Some(first_frequency(s, &dens.physical)?);
-    let mut problem = Problem::from_scenario(s, Some(Kinematics::TotalLagrangian))?;
-    problem.cases = perimeter_walk(s.optimization.samples, s.actuators.stroke_amplitude);
+    let mechanism = Problem::is_mechanism(s);
+    let mut problem = if mechanism {
+        Problem::from_scenario(s, None)?
+    } else {
+        fin.summary.first_frequency_hz = Some(first_frequency(s, &dens.physical)?);
+        Problem::from_scenario(s, Some(Kinematics::TotalLagrangian))?
+    };
+    if !mechanism {
+        problem.cases = perimeter_walk(s.optimization.samples, s.actuators.stroke_amplitude);
+    }
     let mut rho0 = vec![s.optimization.initial_density; dens.physical.len()];
     problem.mesh().apply_passive(&mut rho0, problem.rho_min);
     let r0 = Evaluator::new(&problem, AnalysisParams::default())?.solve_cases(&rho0, None)?;
@@ -370,7 +394,10 @@ fn finish(
     let names = opt.constraint_names();
     run.write(files::HISTORY_CSV, history_csv(&names, h).as_bytes())?;
     run.write(files::HISTORY_JSON, to_json(&h).as_bytes())?;
-    write_figures(run, h.len(), &r0.outputs, &r.outputs)?;
+    if !Problem::is_mechanism(s) {
+        // Figure 4's workspace polygons (a mechanism has one output point, no polygon).
+        write_figures(run, h.len(), &r0.outputs, &r.outputs)?;
+    }
     run.write(files::SUMMARY, summary_json(&summary).as_bytes())?;
     // Last: the finished design marks the stage as done for the other commands.
     run.write(files::DESIGN, file.to_json().as_bytes())?;
@@ -547,6 +574,25 @@ pub fn gradient_check(scenario: &Scenario) -> Result<GradientReport> {
     );
     let checks = check_gradients(&problem, &check, Some(&yeoh), &x, 10, 1e-6)?;
     Ok(GradientReport { setup, checks })
+}
+
+/// Refuses a stage that models the two-PEA stage on a general mechanism scenario
+/// (`[[ports]]`: inverter, gripper), whose stages are `design`, `export` (outline) and
+/// `check`.
+pub(crate) fn two_pea_stage(s: &Scenario, stage: &str) -> Result<()> {
+    if Problem::is_mechanism(s) {
+        return Err(flexstage_scenario::ScenarioError::Inconsistent {
+            fields: "ports".into(),
+            reason: format!(
+                "scenario '{}' states a general mechanism ([[ports]]); `{stage}` models the \
+                 two-PEA positioning stage (workspace, reduced model, twin, control). For a \
+                 mechanism run `flexstage design` and `flexstage export`",
+                s.name
+            ),
+        }
+        .into());
+    }
+    Ok(())
 }
 
 #[cfg(test)]

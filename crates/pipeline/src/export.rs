@@ -154,7 +154,13 @@ pub fn export(folder: &RunFolder, options: &ExportOptions) -> Result<ExportSumma
         run.write(files::STL, &outline.to_stl(s.mesh.thickness, unit))?,
     ];
     let (mut verification, mut verify_error) = (None, None);
-    if let Some(o) = &options.verify {
+    if Problem::is_mechanism(s) && options.verify.is_some() {
+        verify_error = Some(
+            "not applicable: the body-fitted verification loads the two PEA ports at the \
+             stroke corners; a [[ports]] mechanism gets its outline only"
+                .into(),
+        );
+    } else if let Some(o) = &options.verify {
         let p = o.params(&s.limits);
         p.validate()?;
         match flexstage_verify::verify(s, &rho, &outline.loops, &p) {

@@ -119,6 +119,7 @@ pub fn reduce(
 ) -> Result<ReduceSummary> {
     options.validate()?;
     let s = folder.scenario();
+    crate::design::two_pea_stage(s, "reduce")?;
     let problem = reduction_problem(s, options.keep_output_spring)?;
     let design = options
         .design

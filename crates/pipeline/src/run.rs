@@ -178,6 +178,7 @@ pub fn run(
     progress: &dyn Progress,
 ) -> Result<RunSummary> {
     options.validate()?;
+    crate::design::two_pea_stage(&scenario, "run")?;
     let t0 = Instant::now();
     let folder = RunFolder::locked(scenario, root.to_path_buf())?;
     for line in folder.notices() {

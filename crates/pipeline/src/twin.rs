@@ -63,6 +63,7 @@ impl TwinOptions {
 pub fn build(folder: &RunFolder) -> Result<(Twin, f64)> {
     let t0 = Instant::now();
     let s = folder.scenario();
+    crate::design::two_pea_stage(s, "twin")?;
     let problem = flexstage_reduce::reduction_problem(s, false)?;
     let rho = load_design(folder, &DesignSource::Run, &problem)?;
     let twin = Twin::from_scenario(s, &rho)?;

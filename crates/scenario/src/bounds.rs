@@ -226,8 +226,12 @@ const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 /// Every check of this module.
 pub(crate) fn validate(s: &Scenario) -> Result<()> {
     mesh_size(s)?;
-    ports(s)?;
-    rigid_body_modes(s)?;
+    if s.ports.is_empty() {
+        ports(s)?;
+        rigid_body_modes(s)?;
+    } else {
+        mechanism_ports(s)?;
+    }
     trajectories(s)
 }
 
@@ -499,6 +503,102 @@ fn rigid_body_modes(s: &Scenario) -> Result<()> {
                 "the structure floats ({free} held by nothing: singular stiffness); add \
                  [[supports]] (e.g. fix = \"y\" at the input nodes) or set output_spring > 0"
             ),
+        ));
+    }
+    Ok(())
+}
+
+// ---- General mechanism problems (`[[ports]]`, design stage) ----
+
+/// The `[[ports]]` of a general mechanism problem on the mesh: each port and the output on
+/// exactly one node, all distinct, no support fixing a port's driven DOF or holding the
+/// output, and the supports with the input and output springs holding every rigid-body
+/// motion.
+fn mechanism_ports(s: &Scenario) -> Result<()> {
+    let grid = Grid::of(s);
+    let out = port(&grid, "output.at", &s.output.at)?;
+    let at = |n| {
+        let [x, y] = grid.xy(n);
+        format!("the node at ({x:e}, {y:e}) m")
+    };
+    let mut nodes = Vec::with_capacity(s.ports.len());
+    for (i, p) in s.ports.iter().enumerate() {
+        let field = format!("ports[{i}].at");
+        let n = port(&grid, &field, &p.at)?;
+        if n == out {
+            return Err(inconsistent(
+                format!("{field}, output.at"),
+                format!("the output selects the input node, {}", at(n)),
+            ));
+        }
+        if let Some(j) = nodes.iter().position(|&m| m == n) {
+            return Err(inconsistent(
+                format!("ports[{j}].at, {field}"),
+                format!("both ports select {}", at(n)),
+            ));
+        }
+        nodes.push(n);
+    }
+    let mut rows: Vec<[f64; 3]> = Vec::new();
+    let row = |c: usize, [x, y]: [f64; 2]| match c {
+        0 => [1.0, 0.0, -y / s.mesh.length],
+        _ => [0.0, 1.0, x / s.mesh.length],
+    };
+    for (i, sup) in s.supports.iter().enumerate() {
+        let field = format!("supports[{i}].at");
+        finite_box(&field, &sup.at)?;
+        let held = grid.nodes(&sup.at);
+        if held.is_empty() {
+            return Err(RangeError::new(
+                field,
+                "a box that picks no node",
+                "a selector that picks at least one node",
+            )
+            .into());
+        }
+        let fixes = |c: usize| matches!((sup.fix, c), (Fix::Xy, _) | (Fix::X, 0) | (Fix::Y, 1));
+        for (k, (p, &n)) in s.ports.iter().zip(&nodes).enumerate() {
+            if held.contains(&n) && fixes(p.component()) {
+                return Err(inconsistent(
+                    format!("supports[{i}].fix, ports[{k}]"),
+                    format!(
+                        "the support fixes the DOF that port {k} drives, at {}",
+                        at(n)
+                    ),
+                ));
+            }
+        }
+        let d = s.output.unit_direction().unwrap_or([0.0, 0.0]);
+        if held.contains(&out) && (0..2).all(|c| d[c] == 0.0 || fixes(c)) {
+            return Err(inconsistent(
+                format!("{field}, output.at, output.direction"),
+                format!(
+                    "the support fixes the output port {} along output.direction: its \
+                     displacement cannot be maximized",
+                    at(out)
+                ),
+            ));
+        }
+        for n in held {
+            for c in (0..2).filter(|&c| fixes(c)) {
+                rows.push(row(c, grid.xy(n)));
+            }
+        }
+    }
+    for (p, &n) in s.ports.iter().zip(&nodes) {
+        rows.push(row(p.component(), grid.xy(n)));
+    }
+    if s.optimization.output_spring > 0.0 {
+        if let Some([dx, dy]) = s.output.unit_direction() {
+            let (a, b) = (row(0, grid.xy(out)), row(1, grid.xy(out)));
+            rows.push([0, 1, 2].map(|k| dx * a[k] + dy * b[k]));
+        }
+    }
+    if rank3(&rows) < 3 {
+        return Err(inconsistent(
+            "supports, ports, optimization.output_spring",
+            "the structure floats (a rigid-body motion is held by neither a support nor a \
+             port or output spring: singular stiffness); add [[supports]]",
         ));
     }
     Ok(())

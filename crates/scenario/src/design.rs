@@ -240,13 +240,119 @@ pub struct Output {
     pub at: Selector,
     /// Tilt θ of the target output frame \[deg\] (Figure 4b, Eq. 22); 0 is the normal setup.
     pub tilt_deg: f64,
+    /// Direction `d` of the output displacement to maximize (`objective = "displacement"`):
+    /// any non-zero finite vector, normalized on use. Unset: `(sin θ, cos θ)` of `tilt_deg`
+    /// (negated in the reversed configuration). Required with `[[ports]]`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f64; 2]>,
 }
 
 impl Output {
     /// Checks every field.
     pub fn validate(&self, mesh: &Mesh) -> Result<()> {
         self.at.validate("output.at", mesh)?;
-        within("output.tilt_deg", self.tilt_deg, -89.0, 89.0)
+        within("output.tilt_deg", self.tilt_deg, -89.0, 89.0)?;
+        if let Some(d) = self.direction {
+            direction("output.direction", d, false)?;
+        }
+        Ok(())
+    }
+
+    /// The unit direction `d` of `direction`, if given.
+    pub fn unit_direction(&self) -> Option<[f64; 2]> {
+        self.direction.map(|d| {
+            let n = d[0].hypot(d[1]);
+            [d[0] / n, d[1] / n]
+        })
+    }
+}
+
+/// Checks a direction vector: finite and non-zero; with `axis`, along x or y.
+fn direction(field: &str, d: [f64; 2], axis: bool) -> Result<()> {
+    let shown = format!("[{:e}, {:e}]", d[0], d[1]);
+    let n = d[0].hypot(d[1]);
+    if !(n.is_finite() && n > 1e-12) {
+        return Err(crate::RangeError::new(
+            field,
+            shown,
+            "a finite non-zero vector [x, y] (it is normalized on use)",
+        )
+        .into());
+    }
+    if axis && d[0] != 0.0 && d[1] != 0.0 {
+        return Err(crate::RangeError::new(
+            field,
+            shown,
+            "a vector along x or y, [±a, 0] or [0, ±a] (a port drives one DOF)",
+        )
+        .into());
+    }
+    Ok(())
+}
+
+/// An input port of a general mechanism problem (`[[ports]]`, e.g. Sigmund's displacement
+/// inverter or a gripper): on one node, along x or y, a grounded input spring `k_in` and the
+/// load `f = k_in · x_nom` (Eq. 2–3 for a PEA of stiffness `k_in` and nominal stroke `x_nom`).
+/// Give the load either as a `force` f \[N\] or as the free `displacement` x_nom \[m\] of
+/// the source (a displacement source with internal stiffness `k_in`); both act along
+/// `direction`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Port {
+    /// The input node (exactly one).
+    pub at: Selector,
+    /// Direction of the load, along x or y (`[±1, 0]` or `[0, ±1]`).
+    pub direction: [f64; 2],
+    /// Input spring `k_in` \[N/m\], > 0: the source's stiffness.
+    pub spring: f64,
+    /// Input force f \[N\] along `direction` (exclusive with `displacement`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub force: Option<f64>,
+    /// Free stroke x_nom \[m\] of the source along `direction` (exclusive with `force`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub displacement: Option<f64>,
+}
+
+impl Port {
+    /// Checks every field; `field` is the TOML path (e.g. `ports[0]`).
+    pub fn validate(&self, field: &str, mesh: &Mesh) -> Result<()> {
+        self.at.validate(&format!("{field}.at"), mesh)?;
+        direction(&format!("{field}.direction"), self.direction, true)?;
+        positive(&format!("{field}.spring"), self.spring)?;
+        match (self.force, self.displacement) {
+            (Some(f), None) => check(
+                &format!("{field}.force"),
+                f,
+                f.is_finite() && f != 0.0,
+                "a finite non-zero force [N]",
+            ),
+            (None, Some(x)) => check(
+                &format!("{field}.displacement"),
+                x,
+                x.is_finite() && x != 0.0 && x.abs() <= 1.0,
+                "a non-zero stroke in [-1, 1] m",
+            ),
+            (f, x) => Err(ScenarioError::Inconsistent {
+                fields: format!("{field}.force, {field}.displacement"),
+                reason: format!(
+                    "give exactly one of force and displacement (force = {f:?}, displacement = {x:?})"
+                ),
+            }),
+        }
+    }
+
+    /// The DOF component the port drives: 0 = x, 1 = y.
+    pub fn component(&self) -> usize {
+        usize::from(self.direction[0] == 0.0)
+    }
+
+    /// The signed nominal stroke along the driven DOF's +axis \[m\]: `x_nom` or `f / k_in`,
+    /// times the sign of `direction`.
+    pub fn nominal_stroke(&self) -> f64 {
+        let x = self
+            .displacement
+            .unwrap_or_else(|| self.force.unwrap_or(0.0) / self.spring);
+        x * self.direction[self.component()].signum()
     }
 }
 
@@ -354,6 +460,10 @@ pub struct Optimization {
     /// (DECISIONS.md, "Robust formulation"). Default true.
     #[serde(default = "default_true")]
     pub robust: bool,
+    /// Strain-energy constraint Σ ≤ Σ0 of Eq. (5) (`strain_energy_limit`). Default true; the
+    /// classic mechanism codes (inverter, gripper) state none.
+    #[serde(default = "default_true")]
+    pub energy_constraint: bool,
     /// Fatigue stress constraint: aggregated von Mises stress of the (eroded) design at the
     /// four Table 2 extreme inputs ≤ `limits.fatigue_strength / limits.safety_factor`
     /// (DECISIONS.md, "Stress constraint"). Default true.
@@ -381,8 +491,9 @@ pub enum KinematicsKind {
 pub enum ObjectiveKind {
     /// Maximize the shoelace area of the output polygon (Eq. 4).
     Workspace,
-    /// Maximize the output displacement along the target direction under the compressive
-    /// input (PEA1 +a, PEA2 −a), with the output spring.
+    /// Maximize the output displacement `d · u_out` along `output.direction` (or the tilt
+    /// axis): for the two PEAs under the compressive input (PEA1 +a, PEA2 −a), for
+    /// `[[ports]]` under their loads; with the output spring.
     Displacement,
 }
 
@@ -601,6 +712,55 @@ pub(crate) fn validate_supports(supports: &[Support], mesh: &Mesh) -> Result<()>
 pub(crate) fn validate_regions(regions: &[Region], mesh: &Mesh) -> Result<()> {
     for (i, r) in regions.iter().enumerate() {
         r.at.validate(&format!("regions[{i}].at"), mesh)?;
+    }
+    Ok(())
+}
+
+/// Checks the `[[ports]]` of a general mechanism problem against the groups they interact
+/// with (the node-level checks, e.g. a port on a support, are in `bounds`).
+pub(crate) fn validate_ports(s: &crate::Scenario) -> Result<()> {
+    if s.ports.is_empty() {
+        return Ok(());
+    }
+    count("ports (number of [[ports]])", s.ports.len(), 1, 2)?;
+    for (i, p) in s.ports.iter().enumerate() {
+        p.validate(&format!("ports[{i}]"), &s.mesh)?;
+    }
+    let o = &s.optimization;
+    let inconsistent = |fields: &str, reason: &str| {
+        Err(ScenarioError::Inconsistent {
+            fields: fields.into(),
+            reason: reason.into(),
+        })
+    };
+    if o.objective != ObjectiveKind::Displacement {
+        return inconsistent(
+            "ports, optimization.objective",
+            "[[ports]] state a mechanism whose output displacement is maximized: set \
+             optimization.objective = \"displacement\" (the workspace objective needs the two \
+             PEAs of [actuators])",
+        );
+    }
+    if s.output.direction.is_none() {
+        return inconsistent(
+            "ports, output.direction",
+            "[[ports]] need output.direction, the direction of the output displacement to \
+             maximize (e.g. [-1.0, 0.0])",
+        );
+    }
+    if o.stress_constraint {
+        return inconsistent(
+            "ports, optimization.stress_constraint",
+            "the fatigue stress constraint is evaluated at the Table 2 stroke corners of the \
+             two-PEA stage; set optimization.stress_constraint = false for [[ports]] problems",
+        );
+    }
+    if s.output.tilt_deg != 0.0 {
+        return inconsistent(
+            "ports, output.tilt_deg",
+            "the tilt requirement belongs to the two-PEA workspace; with [[ports]] give the \
+             output direction in output.direction and set tilt_deg = 0",
+        );
     }
     Ok(())
 }

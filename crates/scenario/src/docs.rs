@@ -109,6 +109,31 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
         "Output port (Figure 2b, Eq. 7): centre of the top edge.",
     ),
     (
+        "output.direction",
+        "Direction [x, y] of the output displacement maximized by objective = \"displacement\" (normalized; required with [[ports]]). Unset: the tilt axis.",
+    ),
+    (
+        "ports",
+        "An input port of a general mechanism problem (inverter, gripper), replacing the PEAs: one node, a direction along x or y, an input spring and a force or a free displacement.",
+    ),
+    ("ports.at", "The input node (exactly one)."),
+    (
+        "ports.direction",
+        "Load direction along x or y: [±1, 0] or [0, ±1].",
+    ),
+    (
+        "ports.spring",
+        "Input spring k_in [N/m], > 0 (the source's stiffness).",
+    ),
+    (
+        "ports.force",
+        "Input force f [N] along direction (or give displacement).",
+    ),
+    (
+        "ports.displacement",
+        "Free stroke x_nom [m] of the source along direction; the load is spring · x_nom (or give force).",
+    ),
+    (
         "output.tilt_deg",
         "Tilt θ of the target output frame [deg], in [-89, 89] (Figure 4b, Eq. 22). 0: normal setup.",
     ),
@@ -216,6 +241,10 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     (
         "optimization.robust",
         "Robust formulation (Wang, Lazarov & Sigmund 2011): maximize the worst workspace of the eroded, intermediate and dilated designs; thresholds and filter radius come from limits.min_hinge_thickness and limits.min_slot_width (DECISIONS.md). Default true.",
+    ),
+    (
+        "optimization.energy_constraint",
+        "Strain-energy constraint Σ ≤ Σ0 of Eq. 5 (strain_energy_limit). Default true; the classic mechanism codes (inverter, gripper) state none.",
     ),
     (
         "optimization.stress_constraint",

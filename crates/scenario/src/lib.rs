@@ -9,6 +9,35 @@
 //! `DECISIONS.md` where the paper is silent. Every group has a `validate()` that names the field,
 //! the value and the accepted range; unknown keys are rejected when parsing.
 //!
+//! # General mechanism problems
+//! `[[ports]]` replace the two PEAs for other compliant mechanisms (Sigmund's displacement
+//! inverter, a gripper; `examples/scenarios/`): each [`Port`] is one node, a direction along
+//! x or y, an input spring `k_in` and either a `force` f or a free `displacement` x_nom of the
+//! source (`f = k_in · x_nom`). `output.direction` ([`Output::direction`]) is the direction d
+//! whose output displacement `d · u_out` the `displacement` objective maximizes, against
+//! `optimization.output_spring` acting along d. Constraints switch off with
+//! `optimization.energy_constraint`, `stress_constraint` (must be off with ports: it is
+//! evaluated at the Table 2 corners of the two-PEA stage), `mirror_symmetry`, `robust` and
+//! `volume_fraction = 1`. Groups a mechanism does not use (actuators, hysteresis, stage,
+//! controller, sensors, simulation, trajectories) may be omitted; supports and regions default
+//! to none. Validation names the field, value and range for a zero or oblique direction, a
+//! non-positive spring, a missing or doubled load, more than two ports, and (in `bounds`) a
+//! port on a support that fixes its DOF, an output held along d, coinciding nodes and a
+//! floating structure.
+//!
+//! ```toml
+//! [output]
+//! tilt_deg = 0.0
+//! direction = [-1.0, 0.0]
+//! at = { kind = "nearest", point = [4.0, 2.0] }
+//!
+//! [[ports]]
+//! at = { kind = "nearest", point = [0.0, 2.0] }
+//! direction = [1.0, 0.0]
+//! spring = 0.1
+//! force = 1.0
+//! ```
+//!
 //! ```
 //! use flexstage_scenario::{Preset, Scenario};
 //! let text = Scenario::preset(Preset::Paper).to_commented_toml();
@@ -30,7 +59,7 @@ use serde::{Deserialize, Serialize};
 pub use bounds::{DesignEstimate, LIMITS, RecordEstimate, TRACK_COLUMNS, limit};
 pub use design::{
     Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Limits, Material, Mesh,
-    ObjectiveKind, Optimization, Output, Projection, Region, RegionKind, Selector, Support,
+    ObjectiveKind, Optimization, Output, Port, Projection, Region, RegionKind, Selector, Support,
 };
 pub use error::{RangeError, Result, ScenarioError};
 pub use rig::{Amplifier, Creep, FloorVibration, Rig, SensorDynamics, Twin};
@@ -48,7 +77,8 @@ pub struct Scenario {
     pub mesh: Mesh,
     /// Solid material.
     pub material: Material,
-    /// The two PEAs.
+    /// The two PEAs. Optional with `[[ports]]` (then unused; default: the paper's).
+    #[serde(default = "default_actuators")]
     pub actuators: Actuators,
     /// The output port.
     pub output: Output,
@@ -57,15 +87,20 @@ pub struct Scenario {
     /// Fatigue strength, safety factor and the smallest hinge and slot.
     #[serde(default)]
     pub limits: Limits,
-    /// Piezo hysteresis and amplifier.
+    /// Piezo hysteresis and amplifier (default: the paper's, Table A1).
+    #[serde(default = "default_hysteresis")]
     pub hysteresis: Hysteresis,
-    /// Reduced stage model: guess and truth.
+    /// Reduced stage model: guess and truth (default: the paper's, Table 4).
+    #[serde(default = "default_stage")]
     pub stage: Stage,
-    /// Observer and controller gains.
+    /// Observer and controller gains (default: the paper's).
+    #[serde(default = "default_controller")]
     pub controller: Controller,
-    /// Position sensors.
+    /// Position sensors (default: the paper's).
+    #[serde(default = "default_sensors")]
     pub sensors: Sensors,
-    /// Timing of the simulated experiment.
+    /// Timing of the simulated experiment (default: the paper's).
+    #[serde(default = "default_simulation")]
     pub simulation: Simulation,
     /// The loop around the simulated stage, as on a rig (delay, amplifiers, PEA truth and
     /// creep, sensor dynamics and noise, floor vibration).
@@ -74,16 +109,48 @@ pub struct Scenario {
     /// How the digital twin is built from the design.
     #[serde(default)]
     pub twin: Twin,
-    /// Supports.
+    /// Supports (default: none; the checks refuse a structure nothing holds).
+    #[serde(default)]
     pub supports: Vec<Support>,
-    /// Passive regions.
+    /// Passive regions (default: none).
+    #[serde(default)]
     pub regions: Vec<Region>,
-    /// Reference trajectories.
+    /// Reference trajectories (default: the paper's).
+    #[serde(default = "default_trajectories")]
     pub trajectories: Vec<Trajectory>,
+    /// Input ports of a general mechanism problem (one or two; e.g. Sigmund's inverter, a
+    /// gripper). Empty (the default): the two PEAs of `actuators` drive the stage. Non-empty:
+    /// they replace the PEAs, the objective must be `displacement` along `output.direction`,
+    /// and only `design`/`export`/`analyze` apply (the later stages model the two-PEA stage).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub ports: Vec<Port>,
 }
 
 fn default_rig() -> Rig {
     Rig::realistic(&Scenario::paper().hysteresis)
+}
+
+// The groups a design-only scenario (e.g. `[[ports]]`) may leave out: the paper's values.
+fn default_actuators() -> Actuators {
+    Scenario::paper().actuators
+}
+fn default_hysteresis() -> Hysteresis {
+    Scenario::paper().hysteresis
+}
+fn default_stage() -> Stage {
+    Scenario::paper().stage
+}
+fn default_controller() -> Controller {
+    Scenario::paper().controller
+}
+fn default_sensors() -> Sensors {
+    Scenario::paper().sensors
+}
+fn default_simulation() -> Simulation {
+    Scenario::paper().simulation
+}
+fn default_trajectories() -> Vec<Trajectory> {
+    Scenario::paper().trajectories
 }
 
 /// Built-in scenarios.
@@ -193,6 +260,7 @@ impl Scenario {
             output: Output {
                 at: Selector::Nearest { point: out },
                 tilt_deg: 0.0,
+                direction: None,
             },
             optimization: Optimization {
                 penalty: 3.0,
@@ -213,6 +281,7 @@ impl Scenario {
                 stagnation_tolerance: 1e-3,
                 mirror_symmetry: true,
                 robust: true,
+                energy_constraint: true,
                 stress_constraint: true,
                 projection: Projection {
                     enabled: true,
@@ -296,6 +365,7 @@ impl Scenario {
                     duration: 1.0,
                 },
             ],
+            ports: Vec::new(),
         };
         scenario.regions = port_patches(&scenario, 3);
         scenario
@@ -332,12 +402,16 @@ impl Scenario {
         error::file_name("name", &self.name)?;
         self.mesh.validate()?;
         self.material.validate()?;
-        self.actuators.validate(&self.mesh)?;
+        if self.ports.is_empty() {
+            // With [[ports]] the PEAs are unused (and their default nodes may lie elsewhere).
+            self.actuators.validate(&self.mesh)?;
+        }
         self.output.validate(&self.mesh)?;
         design::validate_supports(&self.supports, &self.mesh)?;
         design::validate_regions(&self.regions, &self.mesh)?;
         self.optimization.validate()?;
         self.limits.validate()?;
+        design::validate_ports(self)?;
         if self.optimization.mirror_symmetry && self.output.tilt_deg != 0.0 {
             return Err(ScenarioError::Inconsistent {
                 fields: "optimization.mirror_symmetry, output.tilt_deg".into(),

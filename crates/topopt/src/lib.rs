@@ -48,4 +48,4 @@ pub use realization::{
 };
 pub use responses::{PerResponse, ResponseKind};
 pub use stress::StressConstraint;
-pub use summary::DesignSummary;
+pub use summary::{DesignSummary, MechanismSummary};

@@ -22,6 +22,14 @@
 //! * `optimization.mirror_symmetry` → [`Problem::mirror_symmetry`], checked against the
 //!   supports, springs, ports and passive regions.
 //!
+//! # General mechanism problems
+//! A scenario with `[[ports]]` (inverter, gripper) builds the same [`Problem`] as the hand-made
+//! [`crate::samples::inverter`]: one [`Port`] per scenario port (a grounded spring `k_in` on
+//! the driven DOF, the load `k_in·x_nom`), one load case, the objective
+//! [`Objective::Displacement`] along the unit `output.direction`, the output spring grounded
+//! along it (a plain spring on an axis, a link spring on `d·u_out` otherwise), no stroke,
+//! tilt or stress constraint, the energy bound only with `optimization.energy_constraint`.
+//!
 //! # Load cases (DECISIONS.md)
 //! The `p_m` samples walk the perimeter of the stroke square `[−a, a]²` in `(x_nom1, x_nom2)`,
 //! `p_m/4` per side, starting at the corner `(+a, +a)`:
@@ -197,6 +205,49 @@ pub fn stress_energy_bound(s: &Scenario) -> f64 {
     (1.0 - s.material.poisson_ratio) * sa * sa * volume / s.material.youngs_modulus
 }
 
+/// The strain-energy bound Σ0 of a scenario, if `optimization.energy_constraint`:
+/// `strain_energy_limit`, or [`stress_energy_bound`] when that is 0.
+fn energy_limit(s: &Scenario) -> Option<f64> {
+    let o = &s.optimization;
+    o.energy_constraint.then(|| {
+        if o.strain_energy_limit > 0.0 {
+            o.strain_energy_limit
+        } else {
+            stress_energy_bound(s)
+        }
+    })
+}
+
+/// SIMP material of a scenario.
+fn scenario_material(s: &Scenario) -> FemMaterial {
+    FemMaterial {
+        e0: s.material.youngs_modulus,
+        e_min: s.material.min_modulus,
+        nu: s.material.poisson_ratio,
+        penalty: s.optimization.penalty,
+    }
+}
+
+/// The fixed DOFs of a scenario's supports.
+fn scenario_supports(s: &Scenario, mesh: &Mesh) -> Result<BoundaryConditions> {
+    let mut bcs = BoundaryConditions::new();
+    for (i, sup) in s.supports.iter().enumerate() {
+        let nodes = select_nodes(mesh, &sup.at);
+        if nodes.is_empty() {
+            return Err(TopoptError::Problem(format!(
+                "supports[{i}].at selects no node"
+            )));
+        }
+        let c = match sup.fix {
+            Fix::X => Component::X,
+            Fix::Y => Component::Y,
+            Fix::Xy => Component::Both,
+        };
+        bcs.fix_nodes(&nodes, c);
+    }
+    Ok(bcs)
+}
+
 /// Mesh with the scenario's passive regions (later regions override earlier ones).
 pub fn scenario_mesh(s: &Scenario) -> Result<Mesh> {
     let m = &s.mesh;
@@ -224,14 +275,12 @@ impl Problem {
     /// Builds the problem of a scenario. `kinematics` overrides `optimization.kinematics`
     /// (e.g. the final nonlinear analysis of a linearly optimized design).
     pub fn from_scenario(s: &Scenario, kinematics: Option<Kinematics>) -> Result<Problem> {
+        if !s.ports.is_empty() {
+            return Self::mechanism_from_scenario(s, kinematics);
+        }
         let mesh = scenario_mesh(s)?;
         let o = &s.optimization;
-        let material = FemMaterial {
-            e0: s.material.youngs_modulus,
-            e_min: s.material.min_modulus,
-            nu: s.material.poisson_ratio,
-            penalty: o.penalty,
-        };
+        let material = scenario_material(s);
         let a = &s.actuators;
         let n1 = single_node(&mesh, &a.pea1, "actuators.pea1")?;
         let n2 = single_node(&mesh, &a.pea2, "actuators.pea2")?;
@@ -241,21 +290,7 @@ impl Problem {
                 "actuators.pea1 and actuators.pea2 select the same node".into(),
             ));
         }
-        let mut bcs = BoundaryConditions::new();
-        for (i, sup) in s.supports.iter().enumerate() {
-            let nodes = select_nodes(&mesh, &sup.at);
-            if nodes.is_empty() {
-                return Err(TopoptError::Problem(format!(
-                    "supports[{i}].at selects no node"
-                )));
-            }
-            let c = match sup.fix {
-                Fix::X => Component::X,
-                Fix::Y => Component::Y,
-                Fix::Xy => Component::Both,
-            };
-            bcs.fix_nodes(&nodes, c);
-        }
+        let mut bcs = scenario_supports(s, &mesh)?;
         bcs.add_spring(2 * n1, a.stiffness)
             .add_spring(2 * n2, a.stiffness);
         let theta = s.output.tilt_deg.to_radians();
@@ -263,7 +298,10 @@ impl Problem {
             Configuration::Regular => 1.0,
             Configuration::Reversed => -1.0,
         };
-        let direction = [sign * theta.sin(), sign * theta.cos()];
+        let direction = s
+            .output
+            .unit_direction()
+            .unwrap_or([sign * theta.sin(), sign * theta.cos()]);
         if o.output_spring > 0.0 {
             // The load the output drives, relative to the moving frame of Eq. (22): it forces
             // the mechanism to transmit force to the output instead of moving it through void
@@ -291,11 +329,7 @@ impl Problem {
         }
         let kin = kinematics.unwrap_or_else(|| scenario_kinematics(s));
         let model = Model::new(mesh, material, kin, bcs)?;
-        let energy_limit = Some(if o.strain_energy_limit > 0.0 {
-            o.strain_energy_limit
-        } else {
-            stress_energy_bound(s)
-        });
+        let energy_limit = energy_limit(s);
         let corners = corner_cases(cases.len());
         let stress = (o.stress_constraint && matches!(objective, Objective::Workspace { .. }))
             .then(|| StressConstraint {
@@ -337,6 +371,66 @@ impl Problem {
         };
         p.validate()?;
         Ok(p)
+    }
+
+    /// The general mechanism problem of a scenario with `[[ports]]` (module docs, "General
+    /// mechanism problems"): the ports' springs and loads, the output spring along the output
+    /// direction, one load case, `d · u_out` maximized.
+    fn mechanism_from_scenario(s: &Scenario, kinematics: Option<Kinematics>) -> Result<Problem> {
+        let mesh = scenario_mesh(s)?;
+        let o = &s.optimization;
+        let out = single_node(&mesh, &s.output.at, "output.at")?;
+        let mut bcs = scenario_supports(s, &mesh)?;
+        let mut inputs = Vec::with_capacity(s.ports.len());
+        for (i, p) in s.ports.iter().enumerate() {
+            let node = single_node(&mesh, &p.at, &format!("ports[{i}].at"))?;
+            let dof = 2 * node + p.component();
+            bcs.add_spring(dof, p.spring);
+            inputs.push(Port {
+                node,
+                dof,
+                stiffness: p.spring,
+            });
+        }
+        let direction = s
+            .output
+            .unit_direction()
+            .ok_or_else(|| TopoptError::Problem("[[ports]] need output.direction".into()))?;
+        if o.output_spring > 0.0 {
+            // A grounded spring on d·u_out: a plain spring when d is along an axis.
+            let [dx, dy] = direction;
+            if dy == 0.0 {
+                bcs.add_spring(2 * out, o.output_spring);
+            } else if dx == 0.0 {
+                bcs.add_spring(2 * out + 1, o.output_spring);
+            } else {
+                bcs.add_link(&[(2 * out, dx), (2 * out + 1, dy)], o.output_spring);
+            }
+        }
+        let kin = kinematics.unwrap_or_else(|| scenario_kinematics(s));
+        let model = Model::new(mesh, scenario_material(s), kin, bcs)?;
+        let p = Problem {
+            model,
+            cases: vec![s.ports.iter().map(|p| p.nominal_stroke()).collect()],
+            inputs,
+            output: out,
+            objective: Objective::Displacement { direction },
+            energy_limit: energy_limit(s),
+            max_stroke: None,
+            volume_fraction: (o.volume_fraction < 1.0).then_some(o.volume_fraction),
+            tilt: None,
+            stress: None,
+            mirror_symmetry: o.mirror_symmetry,
+            rho_min: o.rho_min,
+            initial_density: o.initial_density,
+        };
+        p.validate()?;
+        Ok(p)
+    }
+
+    /// Is this a general mechanism problem (not the two-PEA workspace of Eq. 4–5)?
+    pub fn is_mechanism(s: &Scenario) -> bool {
+        !s.ports.is_empty()
     }
 
     /// Checks that the problem is mirror-symmetric about `x = l/2` (passive regions, supports,

@@ -77,6 +77,30 @@ pub struct DesignSummary {
     /// Lowest natural frequency of the design \[Hz\] (computed by the reduced model, if run).
     #[serde(default)]
     pub first_frequency_hz: Option<f64>,
+    /// What a general mechanism (`[[ports]]`: inverter, gripper) delivers; None for the
+    /// two-PEA workspace problem, whose area, α and θ are the fields above.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mechanism: Option<MechanismSummary>,
+}
+
+/// The output of a general mechanism problem, from a final analysis with the scenario's own
+/// kinematics (the problem's one load case).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MechanismSummary {
+    /// Unit output direction d.
+    pub direction: [f64; 2],
+    /// Output displacement along d, `d · u_out`, of the blueprint \[m\].
+    pub output_displacement: f64,
+    /// The full output displacement (u_x, u_y) of the blueprint \[m\].
+    pub output: [f64; 2],
+    /// Displacement of each input port along its driven DOF \[m\].
+    pub inputs: Vec<f64>,
+    /// Geometric advantage `d · u_out / u_in` of the first port.
+    pub geometric_advantage: f64,
+    /// `d · u_out` of the eroded design \[m\] (robust formulation).
+    pub eroded: Option<f64>,
+    /// `d · u_out` of the dilated design \[m\] (robust formulation).
+    pub dilated: Option<f64>,
 }
 
 /// The final analysis of a design: its summary, the blueprint's case results and the
@@ -129,12 +153,16 @@ fn peak_stress(problem: &Problem, ev: &Evaluator, rho: &[f64]) -> f64 {
 }
 
 /// The final analysis (module docs) of the densities of an optimization of scenario `s`,
-/// with the length scale of its robust formulation (if any).
+/// with the length scale of its robust formulation (if any). A general mechanism
+/// (`[[ports]]`) is analysed by [`mechanism_analysis`].
 pub fn final_analysis(
     s: &Scenario,
     dens: &Densities,
     length_scale: Option<LengthScale>,
 ) -> Result<FinalAnalysis> {
+    if Problem::is_mechanism(s) {
+        return mechanism_analysis(s, dens, length_scale);
+    }
     let mut problem = Problem::from_scenario(s, Some(Kinematics::TotalLagrangian))?;
     let a = s.actuators.stroke_amplitude;
     problem.cases = perimeter_walk(s.optimization.samples, a);
@@ -166,8 +194,34 @@ pub fn final_analysis(
     };
     let theta_target = s.output.tilt_deg.to_radians();
     let (alpha, theta) = amplification(&problem, &response, theta_target, sign);
+    let summary = DesignSummary {
+        area,
+        area_ratio: area / (2.0 * a).powi(2),
+        alpha,
+        theta_deg: theta,
+        area_eroded: eroded.as_ref().map(|(_, x)| x.0),
+        area_dilated,
+        peak_stress: peak_stress(&problem, &ev, &dens.physical),
+        constrained_stress,
+        ..base_summary(s, &problem, &dens.physical, length_scale)
+    };
+    let corner_displacement = ev.cases[problem.differential_corners().0].u.clone();
+    Ok(FinalAnalysis {
+        summary,
+        response,
+        corner_displacement,
+    })
+}
+
+/// The summary fields every problem shares (mass, sizes, symmetry, allowables); the
+/// response fields zero or None.
+fn base_summary(
+    s: &Scenario,
+    problem: &Problem,
+    rho: &[f64],
+    length_scale: Option<LengthScale>,
+) -> DesignSummary {
     let mesh = problem.mesh();
-    let rho = &dens.physical;
     let design: Vec<usize> = problem.design_elements();
     let field = Field {
         nl: mesh.nl,
@@ -177,18 +231,18 @@ pub fn final_analysis(
     };
     let (thinnest, gap) = member_sizes(&field, GEOMETRY_REFINE);
     let element_volume = mesh.dx() * mesh.dy() * mesh.thickness;
-    let summary = DesignSummary {
-        area,
-        area_ratio: area / (2.0 * a).powi(2),
-        alpha,
-        theta_deg: theta,
+    DesignSummary {
+        area: 0.0,
+        area_ratio: 0.0,
+        alpha: 0.0,
+        theta_deg: 0.0,
         theta_target_deg: s.output.tilt_deg,
         mass: rho.iter().sum::<f64>() * element_volume * s.material.density,
         volume_fraction: design.iter().map(|&e| rho[e]).sum::<f64>() / design.len() as f64,
-        area_eroded: eroded.as_ref().map(|(_, x)| x.0),
-        area_dilated,
-        peak_stress: peak_stress(&problem, &ev, rho),
-        constrained_stress,
+        area_eroded: None,
+        area_dilated: None,
+        peak_stress: 0.0,
+        constrained_stress: None,
         allowable_stress: s.limits.allowable_stress(),
         design_allowable: s.limits.allowable_stress() / s.limits.mesh_stress_factor,
         one_node_hinges: one_node_hinges(&field).len(),
@@ -200,8 +254,58 @@ pub fn final_analysis(
         guaranteed_gap: length_scale.map(|l| l.void_size),
         mirror_asymmetry: mirror_asymmetry(&field),
         first_frequency_hz: None,
+        mechanism: None,
+    }
+}
+
+/// The final analysis of a general mechanism (`[[ports]]`): its one load case with the
+/// scenario's own kinematics (the classic mechanism codes are linear; a 0.1 m-per-newton
+/// inverter analysed nonlinearly would be another problem), for the blueprint and the eroded
+/// and dilated designs. `alpha` is the geometric advantage, `theta_deg` the direction of
+/// u_out from +y towards +x; the workspace fields are zero.
+pub fn mechanism_analysis(
+    s: &Scenario,
+    dens: &Densities,
+    length_scale: Option<LengthScale>,
+) -> Result<FinalAnalysis> {
+    let problem = Problem::from_scenario(s, None)?;
+    let d = match problem.objective {
+        crate::problem::Objective::Displacement { direction } => direction,
+        crate::problem::Objective::Workspace { .. } => [0.0, 1.0],
     };
-    let corner_displacement = ev.cases[problem.differential_corners().0].u.clone();
+    let along = |o: [f64; 2]| d[0] * o[0] + d[1] * o[1];
+    let solve = |rho: &[f64]| -> Result<(CaseResults, Evaluator)> {
+        let mut ev = Evaluator::new(&problem, AnalysisParams::default())?;
+        let r = ev.solve_cases(rho, None)?;
+        Ok((r, ev))
+    };
+    let (response, ev) = solve(&dens.physical)?;
+    let of = |which: Realization| -> Result<Option<f64>> {
+        dens.of(which)
+            .map(|rho| solve(rho).map(|(r, _)| along(r.outputs[0])))
+            .transpose()
+    };
+    let output = response.outputs[0];
+    let inputs = response.inputs[0].clone();
+    let u_out = along(output);
+    let geometric_advantage = u_out / inputs[0].abs().max(f64::MIN_POSITIVE);
+    let summary = DesignSummary {
+        alpha: geometric_advantage,
+        theta_deg: output[0].atan2(output[1]).to_degrees(),
+        theta_target_deg: d[0].atan2(d[1]).to_degrees(),
+        peak_stress: peak_stress(&problem, &ev, &dens.physical),
+        mechanism: Some(MechanismSummary {
+            direction: d,
+            output_displacement: u_out,
+            output,
+            inputs,
+            geometric_advantage,
+            eroded: of(Realization::Eroded)?,
+            dilated: of(Realization::Dilated)?,
+        }),
+        ..base_summary(s, &problem, &dens.physical, length_scale)
+    };
+    let corner_displacement = ev.cases[0].u.clone();
     Ok(FinalAnalysis {
         summary,
         response,
@@ -218,17 +322,20 @@ impl DesignSummary {
                 format!(" at ({:.1}, {:.1}) mm", p[0] * 1e3, p[1] * 1e3)
             })
         };
-        let mut out = vec![
-            format!(
-                "amplification α = {:.3}, output direction θ = {:.2}° (target {:.1}°)",
-                self.alpha, self.theta_deg, self.theta_target_deg
-            ),
-            format!(
-                "workspace area {:.0} µm² ({:.3} × the input stroke square)",
-                self.area * 1e12,
-                self.area_ratio
-            ),
-        ];
+        let mut out = match &self.mechanism {
+            Some(m) => m.lines(),
+            None => vec![
+                format!(
+                    "amplification α = {:.3}, output direction θ = {:.2}° (target {:.1}°)",
+                    self.alpha, self.theta_deg, self.theta_target_deg
+                ),
+                format!(
+                    "workspace area {:.0} µm² ({:.3} × the input stroke square)",
+                    self.area * 1e12,
+                    self.area_ratio
+                ),
+            ],
+        };
         if let (Some(e), Some(d)) = (self.area_eroded, self.area_dilated) {
             out.push(format!(
                 "eroded / dilated designs: {:.0} / {:.0} µm² ({:.0} % / {:.0} % of the blueprint)",
@@ -266,6 +373,38 @@ impl DesignSummary {
         ));
         if let Some(f) = self.first_frequency_hz {
             out.push(format!("first natural frequency {f:.0} Hz"));
+        }
+        out
+    }
+}
+
+impl MechanismSummary {
+    /// The mechanism's output as lines of text.
+    pub fn lines(&self) -> Vec<String> {
+        let mut out = vec![
+            format!(
+                "output displacement along d = [{:.3}, {:.3}]: {:.4e} m (u_out = [{:.4e}, {:.4e}] m)",
+                self.direction[0],
+                self.direction[1],
+                self.output_displacement,
+                self.output[0],
+                self.output[1]
+            ),
+            format!(
+                "input displacement{} {} m, geometric advantage {:.3}",
+                if self.inputs.len() > 1 { "s" } else { "" },
+                self.inputs
+                    .iter()
+                    .map(|u| format!("{u:.4e}"))
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                self.geometric_advantage
+            ),
+        ];
+        if let (Some(e), Some(d)) = (self.eroded, self.dilated) {
+            out.push(format!(
+                "eroded / dilated designs: {e:.4e} / {d:.4e} m along d"
+            ));
         }
         out
     }
