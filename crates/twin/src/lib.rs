@@ -118,6 +118,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod craig_bampton;
+pub mod designed;
 mod error;
 pub mod modal;
 pub mod nonlinear;
@@ -129,6 +130,7 @@ pub mod structure;
 pub mod summary;
 pub mod twin;
 
+pub use designed::DesignedStage;
 pub use error::{Result, TwinError};
 pub use reference::{Agreement, ModeCheck, ReferenceParams, ValidationParams, Validity, validate};
 pub use stage::TwinStage;
