@@ -182,7 +182,12 @@ impl MassMatrix {
             MassLumping::Consistent => {
                 let dof_masses: Vec<DofMass> = point_masses
                     .iter()
-                    .flat_map(|p| (0..2).map(move |d| DofMass { dof: 2 * p.node + d, mass: p.mass }))
+                    .flat_map(|p| {
+                        (0..2).map(move |d| DofMass {
+                            dof: 2 * p.node + d,
+                            mass: p.mass,
+                        })
+                    })
                     .collect();
                 let lower = consistent_mass(model, &element_mass, &dof_masses)?;
                 let pattern = lower.pattern();
