@@ -272,7 +272,6 @@ pub fn solve(
     precond: Option<&Factor>,
 ) -> Result<NewtonReport, NewtonError> {
     check_inputs(model, design, load, u, params)?;
-    let dofs = model.dofs();
     // Fixed DOFs are prescribed zero.
     for &d in &model.bcs().fixed {
         u[d] = 0.0;

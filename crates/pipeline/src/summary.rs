@@ -371,24 +371,26 @@ impl fmt::Display for TrackSummary {
         writeln!(f, "hysteresis compensator: PEA1 {c1}, PEA2 {c2}")?;
         writeln!(f, "{TRACK_HEADER}")?;
         for r in &self.rows {
-            let m = &r.metrics;
+            let [
+                rms1,
+                rms2,
+                rms1_pct,
+                rms2_pct,
+                max1,
+                max2,
+                max1_pct,
+                max2_pct,
+                settling,
+                peak,
+            ] = r.error_columns();
             writeln!(
                 f,
-                "{:<14} {:<10} {:>8.1}/{:<8.1} {:>7.3}/{:<7.3} {:>8.1}/{:<8.1} {:>7.3}/{:<7.3} \
-                 {:>9.4} {:>8.0} {:>5}",
+                "{:<14} {:<10} {rms1:>8.1}/{rms2:<8.1} {rms1_pct:>7.3}/{rms2_pct:<7.3} \
+                 {max1:>8.1}/{max2:<8.1} {max1_pct:>7.3}/{max2_pct:<7.3} {settling:>9.4} \
+                 {peak:>8.0} {:>5}",
                 r.trajectory,
                 r.controller.name(),
-                m.rms[0] * 1e9,
-                m.rms[1] * 1e9,
-                m.rms_pct[0],
-                m.rms_pct[1],
-                m.max[0] * 1e9,
-                m.max[1] * 1e9,
-                m.max_pct[0],
-                m.max_pct[1],
-                m.settling,
-                m.peak_voltage,
-                m.saturated
+                r.metrics.saturated
             )?;
         }
         writeln!(

@@ -224,6 +224,27 @@ pub struct TrackRow {
     pub usage: f64,
 }
 
+impl TrackRow {
+    /// The error columns of `metrics.csv` and the printed table, in their order: RMS q1, q2
+    /// \[nm\], RMS q1, q2 \[% of range\], max q1, q2 \[nm\], max q1, q2 \[% of range\], settling
+    /// time \[s\], peak voltage \[V\].
+    pub fn error_columns(&self) -> [f64; 10] {
+        let m = &self.metrics;
+        [
+            m.rms[0] * 1e9,
+            m.rms[1] * 1e9,
+            m.rms_pct[0],
+            m.rms_pct[1],
+            m.max[0] * 1e9,
+            m.max[1] * 1e9,
+            m.max_pct[0],
+            m.max_pct[1],
+            m.settling,
+            m.peak_voltage,
+        ]
+    }
+}
+
 /// What `track` did.
 #[derive(Debug, Clone)]
 pub struct TrackSummary {
