@@ -193,8 +193,8 @@ impl MassMatrix {
                 let pattern = lower.pattern();
                 let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
                 for c in 0..dofs.n_free() {
-                    for k in col_ptr[c]..col_ptr[c + 1] {
-                        let (r, value) = (row_idx[k], lower.values()[k]);
+                    let (from, to) = (col_ptr[c], col_ptr[c + 1]);
+                    for (&r, &value) in row_idx[from..to].iter().zip(&lower.values()[from..to]) {
                         trip.push((r, c, value));
                         if r != c {
                             trip.push((c, r, value));
