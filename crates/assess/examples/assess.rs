@@ -8,11 +8,9 @@
 //! ```
 
 use flexstage_assess::{AssessParams, Assessment, Bench};
-use flexstage_control::experiment::Setup;
-use flexstage_reduce::{ReduceParams, reduce, reduction_problem};
 use flexstage_scenario::{Preset, Scenario};
 use flexstage_topopt::DesignFile;
-use flexstage_twin::Twin;
+use flexstage_twin::DesignedStage;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -22,19 +20,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("usage: assess quick|paper DESIGN.json [OUT_DIR]")?;
     let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let out = args.get(3).cloned();
-    let scenario = Scenario::preset(preset);
-    let problem = reduction_problem(&scenario, false)?;
-    let params = ReduceParams {
-        modal: None,
-        validity: None,
-        ..ReduceParams::default()
-    };
-    let reduced = reduce(&scenario, &problem, &design.rho, &params)?;
-    let mut s = scenario.clone();
-    s.stage.guess = reduced.params.clone();
-    s.stage.truth = reduced.params.clone();
-    let setup = Setup::from_scenario(&s);
-    let twin = Twin::from_scenario(&s, &design.rho)?;
+    let DesignedStage {
+        scenario: s,
+        setup,
+        twin,
+        ..
+    } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
     let t0 = std::time::Instant::now();
     let bench = Bench::new(setup, twin, Default::default())?;
     let a = Assessment::run(&bench, &s, &AssessParams::default())?;

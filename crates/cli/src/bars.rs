@@ -78,7 +78,7 @@ impl Progress for Bars {
                 seconds,
                 summary,
             } => {
-                print::stage(summary);
+                print::summary(*summary);
                 errln!(
                     "[{}/{n}] {}: done in {seconds:.1} s",
                     stage.number(),

@@ -277,6 +277,6 @@ fn run(a: RunArgs) -> anyhow::Result<()> {
         ..RunOptions::default()
     };
     let summary = flexstage_pipeline::run::run(s, &root, &options, &bars::Bars::default())?;
-    print::run(&summary);
+    out!("{summary}");
     Ok(())
 }

@@ -75,7 +75,7 @@ pub fn design(a: DesignArgs) -> anyhow::Result<()> {
         max_iterations: a.max_iterations,
     };
     let s = flexstage_pipeline::design(&folder, &options, start, &Bars::default())?;
-    print::design(&s);
+    print::summary(&s);
     Ok(())
 }
 
@@ -101,7 +101,7 @@ pub fn analyze(a: AnalyzeArgs) -> anyhow::Result<()> {
         design: a.design.map(|d| d.parse()).transpose()?,
         inputs: a.inputs.iter().map(|p| p.0.map(|x| x * 1e-6)).collect(),
     };
-    print::analyze(&flexstage_pipeline::analyze(&folder, &options)?);
+    print::summary(&flexstage_pipeline::analyze(&folder, &options)?);
     Ok(())
 }
 
@@ -172,7 +172,7 @@ pub fn export(a: ExportArgs) -> anyhow::Result<()> {
         verify,
     };
     let summary = flexstage_pipeline::export(&folder, &options)?;
-    print::export(&summary);
+    print::summary(&summary);
     if a.require_safe && options.verify.is_some() && !summary.safe() {
         errln!("--require-safe: the design is not verified safe");
         std::process::exit(2);
@@ -221,7 +221,7 @@ pub fn reduce(a: ReduceArgs) -> anyhow::Result<()> {
         scales: a.scales.0,
         keep_output_spring: a.keep_output_spring,
     };
-    print::reduce(&flexstage_pipeline::reduce(
+    print::summary(&flexstage_pipeline::reduce(
         &folder,
         &options,
         &Bars::default(),
@@ -291,14 +291,14 @@ pub fn pea(PeaCommand::Simulate(a): PeaCommand) -> anyhow::Result<()> {
     };
     if let Some(path) = &a.output {
         let r = flexstage_pipeline::simulate_pea(&a.target.scenario.load()?, &options)?;
-        print::pea_record(&r);
+        out!("{r}");
         flexstage_pipeline::write_pea_csv(path, &r, a.target.force)?;
         errln!("wrote {}", path.display());
         return Ok(());
     }
     let folder = a.target.open()?;
     let r = flexstage_pipeline::simulate_pea(folder.scenario(), &options)?;
-    print::pea_record(&r);
+    out!("{r}");
     let (files, replaced) = flexstage_pipeline::write_pea_record(&folder, &r)?;
     print::wrote(&files[0], replaced);
     Ok(())
@@ -410,7 +410,7 @@ pub fn identify(cmd: IdentifyCommand) -> anyhow::Result<()> {
                 passes: a.passes,
             };
             let s = flexstage_pipeline::identify_pea(&a.target.open()?, &options)?;
-            print::pea_identification(&s);
+            print::summary(&s);
         }
         IdentifyCommand::Stage(a) => {
             let data = match a.data {
@@ -434,7 +434,7 @@ pub fn identify(cmd: IdentifyCommand) -> anyhow::Result<()> {
             e.scheme = parse(&SCHEMES, &a.scheme).expect("clap checks --scheme");
             let folder = a.target.open()?;
             let s = flexstage_pipeline::identify_stage(&folder, &options, &Bars::default())?;
-            print::stage_identification(&s);
+            print::summary(&s);
         }
     }
     Ok(())
@@ -494,13 +494,13 @@ pub fn track(a: TrackArgs) -> anyhow::Result<()> {
         let o = TwinOptions {
             validation: twin_validation(&a.twin_validate),
         };
-        print::twin(&flexstage_pipeline::write_twin(
+        print::summary(&flexstage_pipeline::write_twin(
             &folder,
             &o,
             &Bars::default(),
         )?);
     }
-    print::track(&flexstage_pipeline::track(
+    print::summary(&flexstage_pipeline::track(
         &folder,
         &options,
         &Bars::default(),

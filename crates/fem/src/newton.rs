@@ -281,25 +281,7 @@ pub fn solve(
     ws: &mut NewtonWorkspace,
     precond: Option<&Factor>,
 ) -> Result<NewtonReport, NewtonError> {
-    params.validate()?;
-    design.validate(model.mesh().n_elements())?;
-    crate::error::check_len("load", load.len(), model.n_dofs())?;
-    crate::error::check_len("u", u.len(), model.n_dofs())?;
-    if let Some(i) = u.iter().position(|x| !x.is_finite()) {
-        return Err(ParamError::NonFinite {
-            what: "u",
-            index: i,
-        }
-        .into());
-    }
-    if let Some(i) = load.iter().position(|x| !x.is_finite()) {
-        return Err(ParamError::NonFinite {
-            what: "load",
-            index: i,
-        }
-        .into());
-    }
-    let dofs = model.dofs();
+    check_inputs(model, design, load, u, params)?;
     // Fixed DOFs are prescribed zero.
     for &d in &model.bcs().fixed {
         u[d] = 0.0;
@@ -311,31 +293,10 @@ pub fn solve(
         linear_iterations: 0,
         indefinite: false,
     };
-    let p_norm = dofs
-        .free_dofs()
-        .iter()
-        .map(|&d| load[d] * load[d])
-        .sum::<f64>()
-        .sqrt();
-    // Assemble at the initial state.
-    model.assemble(
-        design,
-        u,
-        Some(&mut ws.r_full),
-        Some(&mut ws.tangent),
-        &mut ws.assembly,
-    );
-    let r0 = dofs
-        .free_dofs()
-        .iter()
-        .map(|&d| ws.r_full[d].powi(2))
-        .sum::<f64>()
-        .sqrt();
+    let p_ref = reference_force(model, design, load, u, ws);
     // Start of the load path: the force in equilibrium with the initial guess.
     let mut p0 = std::mem::take(&mut ws.p0);
     p0.copy_from_slice(&ws.r_full);
-    // Reference force: the load, or (zero load) the initial out-of-balance force.
-    let p_ref = if p_norm > 0.0 { p_norm } else { r0 };
     if p_ref == 0.0 {
         // Zero load and zero internal force: u is the solution.
         ws.p0 = p0;
@@ -453,6 +414,53 @@ pub fn solve(
         relative_residual: last_rel,
         history,
     })
+}
+
+/// The checks of [`solve`]'s inputs: parameters, design, lengths, finite values.
+fn check_inputs(
+    model: &Model,
+    design: &Design,
+    load: &[f64],
+    u: &[f64],
+    params: &NewtonParams,
+) -> Result<(), NewtonError> {
+    params.validate()?;
+    design.validate(model.mesh().n_elements())?;
+    crate::error::check_len("load", load.len(), model.n_dofs())?;
+    crate::error::check_len("u", u.len(), model.n_dofs())?;
+    for (what, v) in [("u", u), ("load", load)] {
+        if let Some(index) = v.iter().position(|x| !x.is_finite()) {
+            return Err(ParamError::NonFinite { what, index }.into());
+        }
+    }
+    Ok(())
+}
+
+/// Assembles residual and tangent at the initial state `u` (into `ws.r_full`, `ws.tangent`)
+/// and returns the reference force of the convergence test: `‖P‖` on the free DOFs, or, under
+/// zero load, the initial out-of-balance force `‖R(u₀)‖`.
+fn reference_force(
+    model: &Model,
+    design: &Design,
+    load: &[f64],
+    u: &[f64],
+    ws: &mut NewtonWorkspace,
+) -> f64 {
+    let free = model.dofs().free_dofs();
+    let p_norm = free.iter().map(|&d| load[d] * load[d]).sum::<f64>().sqrt();
+    model.assemble(
+        design,
+        u,
+        Some(&mut ws.r_full),
+        Some(&mut ws.tangent),
+        &mut ws.assembly,
+    );
+    let r0 = free
+        .iter()
+        .map(|&d| ws.r_full[d].powi(2))
+        .sum::<f64>()
+        .sqrt();
+    if p_norm > 0.0 { p_norm } else { r0 }
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -464,6 +464,13 @@ fn summary_json(s: &DesignSummary) -> String {
 type Column<'a> = (&'a str, &'a dyn Fn(&IterationRecord) -> f64);
 
 /// The iteration history as CSV, one column per recorded quantity.
+///
+/// Columns: `iteration`, `area_m2` (workspace area A), `objective`, `f0` (normalized MMA
+/// objective), one `g_<name>` per constraint (the normalized constraint value, ≤ 0 feasible,
+/// e.g. `g_volume` = V/V* − 1 of the volume constraint), `energy_J`, `stroke_ratio`,
+/// `volume_fraction` (the blueprint's material fraction of the design elements), `grey`
+/// (fraction with 0.1 < ρ < 0.9), `change`, `mean_change`, `kkt`, `beta`, `newton_total`,
+/// `newton_max`, `retried_cases`, `time_s`, `area_rel` (A / A at iteration 0).
 fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
     let col = |f: &dyn Fn(&IterationRecord) -> f64| h.iter().map(f).collect::<Vec<f64>>();
     let mut header = vec!["iteration", "area_m2", "objective", "f0"];
@@ -473,14 +480,15 @@ fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
         col(&|r| r.objective),
         col(&|r| r.f0),
     ];
-    for (i, n) in names.iter().enumerate() {
+    let constraint_headers: Vec<String> = names.iter().map(|n| format!("g_{n}")).collect();
+    for (i, n) in constraint_headers.iter().enumerate() {
         header.push(n);
         cols.push(col(&|r| r.constraints[i]));
     }
     let rest: [Column; 13] = [
         ("energy_J", &|r| r.energy),
         ("stroke_ratio", &|r| r.stroke),
-        ("volume", &|r| r.volume),
+        ("volume_fraction", &|r| r.volume),
         ("grey", &|r| r.grey),
         ("change", &|r| r.change),
         ("mean_change", &|r| r.mean_change),

@@ -64,6 +64,7 @@ pub mod run;
 pub mod source;
 pub mod stage_id;
 pub mod state;
+pub mod summary;
 pub mod track;
 mod track_files;
 pub mod twin;

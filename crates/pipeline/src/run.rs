@@ -28,8 +28,8 @@ use crate::progress::{Progress, RunEvent, StartOver};
 use crate::reduce::{ReduceOptions, ReduceSummary, reduce};
 use crate::stage_id::{ParameterRow, StageIdOptions, StageIdSummary, identify_stage, read_table};
 use crate::state::{Mismatch, RunState, fnv1a};
-use crate::track::{TrackOptions, TrackSummary, track};
-use crate::twin::{TwinOptions, TwinSummary, write_twin};
+use crate::track::{TrackOptions, TrackSummary, TwinBuild, track_on, try_build};
+use crate::twin::{TwinOptions, TwinSummary, write_twin_of};
 
 /// The stages of `run`, in order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -186,6 +186,9 @@ pub fn run(
     }
     let (mut state, resume) = start_state(&folder, options, progress)?;
     state.save(folder.dir())?;
+    // The twin of the design, built once by the twin stage and simulated on by track (a run
+    // resumed after the twin stage builds it in track).
+    let mut twin: Option<TwinBuild> = None;
     for stage in Stage::ALL {
         if state.finished(stage) {
             progress.event(&RunEvent::Skipped(stage));
@@ -193,7 +196,7 @@ pub fn run(
         }
         progress.event(&RunEvent::Started(stage));
         let ts = Instant::now();
-        let summary = run_stage(stage, &folder, options, resume, progress)?;
+        let summary = run_stage(stage, &folder, options, resume, &mut twin, progress)?;
         let seconds = ts.elapsed().as_secs_f64();
         progress.event(&RunEvent::Finished {
             stage,
@@ -288,6 +291,7 @@ fn run_stage(
     folder: &RunFolder,
     options: &RunOptions,
     resume: bool,
+    twin: &mut Option<TwinBuild>,
     progress: &dyn Progress,
 ) -> Result<StageSummary> {
     let run = folder.dir();
@@ -305,19 +309,27 @@ fn run_stage(
         }
         Stage::Export => StageSummary::Export(export(folder, &options.export)?),
         Stage::Reduce => StageSummary::Reduce(Box::new(reduce(folder, &options.reduce, progress)?)),
-        Stage::Twin => match write_twin(folder, &options.twin, progress) {
-            Ok(t) => StageSummary::Twin(Some(Box::new(t))),
+        Stage::Twin => {
+            progress
+                .note("building the twin of the design (FE model, Craig–Bampton, nonlinear fit)");
             // The twin is report data and `track`'s plant; a design it cannot model (e.g. solid
             // islands of an unconverged design) must not stop the run: `track` then runs on
             // the lumped model and says so.
-            Err(PipelineError::Twin(e)) => {
-                progress.note(&format!(
-                    "warning: the twin of this design could not be built: {e}"
-                ));
-                StageSummary::Twin(None)
+            match twin.insert(try_build(folder)?) {
+                Ok(built) => StageSummary::Twin(Some(Box::new(write_twin_of(
+                    folder,
+                    &options.twin,
+                    progress,
+                    built,
+                )?))),
+                Err(e) => {
+                    progress.note(&format!(
+                        "warning: the twin of this design could not be built: {e}"
+                    ));
+                    StageSummary::Twin(None)
+                }
             }
-            Err(e) => return Err(e),
-        },
+        }
         Stage::Pea => StageSummary::Pea(simulate_and_identify_each(
             folder,
             &options.pea,
@@ -328,7 +340,9 @@ fn run_stage(
             &options.identify_stage,
             progress,
         )?)),
-        Stage::Track => StageSummary::Track(track(folder, &options.track, progress)?),
+        Stage::Track => {
+            StageSummary::Track(track_on(folder, &options.track, progress, twin.take())?)
+        }
         Stage::Report => StageSummary::Report(write_report(folder)?),
     })
 }

@@ -46,6 +46,7 @@ use crate::folder::RunFolder;
 use crate::plant::{Plant, PlantSource, read_stage_params};
 use crate::progress::Progress;
 use crate::source::plain;
+use crate::twin::Built;
 
 /// The longest tracking run \[s\] (bounded work: 6·10⁶ samples at 10 kHz).
 pub const MAX_DURATION: f64 = 600.0;
@@ -224,6 +225,27 @@ pub struct TrackRow {
     pub usage: f64,
 }
 
+impl TrackRow {
+    /// The error columns of `metrics.csv` and the printed table, in their order: RMS q1, q2
+    /// \[nm\], RMS q1, q2 \[% of range\], max q1, q2 \[nm\], max q1, q2 \[% of range\], settling
+    /// time \[s\], peak voltage \[V\].
+    pub fn error_columns(&self) -> [f64; 10] {
+        let m = &self.metrics;
+        [
+            m.rms[0] * 1e9,
+            m.rms[1] * 1e9,
+            m.rms_pct[0],
+            m.rms_pct[1],
+            m.max[0] * 1e9,
+            m.max[1] * 1e9,
+            m.max_pct[0],
+            m.max_pct[1],
+            m.settling,
+            m.peak_voltage,
+        ]
+    }
+}
+
 /// What `track` did.
 #[derive(Debug, Clone)]
 pub struct TrackSummary {
@@ -270,6 +292,7 @@ fn simulated(
     folder: &RunFolder,
     options: &TrackOptions,
     progress: &dyn Progress,
+    prebuilt: Option<TwinBuild>,
     warnings: &mut Vec<String>,
 ) -> Result<Simulated> {
     if options.plant == PlantKind::Lumped {
@@ -283,24 +306,32 @@ fn simulated(
         );
         return Ok(Simulated::Lumped);
     }
-    progress.note("building the twin of the design (FE model, Craig–Bampton, nonlinear fit)");
-    let (twin, seconds) = match crate::twin::build(folder) {
+    let reused = prebuilt.is_some();
+    let built = match prebuilt {
+        Some(b) => b,
+        None => {
+            progress
+                .note("building the twin of the design (FE model, Craig–Bampton, nonlinear fit)");
+            try_build(folder)?
+        }
+    };
+    let Built { twin, seconds } = match built {
         Ok(t) => t,
         // A design far from converged can leave solid islands that the twin (void removed
         // as air) cannot hold; the lumped model still runs, and the warning says why.
-        Err(PipelineError::Twin(e)) => {
+        Err(e) => {
             warnings.push(format!(
                 "the twin of this design could not be built ({e}), so tracking runs on the \
                  lumped 8-state model"
             ));
             return Ok(Simulated::Lumped);
         }
-        Err(e) => return Err(e),
     };
     progress.note(&format!(
-        "twin: {} modes, first resonance {:.0} Hz, built in {seconds:.1} s",
+        "twin: {} modes, first resonance {:.0} Hz, built in {seconds:.1} s{}",
         twin.modal.modes.len(),
-        twin.first_resonance()
+        twin.first_resonance(),
+        if reused { " (by the twin stage)" } else { "" }
     ));
     Ok(Simulated::Twin(Box::new(twin)))
 }
@@ -337,11 +368,36 @@ fn read_estimates(rel: &str, text: &str) -> Result<BoucWenParams> {
     Ok(r.recommended_params)
 }
 
-/// Runs `track`.
+/// The outcome of building the twin of the run's design: the twin, or why the twin could not
+/// model this design (a `TwinError`'s message; tracking then runs on the lumped model).
+pub type TwinBuild = std::result::Result<Built, String>;
+
+/// Builds the twin of the run's design; a design the twin cannot model is an `Ok(Err(why))`,
+/// any other failure (an unreadable design) an error.
+pub fn try_build(folder: &RunFolder) -> Result<TwinBuild> {
+    match crate::twin::build(folder) {
+        Ok(b) => Ok(Ok(b)),
+        Err(PipelineError::Twin(e)) => Ok(Err(e.to_string())),
+        Err(e) => Err(e),
+    }
+}
+
+/// Runs `track` (building the twin of the design when it simulates on the twin).
 pub fn track(
     folder: &RunFolder,
     options: &TrackOptions,
     progress: &dyn Progress,
+) -> Result<TrackSummary> {
+    track_on(folder, options, progress, None)
+}
+
+/// Runs `track` with the twin `run` built in its twin stage (`None`: builds it, as [`track`]).
+/// The twin is used only when `options.plant` is the twin and the run has a finished design.
+pub fn track_on(
+    folder: &RunFolder,
+    options: &TrackOptions,
+    progress: &dyn Progress,
+    prebuilt: Option<TwinBuild>,
 ) -> Result<TrackSummary> {
     options.validate()?;
     let plant = Plant::of_run(folder)?;
@@ -356,7 +412,7 @@ pub fn track(
     }
     let compensator = identified_peas(folder, &mut setup)?;
     let mut warnings = Vec::new();
-    let sim = simulated(folder, options, progress, &mut warnings)?;
+    let sim = simulated(folder, options, progress, prebuilt, &mut warnings)?;
     let kind = match sim {
         Simulated::Twin(_) => PlantKind::Twin,
         Simulated::Lumped => PlantKind::Lumped,

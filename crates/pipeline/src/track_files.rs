@@ -15,21 +15,13 @@ max1_nm,max2_nm,max1_pct,max2_pct,settling_s,peak_voltage_V,saturated_samples,dr
 workspace_usage";
 
 fn line(r: &TrackRow, compensation: &str, model: &str, plant: &str) -> String {
+    let errors: Vec<String> = r.error_columns().iter().map(f64::to_string).collect();
     let m = &r.metrics;
     format!(
-        "{},{},{compensation},{model},{plant},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+        "{},{},{compensation},{model},{plant},{},{},{},{}",
         r.trajectory,
         r.controller.name(),
-        m.rms[0] * 1e9,
-        m.rms[1] * 1e9,
-        m.rms_pct[0],
-        m.rms_pct[1],
-        m.max[0] * 1e9,
-        m.max[1] * 1e9,
-        m.max_pct[0],
-        m.max_pct[1],
-        m.settling,
-        m.peak_voltage,
+        errors.join(","),
         m.saturated,
         m.dropouts,
         r.usage

@@ -59,15 +59,30 @@ impl TwinOptions {
     }
 }
 
+/// The twin of a run's design, built once: [`build`].
+#[derive(Debug)]
+pub struct Built {
+    /// The twin.
+    pub twin: Twin,
+    /// Wall-clock seconds its build took.
+    pub seconds: f64,
+}
+
 /// The twin of the run's finished design and the seconds it took to build.
-pub fn build(folder: &RunFolder) -> Result<(Twin, f64)> {
+///
+/// `run` builds it once, in its twin stage, and hands the same twin to `track`
+/// ([`crate::track::track_on`]); the single-stage commands build their own.
+pub fn build(folder: &RunFolder) -> Result<Built> {
     let t0 = Instant::now();
     let s = folder.scenario();
     crate::design::two_pea_stage(s, "twin")?;
     let problem = flexstage_reduce::reduction_problem(s, false)?;
     let rho = load_design(folder, &DesignSource::Run, &problem)?;
     let twin = Twin::from_scenario(s, &rho)?;
-    Ok((twin, t0.elapsed().as_secs_f64()))
+    Ok(Built {
+        twin,
+        seconds: t0.elapsed().as_secs_f64(),
+    })
 }
 
 /// What [`write_twin`] did.
@@ -89,7 +104,18 @@ pub fn write_twin(
 ) -> Result<TwinSummary> {
     options.validate()?;
     progress.note("building the twin of the design (FE model, Craig–Bampton, nonlinear fit)");
-    let (twin, build_seconds) = build(folder)?;
+    write_twin_of(folder, options, progress, &build(folder)?)
+}
+
+/// Writes the report data of an already built twin of the run's design to `twin/`.
+pub fn write_twin_of(
+    folder: &RunFolder,
+    options: &TwinOptions,
+    progress: &dyn Progress,
+    built: &Built,
+) -> Result<TwinSummary> {
+    options.validate()?;
+    let (twin, build_seconds) = (&built.twin, built.seconds);
     let dofs = twin.fe.model.dofs().n_free();
     let (run_it, reason) = match options.validation {
         TwinValidation::On => (true, "requested".to_string()),
@@ -122,7 +148,7 @@ pub fn write_twin(
     } else {
         Err(reason)
     };
-    let data = report_data(&twin, &lumped, build_seconds, transient)?;
+    let data = report_data(twin, &lumped, build_seconds, transient)?;
     let replaced = folder.has_results(layout::twin::DIR);
     for (rel, text) in data.files()? {
         folder.dir().write(rel, text.as_bytes())?;

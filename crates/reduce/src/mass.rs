@@ -22,12 +22,12 @@
 //!
 //! # Element mass matrices (rectangular Q4, thickness t)
 //! * consistent: `m_e/36 · [[4,2,1,2],[2,4,2,1],[1,2,4,2],[2,1,2,4]] ⊗ I₂` (counter-clockwise
-//!   nodes);
+//!   nodes), assembled by `flexstage_fem::consistent_mass` (the one implementation);
 //! * lumped (row sum): `m_e/4` on each node and direction.
 //!
 //! Point masses (e.g. the input plates `m_in`) add to both directions of a node.
 
-use flexstage_fem::{Mesh, Model};
+use flexstage_fem::{DofMass, Mesh, Model, consistent_mass};
 
 use crate::error::{Result, check, within};
 
@@ -149,44 +149,57 @@ impl MassMatrix {
         }
         let dofs = model.dofs();
         let v = mesh.dx() * mesh.dy() * mesh.thickness;
-        const C: [[f64; 4]; 4] = [
-            [4.0, 2.0, 1.0, 2.0],
-            [2.0, 4.0, 2.0, 1.0],
-            [1.0, 2.0, 4.0, 2.0],
-            [2.0, 1.0, 2.0, 4.0],
-        ];
+        let element_mass: Vec<f64> = rho
+            .iter()
+            .map(|&r| interpolation.relative_mass(r) * density * v)
+            .collect();
+        let total = point_masses
+            .iter()
+            .fold(element_mass.iter().sum::<f64>(), |t, p| t + p.mass);
         let mut trip: Vec<(usize, usize, f64)> = Vec::with_capacity(mesh.n_elements() * 32);
-        let mut total = 0.0;
-        for (e, &r) in rho.iter().enumerate() {
-            let m = interpolation.relative_mass(r) * density * v;
-            total += m;
-            if m == 0.0 {
-                continue;
-            }
-            let nodes = mesh.element_nodes(e);
-            for d in 0..2 {
-                for a in 0..4 {
-                    let Some(ra) = dofs.reduced(2 * nodes[a] + d) else {
-                        continue;
-                    };
-                    match lumping {
-                        MassLumping::Lumped => trip.push((ra, ra, 0.25 * m)),
-                        MassLumping::Consistent => {
-                            for b in 0..4 {
-                                if let Some(rb) = dofs.reduced(2 * nodes[b] + d) {
-                                    trip.push((ra, rb, m * C[a][b] / 36.0));
-                                }
+        match lumping {
+            MassLumping::Lumped => {
+                for (e, &m) in element_mass.iter().enumerate() {
+                    for &node in mesh.element_nodes(e).iter().filter(|_| m != 0.0) {
+                        for d in 0..2 {
+                            if let Some(r) = dofs.reduced(2 * node + d) {
+                                trip.push((r, r, 0.25 * m));
                             }
                         }
                     }
                 }
+                for p in point_masses {
+                    for d in 0..2 {
+                        if let Some(r) = dofs.reduced(2 * p.node + d) {
+                            trip.push((r, r, p.mass));
+                        }
+                    }
+                }
             }
-        }
-        for p in point_masses {
-            total += p.mass;
-            for d in 0..2 {
-                if let Some(r) = dofs.reduced(2 * p.node + d) {
-                    trip.push((r, r, p.mass));
+            // The consistent element mass is `flexstage_fem::consistent_mass` (the one
+            // implementation of the Q4 element mass), stored as its lower triangle in the
+            // model's pattern; mirrored here into full storage.
+            MassLumping::Consistent => {
+                let dof_masses: Vec<DofMass> = point_masses
+                    .iter()
+                    .flat_map(|p| {
+                        (0..2).map(move |d| DofMass {
+                            dof: 2 * p.node + d,
+                            mass: p.mass,
+                        })
+                    })
+                    .collect();
+                let lower = consistent_mass(model, &element_mass, &dof_masses)?;
+                let pattern = lower.pattern();
+                let (col_ptr, row_idx) = (pattern.col_ptr(), pattern.row_idx());
+                for c in 0..dofs.n_free() {
+                    let (from, to) = (col_ptr[c], col_ptr[c + 1]);
+                    for (&r, &value) in row_idx[from..to].iter().zip(&lower.values()[from..to]) {
+                        trip.push((r, c, value));
+                        if r != c {
+                            trip.push((c, r, value));
+                        }
+                    }
                 }
             }
         }

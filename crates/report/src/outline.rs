@@ -222,49 +222,8 @@ impl Outline {
                 }
             }
         }
-        // Chain the segments into loops.
-        let mut loop_indices: Vec<Vec<usize>> = Vec::new();
-        let mut starts: Vec<usize> = next.keys().copied().collect();
-        starts.sort_unstable();
-        let mut used: HashSet<usize> = HashSet::new();
-        for start in starts {
-            if used.contains(&start) {
-                continue;
-            }
-            let mut lp = vec![start];
-            used.insert(start);
-            let mut cur = next[&start];
-            while cur != start {
-                used.insert(cur);
-                lp.push(cur);
-                match next.get(&cur) {
-                    Some(&n) => cur = n,
-                    None => break,
-                }
-            }
-            if lp.len() >= 3 {
-                loop_indices.push(lp);
-            }
-        }
-        // Taubin smoothing of the loop points (shared with the caps, so the STL stays closed).
-        for _ in 0..smoothing {
-            for factor in [0.5, -0.53] {
-                let mut moved: Vec<(usize, [f64; 2])> = Vec::new();
-                for lp in &loop_indices {
-                    let n = lp.len();
-                    for i in 0..n {
-                        let p = points[lp[i]];
-                        let a = points[lp[(i + n - 1) % n]];
-                        let b = points[lp[(i + 1) % n]];
-                        let lap = [0.5 * (a[0] + b[0]) - p[0], 0.5 * (a[1] + b[1]) - p[1]];
-                        moved.push((lp[i], [p[0] + factor * lap[0], p[1] + factor * lap[1]]));
-                    }
-                }
-                for (i, p) in moved {
-                    points[i] = p;
-                }
-            }
-        }
+        let loop_indices = chain_loops(&next);
+        taubin_smooth(&mut points, &loop_indices, smoothing);
         let loops = loop_indices
             .iter()
             .map(|lp| lp.iter().map(|&i| points[i]).collect())
@@ -625,6 +584,60 @@ pub fn signed_area(p: &[[f64; 2]]) -> f64 {
         })
         .sum::<f64>()
         * 0.5
+}
+
+/// Chains the boundary segments `next[from] = to` of marching squares into closed loops
+/// (point indices, solid on the left), in the order of their smallest start point; chains
+/// of fewer than three points are dropped.
+fn chain_loops(next: &HashMap<usize, usize>) -> Vec<Vec<usize>> {
+    let mut loop_indices: Vec<Vec<usize>> = Vec::new();
+    let mut starts: Vec<usize> = next.keys().copied().collect();
+    starts.sort_unstable();
+    let mut used: HashSet<usize> = HashSet::new();
+    for start in starts {
+        if used.contains(&start) {
+            continue;
+        }
+        let mut lp = vec![start];
+        used.insert(start);
+        let mut cur = next[&start];
+        while cur != start {
+            used.insert(cur);
+            lp.push(cur);
+            match next.get(&cur) {
+                Some(&n) => cur = n,
+                None => break,
+            }
+        }
+        if lp.len() >= 3 {
+            loop_indices.push(lp);
+        }
+    }
+    loop_indices
+}
+
+/// Taubin λ|μ smoothing (λ = 0.5, μ = −0.53; Taubin 1995, SIGGRAPH, "A signal processing
+/// approach to fair surface design") of the loop points, `passes` times. The points are
+/// shared with the cap triangles, so the STL stays closed.
+fn taubin_smooth(points: &mut [[f64; 2]], loop_indices: &[Vec<usize>], passes: usize) {
+    for _ in 0..passes {
+        for factor in [0.5, -0.53] {
+            let mut moved: Vec<(usize, [f64; 2])> = Vec::new();
+            for lp in loop_indices {
+                let n = lp.len();
+                for i in 0..n {
+                    let p = points[lp[i]];
+                    let a = points[lp[(i + n - 1) % n]];
+                    let b = points[lp[(i + 1) % n]];
+                    let lap = [0.5 * (a[0] + b[0]) - p[0], 0.5 * (a[1] + b[1]) - p[1]];
+                    moved.push((lp[i], [p[0] + factor * lap[0], p[1] + factor * lap[1]]));
+                }
+            }
+            for (i, p) in moved {
+                points[i] = p;
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -184,6 +184,7 @@ impl Preset {
 
 impl Scenario {
     /// The paper's scenario (the built-in default).
+    // fn-length: data literal (the paper's Tables 1, 3, 4 and A1 written out)
     pub fn paper() -> Scenario {
         let mesh = Mesh {
             length: 0.12,

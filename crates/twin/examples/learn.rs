@@ -9,16 +9,15 @@
 use flexstage_control::ControlError;
 use flexstage_control::actuator::Compensation;
 use flexstage_control::controller::StageControl;
-use flexstage_control::experiment::{Setup, Variant, run};
+use flexstage_control::experiment::{Variant, run};
 use flexstage_control::learning::{
     DesignParams, Learning, design, measure_learning_plant, rms_per_period,
 };
 use flexstage_control::rig::StagePlant;
 use flexstage_control::trajectory::Reference;
-use flexstage_reduce::{ReduceParams, reduce, reduction_problem};
 use flexstage_scenario::{Preset, Scenario, Trajectory};
 use flexstage_topopt::DesignFile;
-use flexstage_twin::Twin;
+use flexstage_twin::DesignedStage;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -28,19 +27,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("usage: learn quick|paper DESIGN.json [PERIODS]")?;
     let design_file = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let periods: usize = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(20);
-    let scenario = Scenario::preset(preset);
-    let problem = reduction_problem(&scenario, false)?;
-    let params = ReduceParams {
-        modal: None,
-        validity: None,
-        ..ReduceParams::default()
-    };
-    let reduced = reduce(&scenario, &problem, &design_file.rho, &params)?;
-    let mut s = scenario.clone();
-    s.stage.guess = reduced.params.clone();
-    s.stage.truth = reduced.params.clone();
-    let setup = Setup::from_scenario(&s);
-    let twin = Twin::from_scenario(&s, &design_file.rho)?;
+    let DesignedStage {
+        scenario: s,
+        setup,
+        twin,
+        ..
+    } = DesignedStage::new(&Scenario::preset(preset), &design_file.rho)?;
     let trajectory = s
         .trajectories
         .iter()

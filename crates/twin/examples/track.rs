@@ -16,10 +16,9 @@ use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::{Setup, Variant, experiment, experiment_on};
 use flexstage_control::rig::StagePlant;
 use flexstage_control::trajectory::Reference;
-use flexstage_reduce::{ReduceParams, reduce, reduction_problem};
 use flexstage_scenario::{Preset, Scenario};
 use flexstage_topopt::DesignFile;
-use flexstage_twin::Twin;
+use flexstage_twin::{DesignedStage, Twin};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
@@ -29,22 +28,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("usage: track quick|paper DESIGN.json [SECONDS]")?;
     let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let seconds: Option<f64> = args.get(3).map(|s| s.parse()).transpose()?;
-    let scenario = Scenario::preset(preset);
-    let problem = reduction_problem(&scenario, false)?;
-    let params = ReduceParams {
-        modal: None,
-        validity: None,
-        ..ReduceParams::default()
-    };
-    let reduced = reduce(&scenario, &problem, &design.rho, &params)?;
-    let mut s = scenario.clone();
-    s.stage.guess = reduced.params.clone();
-    s.stage.truth = reduced.params.clone();
-    let setup = Setup::from_scenario(&s);
     let t0 = std::time::Instant::now();
-    let twin = Twin::from_scenario(&s, &design.rho)?;
+    let DesignedStage {
+        scenario: s,
+        setup,
+        twin,
+        ..
+    } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
     println!(
-        "twin: {} modes (f1 = {:.0} Hz), built in {:.1} s; lumped model f = {:?} Hz",
+        "twin: {} modes (f1 = {:.0} Hz), reduced and built in {:.1} s; lumped model f = {:?} Hz",
         twin.modal.modes.len(),
         twin.first_resonance(),
         t0.elapsed().as_secs_f64(),

@@ -9,9 +9,9 @@
 //! Writes `OUT_DIR/{validity.json, modes.csv, bode.csv, bode_magnitude.svg, bode_phase.svg}`
 //! and prints the summary.
 
-use flexstage_reduce::{ReduceParams, reduce, reduction_problem};
 use flexstage_scenario::{Preset, Scenario};
 use flexstage_topopt::DesignFile;
+use flexstage_twin::designed::reduced_model;
 use flexstage_twin::report::validity_lines;
 use flexstage_twin::{Twin, ValidationParams, report_data};
 
@@ -30,15 +30,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let twin = Twin::from_scenario(&scenario, &design.rho)?;
     let build_seconds = t0.elapsed().as_secs_f64();
     // The lumped model of the same design (flexstage reduce), beside the twin.
-    let problem = reduction_problem(&scenario, false)?;
-    let params = ReduceParams {
-        modal: None,
-        validity: None,
-        ..ReduceParams::default()
-    };
-    let reduced = reduce(&scenario, &problem, &design.rho, &params)?;
+    let reduced = reduced_model(&scenario, &design.rho)?;
     let check = Ok((ValidationParams::default(), "requested".to_string()));
-    let data = report_data(&twin, &reduced.params, build_seconds, check)?;
+    let data = report_data(&twin, &reduced, build_seconds, check)?;
     let v = &data.validity;
     println!(
         "twin of {} ({} × {} mesh): {} fixed-interface modes, {} modes, built in {:.2} s",

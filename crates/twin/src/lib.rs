@@ -130,6 +130,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod craig_bampton;
+pub mod designed;
 mod error;
 pub mod modal;
 pub mod nonlinear;
@@ -141,6 +142,7 @@ pub mod structure;
 pub mod summary;
 pub mod twin;
 
+pub use designed::DesignedStage;
 pub use error::{Result, TwinError};
 pub use reference::{Agreement, ModeCheck, ReferenceParams, ValidationParams, Validity, validate};
 pub use stage::TwinStage;

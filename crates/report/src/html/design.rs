@@ -134,16 +134,20 @@ pub(super) fn convergence(b: &mut Builder) {
         b.not_run(&format!("{} missing", files::HISTORY_CSV));
         return;
     };
-    // The history names both the volume constraint and the volume fraction "volume"
-    // (constraint first): the plot wants the fraction, the last column of that name.
+    // Histories written before the columns had distinct names carry two "volume" columns
+    // (constraint first, fraction last): the plot wants the fraction.
     let text = match text.split_once('\n') {
         Some((head, body)) if head.split(',').filter(|h| *h == "volume").count() > 1 => {
-            let head = head.replacen(",volume,", ",volume_constraint,", 1);
+            let head = head.replacen(",volume,", ",g_volume,", 1).replacen(
+                ",volume,",
+                ",volume_fraction,",
+                1,
+            );
             format!("{head}\n{body}")
         }
         _ => text,
     };
-    let Some(c) = csv_cols(&text, &["iteration", "area_rel", "volume", "grey"]) else {
+    let Some(c) = csv_cols(&text, &["iteration", "area_rel", "volume_fraction", "grey"]) else {
         b.not_run(&format!("{} has no history columns", files::HISTORY_CSV));
         return;
     };
