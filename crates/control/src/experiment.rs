@@ -101,6 +101,7 @@ impl Setup {
                     Velocity::FiniteDifference
                 },
                 inner: Inner::Command,
+                delay: RigParams::from_scenario(s).delay,
                 actuator: ActuatorParams {
                     hysteresis,
                     voltage_range,
@@ -428,7 +429,10 @@ pub fn experiment_with_progress(
     progress: impl FnMut(usize),
 ) -> Result<Record> {
     crate::error::positive("duration", duration)?;
-    let mut c = setup.controller(variant, compensation, reference)?;
+    // The minimal loop has no delay: the controller predicts over none.
+    let mut minimal = setup.clone();
+    minimal.controller.delay = 0;
+    let mut c = minimal.controller(variant, compensation, reference)?;
     let mut plant = Plant::new(setup.plant.clone())?;
     Ok(run(
         c.as_mut(),
