@@ -4,8 +4,11 @@
 //! `flexstage-twin`'s `track` example.
 //!
 //! ```text
-//! cargo run --release -p flexstage-assess --example assess -- quick runs/quick/design/design.json [OUT_DIR]
+//! cargo run --release -p flexstage-assess --example assess -- quick runs/quick/design/design.json [OUT_DIR] [SENSOR_HZ]
 //! ```
+//!
+//! `SENSOR_HZ` replaces the rig's sensor bandwidth (its first-order low-pass, the only
+//! anti-aliasing filter of the loop).
 
 use flexstage_assess::{AssessParams, Assessment, Bench};
 use flexstage_control::experiment::Setup;
@@ -33,7 +36,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut s = scenario.clone();
     s.stage.guess = reduced.params.clone();
     s.stage.truth = reduced.params.clone();
-    let setup = Setup::from_scenario(&s);
+    let mut setup = Setup::from_scenario(&s);
+    if let Some(bw) = args.get(4) {
+        setup.rig.sensor.bandwidth = bw.parse()?;
+    }
     let twin = Twin::from_scenario(&s, &design.rho)?;
     let t0 = std::time::Instant::now();
     let bench = Bench::new(setup, twin, Default::default())?;

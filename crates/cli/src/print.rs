@@ -343,6 +343,7 @@ pub fn track(s: &TrackSummary) {
         "(hysteresis compensation: {}; errors against the true output)",
         flexstage_pipeline::names::compensation(s.compensation)
     );
+    out!("{}", s.margins_table());
     wrote(&s.dir, s.replaced);
 }
 

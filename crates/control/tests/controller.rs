@@ -149,6 +149,20 @@ fn never_nan_or_out_of_range_under_faults() {
         ws.max_usage(&inside, 1.0, 1e-4) < 1.0,
         "the default trajectory is inside"
     );
+    // The PI + notch variant needs gains: a plain PI on the model's static gain.
+    let mut s = s;
+    let g = StageModel::new(&s.controller.model).unwrap().dc_gain().unwrap();
+    let axis = flexstage_control::pi_notch::AxisGains {
+        kp: 0.1,
+        ki: 300.0,
+        kd: 0.0,
+        notches: [None, None],
+    };
+    s.pi_notch = Some(flexstage_control::pi_notch::PiNotchParams {
+        axes: [axis; 2],
+        static_gain: [[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]],
+        sample_time: s.rig.sample_time,
+    });
     for variant in Variant::ALL {
         for r in [far, inside] {
             let mut c = s.controller(variant, Compensation::Inverse, r).unwrap();
