@@ -171,8 +171,7 @@ impl Bench {
         self.controller_with(&self.setup, c, compensation, reference)
     }
 
-    /// The linear loop of the rig with `delay` samples: ideal amplifier, the sensor's
-    /// low-pass without its noise, no PEA
+    /// The linear loop of the rig with `delay` samples: ideal amplifier and sensor, no PEA
     /// (x_nom applied directly), no noise, creep or floor; the twin without its geometric
     /// correction. What margins are computed on.
     pub fn linear_rig(&self, delay: usize) -> RigParams {
@@ -180,12 +179,7 @@ impl Bench {
         r.delay = delay;
         r.actuator = PlantActuator::Ideal;
         r.amplifier = AmplifierParams::ideal();
-        // The sensor's low-pass is linear and part of the loop (it is the anti-aliasing
-        // filter); only its noise spectrum goes.
-        r.sensor = SensorParams {
-            flicker_corner: 0.0,
-            ..r.sensor
-        };
+        r.sensor = SensorParams::ideal();
         r.creep.factor = 0.0;
         r.floor.velocity_rms = 0.0;
         r.noise_std = [0.0; 2];

@@ -343,7 +343,13 @@ impl StageControl for BacksteppingController {
         let mut cmd = Command {
             voltage: act.voltage,
             x_nom: act.x_nom,
-            reference: r.q,
+            // The reference of this sample (what the output is scored against now), also
+            // when the law aimed at a later one.
+            reference: if self.delay > 0 {
+                self.reference_at(self.k).q
+            } else {
+                r.q
+            },
             saturated: act.saturated,
             dropout,
         };
