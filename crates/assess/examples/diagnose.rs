@@ -10,8 +10,8 @@
 //! ```
 
 use flexstage_assess::Bench;
-use flexstage_assess::inject::{InjectionParams, injected_margins, is_stable};
 use flexstage_assess::Candidate;
+use flexstage_assess::inject::{InjectionParams, injected_margins, is_stable};
 use flexstage_control::actuator::Compensation;
 use flexstage_control::controller::Velocity;
 use flexstage_control::experiment::Setup;
@@ -228,7 +228,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     fitted.setup.controller.model.c_qo1 *= fit.sqrt();
     fitted.setup.controller.model.c_qo2 *= fit.sqrt();
     let f = StageModel::new(&fitted.setup.controller.model)?.natural_frequencies();
-    report(&format!("model M × {fit:.2} ({:.0}/{:.0} Hz)", f[0], f[1]), &fitted, delay);
+    report(
+        &format!("model M × {fit:.2} ({:.0}/{:.0} Hz)", f[0], f[1]),
+        &fitted,
+        delay,
+    );
     let mut b = fitted.clone();
     for m in &mut b.twin.modal.modes {
         if m.frequency > 0.5 * fs {

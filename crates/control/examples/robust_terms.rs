@@ -22,7 +22,12 @@ use flexstage_scenario::{Preset, Scenario};
 
 /// RMS error per axis over the second half \[m\] and the largest |d̂| per axis after the
 /// first tenth \[m/s²\]; `None` when the run diverges (|error| > 10 µm).
-fn run(setup: &Setup, v: Variant, reference: Reference, duration: f64) -> Option<([f64; 2], [f64; 2])> {
+fn run(
+    setup: &Setup,
+    v: Variant,
+    reference: Reference,
+    duration: f64,
+) -> Option<([f64; 2], [f64; 2])> {
     let mut c = setup
         .controller(v, Compensation::Inverse, reference)
         .expect("controller");
@@ -76,14 +81,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let base = run(&setup, Variant::NonRobust, reference, duration);
     show("non-robust + observer", base);
     show(
-        &format!("robust, scenario ρ_η = {:?}", setup.controller.law.eta_bound),
+        &format!(
+            "robust, scenario ρ_η = {:?}",
+            setup.controller.law.eta_bound
+        ),
         run(&setup, Variant::Robust, reference, duration),
     );
     if let Some((_, d)) = base {
         let mut sized = setup.clone();
         sized.controller.law.eta_bound = d.map(|x| 1.2 * x);
         show(
-            &format!("robust, ρ_η = 1.2 max|d̂| = {:.0?}", sized.controller.law.eta_bound),
+            &format!(
+                "robust, ρ_η = 1.2 max|d̂| = {:.0?}",
+                sized.controller.law.eta_bound
+            ),
             run(&sized, Variant::Robust, reference, duration),
         );
     }

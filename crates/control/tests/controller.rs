@@ -151,7 +151,10 @@ fn never_nan_or_out_of_range_under_faults() {
     );
     // The PI + notch variant needs gains: a plain PI on the model's static gain.
     let mut s = s;
-    let g = StageModel::new(&s.controller.model).unwrap().dc_gain().unwrap();
+    let g = StageModel::new(&s.controller.model)
+        .unwrap()
+        .dc_gain()
+        .unwrap();
     let axis = flexstage_control::pi_notch::AxisGains {
         kp: 0.1,
         ki: 300.0,
@@ -254,7 +257,9 @@ fn one_sample_delay_needs_the_predictor() {
     };
     for robust in [true, false] {
         let (with, without) = (tail(1, robust), tail(0, robust));
-        eprintln!("robust = {robust}: last 20 ms max |q| {with:e} (predictor) / {without:e} (none)");
+        eprintln!(
+            "robust = {robust}: last 20 ms max |q| {with:e} (predictor) / {without:e} (none)"
+        );
         assert!(with < 1e-4 * kick, "robust = {robust}: {with:e}");
         assert!(!(without < 0.1 * kick), "robust = {robust}: {without:e}");
     }

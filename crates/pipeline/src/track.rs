@@ -33,11 +33,11 @@ use flexstage_assess::inject::InjectionParams;
 use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
 use flexstage_assess::{Bench, Candidate};
 use flexstage_control::actuator::Compensation;
-use flexstage_control::tuning::TuningParams;
 use flexstage_control::experiment::{
     Metrics, Record, Setup, Variant, experiment_on, experiment_with_progress,
 };
 use flexstage_control::trajectory::Reference;
+use flexstage_control::tuning::TuningParams;
 use flexstage_piezo::BoucWenParams;
 use flexstage_report::layout::{self, Tracking};
 use flexstage_report::plot::{Figure, Series};
@@ -471,9 +471,10 @@ pub fn track(
     let trajectories = jobs_by_trajectory(&jobs);
     crate::track_files::write_paths(folder.dir(), &out, &trajectories, &merged, &paths)?;
     if !margins.is_empty() {
-        folder
-            .dir()
-            .write(out.margins(), flexstage_assess::margins::csv(&margins, dt).as_bytes())?;
+        folder.dir().write(
+            out.margins(),
+            flexstage_assess::margins::csv(&margins, dt).as_bytes(),
+        )?;
     }
     Ok(TrackSummary {
         simulated: kind,
