@@ -120,6 +120,11 @@
 //! law's band. Only with the model's mass fitted *and* the aliased peaks removed are they
 //! stable (8.0 dB / 58° on q1). They remain the paper's method on its own model, not a
 //! controller to ship.
+//!
+//! What each part buys (lumped plant in the rig, default Lissajous, example
+//! `robust_terms`): the disturbance observer takes the error from 106/465 nm to 8.4/12.1 nm;
+//! the robust terms with the scenario's ρ_η = 0.1 m/s² change nothing (8.7/12.4 nm); sized
+//! from the measured disturbance (≈ 190/110 m/s², A25) they make it 225/96 nm.
 
 // Loops over the two axes index several arrays at once, as the equations do.
 #![allow(clippy::needless_range_loop)]
