@@ -43,7 +43,7 @@ fn run(
         let d = c.estimate();
         for i in 0..2 {
             let e = q[i] - cmd.reference[i];
-            if !(e.abs() < 1e-5) {
+            if !e.is_finite() || e.abs() >= 1e-5 {
                 return None;
             }
             if k >= n / 2 {
