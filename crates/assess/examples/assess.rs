@@ -4,8 +4,11 @@
 //! `flexstage-twin`'s `track` example.
 //!
 //! ```text
-//! cargo run --release -p flexstage-assess --example assess -- quick runs/quick/design/design.json [OUT_DIR]
+//! cargo run --release -p flexstage-assess --example assess -- quick runs/quick/design/design.json [OUT_DIR] [SENSOR_HZ]
 //! ```
+//!
+//! `SENSOR_HZ` replaces the rig's sensor bandwidth (its first-order low-pass, the only
+//! anti-aliasing filter of the loop).
 
 use flexstage_assess::{AssessParams, Assessment, Bench};
 use flexstage_scenario::{Preset, Scenario};
@@ -22,10 +25,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let out = args.get(3).cloned();
     let DesignedStage {
         scenario: s,
-        setup,
+        mut setup,
         twin,
         ..
     } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
+    if let Some(bw) = args.get(4) {
+        setup.rig.sensor.bandwidth = bw.parse()?;
+    }
     let t0 = std::time::Instant::now();
     let bench = Bench::new(setup, twin, Default::default())?;
     let a = Assessment::run(&bench, &s, &AssessParams::default())?;

@@ -89,7 +89,8 @@ pub fn return_ratio(
 
 /// Whether the closed loop of a candidate on the linear rig is asymptotically stable: after
 /// a 10 nm kick of both measurements, the output over the last fifth of `duration` \[s\] stays
-/// below a tenth of its peak and does not grow over the last tenth. (A slowly growing mode
+/// below a tenth of its peak and below the kick, and does not grow over the last tenth (a
+/// loop held flat by the stroke or voltage clamp is not stable). (A slowly growing mode
 /// can still pass for a short `duration`; [`injected_margins`] also reports a loop that
 /// diverges under injection as unstable.)
 pub fn is_stable(bench: &Bench, c: Candidate, delay: usize, duration: f64) -> Result<bool> {
@@ -100,7 +101,7 @@ pub fn is_stable(bench: &Bench, c: Candidate, delay: usize, duration: f64) -> Re
     for k in 0..n {
         let mut y = plant.measure();
         if k == 0 {
-            y = [y[0] + 1e-8, y[1] + 1e-8];
+            y = [y[0] + KICK, y[1] + KICK];
         }
         let cmd = ctrl.step(y);
         plant.apply(&cmd);
@@ -117,8 +118,13 @@ pub fn is_stable(bench: &Bench, c: Candidate, delay: usize, duration: f64) -> Re
             last = last.max(m);
         }
     }
-    Ok(tail < 0.1 * peak && last <= tail)
+    // The output must also end below the kick: a loop that runs into the stroke or voltage
+    // clamp and stays there is flat at the end but not stable.
+    Ok(tail < 0.1 * peak && last <= tail && last < KICK)
 }
+
+/// The kick of [`is_stable`] \[m\].
+const KICK: f64 = 1e-8;
 
 /// Margins of a candidate from measured return ratios; `None` when the closed loop is
 /// unstable (no margin to speak of).

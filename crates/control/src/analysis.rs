@@ -24,6 +24,8 @@ pub const LOOP_LEN: usize = 8 + STATE_LEN;
 pub fn closed_loop_matrix(params: &ControllerParams, plant: &StageModel) -> Result<DMatrix<f64>> {
     let mut p = params.clone();
     p.actuator.compensation = Compensation::Ideal;
+    // The plant here has no delay, so the controller predicts over none.
+    p.delay = 0;
     if p.law.boundary_layer.contains(&0.0) {
         p.law.robust = false;
     }

@@ -21,6 +21,18 @@
 //! once per sample, u uses its mid-sample value ξ_d + (T/2) v (the ZOH holds u over the
 //! sample) and v̇ is the backward difference of v.
 //!
+//! # Delay
+//! On a real-time target the command computed from the sample at t_k acts from t_{k+d}
+//! (d = [`ControllerParams::delay`], the rig's `delay`). Section 3.2.2 is delay-free: with
+//! d = 1 and the law acting on the measured output and its finite difference, the loop on
+//! the lumped plant *equal to its own model* oscillates at ≈ 2.2 kHz and runs into the
+//! stroke (`tests/controller.rs`, `one_sample_delay_needs_the_predictor`). With d ≥ 1 the
+//! controller therefore predicts: the K-filter is first advanced with the measurement and
+//! the command that acts during this sample (issued d samples ago), which gives ẑ_{k+1|k};
+//! the commands still pending advance it by the nominal model (Φ, Γ) to ẑ_{k+d|k}; the law
+//! and the input transformation then use that predicted state (q, q̇ from the estimate, no
+//! finite difference) and the reference at t_{k+d}. With d = 0 the step is the paper's.
+//!
 //! # Robustness of the step
 //! A non-finite measurement (sensor dropout) is replaced by the last valid one and flagged.
 //! x_nom is clamped to the stroke, voltages to the amplifier range, and ξ_d is not integrated
@@ -96,17 +108,30 @@ pub struct ControllerParams {
     pub inner: Inner,
     /// Actuator stage (compensation, amplifier).
     pub actuator: ActuatorParams,
+    /// Samples of computation and I/O delay between the measurement and the command taking
+    /// effect that the controller predicts over, 0–2 (the rig's `delay`; 0: the measured
+    /// output is used directly, as in Section 3.2.2). See the module docs, "Delay".
+    pub delay: usize,
 }
 
 impl ControllerParams {
     /// Checks the fields.
     pub fn validate(&self) -> Result<()> {
+        check(
+            "controller.delay",
+            self.delay as f64,
+            self.delay <= MAX_DELAY,
+            "0–2 samples",
+        )?;
         crate::model::validate(&self.model)?;
         self.observer.validate()?;
         self.law.validate()?;
         self.actuator.validate()
     }
 }
+
+/// Largest delay \[samples\] the controller predicts over.
+pub const MAX_DELAY: usize = 2;
 
 /// Number of numbers in [`BacksteppingController::state`].
 pub const STATE_LEN: usize = FILTER_LEN + 6;
@@ -125,6 +150,10 @@ pub struct BacksteppingController {
     d_inv: nalgebra::Matrix2<f64>,
     t: f64,
     k: u64,
+    delay: usize,
+    /// Commands x_nom issued but not yet acting, oldest first (`pending[0]` acts during the
+    /// current sample when `delay` ≥ 1).
+    pending: [[f64; 2]; MAX_DELAY],
     xi_d: [f64; 2],
     y_prev: [f64; 2],
     v_prev: [f64; 2],
@@ -154,6 +183,8 @@ impl BacksteppingController {
             d_inv,
             t: params.observer.sample_time,
             k: 0,
+            delay: params.delay,
+            pending: [[0.0; 2]; MAX_DELAY],
             xi_d: [0.0; 2],
             y_prev: [0.0; 2],
             v_prev: [0.0; 2],
@@ -220,6 +251,18 @@ impl BacksteppingController {
         self.have_prev = true;
     }
 
+    /// The estimate [ẑ, d̂] predicted to the sample at which the next command acts: the
+    /// filter's ẑ_{k+1|k} advanced by the nominal model (Φ, Γ of the observer design,
+    /// without injection) with the commands still pending, `delay − 1` samples.
+    #[inline]
+    fn predicted(&self) -> Vector10 {
+        let mut z = self.filter.estimate();
+        for u in &self.pending[1..self.delay] {
+            z = self.design.phi * z + self.design.gamma * nalgebra::Vector2::new(u[0], u[1]);
+        }
+        z
+    }
+
     /// The reference sample at step k.
     #[inline]
     fn reference_at(&self, k: u64) -> RefSample {
@@ -233,13 +276,25 @@ impl StageControl for BacksteppingController {
         let t = self.t;
         let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
         let y = if dropout { self.y_prev } else { y_in };
-        let r = self.reference_at(self.k);
-        let zh = self.filter.estimate();
-        let q_dot = match self.velocity {
-            Velocity::FiniteDifference if self.have_prev => {
-                [(y[0] - self.y_prev[0]) / t, (y[1] - self.y_prev[1]) / t]
-            }
-            _ => Q_O_DOT.map(|i| zh[i]),
+        let r = self.reference_at(self.k + self.delay as u64);
+        // With a delay, the estimate is first advanced with the command acting now, then
+        // predicted to the sample at which the new command acts (module docs, "Delay").
+        let zh = if self.delay > 0 {
+            self.filter.step(y, self.pending[0]);
+            self.predicted()
+        } else {
+            self.filter.estimate()
+        };
+        let (q, q_dot) = if self.delay > 0 {
+            (Q_O.map(|i| zh[i]), Q_O_DOT.map(|i| zh[i]))
+        } else {
+            let v = match self.velocity {
+                Velocity::FiniteDifference if self.have_prev => {
+                    [(y[0] - self.y_prev[0]) / t, (y[1] - self.y_prev[1]) / t]
+                }
+                _ => Q_O_DOT.map(|i| zh[i]),
+            };
+            (y, v)
         };
         // η̂ = [z1, z2, ẑ3, ẑ4, q̇1, q̇2] and ξ̂̇ = [ẑ7, ẑ8] (Section 3.2.2, after Eq. 44).
         let (xi, xi_dot) = match self.inner {
@@ -248,7 +303,7 @@ impl StageControl for BacksteppingController {
         };
         let mut eta = [0.0; 6];
         for i in 0..2 {
-            eta[Q_O[i]] = y[i];
+            eta[Q_O[i]] = q[i];
             eta[X_IN[i]] = xi[i];
             eta[Q_O_DOT[i]] = q_dot[i];
         }
@@ -269,8 +324,8 @@ impl StageControl for BacksteppingController {
             let row = X_IN_DOT[i];
             let xi_mid = [self.xi_d[0] + 0.5 * t * v[0], self.xi_d[1] + 0.5 * t * v[1]];
             rhs[i] = v_dot[i]
-                - (b[(row, q1)] * y[0]
-                    + b[(row, q2)] * y[1]
+                - (b[(row, q1)] * q[0]
+                    + b[(row, q2)] * q[1]
                     + b[(row, v1)] * q_dot[0]
                     + b[(row, v2)] * q_dot[1]
                     + b[(row, x1)] * xi_mid[0]
@@ -288,7 +343,13 @@ impl StageControl for BacksteppingController {
         let mut cmd = Command {
             voltage: act.voltage,
             x_nom: act.x_nom,
-            reference: r.q,
+            // The reference of this sample (what the output is scored against now), also
+            // when the law aimed at a later one.
+            reference: if self.delay > 0 {
+                self.reference_at(self.k).q
+            } else {
+                r.q
+            },
             saturated: act.saturated,
             dropout,
         };
@@ -296,7 +357,12 @@ impl StageControl for BacksteppingController {
             cmd.voltage = self.last.voltage;
             cmd.x_nom = self.last.x_nom;
         }
-        self.filter.step(y, cmd.x_nom);
+        if self.delay == 0 {
+            self.filter.step(y, cmd.x_nom);
+        } else {
+            self.pending.copy_within(1..self.delay, 0);
+            self.pending[self.delay - 1] = cmd.x_nom;
+        }
         if !finite {
             let z = self.filter.estimate();
             self.xi_d = X_IN.map(|i| z[i]);

@@ -17,8 +17,9 @@ use crate::controller::{
     BacksteppingController, ControllerParams, Inner, PidController, PidParams, StageControl,
     Velocity,
 };
-use crate::error::Result;
+use crate::error::{ControlError, Result};
 use crate::observer::ObserverParams;
+use crate::pi_notch::{PiNotchController, PiNotchParams};
 use crate::plant::{LumpedStage, Plant, PlantActuator, PlantParams};
 use crate::rig::{RigParams, RigPlant, StagePlant};
 use crate::trajectory::{Feasibility, Reference, Workspace, feasibility};
@@ -30,13 +31,25 @@ pub enum Variant {
     Robust,
     /// Backstepping without the robust terms (Figure 9a).
     NonRobust,
-    /// PID with inverse-hysteresis feedforward (the industry default).
+    /// PID with inverse-hysteresis feedforward, the scenario's gains (`controller.pid`).
     PidFeedforward,
+    /// PI + notches + inverse-hysteresis feedforward tuned on the simulated plant's sampled
+    /// frequency response ([`crate::tuning`], [`Setup::pi_notch`]): the default, the one
+    /// controller that meets 6 dB / 40° on the twin with one sample of delay.
+    PiNotch,
 }
 
 impl Variant {
-    /// All variants, in report order.
-    pub const ALL: [Variant; 3] = [Variant::Robust, Variant::NonRobust, Variant::PidFeedforward];
+    /// All variants, in report order (the default first).
+    pub const ALL: [Variant; 4] = [
+        Variant::PiNotch,
+        Variant::Robust,
+        Variant::NonRobust,
+        Variant::PidFeedforward,
+    ];
+
+    /// The default controller (DECISIONS.md, Control).
+    pub const DEFAULT: Variant = Variant::PiNotch;
 
     /// Short name for files and tables.
     pub fn name(self) -> &'static str {
@@ -44,6 +57,7 @@ impl Variant {
             Variant::Robust => "robust",
             Variant::NonRobust => "nonrobust",
             Variant::PidFeedforward => "pid-ff",
+            Variant::PiNotch => "pi-notch-ff",
         }
     }
 
@@ -64,6 +78,9 @@ pub struct Setup {
     pub plant: PlantParams,
     /// The loop of the scenario's rig (`[rig]`), for [`Setup::lumped_plant`] and the twin.
     pub rig: RigParams,
+    /// The PI + notch gains of [`Variant::PiNotch`], tuned on the plant that is simulated
+    /// ([`crate::tuning::tune`]); `None` until tuned (that variant is then refused).
+    pub pi_notch: Option<PiNotchParams>,
 }
 
 impl Setup {
@@ -101,6 +118,7 @@ impl Setup {
                     Velocity::FiniteDifference
                 },
                 inner: Inner::Command,
+                delay: RigParams::from_scenario(s).delay,
                 actuator: ActuatorParams {
                     hysteresis,
                     voltage_range,
@@ -129,6 +147,7 @@ impl Setup {
                 actuator: PlantActuator::Hysteretic,
             },
             rig: RigParams::from_scenario(s),
+            pi_notch: None,
         }
     }
 
@@ -204,6 +223,15 @@ impl Setup {
                 self.controller.observer.sample_time,
                 reference,
             )?),
+            Variant::PiNotch => {
+                let p = self.pi_notch.ok_or_else(|| ControlError::Infeasible {
+                    what: "controller pi-notch-ff".into(),
+                    detail: "its gains are tuned on the simulated plant's frequency response \
+                             (Setup::pi_notch), and none were given"
+                        .into(),
+                })?;
+                Box::new(PiNotchController::new(p, actuator, reference)?)
+            }
         })
     }
 }
@@ -462,7 +490,10 @@ pub fn experiment_with_progress(
     progress: impl FnMut(usize),
 ) -> Result<Record> {
     crate::error::positive("duration", duration)?;
-    let mut c = setup.controller(variant, compensation, reference)?;
+    // The minimal loop has no delay: the controller predicts over none.
+    let mut minimal = setup.clone();
+    minimal.controller.delay = 0;
+    let mut c = minimal.controller(variant, compensation, reference)?;
     let mut plant = Plant::new(setup.plant.clone())?;
     Ok(run(
         c.as_mut(),

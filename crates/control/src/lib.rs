@@ -100,16 +100,31 @@
 //! modes have ≈ 2 % damping; 1000 s⁻¹ is unstable).
 
 //! # Which controller wins where (on the twin of the designed stage)
-//! Measured with `flexstage-assess` on the quick design (README): the PI + notch + FF, tuned
-//! by [`tuning`] on the twin's sampled frequency response, meets 6 dB / 40° on both loops
-//! with one sample of delay, tracks the default Lissajous to 10.2/8.4 nm RMS (the sensor
-//! noise floor is 7.8/10.4 nm) and passes 93 % of 100 perturbed twins. It wins because the
-//! twin's modes above Nyquist fold into the sampled loop (8.99 kHz appears at 1.02 kHz on
+//! Measured with `flexstage-assess` on the quick design (README): the PI + notch + FF
+//! ([`experiment::Variant::PiNotch`], the default), tuned by [`tuning`] on the twin's
+//! sampled frequency response, meets 6 dB / 40° on both loops with one sample of delay
+//! (6.0 dB, 69° / 9.5 dB, 58°), tracks the default Lissajous to 10.2/5.9 nm RMS (the sensor
+//! noise floor is 7.8/10.4 nm) and passes 96 % of 100 perturbed twins. It wins because the
+//! twin's modes above Nyquist fold into the sampled loop (8.99 kHz appears at 1.01 kHz on
 //! q1) and the notches sit on those peaks, which lets the integral gain rise 3.7×. The PID +
-//! FF without notch is limited by the same peaks to a 40 Hz crossover (18–27 nm); with the
-//! scenario's gains its q1 gain margin is 4.3 dB. The backstepping controllers, designed on
-//! the lumped model of Eq. (36), are unstable on the twin (with and without the robust
-//! terms): they remain the paper's method on its own model, not a controller to ship.
+//! FF without notch is limited by the same peaks to a 40 Hz crossover on q1 (18.5/8.4 nm);
+//! with the scenario's gains its q1 gain margin is 4.3 dB.
+//!
+//! The backstepping controllers are unstable on the twin (with and without the robust
+//! terms). Measured by switching each suspected cause off in turn (`flexstage-assess`'s
+//! `diagnose` example; DECISIONS.md): the one-sample delay, which Section 3.2.2 does not
+//! have and which alone makes the loop oscillate on the lumped plant equal to its model
+//! (now handled: the controller predicts over [`controller::ControllerParams::delay`]); the
+//! model's output modes (1570/2324 Hz) against the twin's (q2 at 3220 Hz, q1 made of modes
+//! above Nyquist that cancel to its static gain); and the aliasing of those modes into the
+//! law's band. Only with the model's mass fitted *and* the aliased peaks removed are they
+//! stable (8.0 dB / 58° on q1). They remain the paper's method on its own model, not a
+//! controller to ship.
+//!
+//! What each part buys (lumped plant in the rig, default Lissajous, example
+//! `robust_terms`): the disturbance observer takes the error from 106/465 nm to 8.4/12.1 nm;
+//! the robust terms with the scenario's ρ_η = 0.1 m/s² change nothing (8.7/12.4 nm); sized
+//! from the measured disturbance (≈ 190/110 m/s², A25) they make it 225/96 nm.
 
 // Loops over the two axes index several arrays at once, as the equations do.
 #![allow(clippy::needless_range_loop)]

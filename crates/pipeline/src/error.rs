@@ -144,6 +144,9 @@ pub enum PipelineError {
     /// Controllers and the simulated experiment.
     #[error(transparent)]
     Control(#[from] flexstage_control::ControlError),
+    /// Margins and tuning of the controllers on the twin.
+    #[error(transparent)]
+    Assess(#[from] flexstage_assess::AssessError),
 
     #[error(transparent)]
     Twin(#[from] flexstage_twin::TwinError),

@@ -397,7 +397,8 @@ impl fmt::Display for TrackSummary {
             f,
             "(hysteresis compensation: {}; errors against the true output)",
             crate::names::compensation(self.compensation)
-        )
+        )?;
+        f.write_str(&self.margins_table())
     }
 }
 

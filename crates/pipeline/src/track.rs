@@ -30,11 +30,15 @@
 use flexstage_scenario::RecordEstimate;
 use std::path::{Path, PathBuf};
 
+use flexstage_assess::inject::InjectionParams;
+use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
+use flexstage_assess::{Bench, Candidate};
 use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::{
     Metrics, Record, Setup, Variant, experiment_on, experiment_with_progress,
 };
 use flexstage_control::trajectory::Reference;
+use flexstage_control::tuning::TuningParams;
 use flexstage_piezo::BoucWenParams;
 use flexstage_report::layout::{self, Tracking};
 use flexstage_report::plot::{Figure, Series};
@@ -268,6 +272,90 @@ pub struct TrackSummary {
     pub dir: PathBuf,
     /// Whether earlier results were replaced.
     pub replaced: bool,
+    /// Loop-at-a-time margins of each controller on the twin's sampled loop with the rig's
+    /// delay (`flexstage-assess`; empty on the lumped plant).
+    pub margins: Vec<MarginRow>,
+    /// The rig's sample time \[s\] (delay margins in samples).
+    pub sample_time: f64,
+}
+
+impl TrackSummary {
+    /// The margins as a table: per controller and loop the gain margin, phase margin, gain
+    /// crossover and delay margin, `FLAGGED` below 6 dB / 40° (issue #18); empty when none
+    /// were measured.
+    pub fn margins_table(&self) -> String {
+        if self.margins.is_empty() {
+            return String::new();
+        }
+        let mut s = format!(
+            "margins with {} sample(s) of delay (loop at a time, the other loop closed):\n\
+             controller     loop  GM [dB]  PM [deg]  f_c [Hz]  DM [samples]\n",
+            self.margins[0].delay
+        );
+        for r in &self.margins {
+            for l in 0..2 {
+                let m = match &r.margins {
+                    Some(m) => format!(
+                        "{:>7.1}  {:>8.1}  {:>8.0}  {:>12.2}",
+                        m[l].gain_db,
+                        m[l].phase_deg,
+                        m[l].gain_crossover,
+                        m[l].delay / self.sample_time
+                    ),
+                    None => format!("{:>41}", "closed loop unstable"),
+                };
+                let flag = if r.meets { "" } else { "  FLAGGED" };
+                s.push_str(&format!(
+                    "{:<14} q{}   {m}{flag}\n",
+                    r.candidate.name(),
+                    l + 1
+                ));
+            }
+        }
+        s
+    }
+}
+
+/// The assessment candidate of a variant.
+fn candidate(v: Variant) -> Candidate {
+    match v {
+        Variant::Robust => Candidate::Robust,
+        Variant::NonRobust => Candidate::NonRobust,
+        Variant::PidFeedforward => Candidate::PidScenario,
+        Variant::PiNotch => Candidate::PiNotch,
+    }
+}
+
+/// On the twin: tunes the PI + notch on its sampled frequency response with the rig's delay
+/// (`flexstage_control::tuning`, sets [`Setup::pi_notch`]) and measures every selected
+/// controller's margins. On the lumped plant nothing is tuned and the PI + notch is skipped
+/// with a warning.
+fn tune_and_margins(
+    setup: &mut Setup,
+    sim: &Simulated,
+    controllers: &[Variant],
+    warnings: &mut Vec<String>,
+) -> Result<Vec<MarginRow>> {
+    let Simulated::Twin(twin) = sim else {
+        if controllers.contains(&Variant::PiNotch) {
+            warnings.push(
+                "pi-notch-ff is tuned on the twin's frequency response and is not run on the \
+                 lumped plant"
+                    .into(),
+            );
+        }
+        return Ok(Vec::new());
+    };
+    let bench = Bench::new(setup.clone(), (**twin).clone(), TuningParams::default())?;
+    setup.pi_notch = Some(bench.pi_notch.params);
+    let candidates: Vec<Candidate> = controllers.iter().map(|&v| candidate(v)).collect();
+    Ok(margins_table(
+        &bench,
+        &candidates,
+        setup.rig.delay,
+        MarginTargets::default(),
+        &InjectionParams::default(),
+    )?)
 }
 
 /// One planned run.
@@ -417,6 +505,7 @@ pub fn track_on(
         Simulated::Twin(_) => PlantKind::Twin,
         Simulated::Lumped => PlantKind::Lumped,
     };
+    let margins = tune_and_margins(&mut setup, &sim, &options.controllers, &mut warnings)?;
     let jobs = plan(&plant.scenario, &setup, &sim, options, &mut warnings)?;
     for w in &warnings {
         progress.note(&format!("warning: {w}"));
@@ -442,6 +531,12 @@ pub fn track_on(
     )?;
     let trajectories = jobs_by_trajectory(&jobs);
     crate::track_files::write_paths(folder.dir(), &out, &trajectories, &merged, &paths)?;
+    if !margins.is_empty() {
+        folder.dir().write(
+            out.margins(),
+            flexstage_assess::margins::csv(&margins, dt).as_bytes(),
+        )?;
+    }
     crate::error::require_converged_tracking(&rows)?;
     Ok(TrackSummary {
         simulated: kind,
@@ -453,6 +548,8 @@ pub fn track_on(
         warnings,
         dir: folder.dir().path(out.dir()),
         replaced,
+        margins,
+        sample_time: dt,
     })
 }
 
@@ -537,6 +634,9 @@ fn plan<'a>(
             ));
         }
         for &controller in &options.controllers {
+            if controller == Variant::PiNotch && setup.pi_notch.is_none() {
+                continue;
+            }
             jobs.push((
                 Job {
                     trajectory: t.name(),

@@ -66,6 +66,11 @@ pub(super) fn tracking(b: &mut Builder) {
                 | "saturated_samples"
         )
     });
+    // Loop-at-a-time margins of each controller on the twin (flagged below 6 dB / 40°).
+    let margins = track.margins();
+    if b.text(&margins).is_some() {
+        b.csv_table(&margins, |h| h != "method");
+    }
     // Trajectories in the table's order, each with its controllers.
     let mut groups: Vec<(String, Vec<MetricRow>)> = Vec::new();
     for r in metric_rows(&text) {
