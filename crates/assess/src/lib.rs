@@ -138,16 +138,7 @@ impl Assessment {
         );
         for (j, r) in self.margins.iter().enumerate() {
             for l in 0..2 {
-                let m = match &r.margins {
-                    Some(m) => format!(
-                        "{:>7.1}  {:>8.1}  {:>8.0}  {:>12.2}",
-                        m[l].gain_db,
-                        m[l].phase_deg,
-                        m[l].gain_crossover,
-                        m[l].delay / self.sample_time
-                    ),
-                    None => format!("{:>41}", "closed loop UNSTABLE"),
-                };
+                let m = r.loop_columns(l, self.sample_time);
                 let extra = if l == 0 {
                     let t = self.tracking.get(j).map_or([f64::NAN; 2], |x| x.1);
                     let n = self.standstill.get(j).map_or([f64::NAN; 2], |x| x.1);

@@ -40,6 +40,24 @@ pub struct MarginRow {
     pub meets: bool,
 }
 
+impl MarginRow {
+    /// The margin columns of loop `l` (0 or 1) for a text table, 41 characters: gain margin
+    /// \[dB\], phase margin \[deg\], gain crossover \[Hz\] and delay margin \[samples of
+    /// `sample_time`\]; "closed loop unstable" when there are no margins.
+    pub fn loop_columns(&self, l: usize, sample_time: f64) -> String {
+        match &self.margins {
+            Some(m) => format!(
+                "{:>7.1}  {:>8.1}  {:>8.0}  {:>12.2}",
+                m[l].gain_db,
+                m[l].phase_deg,
+                m[l].gain_crossover,
+                m[l].delay / sample_time
+            ),
+            None => format!("{:>41}", "closed loop unstable"),
+        }
+    }
+}
+
 /// The margins of every candidate in `candidates` with `delay` samples of delay.
 pub fn margins_table(
     bench: &Bench,

@@ -294,16 +294,7 @@ impl TrackSummary {
         );
         for r in &self.margins {
             for l in 0..2 {
-                let m = match &r.margins {
-                    Some(m) => format!(
-                        "{:>7.1}  {:>8.1}  {:>8.0}  {:>12.2}",
-                        m[l].gain_db,
-                        m[l].phase_deg,
-                        m[l].gain_crossover,
-                        m[l].delay / self.sample_time
-                    ),
-                    None => format!("{:>41}", "closed loop unstable"),
-                };
+                let m = r.loop_columns(l, self.sample_time);
                 let flag = if r.meets { "" } else { "  FLAGGED" };
                 s.push_str(&format!(
                     "{:<14} q{}   {m}{flag}\n",

@@ -50,6 +50,6 @@ pub use lumped::{stage_params, stage_params_toml};
 pub use mass::{MassInterpolation, MassLumping, MassMatrix, PointMass, design_mass};
 pub use modal::{ModalParams, Modes, modal_analysis};
 pub use reduction::{
-    Assumption2, ReduceParams, Reduction, input_frequency, reduce, reduction_problem,
+    Assumption2, ReduceParams, Reduction, input_frequency, plate_masses, reduce, reduction_problem,
 };
 pub use validity::{ScaleSummary, ValidityMap, ValidityParams, ValiditySample, validity_map};

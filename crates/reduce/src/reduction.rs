@@ -206,16 +206,8 @@ pub fn reduce(
     )?;
     let modes = match &params.modal {
         Some(mp) => {
-            let pm: Vec<PointMass> = if params.plate_masses {
-                problem
-                    .inputs
-                    .iter()
-                    .zip([scenario.stage.guess.m_in1, scenario.stage.guess.m_in2])
-                    .map(|(p, m)| PointMass {
-                        node: p.node,
-                        mass: m,
-                    })
-                    .collect()
+            let pm = if params.plate_masses {
+                plate_masses(problem, scenario)
             } else {
                 Vec::new()
             };
@@ -262,4 +254,18 @@ pub fn reduce(
         assumption2,
         validity,
     })
+}
+
+/// The PEA input plates as point masses on the input nodes (`m_in1`, `m_in2` of the
+/// scenario's model guess, Eq. 1–3), for the modal analysis of the design with its actuators.
+pub fn plate_masses(problem: &Problem, scenario: &Scenario) -> Vec<PointMass> {
+    problem
+        .inputs
+        .iter()
+        .zip([scenario.stage.guess.m_in1, scenario.stage.guess.m_in2])
+        .map(|(p, m)| PointMass {
+            node: p.node,
+            mass: m,
+        })
+        .collect()
 }

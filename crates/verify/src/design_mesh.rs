@@ -4,7 +4,7 @@
 //! analysis.
 
 use flexstage_fem::{Design, Kinematics, NewtonParams, NewtonWorkspace, SymbolicFactor, newton};
-use flexstage_reduce::{ModalParams, PointMass, Ports, condense, modal_analysis};
+use flexstage_reduce::{ModalParams, Ports, condense, modal_analysis};
 use flexstage_scenario::Scenario;
 use flexstage_topopt::Problem;
 use serde::Serialize;
@@ -95,16 +95,8 @@ pub fn analyse(
     let stress_linear = corner_stress(&linear, rho, corners)?.von_mises;
     let ports = Ports::from_problem(reduction).map_err(|e| err(&e))?;
     let c = condense(&reduction.model, &Design::new(rho), ports, None).map_err(|e| err(&e))?;
-    let masses: Vec<PointMass> = if plate_masses {
-        reduction
-            .inputs
-            .iter()
-            .zip([scenario.stage.guess.m_in1, scenario.stage.guess.m_in2])
-            .map(|(p, m)| PointMass {
-                node: p.node,
-                mass: m,
-            })
-            .collect()
+    let masses = if plate_masses {
+        flexstage_reduce::plate_masses(reduction, scenario)
     } else {
         Vec::new()
     };
