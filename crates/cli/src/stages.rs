@@ -448,9 +448,10 @@ pub struct TrackArgs {
     /// Trajectory name from the scenario, or "all".
     #[arg(long, default_value = "all")]
     pub trajectory: String,
-    /// Controller: robust or nonrobust backstepping, PID with feedforward, or all (the
-    /// default).
-    #[arg(long, default_value = "all", value_parser = ["robust", "nonrobust", "pid-ff", "all"])]
+    /// Controller: PI + notch + feedforward (tuned on the twin), robust or nonrobust
+    /// backstepping, PID with feedforward, or all (the default).
+    #[arg(long, default_value = "all",
+          value_parser = ["pi-notch-ff", "robust", "nonrobust", "pid-ff", "all"])]
     pub variant: String,
     /// Hysteresis compensation: inverse (Eq. 21, in the loop) or off (straight line).
     #[arg(long, default_value = names::compensation(TrackOptions::default().compensation),
