@@ -250,12 +250,34 @@ fn init(path: &std::path::Path, name: &str, force: bool) -> anyhow::Result<()> {
 fn check(scenario: &ScenarioArgs) -> anyhow::Result<()> {
     let s: Scenario = scenario.load()?;
     outln!("{}: valid", scenario.describe());
-    outln!(
-        "  mesh {} x {} elements over {} x {} mm, p_m = {} samples, up to {} iterations",
+    let mesh = format!(
+        "mesh {} x {} elements over {} x {} mm",
         s.mesh.nl,
         s.mesh.nw,
         s.mesh.length * 1e3,
-        s.mesh.width * 1e3,
+        s.mesh.width * 1e3
+    );
+    if !s.ports.is_empty() {
+        // A general mechanism ([[ports]]): no PEAs, stroke samples or trajectories.
+        let d = s.output.direction.unwrap_or_default();
+        outln!(
+            "  mechanism: {mesh}, {} input port(s), output along ({}, {}), up to {} iterations",
+            s.ports.len(),
+            d[0],
+            d[1],
+            s.optimization.max_iterations
+        );
+        outln!(
+            "  {} supports, {} passive regions; design and export apply (run, reduce and the \
+             control stages are for the two-PEA stage); run folder {}",
+            s.supports.len(),
+            s.regions.len(),
+            default_root(&s).display()
+        );
+        return Ok(());
+    }
+    outln!(
+        "  {mesh}, p_m = {} samples, up to {} iterations",
         s.optimization.samples,
         s.optimization.max_iterations
     );

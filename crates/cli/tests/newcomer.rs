@@ -126,3 +126,28 @@ fn the_subcommands_share_one_run_folder_and_never_overwrite_silently() {
     assert_eq!(runs.len(), 1, "one run folder");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn check_summarizes_a_mechanism_without_the_two_pea_stage() {
+    // Goal: `check` on a [[ports]] mechanism says what it is and which stages apply, and does
+    // not print the two-PEA stage's stroke samples and trajectories (which it has none of).
+    let dir = fresh("check-mechanism");
+    let scenario =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../../examples/scenarios/inverter.toml");
+    let out = ok(&dir, &["check", scenario.to_str().unwrap()]);
+    assert!(
+        out.contains("mechanism:") && out.contains("1 input port(s)"),
+        "{out}"
+    );
+    assert!(out.contains("output along (-1, 0)"), "{out}");
+    assert!(
+        !out.contains("trajectories") && !out.contains("p_m ="),
+        "{out}"
+    );
+    let out = ok(&dir, &["check"]);
+    assert!(
+        out.contains("p_m = ") && out.contains("trajectories"),
+        "{out}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

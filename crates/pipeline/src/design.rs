@@ -401,6 +401,18 @@ fn finish(
     run.write(files::SUMMARY, summary_json(&summary).as_bytes())?;
     // Last: the finished design marks the stage as done for the other commands.
     run.write(files::DESIGN, file.to_json().as_bytes())?;
+    // The checkpoint served only to resume; a finished design is refused as a resume point.
+    let ck = run.path(files::CHECKPOINT);
+    match std::fs::remove_file(&ck) {
+        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
+            return Err(flexstage_report::ReportError::Write {
+                path: ck,
+                source: e,
+            }
+            .into());
+        }
+        _ => {}
+    }
     Ok(summary)
 }
 

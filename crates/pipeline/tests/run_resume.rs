@@ -37,10 +37,10 @@ impl Recorder {
     }
 }
 
-/// Every stage, made short ([`common::short`]): 4 design iterations, no modes or validity
+/// Every stage, made short ([`common::short`]): 4 design iterations (a checkpoint every 2), no modes or validity
 /// map, no full-transient twin check, 0.2 s of identification, 0.05 s of tracking.
 fn short() -> RunOptions {
-    common::short(4, 10, false)
+    common::short(4, 2, false)
 }
 
 fn started(events: &[String]) -> usize {
@@ -59,6 +59,9 @@ fn run_resumes_and_refuses_another_scenario_until_restarted() {
     let ev = rec.take();
     assert_eq!(started(&ev), Stage::ALL.len(), "{ev:?}");
     assert!(s.report.is_file(), "report written");
+    // Checkpoints were written (every 2 of 4 iterations) and removed with the finished design.
+    assert!(root.join("design/design.json").is_file());
+    assert!(!root.join("design/checkpoint.bin").exists());
     assert!(!s.headline.is_empty(), "headline numbers");
     let state = RunState::load(&RunDir::create(&root).unwrap())
         .unwrap()

@@ -350,18 +350,8 @@ impl DesignSummary {
             self.mass * 1e3,
             self.volume_fraction,
         ));
-        out.push(format!(
-            "design-mesh von Mises: peak of the solid {:.1} MPa, constrained (relaxed) {} MPa \
-             (bound {:.1} MPa = allowable {:.1} MPa / mesh factor)",
-            self.peak_stress / 1e6,
-            self.constrained_stress
-                .map_or("-".into(), |v| format!("{:.1}", v / 1e6)),
-            self.design_allowable / 1e6,
-            self.allowable_stress / 1e6
-        ));
-        out.push(format!(
-            "thinnest member {}{}, narrowest gap {}{} (guaranteed {} / {}); one-node hinges {}; \
-             mirror asymmetry {:.1e}",
+        let sizes = format!(
+            "thinnest member {}{}, narrowest gap {}{} (guaranteed {} / {}); one-node hinges {}",
             mm(self.thinnest_member),
             at(self.thinnest_member_at),
             mm(self.narrowest_gap),
@@ -369,8 +359,26 @@ impl DesignSummary {
             mm(self.guaranteed_member),
             mm(self.guaranteed_gap),
             self.one_node_hinges,
-            self.mirror_asymmetry
-        ));
+        );
+        if self.mechanism.is_some() {
+            // A general mechanism has no fatigue constraint (refused with [[ports]]) and no
+            // mirror symmetry to keep: those lines would report numbers nobody asked for.
+            out.push(sizes);
+        } else {
+            out.push(format!(
+                "design-mesh von Mises: peak of the solid {:.1} MPa, constrained (relaxed) {} \
+                 MPa (bound {:.1} MPa = allowable {:.1} MPa / mesh factor)",
+                self.peak_stress / 1e6,
+                self.constrained_stress
+                    .map_or("-".into(), |v| format!("{:.1}", v / 1e6)),
+                self.design_allowable / 1e6,
+                self.allowable_stress / 1e6
+            ));
+            out.push(format!(
+                "{sizes}; mirror asymmetry {:.1e}",
+                self.mirror_asymmetry
+            ));
+        }
         if let Some(f) = self.first_frequency_hz {
             out.push(format!("first natural frequency {f:.0} Hz"));
         }
@@ -407,5 +415,70 @@ impl MechanismSummary {
             ));
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stage() -> DesignSummary {
+        DesignSummary {
+            area: 2.5e-9,
+            area_ratio: 40.0,
+            alpha: 1.5,
+            theta_deg: 0.1,
+            theta_target_deg: 0.0,
+            mass: 0.046,
+            volume_fraction: 0.235,
+            area_eroded: None,
+            area_dilated: None,
+            peak_stress: 80e6,
+            constrained_stress: Some(70e6),
+            allowable_stress: 64e6,
+            design_allowable: 32e6,
+            one_node_hinges: 0,
+            thinnest_member: Some(5e-4),
+            thinnest_member_at: Some([0.01, 0.02]),
+            narrowest_gap: Some(4e-4),
+            narrowest_gap_at: None,
+            guaranteed_member: None,
+            guaranteed_gap: None,
+            mirror_asymmetry: 0.0,
+            first_frequency_hz: Some(900.0),
+            mechanism: None,
+        }
+    }
+
+    #[test]
+    fn a_mechanism_summary_omits_the_stage_only_lines() {
+        // Goal: a [[ports]] mechanism (no fatigue constraint, no mirror symmetry) is not
+        // summarized with a stress line and an asymmetry it never asked for; the stage is.
+        let text = stage().lines().join("\n");
+        assert!(
+            text.contains("von Mises") && text.contains("mirror asymmetry"),
+            "{text}"
+        );
+        assert!(text.contains("amplification α = 1.500"), "{text}");
+        let mechanism = DesignSummary {
+            mechanism: Some(MechanismSummary {
+                direction: [-1.0, 0.0],
+                output_displacement: 1.05,
+                output: [-1.05, 0.0],
+                inputs: vec![8.9],
+                geometric_advantage: 0.118,
+                eroded: None,
+                dilated: None,
+            }),
+            ..stage()
+        };
+        let text = mechanism.lines().join("\n");
+        assert!(text.contains("geometric advantage 0.118"), "{text}");
+        assert!(text.contains("thinnest member 0.50 mm"), "{text}");
+        assert!(
+            !text.contains("von Mises") && !text.contains("asymmetry"),
+            "{text}"
+        );
+        assert!(!text.contains("amplification"), "{text}");
     }
 }
