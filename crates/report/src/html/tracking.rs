@@ -71,6 +71,9 @@ pub(super) fn tracking(b: &mut Builder) {
     if b.text(&margins).is_some() {
         b.csv_table(&margins, |h| h != "method");
     }
+    for line in verdict(&text, b.text(&margins).as_deref()) {
+        b.note(&line);
+    }
     // Trajectories in the table's order, each with its controllers.
     let mut groups: Vec<(String, Vec<MetricRow>)> = Vec::new();
     for r in metric_rows(&text) {
@@ -96,6 +99,87 @@ pub(super) fn tracking(b: &mut Builder) {
             );
         }
     }
+}
+
+/// Which controller wins where, from `metrics.csv` and `margins.csv`: per trajectory the
+/// controller with the smallest planar RMS error √(RMS₁² + RMS₂²) among those that keep the
+/// margins (≥ 6 dB / 40° with the rig's delay, issue #18) and did not diverge, then the
+/// runners-up; controllers below the margins are named apart, whatever their error, because
+/// a practitioner would not ship them. Without margins (the lumped plant) every controller
+/// competes and the text says so.
+pub(super) fn verdict(metrics: &str, margins: Option<&str>) -> Vec<String> {
+    // Controllers whose margins fall short, from `meets_targets`.
+    let flagged: Vec<String> = margins
+        .map(|t| {
+            let mut lines = t.lines();
+            let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+            let col = |n: &str| header.iter().position(|h| *h == n);
+            let (Some(c), Some(m)) = (col("controller"), col("meets_targets")) else {
+                return Vec::new();
+            };
+            let mut out: Vec<String> = lines
+                .filter_map(|l| {
+                    let f: Vec<&str> = l.split(',').collect();
+                    (f.get(m)? != &"true").then(|| f.get(c).map(|s| s.to_string()))?
+                })
+                .collect();
+            out.dedup();
+            out
+        })
+        .unwrap_or_default();
+    let mut order: Vec<String> = Vec::new();
+    let rows = metric_rows(metrics);
+    for r in &rows {
+        if !order.contains(&r.trajectory) {
+            order.push(r.trajectory.clone());
+        }
+    }
+    let mut out = Vec::new();
+    for t in &order {
+        let mut ranked: Vec<(f64, &MetricRow, [f64; 2])> = rows
+            .iter()
+            .filter(|r| &r.trajectory == t && !flagged.contains(&r.controller))
+            .filter_map(|r| {
+                let (a, b) = (r.rms[0].parse::<f64>().ok()?, r.rms[1].parse::<f64>().ok()?);
+                let planar = a.hypot(b);
+                planar.is_finite().then_some((planar, r, [a, b]))
+            })
+            .collect();
+        ranked.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let Some((_, best, e)) = ranked.first() else {
+            out.push(format!(
+                "{t}: no controller both keeps its margins and tracks."
+            ));
+            continue;
+        };
+        let rest: Vec<String> = ranked[1..]
+            .iter()
+            .map(|(_, r, e)| format!("{} {:.1} / {:.1} nm", r.controller, e[0], e[1]))
+            .collect();
+        out.push(format!(
+            "{t}: {} wins with {:.1} / {:.1} nm RMS (q1 / q2){}{}.",
+            best.controller,
+            e[0],
+            e[1],
+            if margins.is_some() {
+                " among the controllers that keep ≥ 6 dB / 40°"
+            } else {
+                " (no margins measured on this plant: every controller competes)"
+            },
+            if rest.is_empty() {
+                String::new()
+            } else {
+                format!("; then {}", rest.join(", "))
+            }
+        ));
+    }
+    if !flagged.is_empty() {
+        out.push(format!(
+            "Below the 6 dB / 40° margins on this plant, so not ranked whatever their error: {}.",
+            flagged.join(", ")
+        ));
+    }
+    out
 }
 
 /// Figure 11's error view: per controller a panel of the error e = q − q_ref in the plane
@@ -174,4 +258,52 @@ fn short_nm(cell: &str) -> String {
     cell.parse::<f64>()
         .map(fmt_num)
         .unwrap_or_else(|_| cell.to_string())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::verdict;
+
+    const METRICS: &str = "trajectory,variant,rms1_nm,rms2_nm\n\
+        circle,robust,2.0,2.0\n\
+        circle,pi-notch-ff,4.3,5.0\n\
+        circle,pid-ff,7.0,8.7\n\
+        line,pi-notch-ff,NaN,1.0\n\
+        line,pid-ff,9.0,9.0\n";
+
+    #[test]
+    fn the_winner_keeps_its_margins_and_the_flagged_are_named_apart() {
+        // Goal: a controller below the margins never wins, even with the smallest error; a
+        // diverged (NaN) row is not ranked; runners-up follow in order.
+        let margins = "controller,delay_samples,loop,gain_margin_dB,meets_targets\n\
+            pi-notch-ff,1,q1,6.0,true\n\
+            pi-notch-ff,1,q2,9.5,true\n\
+            robust,1,q1,unstable,false\n\
+            robust,1,q2,unstable,false\n\
+            pid-ff,1,q1,6.2,true\n\
+            pid-ff,1,q2,15.0,true\n";
+        let v = verdict(METRICS, Some(margins));
+        assert_eq!(v.len(), 3, "{v:?}");
+        assert!(
+            v[0].starts_with("circle: pi-notch-ff wins with 4.3 / 5.0 nm"),
+            "{v:?}"
+        );
+        assert!(v[0].ends_with("; then pid-ff 7.0 / 8.7 nm."), "{v:?}");
+        assert!(v[1].starts_with("line: pid-ff wins"), "{v:?}");
+        assert!(
+            v[2].contains("not ranked") && v[2].ends_with(": robust."),
+            "{v:?}"
+        );
+    }
+
+    #[test]
+    fn without_margins_every_controller_competes() {
+        let v = verdict(METRICS, None);
+        assert!(
+            v[0].starts_with("circle: robust wins with 2.0 / 2.0 nm"),
+            "{v:?}"
+        );
+        assert!(v[0].contains("every controller competes"), "{v:?}");
+        assert_eq!(v.len(), 2, "{v:?}");
+    }
 }
