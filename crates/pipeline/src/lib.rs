@@ -61,6 +61,7 @@ pub mod progress;
 pub mod reduce;
 mod reduce_files;
 pub mod run;
+pub mod scan;
 pub mod source;
 pub mod stage_id;
 pub mod state;

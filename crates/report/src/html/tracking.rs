@@ -74,6 +74,14 @@ pub(super) fn tracking(b: &mut Builder) {
     for line in verdict(&text, b.text(&margins).as_deref()) {
         b.note(&line);
     }
+    // Issue #18, item 5: error against scan frequency (on the twin only).
+    if b.exists(&track.scan_frequency_svg()) {
+        b.img(
+            &track.scan_frequency_svg(),
+            "RMS error of every controller on the Lissajous 3:1 against the frequency of its \
+             fast component, 1–30 % of the twin's first resonance (scan_frequency.csv)",
+        );
+    }
     // Trajectories in the table's order, each with its controllers.
     let mut groups: Vec<(String, Vec<MetricRow>)> = Vec::new();
     for r in metric_rows(&text) {
