@@ -514,6 +514,36 @@ fn element_chunk(
     }
 }
 
+/// Element residuals of every element into `re` and each element's tangent added into the CSC
+/// values `vals` as soon as it is computed (no element-matrix buffer), in element order and
+/// the packed order of [`Model::assemble`]'s scatter, so the sums are bitwise the same.
+#[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"))]
+fn element_scatter(
+    model: &Model,
+    design: &Design,
+    u: &[f64],
+    re: &mut [[f64; 8]],
+    vals: &mut [f64],
+) {
+    let kernel = &model.kernel;
+    for (e, (re, slots)) in re.iter_mut().zip(&model.pattern.elem_slots).enumerate() {
+        let c = model.coefficients(design, e);
+        let ue = model.element_displacement(e, u);
+        let mut k = [[0.0; 8]; 8];
+        kernel.residual_tangent(&c, &ue, re, Some(&mut k));
+        let mut i = 0;
+        for p in 0..8 {
+            for q in p..8 {
+                let s = slots[i];
+                if s != u32::MAX {
+                    vals[s as usize] += k[p][q];
+                }
+                i += 1;
+            }
+        }
+    }
+}
+
 /// Densities and optional additive-material coefficients for one evaluation.
 #[derive(Debug, Clone, Copy)]
 pub struct Design<'a> {
@@ -758,15 +788,7 @@ impl Model {
                 element_chunk(self, design, u, c * CHUNK, ke, re, need_k);
             });
         if let Some(r) = residual {
-            assert_eq!(r.len(), self.n_dofs(), "residual length");
-            r.fill(0.0);
-            for (e, re) in ws.re.iter().enumerate() {
-                let d = self.mesh.element_dofs(e);
-                for k in 0..8 {
-                    r[d[k]] += re[k];
-                }
-            }
-            self.add_spring_forces(u, 1.0, r);
+            self.scatter_residual(u, &ws.re, r);
         }
         if let Some(kt) = tangent {
             assert!(
@@ -783,16 +805,69 @@ impl Model {
                     }
                 }
             }
-            for s in &self.bcs.springs {
-                if let Some(i) = self.dofs.reduced(s.dof) {
-                    vals[self.pattern.diag_slots[i]] += s.stiffness;
-                }
+            self.add_spring_tangent(kt);
+        }
+    }
+
+    /// [`Model::assemble`] on the calling thread, for callers that already run one load case
+    /// per thread (the lock-step groups of the design analysis): no nested rayon tasks, and the
+    /// tangent is scattered element by element as it is computed, without the element-matrix
+    /// buffer (which at 120 × 60 is 2 MB written and read again per assembly). Same summation
+    /// order, so the result is bitwise that of [`Model::assemble`].
+    ///
+    /// # Panics
+    /// As [`Model::assemble`].
+    pub fn assemble_serial(
+        &self,
+        design: &Design,
+        u: &[f64],
+        residual: Option<&mut [f64]>,
+        tangent: Option<&mut SparseMatrix>,
+        ws: &mut AssemblyWorkspace,
+    ) {
+        self.check_sizes(design, u);
+        match tangent {
+            Some(kt) => {
+                assert!(
+                    Arc::ptr_eq(&kt.pattern, &self.pattern),
+                    "tangent pattern is not this model's"
+                );
+                kt.values.fill(0.0);
+                element_scatter(self, design, u, &mut ws.re, &mut kt.values);
+                self.add_spring_tangent(kt);
             }
-            for (l, slots) in self.bcs.links.iter().zip(&self.pattern.link_slots) {
-                for &(i, j, s) in slots {
-                    let (ci, cj) = (l.terms[i as usize].1, l.terms[j as usize].1);
-                    vals[s as usize] += l.stiffness * ci * cj;
-                }
+            None => element_chunk(self, design, u, 0, &mut ws.ke, &mut ws.re, false),
+        }
+        if let Some(r) = residual {
+            self.scatter_residual(u, &ws.re, r);
+        }
+    }
+
+    /// `r = Σ_e r_e` (element residuals `re`) plus the spring forces.
+    fn scatter_residual(&self, u: &[f64], re: &[[f64; 8]], r: &mut [f64]) {
+        assert_eq!(r.len(), self.n_dofs(), "residual length");
+        r.fill(0.0);
+        for (e, re) in re.iter().enumerate() {
+            let d = self.mesh.element_dofs(e);
+            for k in 0..8 {
+                r[d[k]] += re[k];
+            }
+        }
+        self.add_spring_forces(u, 1.0, r);
+    }
+
+    /// Adds the grounded and link springs' stiffness to an assembled tangent.
+    fn add_spring_tangent(&self, kt: &mut SparseMatrix) {
+        let vals = &mut kt.values;
+        for s in &self.bcs.springs {
+            if let Some(i) = self.dofs.reduced(s.dof) {
+                vals[self.pattern.diag_slots[i]] += s.stiffness;
+            }
+        }
+        for (l, slots) in self.bcs.links.iter().zip(&self.pattern.link_slots) {
+            for &(i, j, s) in slots {
+                let (ci, cj) = (l.terms[i as usize].1, l.terms[j as usize].1);
+                vals[s as usize] += l.stiffness * ci * cj;
             }
         }
     }
