@@ -425,8 +425,11 @@ impl SparseMatrix {
 impl SparseMatrix {
     /// `Y = A X` for `k` column-major vectors (`x`, `y` of length `n·k`). The matrix is read
     /// once for up to four columns (sparse mat-vecs are bound by reading the matrix, so a
-    /// block of columns costs little more than one).
-    pub fn matvec_columns(&self, x: &[f64], y: &mut [f64], k: usize) {
+    /// block of columns costs little more than one). `scratch` holds the columns interleaved
+    /// node by node (resized to `8n`; keep it between calls), so that the four updates of a
+    /// matrix entry are one vector operation; each column is summed in the order of
+    /// [`SparseMatrix::matvec`], so the result is bitwise the same.
+    pub fn matvec_columns(&self, x: &[f64], y: &mut [f64], k: usize, scratch: &mut Vec<f64>) {
         let n = self.pattern.n;
         assert!(
             x.len() == n * k && y.len() == n * k,
@@ -441,32 +444,38 @@ impl SparseMatrix {
             );
             match w {
                 1 => self.matvec(xb, yb),
-                2 => self.matvec_block::<2>(xb, yb),
-                3 => self.matvec_block::<3>(xb, yb),
-                _ => self.matvec_block::<4>(xb, yb),
+                2 => self.matvec_block::<2>(xb, yb, scratch),
+                3 => self.matvec_block::<3>(xb, yb, scratch),
+                _ => self.matvec_block::<4>(xb, yb, scratch),
             }
             done += w;
         }
     }
 
-    /// `Y = A X` for exactly `K` columns, one sweep over the matrix.
-    fn matvec_block<const K: usize>(&self, x: &[f64], y: &mut [f64]) {
+    /// `Y = A X` for exactly `K` columns, one sweep over the matrix (interleaved in `scratch`).
+    fn matvec_block<const K: usize>(&self, x: &[f64], y: &mut [f64], scratch: &mut Vec<f64>) {
         let p = &*self.pattern;
         let n = p.n;
-        y.fill(0.0);
-        let xs: [&[f64]; K] = std::array::from_fn(|t| &x[t * n..(t + 1) * n]);
-        let mut it = y.chunks_exact_mut(n);
-        let ys: [&mut [f64]; K] = std::array::from_fn(|_| it.next().expect("K columns"));
+        scratch.clear();
+        scratch.resize(2 * n * K, 0.0);
+        let (xi, yi) = scratch.split_at_mut(n * K);
+        for (t, xt) in x.chunks_exact(n).enumerate() {
+            for (c, v) in xt.iter().enumerate() {
+                xi[c * K + t] = *v;
+            }
+        }
         for c in 0..n {
-            let xc: [f64; K] = std::array::from_fn(|t| xs[t][c]);
+            let xc: [f64; K] = std::array::from_fn(|t| xi[c * K + t]);
             let mut acc = [0.0; K];
             for k in p.col_ptr[c]..p.col_ptr[c + 1] {
                 let r = p.row_idx[k];
                 let v = self.values[k];
                 if r != c {
+                    let xr: [f64; K] = std::array::from_fn(|t| xi[r * K + t]);
+                    let yr = &mut yi[r * K..(r + 1) * K];
                     for t in 0..K {
-                        ys[t][r] += v * xc[t];
-                        acc[t] += v * xs[t][r];
+                        yr[t] += v * xc[t];
+                        acc[t] += v * xr[t];
                     }
                 } else {
                     for t in 0..K {
@@ -475,7 +484,12 @@ impl SparseMatrix {
                 }
             }
             for t in 0..K {
-                ys[t][c] += acc[t];
+                yi[c * K + t] += acc[t];
+            }
+        }
+        for (t, yt) in y.chunks_exact_mut(n).enumerate() {
+            for (c, v) in yt.iter_mut().enumerate() {
+                *v = yi[c * K + t];
             }
         }
     }
