@@ -546,11 +546,11 @@ fn element_scatter(
         let mut k = [[0.0; 8]; 8];
         kernel.residual_tangent(&c, &ue, re, Some(&mut k));
         let mut i = 0;
-        for p in 0..8 {
-            for q in p..8 {
+        for (p, row) in k.iter().enumerate() {
+            for v in &row[p..] {
                 let s = slots[i];
                 if s != u32::MAX {
-                    vals[s as usize] += k[p][q];
+                    vals[s as usize] += v;
                 }
                 i += 1;
             }
