@@ -57,6 +57,18 @@ fn assemble_tangent_residual(b: Bencher, (nl, nw): (usize, usize)) {
     b.bench_local(|| model.assemble(&design, &u, Some(&mut r), Some(&mut k), &mut ws));
 }
 
+/// The residual alone (what a lock-step sweep assembles), same state.
+#[divan::bench(args = SIZES)]
+fn assemble_residual(b: Bencher, (nl, nw): (usize, usize)) {
+    let s = setup(nl, nw);
+    let model = &s.stage.model;
+    let u = deformed(&s);
+    let mut r = model.zero_vector();
+    let mut ws = model.new_workspace();
+    let design = Design::new(&s.rho);
+    b.bench_local(|| model.residual(&design, &u, &mut r, &mut ws));
+}
+
 #[divan::bench(args = SIZES)]
 fn assemble_tangent_residual_with_yeoh(b: Bencher, (nl, nw): (usize, usize)) {
     let s = setup(nl, nw);
@@ -192,4 +204,18 @@ fn newton_solve_pcg_shared_factor(b: Bencher, (nl, nw): (usize, usize)) {
         u.fill(0.0);
         newton::solve(model, &design, &load, &mut u, &params, &mut ws, Some(&f0)).unwrap()
     });
+}
+
+/// [`Model::assemble_serial`] (one case per thread, fused scatter), same state; compare with
+/// `assemble_tangent_residual` under `RAYON_NUM_THREADS=1`.
+#[divan::bench(args = SIZES)]
+fn assemble_tangent_residual_serial(b: Bencher, (nl, nw): (usize, usize)) {
+    let s = setup(nl, nw);
+    let model = &s.stage.model;
+    let u = deformed(&s);
+    let mut k = model.new_matrix();
+    let mut r = model.zero_vector();
+    let mut ws = model.new_workspace();
+    let design = Design::new(&s.rho);
+    b.bench_local(|| model.assemble_serial(&design, &u, Some(&mut r), Some(&mut k), &mut ws));
 }

@@ -304,23 +304,32 @@ impl ElementKernel {
                                 + resp.d[i][2] * b[2][q]);
                     }
                 }
+                // Full rows of eight (they vectorize; a triangular `q ≥ p` loop stays scalar).
+                // Only the upper triangle is kept (symmetrized below), and each of its entries
+                // is summed in the same order as before, so the result is bitwise the same.
+                let geometric = self.kinematics == Kinematics::TotalLagrangian;
+                let dn = &self.geometry.dndx[g];
+                let s = resp.s;
+                // Geometric stiffness G_ab = w ∇N_a·S∇N_b on the x–x and y–y DOF pairs:
+                // `gx[q]` is ∇N_b(q)/2 in the x/y components of DOF q, masked by parity.
+                let nxq: [f64; 8] = std::array::from_fn(|q| dn[q / 2][0]);
+                let nyq: [f64; 8] = std::array::from_fn(|q| dn[q / 2][1]);
                 for p in 0..8 {
-                    for q in p..8 {
-                        kk[p][q] += b[0][p] * db[0][q] + b[1][p] * db[1][q] + b[2][p] * db[2][q];
+                    let (b0, b1, b2) = (b[0][p], b[1][p], b[2][p]);
+                    let row = &mut kk[p];
+                    for q in 0..8 {
+                        row[q] += b0 * db[0][q] + b1 * db[1][q] + b2 * db[2][q];
                     }
-                }
-                if self.kinematics == Kinematics::TotalLagrangian {
-                    let dn = &self.geometry.dndx[g];
-                    let s = resp.s;
-                    for a in 0..4 {
+                    if geometric {
+                        let a = p / 2;
                         let sa = [
                             w * (s[0] * dn[a][0] + s[2] * dn[a][1]),
                             w * (s[2] * dn[a][0] + s[1] * dn[a][1]),
                         ];
-                        for bn in a..4 {
-                            let gab = sa[0] * dn[bn][0] + sa[1] * dn[bn][1];
-                            kk[2 * a][2 * bn] += gab;
-                            kk[2 * a + 1][2 * bn + 1] += gab;
+                        for q in 0..8 {
+                            if q % 2 == p % 2 {
+                                row[q] += sa[0] * nxq[q] + sa[1] * nyq[q];
+                            }
                         }
                     }
                 }

@@ -425,8 +425,11 @@ impl SparseMatrix {
 impl SparseMatrix {
     /// `Y = A X` for `k` column-major vectors (`x`, `y` of length `n·k`). The matrix is read
     /// once for up to four columns (sparse mat-vecs are bound by reading the matrix, so a
-    /// block of columns costs little more than one).
-    pub fn matvec_columns(&self, x: &[f64], y: &mut [f64], k: usize) {
+    /// block of columns costs little more than one). `scratch` holds the columns interleaved
+    /// node by node (resized to `8n`; keep it between calls), so that the four updates of a
+    /// matrix entry are one vector operation; each column is summed in the order of
+    /// [`SparseMatrix::matvec`], so the result is bitwise the same.
+    pub fn matvec_columns(&self, x: &[f64], y: &mut [f64], k: usize, scratch: &mut Vec<f64>) {
         let n = self.pattern.n;
         assert!(
             x.len() == n * k && y.len() == n * k,
@@ -441,32 +444,38 @@ impl SparseMatrix {
             );
             match w {
                 1 => self.matvec(xb, yb),
-                2 => self.matvec_block::<2>(xb, yb),
-                3 => self.matvec_block::<3>(xb, yb),
-                _ => self.matvec_block::<4>(xb, yb),
+                2 => self.matvec_block::<2>(xb, yb, scratch),
+                3 => self.matvec_block::<3>(xb, yb, scratch),
+                _ => self.matvec_block::<4>(xb, yb, scratch),
             }
             done += w;
         }
     }
 
-    /// `Y = A X` for exactly `K` columns, one sweep over the matrix.
-    fn matvec_block<const K: usize>(&self, x: &[f64], y: &mut [f64]) {
+    /// `Y = A X` for exactly `K` columns, one sweep over the matrix (interleaved in `scratch`).
+    fn matvec_block<const K: usize>(&self, x: &[f64], y: &mut [f64], scratch: &mut Vec<f64>) {
         let p = &*self.pattern;
         let n = p.n;
-        y.fill(0.0);
-        let xs: [&[f64]; K] = std::array::from_fn(|t| &x[t * n..(t + 1) * n]);
-        let mut it = y.chunks_exact_mut(n);
-        let ys: [&mut [f64]; K] = std::array::from_fn(|_| it.next().expect("K columns"));
+        scratch.clear();
+        scratch.resize(2 * n * K, 0.0);
+        let (xi, yi) = scratch.split_at_mut(n * K);
+        for (t, xt) in x.chunks_exact(n).enumerate() {
+            for (c, v) in xt.iter().enumerate() {
+                xi[c * K + t] = *v;
+            }
+        }
         for c in 0..n {
-            let xc: [f64; K] = std::array::from_fn(|t| xs[t][c]);
+            let xc: [f64; K] = std::array::from_fn(|t| xi[c * K + t]);
             let mut acc = [0.0; K];
             for k in p.col_ptr[c]..p.col_ptr[c + 1] {
                 let r = p.row_idx[k];
                 let v = self.values[k];
                 if r != c {
+                    let xr: [f64; K] = std::array::from_fn(|t| xi[r * K + t]);
+                    let yr = &mut yi[r * K..(r + 1) * K];
                     for t in 0..K {
-                        ys[t][r] += v * xc[t];
-                        acc[t] += v * xs[t][r];
+                        yr[t] += v * xc[t];
+                        acc[t] += v * xr[t];
                     }
                 } else {
                     for t in 0..K {
@@ -475,7 +484,12 @@ impl SparseMatrix {
                 }
             }
             for t in 0..K {
-                ys[t][c] += acc[t];
+                yi[c * K + t] += acc[t];
+            }
+        }
+        for (t, yt) in y.chunks_exact_mut(n).enumerate() {
+            for (c, v) in yt.iter_mut().enumerate() {
+                *v = yi[c * K + t];
             }
         }
     }
@@ -510,6 +524,36 @@ fn element_chunk(
             }
         } else {
             kernel.residual_tangent(&c, &ue, re, None);
+        }
+    }
+}
+
+/// Element residuals of every element into `re` and each element's tangent added into the CSC
+/// values `vals` as soon as it is computed (no element-matrix buffer), in element order and
+/// the packed order of [`Model::assemble`]'s scatter, so the sums are bitwise the same.
+#[multiversion(targets("x86_64+avx512f+avx512vl+avx2+fma", "x86_64+avx2+fma"))]
+fn element_scatter(
+    model: &Model,
+    design: &Design,
+    u: &[f64],
+    re: &mut [[f64; 8]],
+    vals: &mut [f64],
+) {
+    let kernel = &model.kernel;
+    for (e, (re, slots)) in re.iter_mut().zip(&model.pattern.elem_slots).enumerate() {
+        let c = model.coefficients(design, e);
+        let ue = model.element_displacement(e, u);
+        let mut k = [[0.0; 8]; 8];
+        kernel.residual_tangent(&c, &ue, re, Some(&mut k));
+        let mut i = 0;
+        for (p, row) in k.iter().enumerate() {
+            for v in &row[p..] {
+                let s = slots[i];
+                if s != u32::MAX {
+                    vals[s as usize] += v;
+                }
+                i += 1;
+            }
         }
     }
 }
@@ -758,15 +802,7 @@ impl Model {
                 element_chunk(self, design, u, c * CHUNK, ke, re, need_k);
             });
         if let Some(r) = residual {
-            assert_eq!(r.len(), self.n_dofs(), "residual length");
-            r.fill(0.0);
-            for (e, re) in ws.re.iter().enumerate() {
-                let d = self.mesh.element_dofs(e);
-                for k in 0..8 {
-                    r[d[k]] += re[k];
-                }
-            }
-            self.add_spring_forces(u, 1.0, r);
+            self.scatter_residual(u, &ws.re, r);
         }
         if let Some(kt) = tangent {
             assert!(
@@ -783,16 +819,69 @@ impl Model {
                     }
                 }
             }
-            for s in &self.bcs.springs {
-                if let Some(i) = self.dofs.reduced(s.dof) {
-                    vals[self.pattern.diag_slots[i]] += s.stiffness;
-                }
+            self.add_spring_tangent(kt);
+        }
+    }
+
+    /// [`Model::assemble`] on the calling thread, for callers that already run one load case
+    /// per thread (the lock-step groups of the design analysis): no nested rayon tasks, and the
+    /// tangent is scattered element by element as it is computed, without the element-matrix
+    /// buffer (which at 120 × 60 is 2 MB written and read again per assembly). Same summation
+    /// order, so the result is bitwise that of [`Model::assemble`].
+    ///
+    /// # Panics
+    /// As [`Model::assemble`].
+    pub fn assemble_serial(
+        &self,
+        design: &Design,
+        u: &[f64],
+        residual: Option<&mut [f64]>,
+        tangent: Option<&mut SparseMatrix>,
+        ws: &mut AssemblyWorkspace,
+    ) {
+        self.check_sizes(design, u);
+        match tangent {
+            Some(kt) => {
+                assert!(
+                    Arc::ptr_eq(&kt.pattern, &self.pattern),
+                    "tangent pattern is not this model's"
+                );
+                kt.values.fill(0.0);
+                element_scatter(self, design, u, &mut ws.re, &mut kt.values);
+                self.add_spring_tangent(kt);
             }
-            for (l, slots) in self.bcs.links.iter().zip(&self.pattern.link_slots) {
-                for &(i, j, s) in slots {
-                    let (ci, cj) = (l.terms[i as usize].1, l.terms[j as usize].1);
-                    vals[s as usize] += l.stiffness * ci * cj;
-                }
+            None => element_chunk(self, design, u, 0, &mut ws.ke, &mut ws.re, false),
+        }
+        if let Some(r) = residual {
+            self.scatter_residual(u, &ws.re, r);
+        }
+    }
+
+    /// `r = Σ_e r_e` (element residuals `re`) plus the spring forces.
+    fn scatter_residual(&self, u: &[f64], re: &[[f64; 8]], r: &mut [f64]) {
+        assert_eq!(r.len(), self.n_dofs(), "residual length");
+        r.fill(0.0);
+        for (e, re) in re.iter().enumerate() {
+            let d = self.mesh.element_dofs(e);
+            for k in 0..8 {
+                r[d[k]] += re[k];
+            }
+        }
+        self.add_spring_forces(u, 1.0, r);
+    }
+
+    /// Adds the grounded and link springs' stiffness to an assembled tangent.
+    fn add_spring_tangent(&self, kt: &mut SparseMatrix) {
+        let vals = &mut kt.values;
+        for s in &self.bcs.springs {
+            if let Some(i) = self.dofs.reduced(s.dof) {
+                vals[self.pattern.diag_slots[i]] += s.stiffness;
+            }
+        }
+        for (l, slots) in self.bcs.links.iter().zip(&self.pattern.link_slots) {
+            for &(i, j, s) in slots {
+                let (ci, cj) = (l.terms[i as usize].1, l.terms[j as usize].1);
+                vals[s as usize] += l.stiffness * ci * cj;
             }
         }
     }

@@ -604,6 +604,8 @@ pub struct BlockPcgWorkspace {
     bn: Vec<f64>,
     rz: Vec<f64>,
     running: Vec<usize>,
+    /// Interleaved columns of the block mat-vecs ([`SparseMatrix::matvec_columns`]).
+    mv: Vec<f64>,
 }
 
 impl BlockPcgWorkspace {
@@ -619,6 +621,7 @@ impl BlockPcgWorkspace {
             bn: vec![0.0; k],
             rz: vec![0.0; k],
             running: Vec::with_capacity(k),
+            mv: vec![0.0; 8 * n],
         }
     }
     /// Largest number of columns.
@@ -648,6 +651,7 @@ fn block_matvec(
     q: &mut [f64],
     n: usize,
     want: impl Fn(usize) -> bool,
+    scratch: &mut Vec<f64>,
 ) {
     let k = mats.len();
     let mut a = 0;
@@ -658,7 +662,12 @@ fn block_matvec(
         }
         if let (Some(f), Some(l)) = ((a..b).find(|&j| want(j)), (a..b).rev().find(|&j| want(j))) {
             let w = l + 1 - f;
-            mats[a].matvec_columns(&p[f * n..(l + 1) * n], &mut q[f * n..(l + 1) * n], w);
+            mats[a].matvec_columns(
+                &p[f * n..(l + 1) * n],
+                &mut q[f * n..(l + 1) * n],
+                w,
+                scratch,
+            );
         }
         a = b;
     }
@@ -702,6 +711,7 @@ pub fn pcg_block(
         bn,
         rz,
         running,
+        mv,
         ..
     } = ws;
     let (r, z, p, q) = (
@@ -714,7 +724,7 @@ pub fn pcg_block(
     for a in mats {
         assert_eq!(a.n(), n, "pcg_block matrix order");
     }
-    block_matvec(mats, x, q, n, |_| true);
+    block_matvec(mats, x, q, n, |_| true, mv);
     let mut total = 0;
     running.clear();
     for j in 0..k {
@@ -759,7 +769,7 @@ pub fn pcg_block(
         rz[j] = dot(&r[col(j)], &z[col(c)]);
     }
     for it in 1..=params.max_iter {
-        block_matvec(mats, p, q, n, |j| outcome[j] == ColumnOutcome::Running);
+        block_matvec(mats, p, q, n, |j| outcome[j] == ColumnOutcome::Running, mv);
         for &j in running.iter() {
             let pq = dot(&p[col(j)], &q[col(j)]);
             total += 1;

@@ -18,6 +18,7 @@
 //! Gradients flow back through the adjoint of each map.
 
 use flexstage_fem::{AdditiveYeoh, Passive};
+use rayon::prelude::*;
 
 use crate::analysis::{AnalysisParams, CaseResults, Evaluator, Workspace};
 use crate::design_space::DesignSpace;
@@ -144,7 +145,9 @@ pub struct DesignEvaluator<'p> {
     pub specs: Vec<RealizationSpec>,
     /// One FE analysis (warm starts) per realization, same order.
     pub evaluators: Vec<Evaluator<'p>>,
-    workspace: Workspace,
+    /// One set of FE buffers per realization (same order, one symbolic factorization), so that
+    /// the realizations are analysed concurrently.
+    workspaces: Vec<Workspace>,
 }
 
 /// Which responses a problem has.
@@ -207,22 +210,27 @@ impl<'p> DesignEvaluator<'p> {
         problem.validate()?;
         let space = DesignSpace::new(problem.mesh(), problem.mirror_symmetry)?;
         let specs = realization_specs(problem, robust, eta);
-        let workspace = Workspace::new(problem)?;
+        let first = Workspace::new(problem)?;
         let evaluators = specs
             .iter()
             .map(|s| {
-                let mut ev = Evaluator::with_workspace_of(problem, params, &workspace)?;
+                let mut ev = Evaluator::with_workspace_of(problem, params, &first)?;
                 ev.compute_energies = s.responses[ResponseKind::Energy];
                 Ok(ev)
             })
             .collect::<Result<Vec<_>>>()?;
+        let mut workspaces = Vec::with_capacity(specs.len());
+        for _ in 1..specs.len() {
+            workspaces.push(Workspace::sharing(problem, first.symbolic().clone())?);
+        }
+        workspaces.insert(0, first);
         Ok(Self {
             problem,
             space,
             filter: DensityFilter::new(problem.mesh(), filter_radius),
             specs,
             evaluators,
-            workspace,
+            workspaces,
         })
     }
 
@@ -233,14 +241,7 @@ impl<'p> DesignEvaluator<'p> {
 
     /// The projection of realization `i` at sharpness β (β = 0: none).
     pub fn projection(&self, i: usize, beta: f64) -> Projection {
-        if beta == 0.0 {
-            Projection::off()
-        } else {
-            Projection {
-                beta,
-                eta: self.specs[i].eta,
-            }
-        }
+        Maps::projection(&self.specs[i], beta)
     }
 
     /// `x → x_full → x̃ → x̄_r → ρ_r` (module docs).
@@ -280,33 +281,16 @@ impl<'p> DesignEvaluator<'p> {
     /// Chain rule `dQ/dρ_r → dQ/dx` through the passive overrides, the projection of
     /// realization r, the filter and the design space.
     pub fn chain(&self, filtered: &[f64], proj: Projection, g_rho: &[f64]) -> Vec<f64> {
-        let mesh = self.problem.mesh();
-        let g_tilde: Vec<f64> = (0..g_rho.len())
-            .map(|e| {
-                if mesh.passive[e] == Passive::Design {
-                    g_rho[e] * proj.derivative(filtered[e])
-                } else {
-                    0.0
-                }
-            })
-            .collect();
-        let mut g_full = vec![0.0; g_rho.len()];
-        self.filter.apply_adjoint(&g_tilde, &mut g_full);
-        let mut g = vec![0.0; self.space.n()];
-        self.space.gather(&g_full, &mut g);
-        g
+        self.maps().chain(filtered, proj, g_rho)
     }
 
-    /// Volume fraction of the design elements and its gradient w.r.t. ρ.
-    fn volume(&self, rho: &[f64]) -> (f64, Vec<f64>) {
-        let nd = self.space.n_design_elements() as f64;
-        let mut g = vec![0.0; rho.len()];
-        let mut v = 0.0;
-        for e in self.space.design_elements() {
-            v += rho[e];
-            g[e] = 1.0 / nd;
+    /// The read-only maps of the density chain.
+    fn maps(&self) -> Maps<'_> {
+        Maps {
+            problem: self.problem,
+            space: &self.space,
+            filter: &self.filter,
         }
-        (v / nd, g)
     }
 
     /// Full evaluation at the design variables `x` and sharpness β: densities, FE analysis of
@@ -338,35 +322,112 @@ impl<'p> DesignEvaluator<'p> {
             )));
         }
         let dens = self.densities(x, beta);
-        let mut realizations = Vec::with_capacity(self.specs.len());
-        for i in 0..self.specs.len() {
-            realizations.push(self.evaluate_realization(i, &dens, beta, yeoh, skip)?);
-        }
+        // The realizations are independent FE problems: analysed concurrently (each with its
+        // own workspace), so that one's serial parts (factorization, predictor, adjoint basis,
+        // stress measure, chain rule) overlap the others' parallel ones.
+        let maps = Maps {
+            problem: self.problem,
+            space: &self.space,
+            filter: &self.filter,
+        };
+        let results: Vec<Result<RealizationEvaluation>> = self
+            .evaluators
+            .par_iter_mut()
+            .zip(self.workspaces.par_iter_mut())
+            .zip(self.specs.par_iter())
+            .enumerate()
+            .map(|(i, ((ev, ws), spec))| {
+                maps.evaluate_realization(
+                    spec,
+                    ev,
+                    ws,
+                    &dens.realizations[i].1,
+                    &dens,
+                    beta,
+                    yeoh,
+                    skip,
+                )
+            })
+            .collect();
+        let realizations = results.into_iter().collect::<Result<Vec<_>>>()?;
         Ok((dens, Evaluation { realizations }))
     }
+}
 
+/// The read-only maps of the density chain (design space, filter) and the problem.
+struct Maps<'a> {
+    problem: &'a Problem,
+    space: &'a DesignSpace,
+    filter: &'a DensityFilter,
+}
+
+impl Maps<'_> {
+    /// The projection of a realization at sharpness β (β = 0: none).
+    fn projection(spec: &RealizationSpec, beta: f64) -> Projection {
+        if beta == 0.0 {
+            Projection::off()
+        } else {
+            Projection {
+                beta,
+                eta: spec.eta,
+            }
+        }
+    }
+
+    /// See [`DesignEvaluator::chain`].
+    fn chain(&self, filtered: &[f64], proj: Projection, g_rho: &[f64]) -> Vec<f64> {
+        let mesh = self.problem.mesh();
+        let g_tilde: Vec<f64> = (0..g_rho.len())
+            .map(|e| {
+                if mesh.passive[e] == Passive::Design {
+                    g_rho[e] * proj.derivative(filtered[e])
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        let mut g_full = vec![0.0; g_rho.len()];
+        self.filter.apply_adjoint(&g_tilde, &mut g_full);
+        let mut g = vec![0.0; self.space.n()];
+        self.space.gather(&g_full, &mut g);
+        g
+    }
+
+    /// Volume fraction of the design elements and its gradient w.r.t. ρ.
+    fn volume(&self, rho: &[f64]) -> (f64, Vec<f64>) {
+        let nd = self.space.n_design_elements() as f64;
+        let mut g = vec![0.0; rho.len()];
+        let mut v = 0.0;
+        for e in self.space.design_elements() {
+            v += rho[e];
+            g[e] = 1.0 / nd;
+        }
+        (v / nd, g)
+    }
+
+    #[allow(clippy::too_many_arguments)]
     fn evaluate_realization(
-        &mut self,
-        i: usize,
+        &self,
+        spec: &RealizationSpec,
+        ev: &mut Evaluator,
+        ws: &mut Workspace,
+        rho: &[f64],
         dens: &Densities,
         beta: f64,
         yeoh: Option<&AdditiveYeoh>,
         skip: &PerResponse<bool>,
     ) -> Result<RealizationEvaluation> {
         let problem = self.problem;
-        let spec = self.specs[i].clone();
-        let rho = &dens.realizations[i].1;
-        let ev = &mut self.evaluators[i];
-        let response = ev.solve_cases_in(&mut self.workspace, rho, yeoh)?;
-        let (mut coef, area, stress_max) = fe_coefficients(problem, &spec, rho, ev, &response);
+        let response = ev.solve_cases_in(ws, rho, yeoh)?;
+        let (mut coef, area, stress_max) = fe_coefficients(problem, spec, rho, ev, &response);
         let mut values = PerResponse::from_fn(|q| coef[q].as_ref().map_or(0.0, |c| c.value));
         for q in ResponseKind::FE {
             if skip[q] && q != ResponseKind::Objective {
                 coef[q] = None;
             }
         }
-        let g_rho = ev.gradients_in(&mut self.workspace, rho, yeoh, &coef)?;
-        let proj = self.projection(i, beta);
+        let g_rho = ev.gradients_in(ws, rho, yeoh, &coef)?;
+        let proj = Self::projection(spec, beta);
         let mut gradients = PerResponse::from_fn(|q| {
             g_rho[q]
                 .as_ref()

@@ -11,7 +11,9 @@
 //! solves from its start, then to retries from `u = 0` with more increments. The tangent (for
 //! the adjoint) and the residual are assembled at every converged state; the first sweep
 //! assembles both, so a case that converges there (most do from the prediction) needs one
-//! assembly in all.
+//! assembly in all. A group runs on one thread (the groups and the realizations are the
+//! parallel tasks), so its assemblies are serial with the tangent scattered element by element
+//! ([`flexstage_fem::Model::assemble_serial`]).
 
 use flexstage_fem::{Design, Factor, LinearStrategy, NewtonParams, SparseMatrix, newton};
 
@@ -174,7 +176,7 @@ pub(crate) fn solve_group(
             }
             // The first sweep also assembles the tangent: most cases converge there.
             let tangent = (sweep == 0 && sh.linear_tangent.is_none()).then_some(&mut slot.tangent);
-            model.assemble(design, &cs.u, Some(&mut slot.r), tangent, &mut gws.assembly);
+            model.assemble_serial(design, &cs.u, Some(&mut slot.r), tangent, &mut gws.assembly);
             for (x, &d) in col.iter_mut().zip(free) {
                 *x = loads[j][d] - slot.r[d];
             }
@@ -210,7 +212,7 @@ pub(crate) fn solve_group(
             match sh.linear_tangent {
                 Some(k) => slot.tangent.values_mut().copy_from_slice(k.values()),
                 None if fresh[j] => {}
-                None => model.assemble(
+                None => model.assemble_serial(
                     design,
                     &cases[j].u,
                     None,

@@ -8,7 +8,8 @@
 //! * `adjoint`: `K_T(u_k) λ_k = ∂Q/∂u_k` for every response and case, and
 //!   `dQ/dρ = ∂Q/∂ρ − Σ_k λ_kᵀ ∂R_k/∂ρ` with the exact `∂R/∂ρ` of the fem crate (including the
 //!   additive material's `(1 − ρ^p)` factor).
-//! * `workspace`: warm starts per case, heavy buffers per group, shared between designs.
+//! * `workspace`: warm starts per case, heavy buffers per group (shared by
+//!   designs analysed one after the other).
 //!
 //! One factorization per design and evaluation, of `K(ρ)` at `u = 0`, shared read-only by all
 //! cases (DECISIONS.md "Loading": warm starts, reuse factorizations). The density chain and the
