@@ -22,7 +22,8 @@ fn bench() -> Bench {
 #[test]
 fn injection_equals_transfer_function_for_the_pi_notch() {
     let b = bench();
-    let plant = flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1).unwrap();
+    let plant =
+        flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, &b.setup.rig.sensor).unwrap();
     assert!(plant.sample_time() == 1e-4);
     let p = b.linear_params(Candidate::PiNotch).unwrap().unwrap();
     for f in [20.0, 150.0, 700.0, 2500.0, 4000.0] {

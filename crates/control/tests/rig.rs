@@ -189,6 +189,7 @@ fn sensor_is_first_order_and_its_noise_is_white_plus_one_over_f() {
     r.sensor = SensorParams {
         bandwidth: fs,
         flicker_corner: 0.0,
+        anti_alias: 0.0,
     };
     let t = r.sample_time;
     let h = r.substep();
@@ -209,6 +210,7 @@ fn sensor_is_first_order_and_its_noise_is_white_plus_one_over_f() {
     r.sensor = SensorParams {
         bandwidth: 0.0,
         flicker_corner: 1.0,
+        anti_alias: 0.0,
     };
     r.noise_std = [10e-9; 2];
     let mut p = plant(r, false);
