@@ -75,12 +75,7 @@ pub struct Bench {
 
 /// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay and the
 /// rig's sensor chain `sensor` (electronics and anti-aliasing filter) before the sampler.
-pub fn modal_plant(
-    twin: &Twin,
-    t: f64,
-    delay: usize,
-    sensor: &SensorParams,
-) -> Result<ModalPlant> {
+pub fn modal_plant(twin: &Twin, t: f64, delay: usize, sensor: &SensorParams) -> Result<ModalPlant> {
     let modes = twin
         .modal
         .modes

@@ -570,7 +570,10 @@ mod tests {
         };
         let p = ModalPlant::with_sensor(vec![mode], t, 0, &sensor).unwrap();
         let bare = ModalPlant::new(vec![mode], t, 0).unwrap();
-        let (ws, wa) = (std::f64::consts::TAU * 15_000.0, std::f64::consts::TAU * 3000.0);
+        let (ws, wa) = (
+            std::f64::consts::TAU * 15_000.0,
+            std::f64::consts::TAU * 3000.0,
+        );
         #[rustfmt::skip]
         let a = DMatrix::from_row_slice(5, 5, &[
             0.0, 1.0, 0.0, 0.0, 0.0,
@@ -588,13 +591,19 @@ mod tests {
             let x = m.lu().solve(&g).unwrap();
             let expect = x[3];
             let got = p.response(f)[0][0];
-            assert!((got - expect).norm() < 1e-9 * expect.norm(), "f {f}: {got} vs {expect}");
+            assert!(
+                (got - expect).norm() < 1e-9 * expect.norm(),
+                "f {f}: {got} vs {expect}"
+            );
         }
         let f = 20.0;
         let ratio = p.response(f)[0][0] / bare.response(f)[0][0];
         let h = sensor.response(f);
         let dphase = (ratio.arg() - h.arg()).to_degrees();
-        assert!(dphase.abs() < 0.01, "{dphase}° off the analytic filter phase");
+        assert!(
+            dphase.abs() < 0.01,
+            "{dphase}° off the analytic filter phase"
+        );
         // Analytic phase of the chain: −atan(f/f_s) − atan2(√2 f/f_a, 1 − (f/f_a)²).
         let (x, y) = (f / 15_000.0, f / 3000.0);
         let analytic = -x.atan() - (std::f64::consts::SQRT_2 * y).atan2(1.0 - y * y);
