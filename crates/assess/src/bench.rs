@@ -40,13 +40,14 @@ impl Candidate {
         Candidate::PiNotch,
     ];
 
-    /// Short name for files and tables.
+    /// Short name for files and tables (the `track` variant's name: `pid-ff` is the tuned
+    /// PID, `pid-ff-scenario` the scenario's gains).
     pub fn name(self) -> &'static str {
         match self {
             Candidate::Robust => "robust",
             Candidate::NonRobust => "nonrobust",
-            Candidate::PidScenario => "pid-ff",
-            Candidate::PidTuned => "pid-ff-tuned",
+            Candidate::PidScenario => "pid-ff-scenario",
+            Candidate::PidTuned => "pid-ff",
             Candidate::PiNotch => "pi-notch-ff",
         }
     }

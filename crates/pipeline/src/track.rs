@@ -334,6 +334,7 @@ fn tune_and_margins(
     sim: &Simulated,
     controllers: &[Variant],
     scenario: &flexstage_scenario::Scenario,
+    progress: &dyn Progress,
     warnings: &mut Vec<String>,
 ) -> Result<(Vec<MarginRow>, Option<MonteCarlo>)> {
     let Simulated::Twin(twin) = sim else {
@@ -361,7 +362,15 @@ fn tune_and_margins(
         return Ok((rows, None));
     };
     let (reference, _) = Reference::from_scenario(first);
-    let mc = monte_carlo(&bench, &candidates, reference, &MonteCarloParams::default())?;
+    let t0 = std::time::Instant::now();
+    let mp = MonteCarloParams::default();
+    let mc = monte_carlo(&bench, &candidates, reference, &mp)?;
+    progress.note(&format!(
+        "Monte-Carlo: {} perturbed twins × {} controller(s) in {:.1} s",
+        mp.plants,
+        candidates.len(),
+        t0.elapsed().as_secs_f64()
+    ));
     for (j, r) in rows.iter_mut().enumerate() {
         r.montecarlo_pass = Some(mc.pass_rate(j));
     }
@@ -520,6 +529,7 @@ pub fn track_on(
         &sim,
         &options.controllers,
         &plant.scenario,
+        progress,
         &mut warnings,
     )?;
     let jobs = plan(&plant.scenario, &setup, &sim, options, &mut warnings)?;
