@@ -335,6 +335,9 @@ pub struct PlantMode {
     pub output: [f64; 2],
 }
 
+/// One partial fraction of a filtered mode: its residue r_j and e^{p_j T}.
+type Residue = (Complex<f64>, Complex<f64>);
+
 /// A modal plant sampled with a zero-order hold and `delay` samples of delay: each mode
 /// discretized exactly (`c2d`), `P(z) = z^{−d} Σ_k out_k in_kᵀ [1 0](zI − Φ_k)⁻¹Γ_k`. This is
 /// the sampled loop the rig runs with an ideal amplifier and sensor.
@@ -352,7 +355,7 @@ pub struct ModalPlant {
     modes: Vec<PlantMode>,
     discrete: Vec<([f64; 4], [f64; 2])>,
     /// With a sensor chain: per mode, G_k(0) and the pairs (r_j, e^{p_j T}).
-    filtered: Vec<(f64, Vec<(Complex<f64>, Complex<f64>)>)>,
+    filtered: Vec<(f64, Vec<Residue>)>,
     delay: usize,
     t: f64,
 }
