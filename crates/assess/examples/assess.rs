@@ -4,11 +4,12 @@
 //! `flexstage-twin`'s `track` example.
 //!
 //! ```text
-//! cargo run --release -p flexstage-assess --example assess -- quick runs/quick/design/design.json [OUT_DIR] [SENSOR_HZ]
+//! cargo run --release -p flexstage-assess --example assess -- quick runs/quick/design/design.json [OUT_DIR] [SENSOR_HZ] [ANTI_ALIAS_HZ]
 //! ```
 //!
-//! `SENSOR_HZ` replaces the rig's sensor bandwidth (its first-order low-pass, the only
-//! anti-aliasing filter of the loop).
+//! `SENSOR_HZ` replaces the rig's sensor bandwidth (its first-order low-pass) and
+//! `ANTI_ALIAS_HZ` the corner of the ADC's anti-aliasing filter (2nd-order Butterworth,
+//! 0 = none); every controller is tuned with them in the loop.
 
 use flexstage_assess::{AssessParams, Assessment, Bench};
 use flexstage_scenario::{Preset, Scenario};
@@ -31,6 +32,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
     if let Some(bw) = args.get(4) {
         setup.rig.sensor.bandwidth = bw.parse()?;
+    }
+    if let Some(aa) = args.get(5) {
+        setup.rig.sensor.anti_alias = aa.parse()?;
     }
     let t0 = std::time::Instant::now();
     let bench = Bench::new(setup, twin, Default::default())?;

@@ -40,13 +40,14 @@ impl Candidate {
         Candidate::PiNotch,
     ];
 
-    /// Short name for files and tables.
+    /// Short name for files and tables (the `track` variant's name: `pid-ff` is the tuned
+    /// PID, `pid-ff-scenario` the scenario's gains).
     pub fn name(self) -> &'static str {
         match self {
             Candidate::Robust => "robust",
             Candidate::NonRobust => "nonrobust",
-            Candidate::PidScenario => "pid-ff",
-            Candidate::PidTuned => "pid-ff-tuned",
+            Candidate::PidScenario => "pid-ff-scenario",
+            Candidate::PidTuned => "pid-ff",
             Candidate::PiNotch => "pi-notch-ff",
         }
     }
@@ -73,8 +74,9 @@ pub struct Bench {
     pub tuning: TuningParams,
 }
 
-/// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay.
-pub fn modal_plant(twin: &Twin, t: f64, delay: usize) -> Result<ModalPlant> {
+/// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay and the
+/// rig's sensor chain `sensor` (electronics and anti-aliasing filter) before the sampler.
+pub fn modal_plant(twin: &Twin, t: f64, delay: usize, sensor: &SensorParams) -> Result<ModalPlant> {
     let modes = twin
         .modal
         .modes
@@ -86,14 +88,19 @@ pub fn modal_plant(twin: &Twin, t: f64, delay: usize) -> Result<ModalPlant> {
             output: m.output,
         })
         .collect();
-    Ok(ModalPlant::new(modes, t, delay)?)
+    Ok(ModalPlant::with_sensor(modes, t, delay, sensor)?)
 }
 
 impl Bench {
     /// Tunes the loop-shaping baselines on the twin's sampled loop with the rig's delay and
     /// returns the bench.
     pub fn new(setup: Setup, twin: Twin, tuning: TuningParams) -> Result<Bench> {
-        let plant = modal_plant(&twin, setup.rig.sample_time, setup.rig.delay)?;
+        let plant = modal_plant(
+            &twin,
+            setup.rig.sample_time,
+            setup.rig.delay,
+            &setup.rig.sensor,
+        )?;
         let pid = tune(&plant, Structure::Pid, &tuning)?;
         let pi_notch = tune(&plant, Structure::PiNotch, &tuning)?;
         Ok(Bench {
@@ -171,15 +178,16 @@ impl Bench {
         self.controller_with(&self.setup, c, compensation, reference)
     }
 
-    /// The linear loop of the rig with `delay` samples: ideal amplifier and sensor, no PEA
-    /// (x_nom applied directly), no noise, creep or floor; the twin without its geometric
-    /// correction. What margins are computed on.
+    /// The linear loop of the rig with `delay` samples: ideal amplifier, no PEA (x_nom
+    /// applied directly), the rig's sensor chain (electronics and anti-aliasing filter)
+    /// without noise, no creep or floor; the twin without its geometric correction. What
+    /// margins are computed on.
     pub fn linear_rig(&self, delay: usize) -> RigParams {
         let mut r = self.setup.rig.clone();
         r.delay = delay;
         r.actuator = PlantActuator::Ideal;
         r.amplifier = AmplifierParams::ideal();
-        r.sensor = SensorParams::ideal();
+        r.sensor.flicker_corner = 0.0;
         r.creep.factor = 0.0;
         r.floor.velocity_rms = 0.0;
         r.noise_std = [0.0; 2];
@@ -204,7 +212,12 @@ impl Bench {
         let Some(p) = self.linear_params(c)? else {
             return Ok(None);
         };
-        let plant = modal_plant(&self.twin, self.setup.rig.sample_time, delay)?;
+        let plant = modal_plant(
+            &self.twin,
+            self.setup.rig.sample_time,
+            delay,
+            &self.setup.rig.sensor,
+        )?;
         Ok(Some(loop_margins(&plant, &p, &self.tuning.margins)?))
     }
 }

@@ -38,6 +38,8 @@ pub struct MarginRow {
     pub margins: Option<[Margins; 2]>,
     /// Whether both loops meet the targets.
     pub meets: bool,
+    /// Monte-Carlo pass rate \[0–1\] when the study was run ([`crate::montecarlo`]).
+    pub montecarlo_pass: Option<f64>,
 }
 
 impl MarginRow {
@@ -91,24 +93,28 @@ pub fn margins_table(
             method,
             margins: m,
             meets,
+            montecarlo_pass: None,
         });
     }
     Ok(rows)
 }
 
 /// CSV of the table: controller, delay, loop, GM \[dB\], f_pc \[Hz\], PM \[deg\], f_gc \[Hz\],
-/// delay margin \[samples\], method, meets.
+/// delay margin \[samples\], method, meets, Monte-Carlo pass rate \[%\] (empty when not run).
 pub fn csv(rows: &[MarginRow], sample_time: f64) -> String {
     let mut s = String::from(
-        "controller,delay_samples,loop,gain_margin_dB,phase_crossover_Hz,phase_margin_deg,gain_crossover_Hz,delay_margin_samples,method,meets_targets\n",
+        "controller,delay_samples,loop,gain_margin_dB,phase_crossover_Hz,phase_margin_deg,gain_crossover_Hz,delay_margin_samples,method,meets_targets,montecarlo_pass_pct\n",
     );
     for r in rows {
+        let mc = r
+            .montecarlo_pass
+            .map_or(String::new(), |p| format!("{:.0}", 100.0 * p));
         for l in 0..2 {
             match &r.margins {
                 Some(m) => {
                     let m = m[l];
                     s.push_str(&format!(
-                        "{},{},q{},{:.2},{:.1},{:.1},{:.1},{:.2},{},{}\n",
+                        "{},{},q{},{:.2},{:.1},{:.1},{:.1},{:.2},{},{},{mc}\n",
                         r.candidate.name(),
                         r.delay,
                         l + 1,
@@ -122,7 +128,7 @@ pub fn csv(rows: &[MarginRow], sample_time: f64) -> String {
                     ));
                 }
                 None => s.push_str(&format!(
-                    "{},{},q{},unstable,,,,,{},false\n",
+                    "{},{},q{},unstable,,,,,{},false,{mc}\n",
                     r.candidate.name(),
                     r.delay,
                     l + 1,

@@ -449,9 +449,10 @@ pub struct TrackArgs {
     #[arg(long, default_value = "all")]
     pub trajectory: String,
     /// Controller: PI + notch + feedforward (tuned on the twin), robust or nonrobust
-    /// backstepping, PID with feedforward, or all (the default).
+    /// backstepping, PID with feedforward (tuned on the twin by the same procedure), or all
+    /// (the default); pid-ff-scenario runs the PID with the scenario's untuned gains.
     #[arg(long, default_value = "all",
-          value_parser = ["pi-notch-ff", "robust", "nonrobust", "pid-ff", "all"])]
+          value_parser = ["pi-notch-ff", "robust", "nonrobust", "pid-ff", "pid-ff-scenario", "all"])]
     pub variant: String,
     /// Hysteresis compensation: inverse (Eq. 21, in the loop) or off (straight line).
     #[arg(long, default_value = names::compensation(TrackOptions::default().compensation),

@@ -31,8 +31,15 @@ pub enum Variant {
     Robust,
     /// Backstepping without the robust terms (Figure 9a).
     NonRobust,
-    /// PID with inverse-hysteresis feedforward, the scenario's gains (`controller.pid`).
+    /// PID with inverse-hysteresis feedforward, tuned on the simulated plant's sampled
+    /// frequency response by the same procedure as [`Variant::PiNotch`] ([`crate::tuning`],
+    /// [`Setup::pid_tuned`]); where nothing was tuned (the lumped plant), the scenario's
+    /// gains (`controller.pid`), as [`Variant::PidScenario`].
     PidFeedforward,
+    /// PID with inverse-hysteresis feedforward with the scenario's gains (`controller.pid`)
+    /// and the controller model's static gain, untuned: not among the defaults
+    /// ([`Variant::ALL`]), run only when asked for by name (`--variant pid-ff-scenario`).
+    PidScenario,
     /// PI + notches + inverse-hysteresis feedforward tuned on the simulated plant's sampled
     /// frequency response ([`crate::tuning`], [`Setup::pi_notch`]): the default, the one
     /// controller that meets 6 dB / 40° on the twin with one sample of delay.
@@ -57,13 +64,24 @@ impl Variant {
             Variant::Robust => "robust",
             Variant::NonRobust => "nonrobust",
             Variant::PidFeedforward => "pid-ff",
+            Variant::PidScenario => "pid-ff-scenario",
             Variant::PiNotch => "pi-notch-ff",
         }
     }
 
-    /// Parses [`Variant::name`].
+    /// Every variant that can be asked for by name: [`Variant::ALL`] and
+    /// [`Variant::PidScenario`].
+    pub const NAMED: [Variant; 5] = [
+        Variant::PiNotch,
+        Variant::Robust,
+        Variant::NonRobust,
+        Variant::PidFeedforward,
+        Variant::PidScenario,
+    ];
+
+    /// Parses [`Variant::name`] (any of [`Variant::NAMED`]).
     pub fn from_name(s: &str) -> Option<Variant> {
-        Variant::ALL.into_iter().find(|v| v.name() == s)
+        Variant::NAMED.into_iter().find(|v| v.name() == s)
     }
 }
 
@@ -81,6 +99,10 @@ pub struct Setup {
     /// The PI + notch gains of [`Variant::PiNotch`], tuned on the plant that is simulated
     /// ([`crate::tuning::tune`]); `None` until tuned (that variant is then refused).
     pub pi_notch: Option<PiNotchParams>,
+    /// The PID gains of [`Variant::PidFeedforward`] tuned by the same procedure
+    /// ([`crate::tuning::tune`] with [`crate::tuning::Structure::Pid`]); `None`: that variant
+    /// runs the scenario's gains.
+    pub pid_tuned: Option<PiNotchParams>,
 }
 
 impl Setup {
@@ -148,6 +170,7 @@ impl Setup {
             },
             rig: RigParams::from_scenario(s),
             pi_notch: None,
+            pid_tuned: None,
         }
     }
 
@@ -216,7 +239,11 @@ impl Setup {
                 p.law.robust = variant == Variant::Robust;
                 Box::new(BacksteppingController::new(&p, reference)?)
             }
-            Variant::PidFeedforward => Box::new(PidController::new(
+            Variant::PidFeedforward if self.pid_tuned.is_some() => {
+                let p = self.pid_tuned.expect("checked");
+                Box::new(PiNotchController::new(p, actuator, reference)?)
+            }
+            Variant::PidFeedforward | Variant::PidScenario => Box::new(PidController::new(
                 &self.controller.model,
                 self.pid,
                 actuator,

@@ -32,6 +32,7 @@ use std::path::{Path, PathBuf};
 
 use flexstage_assess::inject::InjectionParams;
 use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
+use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, monte_carlo};
 use flexstage_assess::{Bench, Candidate};
 use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::{
@@ -289,15 +290,19 @@ impl TrackSummary {
         }
         let mut s = format!(
             "margins with {} sample(s) of delay (loop at a time, the other loop closed):\n\
-             controller     loop  GM [dB]  PM [deg]  f_c [Hz]  DM [samples]\n",
+             controller       loop  GM [dB]  PM [deg]  f_c [Hz]  DM [samples]  MC pass\n",
             self.margins[0].delay
         );
         for r in &self.margins {
             for l in 0..2 {
                 let m = r.loop_columns(l, self.sample_time);
                 let flag = if r.meets { "" } else { "  FLAGGED" };
+                let mc = match r.montecarlo_pass {
+                    Some(p) if l == 0 => format!("  {:>5.0} %", 100.0 * p),
+                    _ => String::new(),
+                };
                 s.push_str(&format!(
-                    "{:<14} q{}   {m}{flag}\n",
+                    "{:<16} q{}   {m}{mc}{flag}\n",
                     r.candidate.name(),
                     l + 1
                 ));
@@ -312,21 +317,26 @@ fn candidate(v: Variant) -> Candidate {
     match v {
         Variant::Robust => Candidate::Robust,
         Variant::NonRobust => Candidate::NonRobust,
-        Variant::PidFeedforward => Candidate::PidScenario,
+        Variant::PidFeedforward => Candidate::PidTuned,
+        Variant::PidScenario => Candidate::PidScenario,
         Variant::PiNotch => Candidate::PiNotch,
     }
 }
 
-/// On the twin: tunes the PI + notch on its sampled frequency response with the rig's delay
-/// (`flexstage_control::tuning`, sets [`Setup::pi_notch`]) and measures every selected
-/// controller's margins. On the lumped plant nothing is tuned and the PI + notch is skipped
-/// with a warning.
+/// On the twin: tunes the PI + notch and the PID on its sampled frequency response with the
+/// rig's delay and sensor chain (`flexstage_control::tuning`, sets [`Setup::pi_notch`] and
+/// [`Setup::pid_tuned`]), measures every selected controller's margins and runs the
+/// Monte-Carlo study (`flexstage_assess::montecarlo`, default settings, on the scenario's
+/// first trajectory), whose pass rates go into the margin rows. On the lumped plant nothing
+/// is tuned: the PI + notch is skipped with a warning and `pid-ff` runs the scenario's gains.
 fn tune_and_margins(
     setup: &mut Setup,
     sim: &Simulated,
     controllers: &[Variant],
+    scenario: &flexstage_scenario::Scenario,
+    progress: &dyn Progress,
     warnings: &mut Vec<String>,
-) -> Result<Vec<MarginRow>> {
+) -> Result<(Vec<MarginRow>, Option<MonteCarlo>)> {
     let Simulated::Twin(twin) = sim else {
         if controllers.contains(&Variant::PiNotch) {
             warnings.push(
@@ -335,18 +345,36 @@ fn tune_and_margins(
                     .into(),
             );
         }
-        return Ok(Vec::new());
+        return Ok((Vec::new(), None));
     };
     let bench = Bench::new(setup.clone(), (**twin).clone(), TuningParams::default())?;
     setup.pi_notch = Some(bench.pi_notch.params);
+    setup.pid_tuned = Some(bench.pid.params);
     let candidates: Vec<Candidate> = controllers.iter().map(|&v| candidate(v)).collect();
-    Ok(margins_table(
+    let mut rows = margins_table(
         &bench,
         &candidates,
         setup.rig.delay,
         MarginTargets::default(),
         &InjectionParams::default(),
-    )?)
+    )?;
+    let Some(first) = scenario.trajectories.first() else {
+        return Ok((rows, None));
+    };
+    let (reference, _) = Reference::from_scenario(first);
+    let t0 = std::time::Instant::now();
+    let mp = MonteCarloParams::default();
+    let mc = monte_carlo(&bench, &candidates, reference, &mp)?;
+    progress.note(&format!(
+        "Monte-Carlo: {} perturbed twins × {} controller(s) in {:.1} s",
+        mp.plants,
+        candidates.len(),
+        t0.elapsed().as_secs_f64()
+    ));
+    for (j, r) in rows.iter_mut().enumerate() {
+        r.montecarlo_pass = Some(mc.pass_rate(j));
+    }
+    Ok((rows, Some(mc)))
 }
 
 /// One planned run.
@@ -496,7 +524,14 @@ pub fn track_on(
         Simulated::Twin(_) => PlantKind::Twin,
         Simulated::Lumped => PlantKind::Lumped,
     };
-    let margins = tune_and_margins(&mut setup, &sim, &options.controllers, &mut warnings)?;
+    let (margins, montecarlo) = tune_and_margins(
+        &mut setup,
+        &sim,
+        &options.controllers,
+        &plant.scenario,
+        progress,
+        &mut warnings,
+    )?;
     let jobs = plan(&plant.scenario, &setup, &sim, options, &mut warnings)?;
     for w in &warnings {
         progress.note(&format!("warning: {w}"));
@@ -527,6 +562,9 @@ pub fn track_on(
             out.margins(),
             flexstage_assess::margins::csv(&margins, dt).as_bytes(),
         )?;
+    }
+    if let Some(mc) = &montecarlo {
+        folder.dir().write(out.montecarlo(), mc.csv().as_bytes())?;
     }
     crate::error::require_converged_tracking(&rows)?;
     Ok(TrackSummary {

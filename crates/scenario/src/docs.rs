@@ -605,6 +605,10 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
         "rig.sensor.flicker_corner",
         "1/f corner [Hz] where the 1/f spectrum equals the white one, in [0, 1e4]; 0 = white noise only. Default 1 (assumption).",
     ),
+    (
+        "rig.sensor.anti_alias",
+        "Corner [Hz] of the ADC's anti-aliasing filter, a 2nd-order Butterworth after the sensor electronics, in [0, 1e7]; 0 = none. Default: DECISIONS.md, \"Anti-aliasing filter\" (chosen by the twin's Monte-Carlo study at 10 kHz sampling).",
+    ),
     ("rig.creep", "Logarithmic creep of the PEAs."),
     (
         "rig.creep.factor",

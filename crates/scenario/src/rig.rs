@@ -33,6 +33,18 @@ pub struct SensorDynamics {
     pub bandwidth: f64,
     /// 1/f corner \[Hz\] (where the 1/f and white spectra are equal); 0 = white only.
     pub flicker_corner: f64,
+    /// Corner \[Hz\] of the ADC's anti-aliasing filter (2nd-order Butterworth after the
+    /// sensor electronics); 0 = none. Absent in a file: [`ANTI_ALIAS_CORNER`].
+    #[serde(default = "default_anti_alias")]
+    pub anti_alias: f64,
+}
+
+/// The default anti-aliasing corner \[Hz\] for 10 kHz sampling (DECISIONS.md, "Anti-aliasing
+/// filter": chosen by measurement on the twin's Monte-Carlo study).
+pub const ANTI_ALIAS_CORNER: f64 = 0.0;
+
+fn default_anti_alias() -> f64 {
+    ANTI_ALIAS_CORNER
 }
 
 /// Logarithmic creep of the PEAs.
@@ -95,6 +107,7 @@ impl Rig {
             sensor: SensorDynamics {
                 bandwidth: 15_000.0,
                 flicker_corner: 1.0,
+                anti_alias: ANTI_ALIAS_CORNER,
             },
             creep: Creep { factor: 0.01 },
             floor: FloorVibration {
@@ -120,6 +133,7 @@ impl Rig {
             sensor: SensorDynamics {
                 bandwidth: 0.0,
                 flicker_corner: 0.0,
+                anti_alias: 0.0,
             },
             creep: Creep { factor: 0.0 },
             floor: FloorVibration {
@@ -158,6 +172,7 @@ impl Rig {
             0.0,
             1e4,
         )?;
+        within("rig.sensor.anti_alias", self.sensor.anti_alias, 0.0, 1e7)?;
         within("rig.creep.factor", self.creep.factor, 0.0, 0.1)?;
         within("rig.floor.velocity_rms", self.floor.velocity_rms, 0.0, 1e-2)?;
         let [lo, hi] = self.floor.bands;
