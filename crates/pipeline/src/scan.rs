@@ -12,6 +12,15 @@ use flexstage_scenario::{Scenario, Trajectory};
 
 use crate::error::Result;
 
+/// The sweep of one `track` call: its points and the controllers they hold, in order.
+#[derive(Debug, Clone)]
+pub struct ScanFrequency {
+    /// The points, each with one result per candidate.
+    pub points: Vec<SweepPoint>,
+    /// The candidates.
+    pub candidates: Vec<Candidate>,
+}
+
 /// The amplitudes the sweep starts from: those of the scenario's first trajectory (a
 /// circle's radius on both axes); the sweep halves them until the rig can deliver each scan.
 pub fn start_amplitude(s: &Scenario) -> Option<[f64; 2]> {
@@ -21,23 +30,34 @@ pub fn start_amplitude(s: &Scenario) -> Option<[f64; 2]> {
     })
 }
 
-/// Runs the sweep for `candidates` and writes its CSV and figure into `out`; returns the
-/// points (empty when the scenario has no trajectory to take amplitudes from).
-pub fn write_scan_frequency(
-    run: &RunDir,
-    out: &Tracking,
+/// Runs the default sweep ([`SweepParams::default`]) for `candidates` on the bench's twin;
+/// `None` when the scenario has no trajectory to take amplitudes from.
+pub fn scan_frequency(
     bench: &Bench,
     scenario: &Scenario,
     candidates: &[Candidate],
-) -> Result<Vec<SweepPoint>> {
+) -> Result<Option<ScanFrequency>> {
     let Some(amplitude) = start_amplitude(scenario) else {
-        return Ok(Vec::new());
+        return Ok(None);
     };
     let points = sweep::sweep(bench, candidates, amplitude, &SweepParams::default())?;
-    run.write(out.scan_frequency_csv(), sweep::csv(&points).as_bytes())?;
-    run.write(
-        out.scan_frequency_svg(),
-        sweep::figure(&points, candidates)?.as_bytes(),
-    )?;
-    Ok(points)
+    Ok(Some(ScanFrequency {
+        points,
+        candidates: candidates.to_vec(),
+    }))
+}
+
+impl ScanFrequency {
+    /// Writes `scan_frequency.csv` and `scan_frequency.svg` into `out`.
+    pub fn write(&self, run: &RunDir, out: &Tracking) -> Result<()> {
+        run.write(
+            out.scan_frequency_csv(),
+            sweep::csv(&self.points).as_bytes(),
+        )?;
+        run.write(
+            out.scan_frequency_svg(),
+            sweep::figure(&self.points, &self.candidates)?.as_bytes(),
+        )?;
+        Ok(())
+    }
 }

@@ -30,6 +30,7 @@
 use flexstage_scenario::RecordEstimate;
 use std::path::{Path, PathBuf};
 
+use crate::scan::{ScanFrequency, scan_frequency};
 use flexstage_assess::inject::InjectionParams;
 use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, monte_carlo};
@@ -327,7 +328,8 @@ fn candidate(v: Variant) -> Candidate {
 /// rig's delay and sensor chain (`flexstage_control::tuning`, sets [`Setup::pi_notch`] and
 /// [`Setup::pid_tuned`]), measures every selected controller's margins and runs the
 /// Monte-Carlo study (`flexstage_assess::montecarlo`, default settings, on the scenario's
-/// first trajectory), whose pass rates go into the margin rows. On the lumped plant nothing
+/// first trajectory), whose pass rates go into the margin rows, and the error against scan
+/// frequency ([`crate::scan`]). On the lumped plant nothing
 /// is tuned: the PI + notch is skipped with a warning and `pid-ff` runs the scenario's gains.
 fn tune_and_margins(
     setup: &mut Setup,
@@ -336,7 +338,7 @@ fn tune_and_margins(
     scenario: &flexstage_scenario::Scenario,
     progress: &dyn Progress,
     warnings: &mut Vec<String>,
-) -> Result<(Vec<MarginRow>, Option<MonteCarlo>)> {
+) -> Result<(Vec<MarginRow>, Option<MonteCarlo>, Option<ScanFrequency>)> {
     let Simulated::Twin(twin) = sim else {
         if controllers.contains(&Variant::PiNotch) {
             warnings.push(
@@ -345,7 +347,7 @@ fn tune_and_margins(
                     .into(),
             );
         }
-        return Ok((Vec::new(), None));
+        return Ok((Vec::new(), None, None));
     };
     let bench = Bench::new(setup.clone(), (**twin).clone(), TuningParams::default())?;
     setup.pi_notch = Some(bench.pi_notch.params);
@@ -359,7 +361,7 @@ fn tune_and_margins(
         &InjectionParams::default(),
     )?;
     let Some(first) = scenario.trajectories.first() else {
-        return Ok((rows, None));
+        return Ok((rows, None, None));
     };
     let (reference, _) = Reference::from_scenario(first);
     let t0 = std::time::Instant::now();
@@ -374,7 +376,17 @@ fn tune_and_margins(
     for (j, r) in rows.iter_mut().enumerate() {
         r.montecarlo_pass = Some(mc.pass_rate(j));
     }
-    Ok((rows, Some(mc)))
+    let t0 = std::time::Instant::now();
+    let scan = scan_frequency(&bench, scenario, &candidates)?;
+    if let Some(sc) = &scan {
+        progress.note(&format!(
+            "error against scan frequency: {} frequencies × {} controller(s) in {:.1} s",
+            sc.points.len(),
+            candidates.len(),
+            t0.elapsed().as_secs_f64()
+        ));
+    }
+    Ok((rows, Some(mc), scan))
 }
 
 /// One planned run.
@@ -524,7 +536,7 @@ pub fn track_on(
         Simulated::Twin(_) => PlantKind::Twin,
         Simulated::Lumped => PlantKind::Lumped,
     };
-    let (margins, montecarlo) = tune_and_margins(
+    let (margins, montecarlo, scan) = tune_and_margins(
         &mut setup,
         &sim,
         &options.controllers,
@@ -565,6 +577,9 @@ pub fn track_on(
     }
     if let Some(mc) = &montecarlo {
         folder.dir().write(out.montecarlo(), mc.csv().as_bytes())?;
+    }
+    if let Some(sc) = &scan {
+        sc.write(folder.dir(), &out)?;
     }
     crate::error::require_converged_tracking(&rows)?;
     Ok(TrackSummary {
