@@ -45,9 +45,11 @@ use nalgebra::Vector2;
 use crate::actuator::{Actuator, ActuatorParams};
 use crate::backstepping::{Law, LawOutput, LawParams};
 use crate::error::{Result, check};
+use crate::estimator::{KalmanDesign, KalmanParams};
 use crate::model::StageModel;
 use crate::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
 use crate::observer::{DISTURBANCE, FILTER_LEN, KFilter, ObserverDesign, ObserverParams, Vector10};
+use crate::pi_notch::{Biquad, Notch};
 use crate::trajectory::{RefSample, Reference};
 
 /// One sample of controller output.
@@ -93,6 +95,18 @@ pub enum Inner {
     Command,
 }
 
+/// Where the state estimate [ẑ, d̂] of the law comes from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Estimator {
+    /// The K-filter of Eq. (37)–(42) with the pole-placed injection of Table 4 (and, with no
+    /// delay, the velocity of [`ControllerParams::velocity`]).
+    KFilter,
+    /// The same filters with the steady-state Kalman gain of the sensor noise and a
+    /// process-noise level ([`crate::estimator`]); the velocity is always the estimate (no
+    /// finite difference).
+    Kalman(KalmanParams),
+}
+
 /// Settings of the backstepping controller.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ControllerParams {
@@ -102,8 +116,19 @@ pub struct ControllerParams {
     pub observer: ObserverParams,
     /// Backstepping law settings.
     pub law: LawParams,
-    /// Velocity source.
+    /// Velocity source (with [`Estimator::KFilter`] and no delay).
     pub velocity: Velocity,
+    /// State estimator: the paper's K-filter or the steady-state Kalman filter.
+    pub estimator: Estimator,
+    /// Whether the law cancels the estimated model error Δ̂_η (the disturbance observer,
+    /// on by default); off, the estimate is still formed but Z gets Δ̂_η = 0, which is the
+    /// law of Section 3.2.2 without the added disturbance observer.
+    pub disturbance_feedback: bool,
+    /// Notches on each measured output before the estimator, `[axis][0..2]` (`None`: off):
+    /// the peaks of the *sampled* plant response that the lumped model does not have (modes
+    /// above Nyquist folded into the band), as the PI + notch baseline places them
+    /// ([`crate::tuning`]). Their states are not part of [`BacksteppingController::state`].
+    pub measurement_notches: [[Option<Notch>; 2]; 2],
     /// Inner-state source of step 2.
     pub inner: Inner,
     /// Actuator stage (compensation, amplifier).
@@ -125,6 +150,9 @@ impl ControllerParams {
         )?;
         crate::model::validate(&self.model)?;
         self.observer.validate()?;
+        if let Estimator::Kalman(k) = &self.estimator {
+            k.validate()?;
+        }
         self.law.validate()?;
         self.actuator.validate()
     }
@@ -141,11 +169,14 @@ pub const STATE_LEN: usize = FILTER_LEN + 6;
 pub struct BacksteppingController {
     model: StageModel,
     design: ObserverDesign,
+    kalman: Option<KalmanDesign>,
     law: Law,
     filter: KFilter,
     actuator: Actuator,
     velocity: Velocity,
     inner: Inner,
+    disturbance_feedback: f64,
+    notch: [[Biquad; 2]; 2],
     reference: Reference,
     d_inv: nalgebra::Matrix2<f64>,
     t: f64,
@@ -174,11 +205,39 @@ impl BacksteppingController {
             .d
             .try_inverse()
             .ok_or_else(|| crate::error::ControlError::Singular { what: "D".into() })?;
+        let kalman = match &params.estimator {
+            Estimator::KFilter => None,
+            Estimator::Kalman(k) => {
+                Some(KalmanDesign::new(&model, params.observer.sample_time, k)?)
+            }
+        };
+        let filter = match &kalman {
+            None => KFilter::new(&design),
+            Some(k) => KFilter::with_gain(&design.phi, &design.gamma, &k.l),
+        };
+        let velocity = if kalman.is_some() {
+            Velocity::Observer
+        } else {
+            params.velocity
+        };
         Ok(BacksteppingController {
-            filter: KFilter::new(&design),
+            filter,
+            kalman,
             actuator: Actuator::new(params.actuator)?,
-            velocity: params.velocity,
+            velocity,
             inner: params.inner,
+            disturbance_feedback: if params.disturbance_feedback {
+                1.0
+            } else {
+                0.0
+            },
+            notch: params.measurement_notches.map(|a| {
+                a.map(|n| {
+                    n.map_or_else(Biquad::identity, |n| {
+                        Biquad::notch(&n, params.observer.sample_time)
+                    })
+                })
+            }),
             reference,
             d_inv,
             t: params.observer.sample_time,
@@ -205,6 +264,11 @@ impl BacksteppingController {
     /// The observer design (B0, P, Φ, L, F).
     pub fn observer(&self) -> &ObserverDesign {
         &self.design
+    }
+
+    /// The Kalman design when the estimator is [`Estimator::Kalman`].
+    pub fn kalman(&self) -> Option<&KalmanDesign> {
+        self.kalman.as_ref()
     }
 
     /// The law's intermediate values at the last sample (s, a, ε_a, v, …).
@@ -275,7 +339,12 @@ impl StageControl for BacksteppingController {
     fn step(&mut self, y_in: [f64; 2]) -> Command {
         let t = self.t;
         let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
-        let y = if dropout { self.y_prev } else { y_in };
+        let y_raw = if dropout { self.y_prev } else { y_in };
+        let mut y = y_raw;
+        for (i, n) in self.notch.iter_mut().enumerate() {
+            let a = n[0].step(y[i]);
+            y[i] = n[1].step(a);
+        }
         let r = self.reference_at(self.k + self.delay as u64);
         // With a delay, the estimate is first advanced with the command acting now, then
         // predicted to the sample at which the new command acts (module docs, "Delay").
@@ -289,9 +358,10 @@ impl StageControl for BacksteppingController {
             (Q_O.map(|i| zh[i]), Q_O_DOT.map(|i| zh[i]))
         } else {
             let v = match self.velocity {
-                Velocity::FiniteDifference if self.have_prev => {
-                    [(y[0] - self.y_prev[0]) / t, (y[1] - self.y_prev[1]) / t]
-                }
+                Velocity::FiniteDifference if self.have_prev => [
+                    (y_raw[0] - self.y_prev[0]) / t,
+                    (y_raw[1] - self.y_prev[1]) / t,
+                ],
                 _ => Q_O_DOT.map(|i| zh[i]),
             };
             (y, v)
@@ -307,9 +377,8 @@ impl StageControl for BacksteppingController {
             eta[X_IN[i]] = xi[i];
             eta[Q_O_DOT[i]] = q_dot[i];
         }
-        let law = self
-            .law
-            .evaluate(&eta, &xi_dot, &DISTURBANCE.map(|i| zh[i]), &r);
+        let delta = DISTURBANCE.map(|i| self.disturbance_feedback * zh[i]);
+        let law = self.law.evaluate(&eta, &xi_dot, &delta, &r);
         let v = law.v;
         let v_dot = if self.have_prev {
             [(v[0] - self.v_prev[0]) / t, (v[1] - self.v_prev[1]) / t]
@@ -374,7 +443,7 @@ impl StageControl for BacksteppingController {
             }
             self.v_prev = v;
         }
-        self.y_prev = y;
+        self.y_prev = y_raw;
         self.have_prev = true;
         self.k += 1;
         self.last = cmd;

@@ -134,6 +134,7 @@ pub mod analysis;
 pub mod backstepping;
 pub mod controller;
 mod error;
+pub mod estimator;
 pub mod experiment;
 pub mod learning;
 pub mod linalg;
