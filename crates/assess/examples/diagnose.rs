@@ -109,12 +109,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let scenario = Scenario::preset(preset);
     let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let DesignedStage { setup, twin, .. } = DesignedStage::new(&scenario, &design.rho)?;
+    // The scenario's backstepping settings (design guess, scenario gains, no notches);
+    // `Bench::new` sets the shipped ones up from the twin's response.
+    let original = setup.controller.clone();
     let bench = Bench::new(setup, twin, Default::default())?;
+    let shipped = bench.clone();
+    let mut bench = bench;
+    bench.setup.controller = original.clone();
     let t = bench.setup.rig.sample_time;
     let fs = 1.0 / t;
 
     // 1. The model against the twin.
-    let model = StageModel::new(&bench.setup.controller.model)?;
+    let model = StageModel::new(&original.model)?;
     let gm = model.dc_gain()?;
     let gt = bench.twin.modal.dc_gain();
     println!("static gain x_nom → q   model (guess)         twin");
@@ -183,7 +189,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     // intensities), BS_NOTCH=0 (without the tuned PI + notch's notches on the measurement),
     // BS_F1 (a q1 mode [Hz] for the fit), BS_MODEL=guess (no fit).
     let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok());
-    let mut bench = bench;
     if let Estimator::Kalman(k) = &mut bench.setup.controller.estimator {
         if let Some(q) = env("BS_QD") {
             k.disturbance_drift = [q; 2];
@@ -192,24 +197,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             k.acceleration_noise = [q; 2];
         }
     }
-    if env("BS_NOTCH") != Some(0.0) {
-        bench.setup.controller.measurement_notches = bench.pi_notch.params.axes.map(|a| a.notches);
-    }
-
     // 2. Stability and margins, one sample of delay.
     println!("\nconfiguration (1 sample delay, margins by sine injection)");
     let mut b = bench.clone();
     b.setup.controller.estimator = Estimator::KFilter;
     report("guess model, K-filter (paper)", &b);
     report("guess model, Kalman", &bench);
+    if env("BS_NOTCH") != Some(0.0) {
+        bench.setup.controller.measurement_notches = bench.pi_notch.params.axes.map(|a| a.notches);
+    }
+    report("guess model, Kalman, notches", &bench);
     let mut fb = bench.clone();
     if std::env::var("BS_MODEL").as_deref() != Ok("guess") {
         fb.setup.controller.model = fitted.clone();
     }
     let mut b = fb.clone();
     b.setup.controller.estimator = Estimator::KFilter;
-    report("fitted model, K-filter (paper)", &b);
-    report("fitted model, Kalman", &fb);
+    report("fitted model, K-filter (paper), notches", &b);
+    report("fitted model, Kalman, notches", &fb);
 
     // 3. Gains sized by the margins: the largest common scale of k_ε, k_η − 1, k that keeps
     // 6 dB / 40° on both loops for both variants.
@@ -236,6 +241,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("no gain scale down to 0.05 meets 6 dB / 40° on both loops");
         return Ok(());
     };
+    report("shipped (Bench::new, for_sampled_plant)", &shipped);
     let law = sized.setup.controller.law;
     println!(
         "chosen: gains × {scale}: k_ε {:.0?}, k_η {:.0?}, k {:.0?}",

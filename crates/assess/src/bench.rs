@@ -73,10 +73,9 @@ pub struct Bench {
     pub tuning: TuningParams,
 }
 
-/// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay.
-pub fn modal_plant(twin: &Twin, t: f64, delay: usize) -> Result<ModalPlant> {
-    let modes = twin
-        .modal
+/// The twin's modes (PEA inputs and outputs only).
+pub fn plant_modes(twin: &Twin) -> Vec<PlantMode> {
+    twin.modal
         .modes
         .iter()
         .map(|m| PlantMode {
@@ -85,8 +84,12 @@ pub fn modal_plant(twin: &Twin, t: f64, delay: usize) -> Result<ModalPlant> {
             input: [m.input[0], m.input[1]],
             output: m.output,
         })
-        .collect();
-    Ok(ModalPlant::new(modes, t, delay)?)
+        .collect()
+}
+
+/// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay.
+pub fn modal_plant(twin: &Twin, t: f64, delay: usize) -> Result<ModalPlant> {
+    Ok(ModalPlant::new(plant_modes(twin), t, delay)?)
 }
 
 impl Bench {
@@ -96,6 +99,11 @@ impl Bench {
         let plant = modal_plant(&twin, setup.rig.sample_time, setup.rig.delay)?;
         let pid = tune(&plant, Structure::Pid, &tuning)?;
         let pi_notch = tune(&plant, Structure::PiNotch, &tuning)?;
+        // The backstepping set up from the twin's sampled response (issue #18).
+        let mut setup = setup;
+        setup.controller = setup
+            .controller
+            .for_sampled_plant(&plant_modes(&twin), pi_notch.params.axes.map(|a| a.notches));
         Ok(Bench {
             setup,
             twin,
