@@ -241,7 +241,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("no gain scale down to 0.05 meets 6 dB / 40° on both loops");
         return Ok(());
     };
-    report("shipped (Bench::new, for_sampled_plant)", &shipped);
+    report("shipped (Bench::new, size_backstepping)", &shipped);
     let law = sized.setup.controller.law;
     println!(
         "chosen: gains × {scale}: k_ε {:.0?}, k_η {:.0?}, k {:.0?}",

@@ -99,18 +99,17 @@ impl Bench {
         let plant = modal_plant(&twin, setup.rig.sample_time, setup.rig.delay)?;
         let pid = tune(&plant, Structure::Pid, &tuning)?;
         let pi_notch = tune(&plant, Structure::PiNotch, &tuning)?;
-        // The backstepping set up from the twin's sampled response (issue #18).
-        let mut setup = setup;
-        setup.controller = setup
-            .controller
-            .for_sampled_plant(&plant_modes(&twin), pi_notch.params.axes.map(|a| a.notches));
-        Ok(Bench {
+        let mut bench = Bench {
             setup,
             twin,
             pid,
             pi_notch,
             tuning,
-        })
+        };
+        // The backstepping set up from the twin's sampled response, gains sized by the
+        // margins (issue #18).
+        crate::inject::size_backstepping(&mut bench)?;
+        Ok(bench)
     }
 
     /// The linear-controller parameters of a linear candidate (the scenario's PID as a

@@ -32,3 +32,30 @@ fn is_stable_separates_a_stable_and_an_unstable_loop() {
     assert!(m.iter().any(|m| m.gain_db < 0.0), "{m:?}");
     assert!(!is_stable(&u, Candidate::PidScenario, d, 0.5).unwrap());
 }
+
+/// Reference: the 6 dB / 40° target of issue #18 with one sample of delay, loop-at-a-time by
+/// sine injection (the method `margins_table` uses for the nonlinear controllers). Goal: the
+/// backstepping as `Bench::new` ships it (model fitted to the twin's sampled response,
+/// measurement notches, Kalman estimate, gains × 0.5) is stable on the twin and keeps the
+/// margins, robust and non-robust; the scenario's settings (design guess, no notches) are not.
+#[test]
+fn shipped_backstepping_keeps_the_margins_on_the_twin() {
+    use flexstage_assess::inject::{InjectionParams, injected_margins};
+    let b = bench();
+    let d = b.setup.rig.delay;
+    let mut mp = b.tuning.margins;
+    mp.f_min = 10.0;
+    mp.points = 40;
+    mp.refine = 8;
+    for c in [Candidate::Robust, Candidate::NonRobust] {
+        let m = injected_margins(&b, c, d, &mp, &InjectionParams::default())
+            .unwrap()
+            .expect("stable");
+        eprintln!("{}: {m:?}", c.name());
+        assert!(m.iter().all(|m| m.meets(6.0, 40.0)), "{}: {m:?}", c.name());
+    }
+    let (s, _) = flexstage_twin::samples::quick_rhombus().unwrap();
+    let mut scenario = b.clone();
+    scenario.setup.controller = Setup::from_scenario(&s).controller;
+    assert!(!is_stable(&scenario, Candidate::Robust, d, 0.5).unwrap());
+}

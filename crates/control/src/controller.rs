@@ -158,12 +158,11 @@ impl ControllerParams {
     }
 }
 
-/// Scale of the law's gains k_ε, k_η − 1, k on a sampled plant with folded modes
-/// ([`ControllerParams::for_sampled_plant`]): the largest of 1, 0.7, 0.5, … that keeps
-/// 6 dB / 40° on both loops of the twin of the quick design with one sample of delay
-/// (`flexstage-assess`'s `diagnose` example: 7.6/23.7 dB, 61/75° robust; 0.7 gives
-/// 5.9 dB).
-pub const SAMPLED_PLANT_GAIN_SCALE: f64 = 0.5;
+/// The scales of the law's gains k_ε, k_η − 1, k tried, largest first, when the
+/// backstepping is sized by its margins on a sampled plant
+/// ([`ControllerParams::for_sampled_plant`]; `flexstage-assess` picks the largest that keeps
+/// 6 dB / 40° on both loops with the rig's delay).
+pub const GAIN_SCALES: [f64; 8] = [1.0, 0.7, 0.5, 0.35, 0.25, 0.18, 0.12, 0.08];
 
 impl ControllerParams {
     /// The settings for a plant known by its modal response (e.g. the twin's modes), as a
@@ -172,11 +171,13 @@ impl ControllerParams {
     /// ([`crate::model::ResponseFit::from_modes`] with a 10 % share, then
     /// [`crate::model::fit_to_response`]; kept as it is when the fit is refused), the
     /// notches of the sampled response's peaks on the measurement (`notches`, e.g. the
-    /// tuned PI + notch's), and the law's gains scaled by [`SAMPLED_PLANT_GAIN_SCALE`].
+    /// tuned PI + notch's), and the law's gains scaled by `gain_scale` (in (0, 1], see
+    /// [`GAIN_SCALES`]).
     pub fn for_sampled_plant(
         &self,
         modes: &[crate::tuning::PlantMode],
         notches: [[Option<Notch>; 2]; 2],
+        gain_scale: f64,
     ) -> ControllerParams {
         let mut p = self.clone();
         let nyquist = 0.5 / self.observer.sample_time;
@@ -185,7 +186,7 @@ impl ControllerParams {
             p.model = m;
         }
         p.measurement_notches = notches;
-        let g = SAMPLED_PLANT_GAIN_SCALE;
+        let g = gain_scale;
         p.law.error_gain = self.law.error_gain.map(|k| g * k);
         p.law.eta_gain = self.law.eta_gain.map(|k| 1.0 + g * (k - 1.0));
         p.law.feedback_gain = self.law.feedback_gain.map(|k| g * k);
