@@ -190,7 +190,8 @@ impl KalmanDesign {
         let c_s = &c * &sd;
         let (p_s, iterations) = dare(&phi_s, &c_s, &q_s, &r)?;
         let residual = dare_residual(&phi_s, &c_s, &q_s, &r, &p_s);
-        if !(residual <= 1e-8 * p_s.amax().max(1.0)) {
+        let tolerance = 1e-8 * p_s.amax().max(1.0);
+        if residual.is_nan() || residual > tolerance {
             return Err(ControlError::Unstable {
                 what: "Kalman Riccati equation".into(),
                 detail: format!("residual {residual:e} after {iterations} doubling steps"),

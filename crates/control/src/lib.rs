@@ -98,7 +98,8 @@
 //! outside the unit circle (largest |z| ≈ 2.6–2.7 on the nominal model with
 //! `analysis::closed_loop_poles`): k_ε T = 2 is beyond what 10 kHz sampling with a
 //! finite-difference velocity supports. The defaults k_ε = k_η = k = 3e3 s⁻¹ and κ_d = 3e4 s⁻¹
-//! give a largest closed-loop |z| ≈ 0.86. The observer gains 1e5 of Table 4 are kept. The
+//! give a largest closed-loop |z| ≈ 0.86 with the K-filter (0.91 with the default Kalman
+//! estimate) on the nominal model. The observer gains 1e5 of Table 4 are kept. The
 //! PID baseline's integral gain 300 s⁻¹ is near its stability limit (the 1.5–2.3 kHz output
 //! modes have ≈ 2 % damping; 1000 s⁻¹ is unstable).
 
