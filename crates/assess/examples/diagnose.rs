@@ -19,16 +19,17 @@
 
 use flexstage_assess::Bench;
 use flexstage_assess::Candidate;
+use flexstage_assess::bench::plant_modes;
 use flexstage_assess::inject::{InjectionParams, injected_margins, is_stable};
 use flexstage_control::actuator::Compensation;
+use flexstage_control::backstepping::LawParams;
 use flexstage_control::controller::Estimator;
 use flexstage_control::experiment::{Setup, run};
 use flexstage_control::margins::Margins;
 use flexstage_control::model::{ResponseFit, StageModel, fit_to_response};
 use flexstage_control::rig::StagePlant;
 use flexstage_control::trajectory::Reference;
-use flexstage_control::tuning::PlantMode;
-use flexstage_scenario::{Preset, Scenario};
+use flexstage_scenario::{Preset, Scenario, StageParams};
 use flexstage_topopt::DesignFile;
 use flexstage_twin::DesignedStage;
 
@@ -100,28 +101,14 @@ fn track(
     (m.rms, bound)
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let preset = args
-        .get(1)
-        .and_then(|p| Preset::from_name(p))
-        .ok_or("usage: diagnose quick|paper DESIGN.json")?;
-    let scenario = Scenario::preset(preset);
-    let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
-    let DesignedStage { setup, twin, .. } = DesignedStage::new(&scenario, &design.rho)?;
-    // The scenario's backstepping settings (design guess, scenario gains, no notches);
-    // `Bench::new` sets the shipped ones up from the twin's response.
-    let original = setup.controller.clone();
-    let bench = Bench::new(setup, twin, Default::default())?;
-    let shipped = bench.clone();
-    let mut bench = bench;
-    bench.setup.controller = original.clone();
-    let t = bench.setup.rig.sample_time;
-    let fs = 1.0 / t;
-
-    // 1. The model against the twin.
-    let model = StageModel::new(&original.model)?;
-    let gm = model.dc_gain()?;
+/// Section 1: the scenario's model against the twin (static gain, modes, aliases) and the
+/// model fitted to the twin's response below Nyquist.
+fn model_against_twin(
+    bench: &Bench,
+    guess: &StageParams,
+) -> Result<StageParams, Box<dyn std::error::Error>> {
+    let fs = 1.0 / bench.setup.rig.sample_time;
+    let gm = StageModel::new(guess)?.dc_gain()?;
     let gt = bench.twin.modal.dc_gain();
     println!("static gain x_nom → q   model (guess)         twin");
     for i in 0..2 {
@@ -147,48 +134,42 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             m.output[1] * (m.input[0] - m.input[1]) / w2 / (gt[1][0] - gt[1][1])
         );
     }
-    let modes: Vec<PlantMode> = bench
-        .twin
-        .modal
-        .modes
-        .iter()
-        .map(|m| PlantMode {
-            frequency: m.frequency,
-            damping: m.damping,
-            input: [m.input[0], m.input[1]],
-            output: m.output,
-        })
-        .collect();
-    let mut fit = ResponseFit::from_modes(&modes, 0.5 * fs, 0.1);
-    if let Some(f) = std::env::var("BS_F1")
-        .ok()
-        .and_then(|v| v.parse::<f64>().ok())
-    {
+    let mut fit = ResponseFit::from_modes(&plant_modes(&bench.twin), 0.5 * fs, 0.1);
+    if let Some(f) = env("BS_F1") {
         fit.frequency[0] = Some(f);
     }
-    let fitted = fit_to_response(&bench.setup.controller.model, &fit)?;
+    let fitted = fit_to_response(guess, &fit)?;
     println!(
         "fit (identification below Nyquist): q1 mode {:?} Hz, q2 mode {:?} Hz ζ {:.3}; \
-         M {:.3e} → {:.3e} kg, K_qo1 {:.3e} → {:.3e} N/m, K_in {:.3e} → {:.3e} N/m, α {:.3} → {:.3}; \
-         model modes {:.0?} Hz",
+         M {:.3e} → {:.3e} kg, K_qo1 {:.3e} → {:.3e} N/m, K_in {:.3e} → {:.3e} N/m, \
+         α {:.3} → {:.3}; model modes {:.0?} Hz",
         fit.frequency[0],
         fit.frequency[1],
         fit.damping[1],
-        bench.setup.controller.model.mass,
+        guess.mass,
         fitted.mass,
-        bench.setup.controller.model.k_qo1,
+        guess.k_qo1,
         fitted.k_qo1,
-        bench.setup.controller.model.k_in1,
+        guess.k_in1,
         fitted.k_in1,
-        bench.setup.controller.model.alpha,
+        guess.alpha,
         fitted.alpha,
         StageModel::new(&fitted)?.natural_frequencies(),
     );
+    Ok(fitted)
+}
 
-    // Exploration knobs (environment): BS_QD, BS_QA (Kalman drift and acceleration
-    // intensities), BS_NOTCH=0 (without the tuned PI + notch's notches on the measurement),
-    // BS_F1 (a q1 mode [Hz] for the fit), BS_MODEL=guess (no fit).
-    let env = |k: &str| std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok());
+/// An exploration knob from the environment: BS_QD, BS_QA (Kalman drift and acceleration
+/// intensities), BS_NOTCH=0 (without the tuned PI + notch's notches on the measurement),
+/// BS_F1 (a q1 mode [Hz] for the fit), BS_GUESS=1 (no fit).
+fn env(k: &str) -> Option<f64> {
+    std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok())
+}
+
+/// Section 2: stability and margins of each set-up with one sample of delay; returns the
+/// bench with the fitted model, notches and Kalman estimate (scenario gains).
+fn stability(bench: &Bench, fitted: &StageParams) -> Bench {
+    let mut bench = bench.clone();
     if let Estimator::Kalman(k) = &mut bench.setup.controller.estimator {
         if let Some(q) = env("BS_QD") {
             k.disturbance_drift = [q; 2];
@@ -197,7 +178,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             k.acceleration_noise = [q; 2];
         }
     }
-    // 2. Stability and margins, one sample of delay.
     println!("\nconfiguration (1 sample delay, margins by sine injection)");
     let mut b = bench.clone();
     b.setup.controller.estimator = Estimator::KFilter;
@@ -207,19 +187,20 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         bench.setup.controller.measurement_notches = bench.pi_notch.params.axes.map(|a| a.notches);
     }
     report("guess model, Kalman, notches", &bench);
-    let mut fb = bench.clone();
-    if std::env::var("BS_MODEL").as_deref() != Ok("guess") {
-        fb.setup.controller.model = fitted.clone();
+    if env("BS_GUESS") != Some(1.0) {
+        bench.setup.controller.model = fitted.clone();
     }
-    let mut b = fb.clone();
+    let mut b = bench.clone();
     b.setup.controller.estimator = Estimator::KFilter;
     report("fitted model, K-filter (paper), notches", &b);
-    report("fitted model, Kalman, notches", &fb);
+    report("fitted model, Kalman, notches", &bench);
+    bench
+}
 
-    // 3. Gains sized by the margins: the largest common scale of k_ε, k_η − 1, k that keeps
-    // 6 dB / 40° on both loops for both variants.
+/// Section 3: the largest common scale of k_ε, k_η − 1, k that keeps 6 dB / 40° on both
+/// loops for both variants.
+fn size_gains(fb: &Bench) -> Option<(f64, Bench)> {
     let base = fb.setup.controller.law;
-    let mut chosen = None;
     for scale in [1.0, 0.7, 0.5, 0.35, 0.25, 0.18, 0.12, 0.08, 0.05] {
         let mut b = fb.clone();
         let law = &mut b.setup.controller.law;
@@ -233,26 +214,31 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             show(&m[1])
         );
         if m.iter().all(meets) {
-            chosen = Some((scale, b));
-            break;
+            return Some((scale, b));
         }
     }
-    let Some((scale, sized)) = chosen else {
-        println!("no gain scale down to 0.05 meets 6 dB / 40° on both loops");
-        return Ok(());
-    };
-    report("shipped (Bench::new, size_backstepping)", &shipped);
-    let law = sized.setup.controller.law;
-    println!(
-        "chosen: gains × {scale}: k_ε {:.0?}, k_η {:.0?}, k {:.0?}",
-        law.error_gain, law.eta_gain, law.feedback_gain
-    );
+    None
+}
 
-    // 4. ρ_η from the twin's measured disturbance, and what each part buys.
+/// The robust-term settings of one row of the table: ρ_η and, optionally, φ_s.
+fn set_rho(law: &mut LawParams, rho: Option<[f64; 2]>, phi_s: Option<f64>) {
+    if let Some(r) = rho {
+        law.eta_bound = r;
+    }
+    if let Some(phi) = phi_s {
+        law.boundary_layer[0] = phi;
+    }
+}
+
+/// Section 4: ρ_η from the twin's measured disturbance, and what each part buys.
+fn what_each_part_buys(
+    sized: &Bench,
+    scenario: &Scenario,
+) -> Result<(), Box<dyn std::error::Error>> {
     let (reference, duration) = Reference::from_scenario(&scenario.trajectories[0]);
-    let s = sized.setup.clone();
+    let s = &sized.setup;
     let (_, bound) = track(
-        &s,
+        s,
         false,
         &mut sized.twin.plant(&s.rig)?,
         reference,
@@ -267,36 +253,37 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     report("robust with ρ_η = measured bound", &sized_rho);
     // The boundary layer widened so that the layer's slope ρ_η/φ_s is a quarter of k_η:
     // inside it the robust term is then a 25 % higher linear gain.
-    let phi_s = bound[0].max(bound[1]) / (0.25 * law.eta_gain[0]);
+    let phi_s = bound[0].max(bound[1]) / (0.25 * s.controller.law.eta_gain[0]);
     sized_rho.setup.controller.law.boundary_layer[0] = phi_s;
     report(
         &format!("  + boundary layer φ_s = {phi_s:.3} m/s"),
         &sized_rho,
     );
     println!("\nvariant (Kalman estimate)            twin RMS q1/q2 [nm]   lumped RMS q1/q2 [nm]");
-    let cases: [(&str, bool, bool, Option<[f64; 2]>); 5] = [
-        ("robust, ρ_η = measured bound", true, true, Some(bound)),
+    type Case<'a> = (&'a str, bool, bool, Option<[f64; 2]>, Option<f64>);
+    let cases: [Case; 5] = [
+        (
+            "robust, ρ_η = measured bound",
+            true,
+            true,
+            Some(bound),
+            None,
+        ),
         (
             "robust, ρ_η measured, wide φ_s",
             true,
             true,
-            Some([-1.0, phi_s]),
+            Some(bound),
+            Some(phi_s),
         ),
-        ("robust, scenario ρ_η", true, true, None),
-        ("non-robust", false, true, None),
-        ("without disturbance observer", false, false, None),
+        ("robust, scenario ρ_η", true, true, None, None),
+        ("non-robust", false, true, None, None),
+        ("without disturbance observer", false, false, None, None),
     ];
-    for (name, robust, dob, rho) in cases {
+    for (name, robust, dob, rho, phi) in cases {
         let mut st = sized.setup.clone();
         st.controller.disturbance_feedback = dob;
-        match rho {
-            Some([w, phi]) if w < 0.0 => {
-                st.controller.law.eta_bound = bound;
-                st.controller.law.boundary_layer[0] = phi;
-            }
-            Some(r) => st.controller.law.eta_bound = r,
-            None => {}
-        }
+        set_rho(&mut st.controller.law, rho, phi);
         let (tw, _) = track(
             &st,
             robust,
@@ -307,16 +294,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // The lumped plant in the rig as `track --plant lumped` runs it: the scenario's
         // setup (controller model = design guess, scenario gains), Kalman estimate, the
         // same robust / disturbance-observer settings.
-        let mut sl = Setup::from_scenario(&scenario);
+        let mut sl = Setup::from_scenario(scenario);
         sl.controller.disturbance_feedback = dob;
-        match rho {
-            Some([w, phi]) if w < 0.0 => {
-                sl.controller.law.eta_bound = bound;
-                sl.controller.law.boundary_layer[0] = phi;
-            }
-            Some(r) => sl.controller.law.eta_bound = r,
-            None => {}
-        }
+        set_rho(&mut sl.controller.law, rho, phi);
         let (lu, _) = track(&sl, robust, &mut sl.lumped_plant()?, reference, duration);
         println!(
             "{name:<36} {:>7.1}/{:<7.1}          {:>7.1}/{:<7.1}",
@@ -327,4 +307,35 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
     }
     Ok(())
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let preset = args
+        .get(1)
+        .and_then(|p| Preset::from_name(p))
+        .ok_or("usage: diagnose quick|paper DESIGN.json")?;
+    let scenario = Scenario::preset(preset);
+    let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
+    let DesignedStage { setup, twin, .. } = DesignedStage::new(&scenario, &design.rho)?;
+    // The scenario's backstepping settings (design guess, scenario gains, no notches);
+    // `Bench::new` sets the shipped ones up from the twin's response.
+    let original = setup.controller.clone();
+    let shipped = Bench::new(setup, twin, Default::default())?;
+    let mut bench = shipped.clone();
+    bench.setup.controller = original.clone();
+
+    let fitted = model_against_twin(&bench, &original.model)?;
+    let fb = stability(&bench, &fitted);
+    let Some((scale, sized)) = size_gains(&fb) else {
+        println!("no gain scale down to 0.05 meets 6 dB / 40° on both loops");
+        return Ok(());
+    };
+    report("shipped (Bench::new, size_backstepping)", &shipped);
+    let law = sized.setup.controller.law;
+    println!(
+        "chosen: gains × {scale}: k_ε {:.0?}, k_η {:.0?}, k {:.0?}",
+        law.error_gain, law.eta_gain, law.feedback_gain
+    );
+    what_each_part_buys(&sized, &scenario)
 }
