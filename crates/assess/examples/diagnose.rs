@@ -92,6 +92,15 @@ fn track(
     let t = setup.rig.sample_time;
     let rec = run(c.as_mut(), plant, duration, t, |_| {});
     let m = rec.metrics(reference.half_range(duration, t));
+    if let Ok(path) = std::env::var("BS_DUMP") {
+        let mut out = String::new();
+        for k in 0..rec.t.len() {
+            out += &format!("{} {} {} {} {} {} {}\n", rec.t[k], rec.error[0][k], rec.error[1][k], rec.reference[0][k], rec.reference[1][k], rec.estimate[8][k], rec.estimate[9][k]);
+        }
+        static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        std::fs::write(format!("{path}-{n}"), out).unwrap();
+    }
     let n = rec.t.len();
     let bound = [8, 9].map(|j| {
         rec.estimate[j][n / 10..]

@@ -128,6 +128,9 @@ pub struct ControllerParams {
     /// the peaks of the *sampled* plant response that the lumped model does not have (modes
     /// above Nyquist folded into the band), as the PI + notch baseline places them
     /// ([`crate::tuning`]). Their states are not part of [`BacksteppingController::state`].
+    /// At low frequency a notch delays the signal by τ = 2(ζ_p − ζ_z)/ω_n; the law then aims
+    /// the filtered output at the reference τ earlier, so that the true output follows the
+    /// reference itself (without that it leads by τ: 2.3 samples on the twin's q1).
     pub measurement_notches: [[Option<Notch>; 2]; 2],
     /// Inner-state source of step 2.
     pub inner: Inner,
@@ -213,6 +216,7 @@ pub struct BacksteppingController {
     inner: Inner,
     disturbance_feedback: f64,
     notch: [[Biquad; 2]; 2],
+    notch_delay: [f64; 2],
     reference: Reference,
     d_inv: nalgebra::Matrix2<f64>,
     t: f64,
@@ -267,6 +271,15 @@ impl BacksteppingController {
             } else {
                 0.0
             },
+            notch_delay: params.measurement_notches.map(|a| {
+                a.iter()
+                    .flatten()
+                    .map(|n| {
+                        2.0 * (n.pole_damping - n.zero_damping)
+                            / (std::f64::consts::TAU * n.frequency)
+                    })
+                    .sum()
+            }),
             notch: params.measurement_notches.map(|a| {
                 a.map(|n| {
                     n.map_or_else(Biquad::identity, |n| {
@@ -368,6 +381,23 @@ impl BacksteppingController {
     fn reference_at(&self, k: u64) -> RefSample {
         self.reference.sample(k as f64 * self.t)
     }
+
+    /// The reference the law aims the (notch-filtered) output at, at step k: each axis's
+    /// reference earlier by its notches' low-frequency delay (the field's docs).
+    #[inline]
+    fn law_reference_at(&self, k: u64) -> RefSample {
+        let t = k as f64 * self.t;
+        let [d0, d1] = self.notch_delay;
+        let mut r = self.reference.sample(t - d0);
+        if d1 != d0 {
+            let b = self.reference.sample(t - d1);
+            r.q[1] = b.q[1];
+            r.dq[1] = b.dq[1];
+            r.ddq[1] = b.ddq[1];
+            r.dddq[1] = b.dddq[1];
+        }
+        r
+    }
 }
 
 impl StageControl for BacksteppingController {
@@ -381,7 +411,7 @@ impl StageControl for BacksteppingController {
             let a = n[0].step(y[i]);
             y[i] = n[1].step(a);
         }
-        let r = self.reference_at(self.k + self.delay as u64);
+        let r = self.law_reference_at(self.k + self.delay as u64);
         // With a delay, the estimate is first advanced with the command acting now, then
         // predicted to the sample at which the new command acts (module docs, "Delay").
         let zh = if self.delay > 0 {
@@ -450,7 +480,7 @@ impl StageControl for BacksteppingController {
             x_nom: act.x_nom,
             // The reference of this sample (what the output is scored against now), also
             // when the law aimed at a later one.
-            reference: if self.delay > 0 {
+            reference: if self.delay > 0 || self.notch_delay != [0.0; 2] {
                 self.reference_at(self.k).q
             } else {
                 r.q
