@@ -95,7 +95,16 @@ fn track(
     if let Ok(path) = std::env::var("BS_DUMP") {
         let mut out = String::new();
         for k in 0..rec.t.len() {
-            out += &format!("{} {} {} {} {} {} {}\n", rec.t[k], rec.error[0][k], rec.error[1][k], rec.reference[0][k], rec.reference[1][k], rec.estimate[8][k], rec.estimate[9][k]);
+            out += &format!(
+                "{} {} {} {} {} {} {}\n",
+                rec.t[k],
+                rec.error[0][k],
+                rec.error[1][k],
+                rec.reference[0][k],
+                rec.reference[1][k],
+                rec.estimate[8][k],
+                rec.estimate[9][k]
+            );
         }
         static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
         let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
