@@ -179,7 +179,8 @@ fn model_against_twin(
 
 /// An exploration knob from the environment: BS_QD, BS_QA (Kalman drift and acceleration
 /// intensities), BS_NOTCH=0 (without the tuned PI + notch's notches on the measurement),
-/// BS_F1 (a q1 mode [Hz] for the fit), BS_GUESS=1 (no fit).
+/// BS_F1 (a q1 mode [Hz] for the fit), BS_GUESS=1 (no fit); BS_DUMP=PATH writes each
+/// tracking run's time, errors, references and Δ̂_η to PATH-n (n in run order).
 fn env(k: &str) -> Option<f64> {
     std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok())
 }
