@@ -126,18 +126,19 @@
 //! measurement ([`controller::ControllerParams::measurement_notches`]) and the gains scaled
 //! by the margins (`flexstage-assess` picks the largest of [`controller::GAIN_SCALES`]
 //! keeping 6 dB / 40°). On the quick design that is × 0.5: 7.6 dB / 61° (q1) and
-//! 23.7 dB / 75° (q2) with one sample of delay, 11.6/14.9 nm RMS on the default Lissajous
-//! (the PI + notch: 10.2/5.9 nm). The notches delay the measurement; the law aims the
-//! filtered output at the reference earlier by that delay
-//! ([`controller::notch_delay`]), without which the output led by 2.3 samples (48 nm).
+//! 23.7 dB / 75° (q2) with one sample of delay, 3.8/12.4 nm RMS on the default Lissajous
+//! (the PI + notch: 10.2/5.9 nm; Monte-Carlo pass 67 % against its 96 %). The notches delay
+//! the measurement and (44*)'s mid-sample ξ_d makes the output half a sample early; the law
+//! aims at the reference earlier by both ([`controller::notch_delay`], controller docs
+//! "Reference timing"), without which the output led by 2.3 samples (48 nm).
 //!
 //! What each part buys, each with the Kalman estimate (default Lissajous, RMS q1/q2; twin |
-//! lumped plant in the rig; `flexstage-assess`'s `diagnose` example): non-robust 11.6/14.9 |
-//! 9.5/13.7 nm; robust with the scenario's ρ_η = 0.1 m/s² 11.9/14.7 | 9.8/14.0 nm; robust
+//! lumped plant in the rig; `flexstage-assess`'s `diagnose` example): non-robust 3.8/12.4 |
+//! 6.4/11.8 nm; robust with the scenario's ρ_η = 0.1 m/s² 3.8/12.1 | 6.2/11.9 nm; robust
 //! with ρ_η = the twin's measured max|Δ̂_η| = 66/284 m/s² (A25) unstable (µm); the same with
-//! the boundary layer widened to keep the margins 11.5/14.7 | 9.5/13.7 nm; without the
+//! the boundary layer widened to keep the margins 3.7/12.2 | 6.4/11.8 nm; without the
 //! disturbance observer ([`controller::ControllerParams::disturbance_feedback`] off)
-//! 665/1160 | 1626/1766 nm. The disturbance observer does the work; the robust terms at
+//! 668/1163 | 1628/1768 nm. The disturbance observer does the work; the robust terms at
 //! their theoretical size either destabilize the loop or act as a little more linear gain.
 
 // Loops over the two axes index several arrays at once, as the equations do.
