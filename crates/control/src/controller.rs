@@ -34,18 +34,18 @@
 //! finite difference) and the reference at t_{k+d}. With d = 0 the step is the paper's.
 //!
 //! # Reference timing
-//! (44*) evaluates ξ_d at mid-sample, ξ_d + (T/2) v, so the command realizes the inner
-//! state half a sample ahead of the sample it is computed for, and the output followed the
-//! reference early: by 0.35/0.47 samples on the lumped plant and 0.53/0.66 on the twin
-//! (least-squares fit of the error on q_d and q̇_d over the default Lissajous, one sample of
-//! delay). With a delay the law therefore aims at the reference half a sample earlier
-//! (measured, not derived: without delay, on the nominal model, the same shift doubles the
-//! error, so it is not applied there) (and, with measurement notches,
-//! earlier again by their delay, [`notch_delay`]); the fitted shift is then within
-//! ±0.16 sample and the twin's RMS error drops from 11.6/14.9 to 3.8/12.4 nm. The reference
-//! reported with the command (what the output is scored against) is the unshifted one.
-//! Evaluating ξ_d at the sample instead is not an option: the loop on the twin then needs
-//! gains × 0.08 for 6 dB / 40°.
+//! With one sample of delay the output followed the reference early: by 0.35/0.47 samples
+//! on the lumped plant and 0.53/0.66 on the twin (least-squares fit of the error on q_d and
+//! q̇_d over the default Lissajous). The likely cause is that (44*) evaluates ξ_d at
+//! mid-sample, ξ_d + (T/2) v, which the loop needs (at the sample instead, 6 dB / 40° on the
+//! twin needs gains × 0.08). With a delay the law therefore aims at the reference half a
+//! sample earlier, and, with measurement notches, earlier again by their delay
+//! ([`notch_delay`]). The half sample is measured, not derived: without delay (the minimal
+//! loop on its own model) the same shift doubles the error and is not applied. With it the
+//! fitted shift is within ±0.16 sample on both plants (`tests/controller.rs`,
+//! `output_is_on_time_with_one_sample_of_delay`) and the twin's RMS error drops from
+//! 11.6/14.9 to 3.8/12.4 nm. The reference reported with the command (what the output is
+//! scored against) is the unshifted one.
 //!
 //! # Robustness of the step
 //! A non-finite measurement (sensor dropout) is replaced by the last valid one and flagged.
