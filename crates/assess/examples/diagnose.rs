@@ -1,9 +1,17 @@
-//! Why the backstepping controllers fail on the twin, by measurement: the sampled closed
-//! loop of each backstepping variant on the twin's linear rig, with one suspected cause
-//! switched off at a time (issue #18, item 1). For each configuration it prints whether the
-//! loop is stable after a 10 nm kick, the frequency and growth rate of the dominant
-//! oscillation (zero crossings and envelope of q1, q2 over the run), and, when stable, the
-//! loop-at-a-time margins by sine injection.
+//! Backstepping on the twin (issue #18): why the controller as shipped with the design
+//! guess is unstable, what makes it stable, the gains sized by the margins, ρ_η sized from
+//! the twin's measured disturbance, and what each part buys.
+//!
+//! 1. The controller's lumped model against the twin (static gain, modes, aliases).
+//! 2. Kick test and loop-at-a-time margins (sine injection, one sample of delay) of the
+//!    backstepping variants: the design guess with the K-filter (the paper's estimator), the
+//!    guess with the Kalman estimate, and the model fitted to the twin's response below
+//!    Nyquist ("what identification would give", `model::ResponseFit::from_modes`).
+//! 3. The law's gains k_ε = k_η = k scaled down until both loops keep 6 dB / 40°.
+//! 4. The disturbance bound max|Δ̂_η| measured on the twin in the full rig (non-robust,
+//!    default Lissajous), ρ_η of A25 set to it, and the tracking table: robust, non-robust,
+//!    without the disturbance observer, each with the Kalman estimate, on the twin and on the
+//!    lumped plant.
 //!
 //! ```text
 //! cargo run --release -p flexstage-assess --example diagnose -- quick runs/quick/design/design.json
@@ -11,126 +19,116 @@
 
 use flexstage_assess::Bench;
 use flexstage_assess::Candidate;
+use flexstage_assess::bench::plant_modes;
 use flexstage_assess::inject::{InjectionParams, injected_margins, is_stable};
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::Velocity;
-use flexstage_control::model::StageModel;
-use flexstage_control::plant::LumpedStage;
-use flexstage_control::rig::{RigPlant, StagePlant};
-use flexstage_control::trajectory::{Reference, Shape};
-use flexstage_scenario::{Preset, Scenario};
+use flexstage_control::backstepping::LawParams;
+use flexstage_control::controller::Estimator;
+use flexstage_control::experiment::{Setup, run};
+use flexstage_control::margins::Margins;
+use flexstage_control::model::{ResponseFit, StageModel, fit_to_response};
+use flexstage_control::rig::StagePlant;
+use flexstage_control::trajectory::Reference;
+use flexstage_scenario::{Preset, Scenario, StageParams};
 use flexstage_topopt::DesignFile;
 use flexstage_twin::DesignedStage;
 
-/// Dominant oscillation of the kicked loop: (frequency of q_i from zero crossings over the
-/// last half [Hz], growth rate of the envelope between the two halves [1/s], peak [m]).
-fn kick(bench: &Bench, c: Candidate, delay: usize, duration: f64) -> [(f64, f64, f64); 2] {
-    kick_on(bench, c, &mut bench.linear_plant(delay).unwrap(), duration)
-}
-
-/// [`kick`] on any plant.
-fn kick_on(
-    bench: &Bench,
-    c: Candidate,
-    plant: &mut dyn StagePlant,
-    duration: f64,
-) -> [(f64, f64, f64); 2] {
-    let r = Reference::new(Shape::Step { target: [0.0; 2] });
-    let mut ctrl = match bench.controller(c, Compensation::Ideal, r) {
-        Ok(c) => c,
-        Err(e) => {
-            println!("    {e}");
-            return [(f64::NAN, f64::NAN, f64::NAN); 2];
-        }
-    };
-    let t = bench.setup.rig.sample_time;
-    let n = (duration / t).round() as usize;
-    let mut q = [Vec::with_capacity(n), Vec::with_capacity(n)];
-    for k in 0..n {
-        let mut y = plant.measure();
-        if k == 0 {
-            y = [y[0] + 1e-8, y[1] + 1e-8];
-        }
-        let cmd = ctrl.step(y);
-        plant.apply(&cmd);
-        let o = plant.output();
-        if !(o[0].abs() < 1e-6 && o[1].abs() < 1e-6) {
-            break;
-        }
-        q[0].push(o[0]);
-        q[1].push(o[1]);
-    }
-    [0, 1].map(|i| {
-        let x = &q[i];
-        let m = x.len();
-        let half = &x[m / 2..];
-        let crossings = half.windows(2).filter(|w| w[0] * w[1] < 0.0).count();
-        let f = crossings as f64 / 2.0 / (half.len() as f64 * t);
-        let rms = |s: &[f64]| (s.iter().map(|v| v * v).sum::<f64>() / s.len() as f64).sqrt();
-        let (a, b) = (rms(&x[m / 4..m / 2]), rms(&x[3 * m / 4..]));
-        let growth = (b / a).ln() / (0.5 * m as f64 * t);
-        let peak = x.iter().fold(0.0f64, |p, v| p.max(v.abs()));
-        (f, growth, peak)
-    })
-}
-
-fn report(name: &str, bench: &Bench, delay: usize) {
-    let mut owned = bench.clone();
-    owned.setup.controller.delay = delay;
-    let bench = &owned;
-    for c in [Candidate::Robust, Candidate::NonRobust] {
-        let k = kick(bench, c, delay, 0.2);
-        let stable = is_stable(bench, c, delay, 1.0).unwrap_or(false);
-        let margins = if stable {
-            let mut mp = bench.tuning.margins;
-            mp.f_min = 10.0;
-            mp.points = 40;
-            mp.refine = 8;
-            match injected_margins(bench, c, delay, &mp, &InjectionParams::default()).unwrap() {
-                Some(m) => format!(
-                    "GM {:.1}/{:.1} dB, PM {:.0}/{:.0}°, f_c {:.0}/{:.0} Hz",
-                    m[0].gain_db,
-                    m[1].gain_db,
-                    m[0].phase_deg,
-                    m[1].phase_deg,
-                    m[0].gain_crossover,
-                    m[1].gain_crossover
-                ),
-                None => "diverges under injection".into(),
-            }
-        } else {
-            String::new()
-        };
-        println!(
-            "{name:<34} {:<9} {:<8} q1 {:>6.0} Hz {:>+8.0}/s | q2 {:>6.0} Hz {:>+8.0}/s  {margins}",
-            c.name(),
-            if stable { "stable" } else { "UNSTABLE" },
-            k[0].0,
-            k[0].1,
-            k[1].0,
-            k[1].1,
-        );
-    }
-}
-
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let args: Vec<String> = std::env::args().collect();
-    let preset = args
-        .get(1)
-        .and_then(|p| Preset::from_name(p))
-        .ok_or("usage: diagnose quick|paper DESIGN.json")?;
-    let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
-    let DesignedStage { setup, twin, .. } =
-        DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
-    let bench = Bench::new(setup, twin, Default::default())?;
-    let t = bench.setup.rig.sample_time;
+/// Margins of a backstepping variant (None: unstable).
+fn margins(bench: &Bench, c: Candidate) -> Option<[Margins; 2]> {
     let delay = bench.setup.rig.delay;
+    if !is_stable(bench, c, delay, 1.0).unwrap_or(false) {
+        return None;
+    }
+    let mut mp = bench.tuning.margins;
+    mp.f_min = 10.0;
+    mp.points = 40;
+    mp.refine = 8;
+    injected_margins(bench, c, delay, &mp, &InjectionParams::default()).unwrap_or(None)
+}
 
-    // Static gains and modes: the controller's lumped model against the twin.
-    let model = StageModel::new(&bench.setup.controller.model)?;
-    let gm = model.dc_gain()?;
+fn show(m: &Option<[Margins; 2]>) -> String {
+    match m {
+        None => "UNSTABLE".into(),
+        Some(m) => format!(
+            "GM {:.1}/{:.1} dB, PM {:.0}/{:.0}°, f_c {:.0}/{:.0} Hz",
+            m[0].gain_db,
+            m[1].gain_db,
+            m[0].phase_deg,
+            m[1].phase_deg,
+            m[0].gain_crossover,
+            m[1].gain_crossover
+        ),
+    }
+}
+
+fn meets(m: &Option<[Margins; 2]>) -> bool {
+    m.as_ref()
+        .is_some_and(|m| m.iter().all(|m| m.meets(6.0, 40.0)))
+}
+
+fn report(name: &str, bench: &Bench) {
+    for c in [Candidate::Robust, Candidate::NonRobust] {
+        println!("{name:<44} {:<9} {}", c.name(), show(&margins(bench, c)));
+    }
+}
+
+/// One tracking run of a backstepping variant on `plant`: RMS error against the true
+/// output per axis and max|Δ̂_η| per axis.
+fn track(
+    setup: &Setup,
+    robust: bool,
+    plant: &mut dyn StagePlant,
+    reference: Reference,
+    duration: f64,
+) -> ([f64; 2], [f64; 2]) {
+    let variant = if robust {
+        flexstage_control::experiment::Variant::Robust
+    } else {
+        flexstage_control::experiment::Variant::NonRobust
+    };
+    let mut c = setup
+        .controller(variant, Compensation::Inverse, reference)
+        .unwrap();
+    let t = setup.rig.sample_time;
+    let rec = run(c.as_mut(), plant, duration, t, |_| {});
+    let m = rec.metrics(reference.half_range(duration, t));
+    if let Ok(path) = std::env::var("BS_DUMP") {
+        let mut out = String::new();
+        for k in 0..rec.t.len() {
+            out += &format!(
+                "{} {} {} {} {} {} {}\n",
+                rec.t[k],
+                rec.error[0][k],
+                rec.error[1][k],
+                rec.reference[0][k],
+                rec.reference[1][k],
+                rec.estimate[8][k],
+                rec.estimate[9][k]
+            );
+        }
+        static N: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+        let n = N.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        std::fs::write(format!("{path}-{n}"), out).unwrap();
+    }
+    let n = rec.t.len();
+    let bound = [8, 9].map(|j| {
+        rec.estimate[j][n / 10..]
+            .iter()
+            .fold(0.0f64, |a, v| a.max(v.abs()))
+    });
+    (m.rms, bound)
+}
+
+/// Section 1: the scenario's model against the twin (static gain, modes, aliases) and the
+/// model fitted to the twin's response below Nyquist.
+fn model_against_twin(
+    bench: &Bench,
+    guess: &StageParams,
+) -> Result<StageParams, Box<dyn std::error::Error>> {
+    let fs = 1.0 / bench.setup.rig.sample_time;
+    let gm = StageModel::new(guess)?.dc_gain()?;
     let gt = bench.twin.modal.dc_gain();
-    println!("static gain x_nom → q   model                 twin");
+    println!("static gain x_nom → q   model (guess)         twin");
     for i in 0..2 {
         println!(
             "  row {}   [{:+.4} {:+.4}]   [{:+.4} {:+.4}]",
@@ -141,94 +139,222 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             gt[i][1]
         );
     }
-    println!("twin modes (f [Hz], ζ, aliased to [Hz], |out·in| q1, q2):");
-    let fs = 1.0 / t;
-    for m in bench.twin.modal.modes.iter().take(14) {
+    println!("twin modes (f [Hz], ζ, aliased to [Hz], share of static gain q1, q2):");
+    for m in bench.twin.modal.modes.iter().take(10) {
         let alias = (m.frequency - fs * (m.frequency / fs).round()).abs();
         let w2 = (std::f64::consts::TAU * m.frequency).powi(2);
         println!(
-            "  {:>9.1}  {:.4}  {:>7.1}  {:+.3e} {:+.3e}",
+            "  {:>9.1}  {:.4}  {:>7.1}  {:+.3} {:+.3}",
             m.frequency,
             m.damping,
             alias,
-            m.output[0] * (m.input[0] + m.input[1]) / w2,
-            m.output[1] * (m.input[0] - m.input[1]) / w2
+            m.output[0] * (m.input[0] + m.input[1]) / w2 / (gt[0][0] + gt[0][1]),
+            m.output[1] * (m.input[0] - m.input[1]) / w2 / (gt[1][0] - gt[1][1])
         );
     }
-    let ev = model.b.complex_eigenvalues();
-    let mut fm: Vec<f64> = ev
-        .iter()
-        .map(|z| z.im.abs() / std::f64::consts::TAU)
-        .collect();
-    fm.sort_by(f64::total_cmp);
-    fm.dedup_by(|a, b| (*a - *b).abs() < 1e-6);
-    println!("controller model modes [Hz]: {fm:.0?}");
+    let mut fit = ResponseFit::from_modes(&plant_modes(&bench.twin), 0.5 * fs, 0.1);
+    if let Some(f) = env("BS_F1") {
+        fit.frequency[0] = Some(f);
+    }
+    let fitted = fit_to_response(guess, &fit)?;
     println!(
-        "\n{:<34} {:<9} {:<8} dominant oscillation of the kicked loop; margins when stable",
-        "configuration", "variant", "loop"
+        "fit (identification below Nyquist): q1 mode {:?} Hz, q2 mode {:?} Hz ζ {:.3}; \
+         M {:.3e} → {:.3e} kg, K_qo1 {:.3e} → {:.3e} N/m, K_in {:.3e} → {:.3e} N/m, \
+         α {:.3} → {:.3}; model modes {:.0?} Hz",
+        fit.frequency[0],
+        fit.frequency[1],
+        fit.damping[1],
+        guess.mass,
+        fitted.mass,
+        guess.k_qo1,
+        fitted.k_qo1,
+        guess.k_in1,
+        fitted.k_in1,
+        guess.alpha,
+        fitted.alpha,
+        StageModel::new(&fitted)?.natural_frequencies(),
     );
+    Ok(fitted)
+}
 
-    for d in [delay, 0] {
-        let mut rig = bench.linear_rig(d);
-        rig.floor.velocity_rms = 0.0;
-        let stage = LumpedStage::new(&bench.setup.plant.truth, 0.0, rig.substep())?;
-        let mut lumped = RigPlant::new(rig, stage)?;
-        for c in [Candidate::Robust, Candidate::NonRobust] {
-            let k = kick_on(&bench, c, &mut lumped, 0.2);
-            println!(
-                "{:<34} {:<9} (kick) q1 {:>6.0} Hz {:>+8.0}/s | q2 {:>6.0} Hz {:>+8.0}/s",
-                format!("lumped plant = model, delay {d}"),
-                c.name(),
-                k[0].0,
-                k[0].1,
-                k[1].0,
-                k[1].1
-            );
+/// An exploration knob from the environment: BS_QD, BS_QA (Kalman drift and acceleration
+/// intensities), BS_NOTCH=0 (without the tuned PI + notch's notches on the measurement),
+/// BS_F1 (a q1 mode [Hz] for the fit), BS_GUESS=1 (no fit); BS_DUMP=PATH writes each
+/// tracking run's time, errors, references and Δ̂_η to PATH-n (n in run order).
+fn env(k: &str) -> Option<f64> {
+    std::env::var(k).ok().and_then(|v| v.parse::<f64>().ok())
+}
+
+/// Section 2: stability and margins of each set-up with one sample of delay; returns the
+/// bench with the fitted model, notches and Kalman estimate (scenario gains).
+fn stability(bench: &Bench, fitted: &StageParams) -> Bench {
+    let mut bench = bench.clone();
+    if let Estimator::Kalman(k) = &mut bench.setup.controller.estimator {
+        if let Some(q) = env("BS_QD") {
+            k.disturbance_drift = [q; 2];
+        }
+        if let Some(q) = env("BS_QA") {
+            k.acceleration_noise = [q; 2];
         }
     }
-    report("as shipped", &bench, delay);
-    report("no delay", &bench, 0);
+    println!("\nconfiguration (1 sample delay, margins by sine injection)");
     let mut b = bench.clone();
-    for m in &mut b.twin.modal.modes {
-        if m.frequency > 0.5 * fs {
-            m.damping = 1.0;
+    b.setup.controller.estimator = Estimator::KFilter;
+    report("guess model, K-filter (paper)", &b);
+    report("guess model, Kalman", &bench);
+    if env("BS_NOTCH") != Some(0.0) {
+        bench.setup.controller.measurement_notches = bench.pi_notch.params.axes.map(|a| a.notches);
+    }
+    report("guess model, Kalman, notches", &bench);
+    if env("BS_GUESS") != Some(1.0) {
+        bench.setup.controller.model = fitted.clone();
+    }
+    let mut b = bench.clone();
+    b.setup.controller.estimator = Estimator::KFilter;
+    report("fitted model, K-filter (paper), notches", &b);
+    report("fitted model, Kalman, notches", &bench);
+    bench
+}
+
+/// Section 3: the largest common scale of k_ε, k_η − 1, k that keeps 6 dB / 40° on both
+/// loops for both variants.
+fn size_gains(fb: &Bench) -> Option<(f64, Bench)> {
+    let base = fb.setup.controller.law;
+    for scale in [1.0, 0.7, 0.5, 0.35, 0.25, 0.18, 0.12, 0.08, 0.05] {
+        let mut b = fb.clone();
+        let law = &mut b.setup.controller.law;
+        law.error_gain = base.error_gain.map(|g| scale * g);
+        law.eta_gain = base.eta_gain.map(|g| 1.0 + scale * (g - 1.0));
+        law.feedback_gain = base.feedback_gain.map(|g| scale * g);
+        let m = [Candidate::Robust, Candidate::NonRobust].map(|c| margins(&b, c));
+        println!(
+            "gains × {scale:<5} robust {} | non-robust {}",
+            show(&m[0]),
+            show(&m[1])
+        );
+        if m.iter().all(meets) {
+            return Some((scale, b));
         }
     }
-    report("twin modes > f_s/2 overdamped", &b, delay);
-    let mut b = bench.clone();
-    b.setup.controller.velocity = Velocity::Observer;
-    // With a delay the predictor always takes q̇ from the observer; without, the law's
-    // finite difference is the paper's default.
-    report("no delay, observer velocity (no FD)", &b, 0);
-    let mut b = bench.clone();
-    b.setup.controller.observer.disturbance_gain *= 0.1;
-    report("disturbance observer κ_d / 10", &b, delay);
-    let mut b = bench.clone();
-    b.setup.controller.law.error_gain = b.setup.controller.law.error_gain.map(|g| 0.3 * g);
-    b.setup.controller.law.eta_gain = b.setup.controller.law.eta_gain.map(|g| 0.3 * g);
-    report("gains k_ε, k_η × 0.3", &b, delay);
-    // The controller model's output mass fitted to the twin's q2 mode (3.2 kHz on the quick
-    // design), keeping every stiffness (so the static gain stays).
-    let fit = (2324.0f64 / 3220.0).powi(2);
-    let mut fitted = bench.clone();
-    fitted.setup.controller.model.mass *= fit;
-    fitted.setup.controller.model.c_qo1 *= fit.sqrt();
-    fitted.setup.controller.model.c_qo2 *= fit.sqrt();
-    let f = StageModel::new(&fitted.setup.controller.model)?.natural_frequencies();
-    report(
-        &format!("model M × {fit:.2} ({:.0}/{:.0} Hz)", f[0], f[1]),
-        &fitted,
-        delay,
+    None
+}
+
+/// The robust-term settings of one row of the table: ρ_η and, optionally, φ_s.
+fn set_rho(law: &mut LawParams, rho: Option<[f64; 2]>, phi_s: Option<f64>) {
+    if let Some(r) = rho {
+        law.eta_bound = r;
+    }
+    if let Some(phi) = phi_s {
+        law.boundary_layer[0] = phi;
+    }
+}
+
+/// Section 4: ρ_η from the twin's measured disturbance, and what each part buys.
+fn what_each_part_buys(
+    sized: &Bench,
+    scenario: &Scenario,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let (reference, duration) = Reference::from_scenario(&scenario.trajectories[0]);
+    let s = &sized.setup;
+    let (_, bound) = track(
+        s,
+        false,
+        &mut sized.twin.plant(&s.rig)?,
+        reference,
+        duration,
     );
-    let mut b = fitted.clone();
-    for m in &mut b.twin.modal.modes {
-        if m.frequency > 0.5 * fs {
-            m.damping = 1.0;
-        }
+    println!(
+        "\nmeasured max|Δ̂_η| on the twin (non-robust, {duration} s Lissajous): {:.1}/{:.1} m/s²",
+        bound[0], bound[1]
+    );
+    let mut sized_rho = sized.clone();
+    sized_rho.setup.controller.law.eta_bound = bound;
+    report("robust with ρ_η = measured bound", &sized_rho);
+    // The boundary layer widened so that the layer's slope ρ_η/φ_s is a quarter of k_η:
+    // inside it the robust term is then a 25 % higher linear gain.
+    let phi_s = bound[0].max(bound[1]) / (0.25 * s.controller.law.eta_gain[0]);
+    sized_rho.setup.controller.law.boundary_layer[0] = phi_s;
+    report(
+        &format!("  + boundary layer φ_s = {phi_s:.3} m/s"),
+        &sized_rho,
+    );
+    println!("\nvariant (Kalman estimate)            twin RMS q1/q2 [nm]   lumped RMS q1/q2 [nm]");
+    type Case<'a> = (&'a str, bool, bool, Option<[f64; 2]>, Option<f64>);
+    let cases: [Case; 5] = [
+        (
+            "robust, ρ_η = measured bound",
+            true,
+            true,
+            Some(bound),
+            None,
+        ),
+        (
+            "robust, ρ_η measured, wide φ_s",
+            true,
+            true,
+            Some(bound),
+            Some(phi_s),
+        ),
+        ("robust, scenario ρ_η", true, true, None, None),
+        ("non-robust", false, true, None, None),
+        ("without disturbance observer", false, false, None, None),
+    ];
+    for (name, robust, dob, rho, phi) in cases {
+        let mut st = sized.setup.clone();
+        st.controller.disturbance_feedback = dob;
+        set_rho(&mut st.controller.law, rho, phi);
+        let (tw, _) = track(
+            &st,
+            robust,
+            &mut sized.twin.plant(&st.rig)?,
+            reference,
+            duration,
+        );
+        // The lumped plant in the rig as `track --plant lumped` runs it: the scenario's
+        // setup (controller model = design guess, scenario gains), Kalman estimate, the
+        // same robust / disturbance-observer settings.
+        let mut sl = Setup::from_scenario(scenario);
+        sl.controller.disturbance_feedback = dob;
+        set_rho(&mut sl.controller.law, rho, phi);
+        let (lu, _) = track(&sl, robust, &mut sl.lumped_plant()?, reference, duration);
+        println!(
+            "{name:<36} {:>7.1}/{:<7.1}          {:>7.1}/{:<7.1}",
+            tw[0] * 1e9,
+            tw[1] * 1e9,
+            lu[0] * 1e9,
+            lu[1] * 1e9
+        );
     }
-    report("  + twin modes > f_s/2 overdamped", &b, delay);
-    let mut b = fitted.clone();
-    b.setup.controller.observer.gain = b.setup.controller.observer.gain.map(|x| 0.3 * x);
-    report("  + observer gains × 0.3", &b, delay);
     Ok(())
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let preset = args
+        .get(1)
+        .and_then(|p| Preset::from_name(p))
+        .ok_or("usage: diagnose quick|paper DESIGN.json")?;
+    let scenario = Scenario::preset(preset);
+    let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
+    let DesignedStage { setup, twin, .. } = DesignedStage::new(&scenario, &design.rho)?;
+    // The scenario's backstepping settings (design guess, scenario gains, no notches);
+    // `Bench::new` sets the shipped ones up from the twin's response.
+    let original = setup.controller.clone();
+    let shipped = Bench::new(setup, twin, Default::default())?;
+    let mut bench = shipped.clone();
+    bench.setup.controller = original.clone();
+
+    let fitted = model_against_twin(&bench, &original.model)?;
+    let fb = stability(&bench, &fitted);
+    let Some((scale, sized)) = size_gains(&fb) else {
+        println!("no gain scale down to 0.05 meets 6 dB / 40° on both loops");
+        return Ok(());
+    };
+    report("shipped (Bench::new, size_backstepping)", &shipped);
+    let law = sized.setup.controller.law;
+    println!(
+        "chosen: gains × {scale}: k_ε {:.0?}, k_η {:.0?}, k {:.0?}",
+        law.error_gain, law.eta_gain, law.feedback_gain
+    );
+    what_each_part_buys(&sized, &scenario)
 }

@@ -74,11 +74,9 @@ pub struct Bench {
     pub tuning: TuningParams,
 }
 
-/// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay and the
-/// rig's sensor chain `sensor` (electronics and anti-aliasing filter) before the sampler.
-pub fn modal_plant(twin: &Twin, t: f64, delay: usize, sensor: &SensorParams) -> Result<ModalPlant> {
-    let modes = twin
-        .modal
+/// The twin's modes (PEA inputs and outputs only).
+pub fn plant_modes(twin: &Twin) -> Vec<PlantMode> {
+    twin.modal
         .modes
         .iter()
         .map(|m| PlantMode {
@@ -87,8 +85,13 @@ pub fn modal_plant(twin: &Twin, t: f64, delay: usize, sensor: &SensorParams) -> 
             input: [m.input[0], m.input[1]],
             output: m.output,
         })
-        .collect();
-    Ok(ModalPlant::with_sensor(modes, t, delay, sensor)?)
+        .collect()
+}
+
+/// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay and the
+/// rig's sensor chain `sensor` (electronics and anti-aliasing filter) before the sampler.
+pub fn modal_plant(twin: &Twin, t: f64, delay: usize, sensor: &SensorParams) -> Result<ModalPlant> {
+    Ok(ModalPlant::with_sensor(plant_modes(twin), t, delay, sensor)?)
 }
 
 impl Bench {
@@ -103,13 +106,17 @@ impl Bench {
         )?;
         let pid = tune(&plant, Structure::Pid, &tuning)?;
         let pi_notch = tune(&plant, Structure::PiNotch, &tuning)?;
-        Ok(Bench {
+        let mut bench = Bench {
             setup,
             twin,
             pid,
             pi_notch,
             tuning,
-        })
+        };
+        // The backstepping set up from the twin's sampled response, gains sized by the
+        // margins (issue #18).
+        crate::inject::size_backstepping(&mut bench)?;
+        Ok(bench)
     }
 
     /// The linear-controller parameters of a linear candidate (the scenario's PID as a

@@ -166,3 +166,40 @@ pub fn injected_margins(
     }
     Ok(Some([out[0].unwrap(), out[1].unwrap()]))
 }
+
+/// Sets the backstepping up from the twin's sampled response
+/// ([`flexstage_control::controller::ControllerParams::for_sampled_plant`]: fitted model,
+/// the tuned PI + notch's notches on the measurement) with the largest gain scale of
+/// [`flexstage_control::controller::GAIN_SCALES`] whose robust and non-robust loops keep
+/// the margin targets of the bench's tuning (6 dB / 40°) with the rig's delay, by sine
+/// injection; the smallest scale when none does (the margins table then flags it). Returns
+/// the scale.
+pub fn size_backstepping(bench: &mut Bench) -> Result<f64> {
+    use flexstage_control::controller::GAIN_SCALES;
+    let base = bench.setup.controller.clone();
+    let modes = crate::bench::plant_modes(&bench.twin);
+    let notches = bench.pi_notch.params.axes.map(|a| a.notches);
+    let delay = bench.setup.rig.delay;
+    let (gm, pm) = (bench.tuning.gain_margin_db, bench.tuning.phase_margin_deg);
+    let mut mp = bench.tuning.margins;
+    mp.f_min = 10.0;
+    mp.points = 40;
+    mp.refine = 8;
+    for &scale in &GAIN_SCALES {
+        bench.setup.controller = base.for_sampled_plant(&modes, notches, scale);
+        let mut ok = true;
+        for c in [Candidate::Robust, Candidate::NonRobust] {
+            ok &= match injected_margins(bench, c, delay, &mp, &InjectionParams::default())? {
+                Some(m) => m.iter().all(|m| m.meets(gm, pm)),
+                None => false,
+            };
+            if !ok {
+                break;
+            }
+        }
+        if ok {
+            return Ok(scale);
+        }
+    }
+    Ok(GAIN_SCALES[GAIN_SCALES.len() - 1])
+}

@@ -14,10 +14,11 @@ use flexstage_scenario::Scenario;
 use crate::actuator::{ActuatorParams, Compensation};
 use crate::backstepping::LawParams;
 use crate::controller::{
-    BacksteppingController, ControllerParams, Inner, PidController, PidParams, StageControl,
-    Velocity,
+    BacksteppingController, ControllerParams, Estimator, Inner, PidController, PidParams,
+    StageControl, Velocity,
 };
 use crate::error::{ControlError, Result};
+use crate::estimator::KalmanParams;
 use crate::observer::ObserverParams;
 use crate::pi_notch::{PiNotchController, PiNotchParams};
 use crate::plant::{LumpedStage, Plant, PlantActuator, PlantParams};
@@ -140,6 +141,9 @@ impl Setup {
                     Velocity::FiniteDifference
                 },
                 inner: Inner::Command,
+                estimator: Estimator::Kalman(KalmanParams::with_sensor_noise(s.sensors.noise_std)),
+                disturbance_feedback: true,
+                measurement_notches: [[None; 2]; 2],
                 delay: RigParams::from_scenario(s).delay,
                 actuator: ActuatorParams {
                     hysteresis,

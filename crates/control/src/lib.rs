@@ -6,6 +6,9 @@
 //!   [`flexstage_scenario::StageParams`] (Table 4 or the file of `flexstage reduce`);
 //! * [`observer`]: the K-filter of Eq. (37–42), B0 checked with the Lyapunov equation (39),
 //!   discretized exactly for the sample time;
+//! * [`estimator`]: the steady-state discrete Kalman gain of the same filters (sensor noise,
+//!   documented process noise; DARE by structure-preserving doubling), the backstepping's
+//!   default estimate in place of finite differences;
 //! * [`backstepping`]: the robust backstepping law of Section 3.2.2 / Appendix D;
 //! * [`controller`]: the real-time controllers ([`controller::StageControl`]:
 //!   `step(measurement) -> command`, no allocation, no I/O, deterministic): the backstepping
@@ -95,7 +98,8 @@
 //! outside the unit circle (largest |z| ≈ 2.6–2.7 on the nominal model with
 //! `analysis::closed_loop_poles`): k_ε T = 2 is beyond what 10 kHz sampling with a
 //! finite-difference velocity supports. The defaults k_ε = k_η = k = 3e3 s⁻¹ and κ_d = 3e4 s⁻¹
-//! give a largest closed-loop |z| ≈ 0.86. The observer gains 1e5 of Table 4 are kept. The
+//! give a largest closed-loop |z| ≈ 0.86 with the K-filter (0.91 with the default Kalman
+//! estimate) on the nominal model. The observer gains 1e5 of Table 4 are kept. The
 //! PID baseline's integral gain 300 s⁻¹ is near its stability limit (the 1.5–2.3 kHz output
 //! modes have ≈ 2 % damping; 1000 s⁻¹ is unstable).
 
@@ -110,21 +114,32 @@
 //! FF without notch is limited by the same peaks to a 40 Hz crossover on q1 (18.5/8.4 nm);
 //! with the scenario's gains its q1 gain margin is 4.3 dB.
 //!
-//! The backstepping controllers are unstable on the twin (with and without the robust
-//! terms). Measured by switching each suspected cause off in turn (`flexstage-assess`'s
-//! `diagnose` example; DECISIONS.md): the one-sample delay, which Section 3.2.2 does not
-//! have and which alone makes the loop oscillate on the lumped plant equal to its model
-//! (now handled: the controller predicts over [`controller::ControllerParams::delay`]); the
-//! model's output modes (1570/2324 Hz) against the twin's (q2 at 3220 Hz, q1 made of modes
-//! above Nyquist that cancel to its static gain); and the aliasing of those modes into the
-//! law's band. Only with the model's mass fitted *and* the aliased peaks removed are they
-//! stable (8.0 dB / 58° on q1). They remain the paper's method on its own model, not a
-//! controller to ship.
+//! The backstepping controllers as the paper sets them up (design guess as the model,
+//! K-filter, Table 4-derived gains) are unstable on the twin: the guess's output modes
+//! (1570/2324 Hz) are not the twin's (q2 at 3220 Hz; q1 has no mode below Nyquist, its
+//! static gain is three modes above it whose shares cancel), and those modes fold into the
+//! sampled loop (8.99 kHz at 1.01 kHz on q1, 3.6× the static gain) where no lumped model
+//! has them. [`controller::ControllerParams::for_sampled_plant`] sets them up as a
+//! practitioner would from the sampled response: the Kalman estimate
+//! ([`controller::Estimator::Kalman`], the default), the model fitted to the static gain and
+//! the modes below Nyquist ([`model::fit_to_response`]), the folded peaks notched on the
+//! measurement ([`controller::ControllerParams::measurement_notches`]) and the gains scaled
+//! by the margins (`flexstage-assess` picks the largest of [`controller::GAIN_SCALES`]
+//! keeping 6 dB / 40°). On the quick design that is × 0.5: 7.6 dB / 61° (q1) and
+//! 23.7 dB / 75° (q2) with one sample of delay, 3.8/12.4 nm RMS on the default Lissajous
+//! (the PI + notch: 10.2/5.9 nm; Monte-Carlo pass 67 % against its 96 %). The notches delay
+//! the measurement and (44*)'s mid-sample ξ_d makes the output half a sample early; the law
+//! aims at the reference earlier by both ([`controller::notch_delay`], controller docs
+//! "Reference timing"), without which the output led by 2.3 samples (48 nm).
 //!
-//! What each part buys (lumped plant in the rig, default Lissajous, example
-//! `robust_terms`): the disturbance observer takes the error from 106/465 nm to 8.4/12.1 nm;
-//! the robust terms with the scenario's ρ_η = 0.1 m/s² change nothing (8.7/12.4 nm); sized
-//! from the measured disturbance (≈ 190/110 m/s², A25) they make it 225/96 nm.
+//! What each part buys, each with the Kalman estimate (default Lissajous, RMS q1/q2; twin |
+//! lumped plant in the rig; `flexstage-assess`'s `diagnose` example): non-robust 3.8/12.4 |
+//! 6.4/11.8 nm; robust with the scenario's ρ_η = 0.1 m/s² 3.8/12.1 | 6.2/11.9 nm; robust
+//! with ρ_η = the twin's measured max|Δ̂_η| = 66/284 m/s² (A25) unstable (µm); the same with
+//! the boundary layer widened to keep the margins 3.7/12.2 | 6.4/11.8 nm; without the
+//! disturbance observer ([`controller::ControllerParams::disturbance_feedback`] off)
+//! 668/1163 | 1628/1768 nm. The disturbance observer does the work; the robust terms at
+//! their theoretical size either destabilize the loop or act as a little more linear gain.
 
 // Loops over the two axes index several arrays at once, as the equations do.
 #![allow(clippy::needless_range_loop)]
@@ -134,6 +149,7 @@ pub mod analysis;
 pub mod backstepping;
 pub mod controller;
 mod error;
+pub mod estimator;
 pub mod experiment;
 pub mod learning;
 pub mod linalg;

@@ -78,6 +78,20 @@ impl ObserverParams {
     }
 }
 
+/// The augmented model of the observer: ż = B z + b u + E d, ḋ = 0, with d = Δ_η
+/// (Eq. 36, 43) entering the output accelerations (rows 5–6). Returns the 10 × 10 system
+/// matrix and the 10 × 2 input matrix.
+pub fn augmented(model: &StageModel) -> Result<(Matrix10, Matrix10x2)> {
+    let mut b = Matrix10::zeros();
+    b.fixed_view_mut::<8, 8>(0, 0).copy_from(&model.b);
+    b[(4, DISTURBANCE[0])] = 1.0;
+    b[(5, DISTURBANCE[1])] = 1.0;
+    let mut b_in = Matrix10x2::zeros();
+    b_in.fixed_view_mut::<8, 2>(0, 0)
+        .copy_from(&model.input_matrix());
+    Ok((b, b_in))
+}
+
 /// The matrices of the observer design, with their checks.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ObserverDesign {
@@ -101,15 +115,7 @@ impl ObserverDesign {
     /// Builds and checks the design: B0 Hurwitz (Eq. 39 solvable with P > 0) and F Schur.
     pub fn new(model: &StageModel, params: &ObserverParams) -> Result<ObserverDesign> {
         params.validate()?;
-        // Augmented model: ż = B z + b u + E d, ḋ = 0, with d = Δ_η (Eq. 36, 43) entering
-        // the output accelerations (rows 5–6).
-        let bu = model.input_matrix();
-        let mut b = Matrix10::zeros();
-        b.fixed_view_mut::<8, 8>(0, 0).copy_from(&model.b);
-        b[(4, 8)] = 1.0;
-        b[(5, 9)] = 1.0;
-        let mut b_in = Matrix10x2::zeros();
-        b_in.fixed_view_mut::<8, 2>(0, 0).copy_from(&bu);
+        let (b, b_in) = augmented(model)?;
         // Continuous injection K (Eq. 38 with k_ei = g_i e_i on the positions, and
         // κ_d S⁻¹ on the disturbance, S = −C B⁻¹ E the static gain from d to q): B0 = B − K C.
         let b_inv = model
@@ -204,6 +210,23 @@ impl KFilter {
             f: design.f,
             l: design.l,
             gamma: design.gamma,
+            zeta: Vector10::zeros(),
+            omega: [Vector10::zeros(); 2],
+        }
+    }
+
+    /// A filter at zero with any predictor gain `l` (e.g. the steady-state Kalman gain of
+    /// [`crate::estimator::KalmanDesign`]): F = Φ − L C.
+    pub fn with_gain(phi: &Matrix10, gamma: &Matrix10x2, l: &Matrix10x2) -> KFilter {
+        let mut f = *phi;
+        for i in 0..2 {
+            let col = f.column(i) - l.column(i);
+            f.set_column(i, &col);
+        }
+        KFilter {
+            f,
+            l: *l,
+            gamma: *gamma,
             zeta: Vector10::zeros(),
             omega: [Vector10::zeros(); 2],
         }

@@ -139,7 +139,7 @@ impl PiNotchParams {
 /// A second-order section y = (b0 + b1 z⁻¹ + b2 z⁻²)/(1 + a1 z⁻¹ + a2 z⁻²) u, direct form II
 /// transposed.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Biquad {
+pub(crate) struct Biquad {
     b: [f64; 3],
     a: [f64; 2],
     s: [f64; 2],
@@ -147,7 +147,7 @@ struct Biquad {
 
 impl Biquad {
     /// The identity.
-    fn identity() -> Biquad {
+    pub(crate) fn identity() -> Biquad {
         Biquad {
             b: [1.0, 0.0, 0.0],
             a: [0.0, 0.0],
@@ -156,7 +156,7 @@ impl Biquad {
     }
 
     /// Tustin transform of the notch, prewarped at its centre.
-    fn notch(n: &Notch, t: f64) -> Biquad {
+    pub(crate) fn notch(n: &Notch, t: f64) -> Biquad {
         let w = std::f64::consts::TAU * n.frequency;
         let c = w / (0.5 * w * t).tan();
         let c2 = c * c;
@@ -177,7 +177,7 @@ impl Biquad {
     }
 
     #[inline]
-    fn step(&mut self, u: f64) -> f64 {
+    pub(crate) fn step(&mut self, u: f64) -> f64 {
         let y = self.b[0] * u + self.s[0];
         self.s[0] = self.b[1] * u - self.a[0] * y + self.s[1];
         self.s[1] = self.b[2] * u - self.a[1] * y;

@@ -7,7 +7,7 @@
 
 use flexstage_control::actuator::Compensation;
 use flexstage_control::analysis::closed_loop_poles;
-use flexstage_control::controller::{BacksteppingController, StageControl};
+use flexstage_control::controller::{BacksteppingController, Estimator, StageControl};
 use flexstage_control::experiment::{Setup, Variant};
 use flexstage_control::model::StageModel;
 use flexstage_control::plant::{Plant, PlantActuator};
@@ -42,8 +42,18 @@ fn closed_loop_poles_inside_the_unit_circle() {
 /// The nominal linear loop: plant = controller model, no cross terms, no noise, ideal
 /// actuator.
 fn nominal(reference: Reference, robust: bool) -> (BacksteppingController, Plant) {
+    nominal_with(reference, robust, setup().controller.estimator)
+}
+
+/// [`nominal`] with a given state estimator.
+fn nominal_with(
+    reference: Reference,
+    robust: bool,
+    estimator: Estimator,
+) -> (BacksteppingController, Plant) {
     let s = setup();
     let mut p = s.controller.clone();
+    p.estimator = estimator;
     p.law.robust = robust;
     p.actuator.compensation = Compensation::Ideal;
     // The minimal loop has no delay.
@@ -63,13 +73,22 @@ fn nominal(reference: Reference, robust: bool) -> (BacksteppingController, Plant
 #[test]
 fn tracking_error_converges_as_a27_predicts() {
     // From an initial output error with a fixed target, ε and s decay exponentially
-    // (A27: ṡ = −k_η s + …, ε̇ = −k_ε ε + s), down to rounding.
+    // (A27: ṡ = −k_η s + …, ε̇ = −k_ε ε + s), down to rounding. With the paper's K-filter
+    // (injection 1e5 s⁻¹) the estimate is exact within a few samples, so the law's own
+    // error dynamics show; the Kalman estimate (slower, noise-aware) converges too, within
+    // its own time constant (bounds below).
     let target = Reference {
         shape: Shape::Step { target: [0.0; 2] },
         smooth_start: 0.0,
     };
-    for robust in [true, false] {
-        let (mut c, mut plant) = nominal(target, robust);
+    let kalman = setup().controller.estimator;
+    for (robust, estimator, bounds) in [
+        (true, Estimator::KFilter, [1e-3, 1e-12]),
+        (false, Estimator::KFilter, [1e-3, 1e-12]),
+        (true, kalman, [1e-2, 1e-12]),
+        (false, kalman, [1e-2, 1e-12]),
+    ] {
+        let (mut c, mut plant) = nominal_with(target, robust, estimator);
         let g = plant.model().dc_gain().unwrap().try_inverse().unwrap();
         // Start at the static equilibrium of q = (0.5, −0.4) µm.
         let q0 = nalgebra::Vector2::new(0.5e-6, -0.4e-6);
@@ -94,14 +113,17 @@ fn tracking_error_converges_as_a27_predicts() {
         // Exponential envelope: the error after 5 ms and 40 ms.
         let late = |a: usize, b: usize| errs[a..b].iter().fold(0.0f64, |m, v| m.max(*v));
         eprintln!(
-            "robust = {robust}: max |ε|/|ε0| over 5–10 ms {:.2e}, 30–40 ms {:.2e}",
+            "robust = {robust}, {estimator:?}: max |ε|/|ε0| over 5–10 ms {:.2e}, 30–40 ms {:.2e}",
             late(50, 100),
             late(300, 400)
         );
-        assert!(late(50, 100) < 1e-3);
-        assert!(late(300, 400) < 1e-12);
+        assert!(late(50, 100) < bounds[0]);
+        assert!(late(300, 400) < bounds[1]);
         let s = c.last_law().s;
-        assert!(s[0].abs() < 1e-7 && s[1].abs() < 1e-7, "s → 0: {s:?}");
+        assert!(
+            s[0].abs() < 1e5 * bounds[1] && s[1].abs() < 1e5 * bounds[1],
+            "s → 0: {s:?}"
+        );
     }
 }
 
@@ -265,5 +287,42 @@ fn one_sample_delay_needs_the_predictor() {
             without.is_nan() || without >= 0.1 * kick,
             "robust = {robust}: {without:e}"
         );
+    }
+}
+
+/// Reference: a tracking error that is a time shift τ of the reference, e ≈ τ q̇_d, is fitted
+/// by least squares of e on (q_d, q̇_d). Goal: with one sample of delay on the lumped plant
+/// in the rig (noise, PEAs, amplifier), the output is neither early nor late by more than a
+/// quarter sample on either axis (it was early by 0.35/0.47 sample before the law's
+/// reference was taken half a sample earlier; controller docs, "Reference timing").
+#[test]
+fn output_is_on_time_with_one_sample_of_delay() {
+    use flexstage_control::experiment::run;
+    let s = Scenario::paper();
+    let setup = Setup::from_scenario(&s);
+    assert_eq!(setup.controller.delay, 1);
+    let (r, _) = Reference::from_scenario(&s.trajectories[0]);
+    let mut c = setup
+        .controller(Variant::NonRobust, Compensation::Inverse, r)
+        .unwrap();
+    let mut plant = setup.lumped_plant().unwrap();
+    let t = setup.rig.sample_time;
+    let rec = run(c.as_mut(), &mut plant, 0.5, t, |_| {});
+    let h = rec.t.len() / 2;
+    for i in 0..2 {
+        let (mut a11, mut a12, mut a22, mut b1, mut b2) = (0.0, 0.0, 0.0, 0.0, 0.0);
+        for k in h..rec.t.len() {
+            let q = rec.reference[i][k];
+            let dq = r.sample(rec.t[k]).dq[i];
+            let e = rec.error[i][k];
+            a11 += q * q;
+            a12 += q * dq;
+            a22 += dq * dq;
+            b1 += q * e;
+            b2 += dq * e;
+        }
+        let tau = (a11 * b2 - a12 * b1) / (a11 * a22 - a12 * a12);
+        eprintln!("axis {i}: output early by {:.3} samples", tau / t);
+        assert!((tau / t).abs() < 0.25, "axis {i}: {:.3} samples", tau / t);
     }
 }

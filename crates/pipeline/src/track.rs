@@ -352,6 +352,7 @@ fn tune_and_margins(
     let bench = Bench::new(setup.clone(), (**twin).clone(), TuningParams::default())?;
     setup.pi_notch = Some(bench.pi_notch.params);
     setup.pid_tuned = Some(bench.pid.params);
+    setup.controller = bench.setup.controller.clone();
     let candidates: Vec<Candidate> = controllers.iter().map(|&v| candidate(v)).collect();
     let mut rows = margins_table(
         &bench,
