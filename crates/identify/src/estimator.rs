@@ -39,14 +39,25 @@ pub struct IdentifyParams {
     /// Initial covariance c of Cov(0) = c·I (positions in µm), > 0. Default 1e6.
     pub initial_covariance: f64,
     /// Prefilter cut-off \[Hz\] (second-order Butterworth, applied to every signal), ≥ 0 and
-    /// below the Nyquist frequency of the record; 0 switches it off. Default 300 Hz.
+    /// below the Nyquist frequency of the record; 0 switches it off. Default 150 Hz (the top
+    /// of the default low band; measured against 300 Hz in the crate docs). With
+    /// [`IdentifyParams::output_prefilter`] set, it filters the plate rows only.
     pub prefilter: f64,
+    /// Prefilter cut-off of the output (q_o1, q_o2) rows \[Hz\], same rules as `prefilter`;
+    /// `None` (default): the output rows use `prefilter`. Set it above the resonance band
+    /// of the excitation ([`crate::Band`]) so that the output rows see the modes (their
+    /// dampings) while the plate rows keep the low band (K_in, see the crate docs).
+    pub output_prefilter: Option<f64>,
     /// Decimation d ≥ 1: the regression runs at d·T_s. Default 1.
     pub decimation: usize,
     /// Sampling of the stiffness regressors. Default [`Scheme::Numerov`].
     pub scheme: Scheme,
     /// Estimate the cross-term coupling k_c (third column of the output rows). Default true.
     pub coupling: bool,
+    /// The excitation has a band around the output modes ([`crate::Band`]): correct the
+    /// output rows' stiffness and damping for the discretization at their natural frequencies
+    /// ([`crate::regression::physical`]). Default false (the low band alone: no correction).
+    pub resonant: bool,
     /// Condition number (of the information matrix with unit-scaled columns) above which a
     /// warning says the excitation is not persistent in some direction, > 1. Default 1e5 (the
     /// default excitation gives 1–4e3 on the output rows and ≈ 6 on the plate rows).
@@ -62,10 +73,12 @@ impl Default for IdentifyParams {
         IdentifyParams {
             forgetting: 1.0,
             initial_covariance: 1e6,
-            prefilter: 300.0,
+            prefilter: 150.0,
+            output_prefilter: None,
             decimation: 1,
             scheme: Scheme::Numerov,
             coupling: true,
+            resonant: false,
             condition_warning: 1e5,
             sampling_tolerance: 1e-3,
             history_points: 400,
@@ -94,7 +107,19 @@ impl IdentifyParams {
                 "a frequency below the Nyquist frequency {} Hz",
                 0.5 / sample_time
             ),
-        )
+        )?;
+        match self.output_prefilter {
+            Some(f) => check(
+                "identify.output_prefilter",
+                f,
+                f < 0.5 / sample_time,
+                &format!(
+                    "a frequency below the Nyquist frequency {} Hz",
+                    0.5 / sample_time
+                ),
+            ),
+            None => Ok(()),
+        }
     }
 
     /// Checks the fields.
@@ -118,6 +143,14 @@ impl IdentifyParams {
             "0 (off) or a frequency ≥ 1 Hz below the Nyquist frequency [Hz] (a lower cut-off \
              removes the excitation itself)",
         )?;
+        if let Some(f) = self.output_prefilter {
+            check(
+                "identify.output_prefilter",
+                f,
+                f == 0.0 || f >= MIN_PREFILTER,
+                "0 (off) or a frequency ≥ 1 Hz below the Nyquist frequency [Hz]",
+            )?;
+        }
         check(
             "identify.decimation",
             self.decimation as f64,
@@ -198,9 +231,14 @@ pub struct StageIdentifier {
     ts: f64,
     decimation: usize,
     coupling: bool,
+    resonant: bool,
     scheme: Scheme,
     filters: [Biquad; 6],
     window: Window,
+    /// The output rows' prefilter and window (same as the plates' without
+    /// [`IdentifyParams::output_prefilter`]).
+    filters_out: [Biquad; 6],
+    window_out: Window,
     seen: u64,
     filled: u8,
     output: [Rls<3>; 2],
@@ -235,14 +273,21 @@ impl StageIdentifier {
             max_trace: f64::INFINITY,
         };
         let filter = Biquad::lowpass(params.prefilter, sample_time);
+        let filter_out = Biquad::lowpass(
+            params.output_prefilter.unwrap_or(params.prefilter),
+            sample_time,
+        );
         Ok(StageIdentifier {
             known: guess.clone(),
             ts,
             decimation: params.decimation,
             coupling: params.coupling,
+            resonant: params.resonant,
             scheme: params.scheme,
             filters: [filter; 6],
             window: Window::default(),
+            filters_out: [filter_out; 6],
+            window_out: Window::default(),
             seen: 0,
             filled: 0,
             output: [Rls::new(rls, theta.output1)?, Rls::new(rls, theta.output2)?],
@@ -272,25 +317,30 @@ impl StageIdentifier {
     pub fn update(&mut self, x_nom: [f64; 2], x_in: [f64; 2], q: [f64; 2]) -> bool {
         let raw = [x_nom[0], x_nom[1], x_in[0], x_in[1], q[0], q[1]];
         let mut f = [0.0; 6];
+        let mut g = [0.0; 6];
         for i in 0..6 {
             let v = raw[i] * SCALE;
             if self.seen == 0 {
                 self.filters[i].settle(v);
+                self.filters_out[i].settle(v);
             }
             f[i] = self.filters[i].step(v);
+            g[i] = self.filters_out[i].step(v);
         }
         self.seen += 1;
         if (self.seen - 1) % self.decimation as u64 != 0 {
             return false;
         }
         self.window.push([f[0], f[1]], [f[2], f[3]], [f[4], f[5]]);
+        self.window_out.push([g[0], g[1]], [g[2], g[3]], [g[4], g[5]]);
         if self.filled < 3 {
             self.filled += 1;
             if self.filled < 3 {
                 return false;
             }
         }
-        let r = rows(&self.window, self.known.alpha, self.scheme);
+        let mut r = rows(&self.window, self.known.alpha, self.scheme);
+        r.output = rows(&self.window_out, self.known.alpha, self.scheme).output;
         self.apply(&r);
         true
     }
@@ -323,7 +373,14 @@ impl StageIdentifier {
     /// The current physical estimates ([`physical`]).
     pub fn estimate(&self) -> Physical {
         let cov = [self.plate[0].covariance(), self.plate[1].covariance()];
-        physical(&self.theta(), &cov, &self.known, self.ts)
+        physical(
+            &self.theta(),
+            &cov,
+            &self.known,
+            self.ts,
+            self.scheme,
+            self.resonant,
+        )
     }
 
     /// Condition numbers of the information matrices Σφφᵀ of the four rows after scaling

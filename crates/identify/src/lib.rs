@@ -71,10 +71,14 @@ pub mod data;
 mod error;
 pub mod estimator;
 pub mod excitation;
+pub mod frequency;
 pub mod regression;
 pub mod samples;
 
 pub use data::StageRecord;
 pub use error::{IdentifyError, Result};
 pub use estimator::{Identification, IdentifyParams, PLAUSIBLE_FACTOR, StageIdentifier, identify};
-pub use excitation::{Excitation, Multisine, SimulationParams, simulate};
+pub use excitation::{
+    Band, Excitation, Multisine, RESONANCE_AMPLITUDE, RigExperiment, SimulationParams,
+    resonance_plan, simulate, simulate_rig,
+};
