@@ -22,7 +22,7 @@ use nalgebra::{DMatrix, SymmetricEigen};
 use crate::data::StageRecord;
 use crate::error::{IdentifyError, Result, check};
 use crate::regression::{
-    OUT_KC, OUTPUT_REGRESSORS, PLATE_REGRESSORS, Physical, Rows, Scheme, Theta, Window, physical,
+    OUT_GAIN, OUT_KC, OUTPUT_REGRESSORS, PLATE_REGRESSORS, Physical, Rows, Scheme, Theta, Window, physical,
     rows,
 };
 
@@ -58,6 +58,12 @@ pub struct IdentifyParams {
     /// output rows' stiffness and damping for the discretization at their natural frequencies
     /// ([`crate::regression::physical`]). Default false (the low band alone: no correction).
     pub resonant: bool,
+    /// Estimate the static gains of the output rows (a fourth column each: β of q_o1 on
+    /// (x_in1 + x_in2)/2, α' of q_o2 on x_in1 − x_in2; [`crate::regression::Theta`]) instead of
+    /// taking them from Eq. (32) with the known α. The identified α' replaces α in the
+    /// parameter set. For a structure whose kinematics differ from the reduced model's by more
+    /// than the dynamic deflection the rows see (the twin: α 1.5 % off). Default false.
+    pub static_gains: bool,
     /// Condition number (of the information matrix with unit-scaled columns) above which a
     /// warning says the excitation is not persistent in some direction, > 1. Default 1e5 (the
     /// default excitation gives 1–4e3 on the output rows and ≈ 6 on the plate rows).
@@ -79,6 +85,7 @@ impl Default for IdentifyParams {
             scheme: Scheme::Numerov,
             coupling: true,
             resonant: false,
+            static_gains: false,
             condition_warning: 1e5,
             sampling_tolerance: 1e-3,
             history_points: 400,
@@ -231,6 +238,7 @@ pub struct StageIdentifier {
     ts: f64,
     decimation: usize,
     coupling: bool,
+    static_gains: bool,
     resonant: bool,
     scheme: Scheme,
     filters: [Biquad; 6],
@@ -241,9 +249,9 @@ pub struct StageIdentifier {
     window_out: Window,
     seen: u64,
     filled: u8,
-    output: [Rls<3>; 2],
+    output: [Rls<4>; 2],
     plate: [Rls<5>; 2],
-    info_output: [[[f64; 3]; 3]; 2],
+    info_output: [[[f64; 4]; 4]; 2],
     info_plate: [[[f64; 5]; 5]; 2],
     updates: u64,
 }
@@ -282,6 +290,7 @@ impl StageIdentifier {
             ts,
             decimation: params.decimation,
             coupling: params.coupling,
+            static_gains: params.static_gains,
             resonant: params.resonant,
             scheme: params.scheme,
             filters: [filter; 6],
@@ -295,7 +304,7 @@ impl StageIdentifier {
                 Rls::new(rls, theta.plate[0])?,
                 Rls::new(rls, theta.plate[1])?,
             ],
-            info_output: [[[0.0; 3]; 3]; 2],
+            info_output: [[[0.0; 4]; 4]; 2],
             info_plate: [[[0.0; 5]; 5]; 2],
             updates: 0,
         })
@@ -352,6 +361,9 @@ impl StageIdentifier {
             if !self.coupling {
                 phi[OUT_KC] = 0.0;
             }
+            if !self.static_gains {
+                phi[OUT_GAIN] = 0.0;
+            }
             self.output[i].update(&phi, y);
             accumulate(&mut self.info_output[i], &phi);
             let (phi, y) = r.plate[i];
@@ -388,12 +400,23 @@ impl StageIdentifier {
     /// q_o1 − x_in is left out: its direction carries the common scale that is taken from
     /// K_qo1 ([`physical`]); the rest must be excited. Infinite when a regressor is zero.
     pub fn conditioning(&self) -> [f64; 4] {
-        let out = |m: &[[f64; 3]; 3], coupling: bool| {
-            if coupling {
-                condition(m)
-            } else {
-                condition(&[[m[0][0], m[0][1]], [m[1][0], m[1][1]]])
+        let out = |m: &[[f64; 4]; 4]| {
+            let idx: Vec<usize> = (0..4)
+                .filter(|&j| {
+                    (j != OUT_KC || self.coupling) && (j != OUT_GAIN || self.static_gains)
+                })
+                .collect();
+            let mut s = [[0.0; 4]; 4];
+            for (a, &i) in idx.iter().enumerate() {
+                for (b, &j) in idx.iter().enumerate() {
+                    s[a][b] = m[i][j];
+                }
             }
+            // Unused slots: unit diagonal, no coupling (they do not change the ratio).
+            for a in idx.len()..4 {
+                s[a][a] = 1.0;
+            }
+            condition_of(&s, idx.len())
         };
         let plate = |m: &[[f64; 5]; 5]| {
             let idx = [0, 1, 3, 4];
@@ -406,8 +429,8 @@ impl StageIdentifier {
             condition(&s)
         };
         [
-            out(&self.info_output[0], self.coupling),
-            out(&self.info_output[1], self.coupling),
+            out(&self.info_output[0]),
+            out(&self.info_output[1]),
             plate(&self.info_plate[0]),
             plate(&self.info_plate[1]),
         ]
@@ -423,9 +446,9 @@ impl StageIdentifier {
                           differently";
         let limit = 1e-12 * self.updates.max(1) as f64;
         for i in 0..2 {
-            let n = if self.coupling { 3 } else { 2 };
-            for j in 0..n {
-                if !(self.info_output[i][j][j] > limit) {
+            for j in 0..4 {
+                let used = (j != OUT_KC || self.coupling) && (j != OUT_GAIN || self.static_gains);
+                if used && !(self.info_output[i][j][j] > limit) {
                     return Err(IdentifyError::NotExcited {
                         row: rows_out[i],
                         regressor: OUTPUT_REGRESSORS[j],
@@ -458,9 +481,14 @@ fn accumulate<const P: usize>(m: &mut [[f64; P]; P], phi: &[f64; P]) {
 
 /// Condition number of a symmetric PSD matrix after unit-diagonal scaling.
 fn condition<const P: usize>(m: &[[f64; P]; P]) -> f64 {
-    let mut s = DMatrix::<f64>::zeros(P, P);
-    for a in 0..P {
-        for b in 0..P {
+    condition_of(m, P)
+}
+
+/// [`condition`] of the leading `n` × `n` block.
+fn condition_of<const P: usize>(m: &[[f64; P]; P], n: usize) -> f64 {
+    let mut s = DMatrix::<f64>::zeros(n, n);
+    for a in 0..n {
+        for b in 0..n {
             let d = (m[a][a] * m[b][b]).sqrt();
             if !(d > 0.0) {
                 return f64::INFINITY;

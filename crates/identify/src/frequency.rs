@@ -96,6 +96,8 @@ pub struct LumpedFit {
     pub params: StageParams,
     /// Cross-axis coupling k_c \[N/m\].
     pub coupling: f64,
+    /// Static gains [β, α'] of the output rows ([`fit`]; [1, α] without `static_gains`).
+    pub gains: [f64; 2],
     /// Relative weighted residual ‖Aθ − y‖/‖y‖ of the q_o1, q_o2, x_in1, x_in2 rows.
     pub residual: [f64; 4],
 }
@@ -150,8 +152,10 @@ impl Equations {
 }
 
 /// The lumped parameters that best represent `points` (module docs), with the masses and α
-/// of `known`. Needs at least two frequencies.
-pub fn fit(points: &[Response], known: &StageParams) -> Result<LumpedFit> {
+/// of `known`; with `static_gains`, the output rows also fit their static gains (β, α'), as
+/// the estimator does with [`crate::IdentifyParams::static_gains`], and α' replaces α. Needs
+/// at least two frequencies.
+pub fn fit(points: &[Response], known: &StageParams, static_gains: bool) -> Result<LumpedFit> {
     if points.len() < 2 {
         return Err(IdentifyError::Estimate {
             what: "frequency fit".into(),
@@ -160,19 +164,28 @@ pub fn fit(points: &[Response], known: &StageParams) -> Result<LumpedFit> {
     }
     let j = C64::new(0.0, 1.0);
     let (m, alpha) = (known.mass, known.alpha);
-    let mut out = Equations::new(5);
+    let mut out = Equations::new(if static_gains { 7 } else { 5 });
     for p in points {
         let w = std::f64::consts::TAU * p.f;
         for (x, q) in p.x_in.iter().zip(&p.q) {
             let e1 = 0.5 * (x[0] + x[1]) - q[0];
             let e2 = alpha * (x[0] - x[1]) - q[1];
             let z = C64::new(0.0, 0.0);
-            out.push(&[2.0 * e1, 2.0 * j * w * e1, z, z, -q[1]], -w * w * m * q[0]);
-            out.push(&[z, z, e2, j * w * e2, -q[0]], -w * w * m * q[1]);
+            let (s1, s2) = (0.5 * (x[0] + x[1]), x[0] - x[1]);
+            let r1 = [2.0 * e1, 2.0 * j * w * e1, z, z, -q[1], s1, z];
+            let r2 = [z, z, e2, j * w * e2, -q[0], z, s2];
+            let n = out.cols;
+            out.push(&r1[..n], -w * w * m * q[0]);
+            out.push(&r2[..n], -w * w * m * q[1]);
         }
     }
     let (th, r_out) = out.solve("frequency fit of the output rows")?;
     let (k_qo1, c_qo1, k_qo2, c_qo2, k_c) = (th[0], th[1], th[2], th[3], th[4]);
+    let gains = if static_gains {
+        [1.0 + th[5] / (2.0 * k_qo1), alpha + th[6] / k_qo2]
+    } else {
+        [1.0, alpha]
+    };
     let plate = |i: usize, m_in: f64| -> Result<([f64; 3], f64)> {
         let mut eq = Equations::new(3);
         for p in points {
@@ -204,9 +217,11 @@ pub fn fit(points: &[Response], known: &StageParams) -> Result<LumpedFit> {
             k_pea2: p2[0],
             k_in2: p2[1],
             c_in2: p2[2],
+            alpha: gains[1],
             ..known.clone()
         },
         coupling: k_c,
+        gains,
         residual: [r_out, r_out, r1, r2],
     })
 }
@@ -220,7 +235,8 @@ mod tests {
         // Reference: the lumped model's own exact frequency response (Eq. 36 with the cross
         // terms of Eq. 30), Table 4 truth and k_c = 5 % of √(2K_qo1K_qo2).
         // Goal: the fit returns every stiffness, damping and k_c to 1e-8 relative, from a
-        // guess that knows only the masses and α, with a residual at round-off.
+        // guess that knows only the masses and α, with a residual at round-off; with the
+        // static gains free it finds β = 1 and α of the model.
         let truth = crate::samples::table4_truth();
         let k_c = 0.05 * (2.0 * truth.k_qo1 * truth.k_qo2).sqrt();
         let model = StageModel::with_coupling(&truth, k_c).unwrap();
@@ -228,8 +244,15 @@ mod tests {
             .into_iter()
             .map(|f| lumped_response(&model, f).unwrap())
             .collect();
-        let fit = fit(&pts, &crate::samples::table4_guess()).unwrap();
+        let guess = crate::samples::table4_guess();
+        let with_gains = fit(&pts, &guess, true).unwrap();
         let rel = |a: f64, b: f64| ((a - b) / b).abs();
+        assert!(
+            rel(with_gains.gains[0], 1.0) < 1e-8 && rel(with_gains.gains[1], truth.alpha) < 1e-8,
+            "static gains of the lumped model: {:?}",
+            with_gains.gains
+        );
+        let fit = fit(&pts, &guess, false).unwrap();
         let (e, t) = (&fit.params, &truth);
         for (name, a, b) in [
             ("k_qo1", e.k_qo1, t.k_qo1),

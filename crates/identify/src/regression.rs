@@ -63,13 +63,21 @@
 use flexstage_scenario::StageParams;
 
 /// Names of the output-row regressors (q_o1 and q_o2 rows).
-pub const OUTPUT_REGRESSORS: [&str; 3] = ["A0 x_in - q_o", "Δ(A0 x_in - q_o)", "-q_o(other axis)"];
+pub const OUTPUT_REGRESSORS: [&str; 4] = [
+    "A0 x_in - q_o",
+    "Δ(A0 x_in - q_o)",
+    "-q_o(other axis)",
+    "A0 row's input (static gain)",
+];
 /// Columns of the output rows (θ, φ): stiffness, damping, cross-axis coupling.
 pub const OUT_K: usize = 0;
 /// Damping column of the output rows.
 pub const OUT_C: usize = 1;
 /// Coupling (k_c) column of the output rows.
 pub const OUT_KC: usize = 2;
+/// Static-gain column of the output rows: (x_in1 + x_in2)/2 in the q_o1 row, x_in1 − x_in2 in
+/// the q_o2 row ([`crate::IdentifyParams::static_gains`]).
+pub const OUT_GAIN: usize = 3;
 /// Columns of the plate rows (θ, φ): K_pea, K_in, K_qo1, C_in, C_qo1.
 pub const PLATE_K_PEA: usize = 0;
 /// K_in column of the plate rows.
@@ -116,7 +124,7 @@ impl Window {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Rows {
     /// q_o1 and q_o2 rows: (φ, y).
-    pub output: [([f64; 3], f64); 2],
+    pub output: [([f64; 4], f64); 2],
     /// Input plates 1 and 2: (φ, y).
     pub plate: [([f64; 5], f64); 2],
 }
@@ -161,13 +169,33 @@ pub fn rows(w: &Window, alpha: f64, scheme: Scheme) -> Rows {
     // A₀ x_in − q_o at the three samples (A₀ of Eq. 32).
     let mut e1 = [0.0; 3];
     let mut e2 = [0.0; 3];
+    let mut s1 = [0.0; 3];
+    let mut s2 = [0.0; 3];
     for j in 0..3 {
-        e1[j] = 0.5 * (x1[j] + x2[j]) - q1[j];
-        e2[j] = alpha * (x1[j] - x2[j]) - q2[j];
+        s1[j] = 0.5 * (x1[j] + x2[j]);
+        s2[j] = x1[j] - x2[j];
+        e1[j] = s1[j] - q1[j];
+        e2[j] = alpha * s2[j] - q2[j];
     }
     let output = [
-        ([mid(&e1, scheme), d1(&e1), -mid(q2, scheme)], d2(q1)),
-        ([mid(&e2, scheme), d1(&e2), -mid(q1, scheme)], d2(q2)),
+        (
+            [
+                mid(&e1, scheme),
+                d1(&e1),
+                -mid(q2, scheme),
+                mid(&s1, scheme),
+            ],
+            d2(q1),
+        ),
+        (
+            [
+                mid(&e2, scheme),
+                d1(&e2),
+                -mid(q1, scheme),
+                mid(&s2, scheme),
+            ],
+            d2(q2),
+        ),
     ];
     let plate = [0, 1].map(|i| {
         let x = &w.x_in[i];
@@ -191,10 +219,12 @@ pub fn rows(w: &Window, alpha: f64, scheme: Scheme) -> Rows {
 /// θ of the four rows.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Theta {
-    /// q_o1 row: T_s²2K_qo1/M, (T_s/2)2C_qo1/M, T_s²k_c/M.
-    pub output1: [f64; 3],
-    /// q_o2 row: T_s²K_qo2/M, (T_s/2)C_qo2/M, T_s²k_c/M.
-    pub output2: [f64; 3],
+    /// q_o1 row: T_s²2K_qo1/M, (T_s/2)2C_qo1/M, T_s²k_c/M, T_s²2K_qo1(β − 1)/M (β the
+    /// static gain of q_o1 on (x_in1 + x_in2)/2, 1 in Eq. 32).
+    pub output1: [f64; 4],
+    /// q_o2 row: T_s²K_qo2/M, (T_s/2)C_qo2/M, T_s²k_c/M, T_s²K_qo2(α' − α)/M (α' the static
+    /// gain of q_o2 on x_in1 − x_in2, α of Eq. 27 in the model).
+    pub output2: [f64; 4],
     /// Plates: T_s²/m_in·[K_pea, K_in, K_qo1], (T_s/2)/m_in·[C_in, C_qo1].
     pub plate: [[f64; 5]; 2],
 }
@@ -214,8 +244,13 @@ impl Theta {
             ]
         };
         Theta {
-            output1: [s2 * 2.0 * p.k_qo1 / m, s1 * 2.0 * p.c_qo1 / m, s2 * k_c / m],
-            output2: [s2 * p.k_qo2 / m, s1 * p.c_qo2 / m, s2 * k_c / m],
+            output1: [
+                s2 * 2.0 * p.k_qo1 / m,
+                s1 * 2.0 * p.c_qo1 / m,
+                s2 * k_c / m,
+                0.0,
+            ],
+            output2: [s2 * p.k_qo2 / m, s1 * p.c_qo2 / m, s2 * k_c / m, 0.0],
             plate: [
                 plate(p.k_pea1, p.k_in1, p.c_in1, p.m_in1),
                 plate(p.k_pea2, p.k_in2, p.c_in2, p.m_in2),
@@ -232,6 +267,9 @@ pub struct Physical {
     pub params: StageParams,
     /// Coupling stiffness k_c from the q_o1 and q_o2 rows [N/m].
     pub coupling: [f64; 2],
+    /// The static gains [β, α'] of the output rows (1 and the model's α when
+    /// [`crate::IdentifyParams::static_gains`] is off; see [`Theta`]).
+    pub gains: [f64; 2],
     /// K_qo1 from each plate row's own scale (a₃ m_in/T_s²): a consistency check, poorly
     /// determined (the plate rows fix ratios well and their scale only through the small
     /// inertial term, see [`physical`]).
@@ -296,6 +334,14 @@ pub fn physical(
         1.0,
         theta.output2[OUT_C] * m / s1,
     );
+    let ratio = |row: &[f64; 4]| {
+        if row[OUT_K] != 0.0 {
+            row[OUT_GAIN] / row[OUT_K]
+        } else {
+            0.0
+        }
+    };
+    let gains = [1.0 + ratio(&theta.output1), known.alpha + ratio(&theta.output2)];
     let coupling = [
         theta.output1[OUT_KC] * m / s2,
         theta.output2[OUT_KC] * m / s2,
@@ -337,9 +383,11 @@ pub fn physical(
             c_qo2,
             c_in1,
             c_in2,
+            alpha: gains[1],
             ..known.clone()
         },
         coupling,
+        gains,
         plate_k_qo1: [
             theta.plate[0][PLATE_K_QO1] * known.m_in1 / s2,
             theta.plate[1][PLATE_K_QO1] * known.m_in2 / s2,
