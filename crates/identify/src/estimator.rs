@@ -22,8 +22,8 @@ use nalgebra::{DMatrix, SymmetricEigen};
 use crate::data::StageRecord;
 use crate::error::{IdentifyError, Result, check};
 use crate::regression::{
-    OUT_GAIN, OUT_KC, OUTPUT_REGRESSORS, PLATE_REGRESSORS, Physical, Rows, Scheme, Theta, Window, physical,
-    rows,
+    OUT_GAIN, OUT_KC, OUTPUT_REGRESSORS, PLATE_REGRESSORS, Physical, Rows, Scheme, Theta, Window,
+    physical, rows,
 };
 
 /// Positions are scaled to µm inside the estimator so that the regressors are O(1) and the
@@ -341,7 +341,8 @@ impl StageIdentifier {
             return false;
         }
         self.window.push([f[0], f[1]], [f[2], f[3]], [f[4], f[5]]);
-        self.window_out.push([g[0], g[1]], [g[2], g[3]], [g[4], g[5]]);
+        self.window_out
+            .push([g[0], g[1]], [g[2], g[3]], [g[4], g[5]]);
         if self.filled < 3 {
             self.filled += 1;
             if self.filled < 3 {
@@ -402,9 +403,7 @@ impl StageIdentifier {
     pub fn conditioning(&self) -> [f64; 4] {
         let out = |m: &[[f64; 4]; 4]| {
             let idx: Vec<usize> = (0..4)
-                .filter(|&j| {
-                    (j != OUT_KC || self.coupling) && (j != OUT_GAIN || self.static_gains)
-                })
+                .filter(|&j| (j != OUT_KC || self.coupling) && (j != OUT_GAIN || self.static_gains))
                 .collect();
             let mut s = [[0.0; 4]; 4];
             for (a, &i) in idx.iter().enumerate() {

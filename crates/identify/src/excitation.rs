@@ -106,9 +106,18 @@ impl Band {
     /// The band from BAND_BELOW × the lowest to BAND_ABOVE × the highest of the `modes` \[Hz\]
     /// that lie below 0.9× the Nyquist frequency 1/(2 `sample_time`), capped there; `None`
     /// when no mode lies below it. Lines every `spacing` Hz, peak `amplitude`.
-    pub fn around_modes(modes: &[f64], sample_time: f64, spacing: f64, amplitude: f64) -> Option<Band> {
+    pub fn around_modes(
+        modes: &[f64],
+        sample_time: f64,
+        spacing: f64,
+        amplitude: f64,
+    ) -> Option<Band> {
         let top = BAND_NYQUIST * 0.5 / sample_time;
-        let below: Vec<f64> = modes.iter().copied().filter(|f| *f > 0.0 && *f < top).collect();
+        let below: Vec<f64> = modes
+            .iter()
+            .copied()
+            .filter(|f| *f > 0.0 && *f < top)
+            .collect();
         let lo = below.iter().copied().fold(f64::MAX, f64::min);
         let hi = below.iter().copied().fold(0.0, f64::max);
         (!below.is_empty()).then(|| Band {
@@ -451,10 +460,19 @@ pub fn simulate_rig<M: Mechanics>(
     let ts = plant.params().sample_time;
     let n = (exp.excitation.duration / ts).round() as usize + 1;
     let mut noise = [3, 4].map(|k| {
-        GaussianNoise::new(exp.plate_sensor[1], exp.seed.wrapping_mul(7).wrapping_add(k))
+        GaussianNoise::new(
+            exp.plate_sensor[1],
+            exp.seed.wrapping_mul(7).wrapping_add(k),
+        )
     });
     let res = exp.plate_sensor[0];
-    let quantize = |v: f64| if res > 0.0 { (v / res).round() * res } else { v };
+    let quantize = |v: f64| {
+        if res > 0.0 {
+            (v / res).round() * res
+        } else {
+            v
+        }
+    };
     let [lo, hi] = exp.voltage_range;
     let mut rec_t = Vec::with_capacity(n);
     let mut x_nom: [Vec<f64>; 2] = [Vec::with_capacity(n), Vec::with_capacity(n)];

@@ -52,14 +52,16 @@ pub fn lumped_response(model: &StageModel, f: f64) -> Result<Response> {
     let b = model.b.map(|v| C64::new(v, 0.0));
     let a = SMatrix::<C64, 8, 8>::identity() * C64::new(0.0, w) - b;
     let bu = model.input_matrix().map(|v| C64::new(v, 0.0));
-    let z = a
-        .lu()
-        .solve(&bu)
-        .ok_or_else(|| IdentifyError::Estimate {
-            what: "lumped frequency response".into(),
-            reason: format!("jωI − B is singular at {f} Hz"),
-        })?;
-    let pick = |row: usize| [[z[(row, 0)], z[(row + 1, 0)]], [z[(row, 1)], z[(row + 1, 1)]]];
+    let z = a.lu().solve(&bu).ok_or_else(|| IdentifyError::Estimate {
+        what: "lumped frequency response".into(),
+        reason: format!("jωI − B is singular at {f} Hz"),
+    })?;
+    let pick = |row: usize| {
+        [
+            [z[(row, 0)], z[(row + 1, 0)]],
+            [z[(row, 1)], z[(row + 1, 1)]],
+        ]
+    };
     Ok(Response {
         f,
         q: pick(0),

@@ -341,7 +341,10 @@ pub fn physical(
             0.0
         }
     };
-    let gains = [1.0 + ratio(&theta.output1), known.alpha + ratio(&theta.output2)];
+    let gains = [
+        1.0 + ratio(&theta.output1),
+        known.alpha + ratio(&theta.output2),
+    ];
     let coupling = [
         theta.output1[OUT_KC] * m / s2,
         theta.output2[OUT_KC] * m / s2,

@@ -225,7 +225,8 @@ fn explore_two_band_settings() {
         var("ID_TOP", 0.0),
     );
     for seed in [1u64, 2, 3] {
-        let mut sim = samples::paper_simulation(dur, var("ID_LIN", 0.0) > 0.0, var("ID_NOISE", 1.0) > 0.0);
+        let mut sim =
+            samples::paper_simulation(dur, var("ID_LIN", 0.0) > 0.0, var("ID_NOISE", 1.0) > 0.0);
         sim.plant.seed = seed;
         let model = StageModel::with_coupling(&sim.plant.truth, sim.plant.coupling).unwrap();
         let (mut band, cut) =
@@ -235,7 +236,11 @@ fn explore_two_band_settings() {
         }
         sim.excitation.resonance = Some(band);
         let params = IdentifyParams {
-            output_prefilter: Some(if top > 0.0 { (1.2 * top).min(4750.0) } else { cut }),
+            output_prefilter: Some(if top > 0.0 {
+                (1.2 * top).min(4750.0)
+            } else {
+                cut
+            }),
             prefilter: pre,
             resonant: var("ID_RES", 1.0) > 0.0,
             ..IdentifyParams::default()

@@ -614,6 +614,30 @@ mod tests {
     use super::*;
 
     #[test]
+    fn twin_response_matches_the_twins_own_frequency_response() {
+        // Reference: flexstage-twin's `ModalStage::frequency_response` (x_nom → q) of a twin
+        // of the quick scenario with uniform densities 0.5. Goal: the q part of
+        // `twin_response` equals it to 1e-12 relative at 10 Hz–4 kHz, and its x_in part is
+        // the static plate motion K_pea/(K_pea + plate stiffness) ≈ 1 at 10 Hz.
+        let s = crate::folder::preset("quick").unwrap();
+        let n = s.mesh.nl * s.mesh.nw;
+        let twin = flexstage_twin::Twin::from_scenario(&s, &vec![0.5; n]).unwrap();
+        for f in [10.0, 300.0, 1500.0, 4000.0] {
+            let r = twin_response(&twin, f);
+            let g = twin.modal.frequency_response(f);
+            for j in 0..2 {
+                for i in 0..2 {
+                    let (re, im) = g[i][j];
+                    let d = (r.q[j][i] - C64::new(re, im)).norm();
+                    assert!(d <= 1e-12 * (re.hypot(im)), "q{i}/x{j} at {f} Hz: {d:e}");
+                }
+            }
+        }
+        let r = twin_response(&twin, 10.0);
+        assert!((r.x_in[0][0].re - 1.0).abs() < 0.02, "{:?}", r.x_in[0][0]);
+    }
+
+    #[test]
     fn options_bound_the_excitation() {
         StageIdOptions::default().validate().unwrap();
         let o = StageIdOptions {
@@ -657,7 +681,10 @@ mod tests {
         let back = read_table(&folder.dir().read_to_string(files::TABLE).unwrap());
         assert_eq!(back, s.rows, "table.csv reads back");
         let model = crate::plant::read_model_params(&s.params_file).unwrap();
-        assert_eq!(model.params, s.identification.params, "params.toml reads back");
+        assert_eq!(
+            model.params, s.identification.params,
+            "params.toml reads back"
+        );
         assert_eq!(
             model.coupling, s.identification.coupling,
             "the coupling is a field of params.toml"
