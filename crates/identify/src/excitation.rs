@@ -502,3 +502,45 @@ pub fn simulate_rig<M: Mechanics>(
     }
     StageRecord::new(rec_t, x_nom, x_in, q, Some(volt), 1e-6)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_band_follows_the_modes_below_nyquist() {
+        // Goal: 0.5× the lowest to 1.3× the highest mode below 0.9× Nyquist (a mode above it,
+        // the plate's, is left out), capped at 0.9× Nyquist; none without such a mode.
+        let b = Band::around_modes(&[1500.0, 2300.0, 12_000.0], 1e-4, 10.0, 2e-6).unwrap();
+        assert_eq!((b.f_lo, b.f_hi), (750.0, 2300.0 * 1.3));
+        let b = Band::around_modes(&[1500.0, 4000.0], 1e-4, 10.0, 2e-6).unwrap();
+        assert_eq!(b.f_hi, 4500.0, "capped at 0.9× Nyquist");
+        assert!(Band::around_modes(&[12_000.0], 1e-4, 10.0, 2e-6).is_none());
+    }
+
+    #[test]
+    fn a_bad_band_is_refused_with_its_field_and_the_sum_keeps_the_peak() {
+        // Goal: a band amplitude at or above the total peak is refused naming the field; a
+        // valid two-band multisine stays within the total peak `amplitude`.
+        let mut e = Excitation {
+            duration: 0.2,
+            resonance: Some(Band {
+                f_lo: 800.0,
+                f_hi: 3000.0,
+                spacing: 10.0,
+                amplitude: 30e-6,
+            }),
+            ..Excitation::default()
+        };
+        let err = e.validate().unwrap_err().to_string();
+        assert!(err.contains("excitation.resonance.amplitude"), "{err}");
+        e.resonance.as_mut().unwrap().amplitude = 2e-6;
+        let m = Multisine::new(&e).unwrap();
+        let peak = (0..20_000)
+            .map(|k| m.value(k as f64 * 1e-5))
+            .map(|v| v[0].abs().max(v[1].abs()))
+            .fold(0.0, f64::max);
+        assert!(peak <= e.amplitude * 1.01, "peak {peak:e}");
+        assert!(peak >= 0.5 * e.amplitude, "peak {peak:e}");
+    }
+}

@@ -263,3 +263,60 @@ fn explore_two_band_settings() {
         );
     }
 }
+
+#[test]
+fn rig_record_of_the_lumped_stage_identifies_its_truth() {
+    // Reference: the lumped stage (Table 4 truth, cross terms 5 %) inside the scenario's rig
+    // with its Bouc–Wen PEAs and 3 kHz amplifiers, the sensors ideal and noise-free and no
+    // floor vibration, so that the record is the one the twin's path (`simulate_rig`) logs.
+    // Goal: `simulate_rig` logs a record from which the two-band identification recovers the
+    // stiffnesses within 1 % and the output dampings and k_c within 5 %.
+    use flexstage_control::experiment::Setup;
+    use flexstage_control::model::StageModel;
+    let scenario = flexstage_scenario::Scenario::paper();
+    let mut setup = Setup::from_scenario(&scenario);
+    let rig = &mut setup.rig;
+    rig.noise_std = [0.0; 2];
+    rig.resolution = [0.0; 2];
+    rig.sensor.bandwidth = 0.0;
+    rig.sensor.flicker_corner = 0.0;
+    rig.floor.velocity_rms = 0.0;
+    let sim = samples::paper_simulation(2.0, false, false);
+    let model = StageModel::with_coupling(&setup.plant.truth, setup.plant.coupling).unwrap();
+    let (band, cut) = flexstage_identify::resonance_plan(
+        &model,
+        setup.rig.sample_time,
+        flexstage_identify::RESONANCE_AMPLITUDE,
+    )
+    .unwrap();
+    let exp = flexstage_identify::RigExperiment {
+        excitation: flexstage_identify::Excitation {
+            resonance: Some(band),
+            ..sim.excitation.clone()
+        },
+        plate_sensor: [0.0; 2],
+        slope: sim.slope,
+        bias_voltage: setup.rig.bias_voltage,
+        voltage_range: setup.rig.voltage_range,
+        seed: 1,
+    };
+    let mut plant = setup.lumped_plant().unwrap();
+    let record = flexstage_identify::simulate_rig(&mut plant, &exp).unwrap();
+    let params = IdentifyParams {
+        output_prefilter: Some(cut),
+        resonant: true,
+        ..IdentifyParams::default()
+    };
+    let id = identify(&record, &samples::table4_guess(), &params).unwrap();
+    let (e, t) = (&id.raw.params, &setup.plant.truth);
+    let r = |a: f64, b: f64| 100.0 * (a - b) / b;
+    let damp = [r(e.c_qo1, t.c_qo1), r(e.c_qo2, t.c_qo2)];
+    let kc = r(id.coupling, setup.plant.coupling);
+    let stiff = stiffness_errors(e, t);
+    println!("rig: {stiff:?} c {damp:?} k_c {kc:+.3} %");
+    for (name, v) in stiff {
+        assert!(v.abs() < 1.0, "{name} {v:+.3} %");
+    }
+    assert!(damp.iter().all(|v| v.abs() < 5.0), "{damp:?}");
+    assert!(kc.abs() < 5.0, "k_c {kc:+.3} %");
+}

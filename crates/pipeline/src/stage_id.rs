@@ -1,6 +1,29 @@
 //! `identify stage`: online least-squares identification of the stage stiffnesses and
 //! dampings (Section 4.2, Eq. 54–56, Table 4) from a logged record or from the simulated
 //! stage of the run ([`Plant::of_run`]).
+//!
+//! # The simulated record
+//! A two-band multisine: the low band (5–150 Hz) and a resonance band derived from the
+//! natural frequencies of the run's lumped model (`flexstage_identify::resonance_plan`), with
+//! the output rows' prefilter above it and the discretization corrected at the modes. The
+//! identified `params.toml` carries the cross-axis `coupling` k_c as a field; `track` builds
+//! the controller's model with it ([`crate::plant::read_model_params`]).
+//!
+//! # Truth
+//! * **Lumped model** (the default, [`Simulation::plant`]): its own parameters (the reduced
+//!   design's `reduce/params.toml`, or the scenario's `stage.truth` before a design) and the
+//!   plant's coupling. Masses and α are known (Section 4.2).
+//! * **On the twin** (`--plant twin`): no lumped parameter set is the twin, so the reference is
+//!   the lumped set that best fits the twin's exact, noise-free frequency response in the
+//!   excitation band on the estimator's own four equations ([`twin_truth`],
+//!   `flexstage_identify::frequency::fit`, static gains free); its relative residual per row
+//!   ([`Truth::residual`]) says how well any lumped model can represent the twin. On the quick
+//!   design it is 87 % on the output rows and 67 % on the plate rows: the twin's modes (3.22,
+//!   5.45 kHz; the second above Nyquist) are not the reduced model's (1.58, 2.32 kHz), its
+//!   static α differs by 1.5 % and its output rows carry an input-inertia term Eq. (31) does
+//!   not have. The 3 % / 10 % targets are therefore met on the lumped model and not
+//!   meaningful on the twin (`docs/DECISIONS.md`); the identification on the twin identifies
+//!   the static gains too (`IdentifyParams::static_gains`).
 
 use flexstage_scenario::RecordEstimate;
 use std::path::PathBuf;
@@ -618,7 +641,7 @@ mod tests {
         // Reference: flexstage-twin's `ModalStage::frequency_response` (x_nom → q) of a twin
         // of the quick scenario with uniform densities 0.5. Goal: the q part of
         // `twin_response` equals it to 1e-12 relative at 10 Hz–4 kHz, and its x_in part is
-        // the static plate motion K_pea/(K_pea + plate stiffness) ≈ 1 at 10 Hz.
+        // consistent with it (the kinematics of Eq. 32 at 10 Hz).
         let s = crate::folder::preset("quick").unwrap();
         let n = s.mesh.nl * s.mesh.nw;
         let twin = flexstage_twin::Twin::from_scenario(&s, &vec![0.5; n]).unwrap();
@@ -633,8 +656,14 @@ mod tests {
                 }
             }
         }
+        // The plates: at 10 Hz the output follows the mean of the plates (q_o1 = (x_in1 +
+        // x_in2)/2, Eq. 32) within 1 %, for either PEA.
         let r = twin_response(&twin, 10.0);
-        assert!((r.x_in[0][0].re - 1.0).abs() < 0.02, "{:?}", r.x_in[0][0]);
+        for j in 0..2 {
+            let mean = 0.5 * (r.x_in[j][0] + r.x_in[j][1]);
+            let d = (r.q[j][0] - mean).norm() / r.q[j][0].norm();
+            assert!(d < 0.01, "PEA {j}: q1 {:?}, plate mean {mean:?}", r.q[j][0]);
+        }
     }
 
     #[test]
