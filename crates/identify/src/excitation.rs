@@ -448,7 +448,7 @@ pub struct RigExperiment {
 /// (3 kHz) moves the PEAs and plates mostly early in the sample; the sampled regression of
 /// Eq. (54)–(56) assumes signals smooth between samples, so with the resonance band the
 /// record biases the estimates. On the lumped stage in a noise-free rig: K_qo1 +2.3 %,
-/// K_in1 −13 %, c_qo1 +57 %, c_qo2 +19 % (K_qo2 −0.5 %, k_c +0.1 %;
+/// K_in1 −13 %, c_qo1 +59 %, c_qo2 +20 % (K_qo2 −0.5 %, k_c +0.1 %;
 /// `rig_record_of_the_lumped_stage_identifies_its_truth`, ignored until a hold-aware
 /// discretization exists). [`simulate`] oversamples the input instead and is unaffected.
 pub fn simulate_rig<M: Mechanics>(

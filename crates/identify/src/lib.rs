@@ -59,7 +59,7 @@
 //!
 //! | | K_qo1 | K_qo2 | K_in1 | K_in2 | K_pea1 | K_pea2 | C_qo1 | C_qo2 | k_c |
 //! |---|---|---|---|---|---|---|---|---|---|
-//! | worst of 4 seeds | −0.025 % | −0.067 % | −2.55 % | −1.51 % | −0.15 % | +0.05 % | −1.12 % | +0.44 % | −1.08 % |
+//! | worst of 4 seeds | −0.024 % | −0.066 % | −2.55 % | −1.51 % | −0.15 % | +0.05 % | +0.08 % | +0.77 % | −1.08 % |
 //!
 //! Measured alternatives (seeds 1–3): 4 s / 300 Hz plate prefilter gave K_in up to −4.9 %;
 //! a 4 µm band up to −5.9 % (it takes amplitude from the low band, where K_in is seen);

@@ -267,7 +267,7 @@ fn explore_two_band_settings() {
 #[test]
 #[ignore = "open defect (issue #18): the rig holds one voltage per sample and its 3 kHz \
             amplifier moves the plates within the sample, which the sampled regression does not \
-            see; measured K_qo1 +2.3 %, K_in1 −13 %, c_qo1 +57 %, c_qo2 +19 % (K_qo2 −0.5 %, \
+            see; measured K_qo1 +2.3 %, K_in1 −13 %, c_qo1 +59 %, c_qo2 +20 % (K_qo2 −0.5 %, \
             k_c +0.1 %). Needs a hold-aware discretization of the regression."]
 fn rig_record_of_the_lumped_stage_identifies_its_truth() {
     // Reference: the lumped stage (Table 4 truth, cross terms 5 %) inside the scenario's rig

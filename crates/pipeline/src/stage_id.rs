@@ -648,9 +648,8 @@ mod tests {
         for f in [10.0, 300.0, 1500.0, 4000.0] {
             let r = twin_response(&twin, f);
             let g = twin.modal.frequency_response(f);
-            for j in 0..2 {
-                for i in 0..2 {
-                    let (re, im) = g[i][j];
+            for (i, row) in g.iter().enumerate() {
+                for (j, &(re, im)) in row.iter().enumerate() {
                     let d = (r.q[j][i] - C64::new(re, im)).norm();
                     assert!(d <= 1e-12 * (re.hypot(im)), "q{i}/x{j} at {f} Hz: {d:e}");
                 }
