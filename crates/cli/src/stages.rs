@@ -12,7 +12,7 @@ use flexstage_pipeline::{
 };
 
 /// The simulated actuators of `identify stage`: index 1 is the linear one.
-const PLANTS: [&str; 2] = ["hysteretic", "linear"];
+const ACTUATORS: [&str; 2] = ["hysteretic", "linear"];
 
 use crate::args::{
     List, Pair, TRACK_PLANTS, TWIN_VALIDATIONS, Target, controllers, plant, twin_validation,
@@ -323,16 +323,19 @@ Examples:
     /// Identify the stage stiffnesses and dampings by online least squares (Section 4.2,
     /// Eq. 54-56, Table 4), from the run's simulated stage or a record.
     #[command(
-        after_help = "Without --data, a multisine excites the run's simulated stage: the \
-designed mechanism once `flexstage reduce` has run (the scenario's stage.truth before). A \
+        after_help = "Without --data, a two-band multisine (5-150 Hz, plus a band around the \
+output modes of the run's lumped model for the dampings) excites the digital twin of the \
+run's design (--plant lumped: the lumped model of the design once `flexstage reduce` has run, \
+the scenario's stage.truth before); the twin is scored against the lumped parameters that best \
+fit its exact frequency response in the band. A \
 record needs the columns t [s], x_nom1, x_nom2 [m] (or U1, U2 [V]), x_in1, x_in2, q1, q2 [m], \
 sampled uniformly. Masses and alpha are the known values of the guess (Eq. 27). Writes \
 <run>/identify/stage/: params.toml (the controller's model of `flexstage track` in this run), \
 table.csv (guess / estimate / truth, like Table 4), convergence.svg/csv, record.csv.
 
 Examples:
-  flexstage identify stage                                # 4 s multisine, noise on
-  flexstage identify stage --plant linear --noise-free --duration 1
+  flexstage identify stage                                # 4 s multisine on the twin, noise on
+  flexstage identify stage --plant lumped --actuator linear --noise-free --duration 1
   flexstage identify stage --data lab.csv --out runs/lab"
     )]
     Stage(IdentifyStageArgs),
@@ -372,13 +375,21 @@ pub struct IdentifyStageArgs {
     /// Excitation length for the simulation [s].
     #[arg(long, default_value_t = Simulation::default().duration)]
     pub duration: f64,
-    /// Highest excitation frequency [Hz].
+    /// Highest frequency of the low excitation band [Hz].
     #[arg(long, default_value_t = Simulation::default().f_max)]
     pub f_max: f64,
-    /// Simulated actuator: "hysteretic" (Bouc–Wen PEAs, cross terms) or "linear" (x_nom
-    /// applied directly, no cross terms: the model of Eq. 36).
-    #[arg(long, default_value = PLANTS[Simulation::default().linear as usize], value_parser = PLANTS)]
+    /// Peak per PEA of the resonance band around the lumped model's output modes [µm] (0:
+    /// the low band alone; the dampings are then not identifiable).
+    #[arg(long, default_value_t = Simulation::default().resonance_amplitude * 1e6)]
+    pub resonance_um: f64,
+    /// The simulated stage: the digital twin of the run's design in the scenario's rig (the
+    /// lumped model before the run has a design), or the lumped 8-state model.
+    #[arg(long, default_value = Simulation::default().plant.name(), value_parser = TRACK_PLANTS)]
     pub plant: String,
+    /// Simulated actuator: "hysteretic" (Bouc–Wen PEAs, cross terms) or "linear" (x_nom
+    /// applied directly; on the lumped model also no cross terms: the model of Eq. 36).
+    #[arg(long, default_value = ACTUATORS[Simulation::default().linear as usize], value_parser = ACTUATORS)]
+    pub actuator: String,
     /// Switch the simulated sensor noise and quantization off.
     #[arg(long)]
     pub noise_free: bool,
@@ -416,9 +427,11 @@ pub fn identify(cmd: IdentifyCommand) -> anyhow::Result<()> {
             let data = match a.data {
                 Some(path) => StageData::Record(path),
                 None => StageData::Simulate(Simulation {
+                    plant: plant(&a.plant),
                     duration: a.duration,
                     f_max: a.f_max,
-                    linear: a.plant == PLANTS[1],
+                    resonance_amplitude: a.resonance_um * 1e-6,
+                    linear: a.actuator == ACTUATORS[1],
                     noise: !a.noise_free,
                 }),
             };

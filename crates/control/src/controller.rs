@@ -126,6 +126,10 @@ pub enum Estimator {
 pub struct ControllerParams {
     /// The controller's model parameters (Table 4 guess, or a reduced/identified set).
     pub model: StageParams,
+    /// Cross-axis coupling stiffness k_c of the controller's model \[N/m\] (Eq. 30; the model is
+    /// `StageModel::with_coupling(&model, coupling)`): 0 for the design model, the identified
+    /// value when the model comes from `identify stage`. Finite.
+    pub coupling: f64,
     /// Observer settings.
     pub observer: ObserverParams,
     /// Backstepping law settings.
@@ -166,6 +170,12 @@ impl ControllerParams {
             "0–2 samples",
         )?;
         crate::model::validate(&self.model)?;
+        check(
+            "controller.coupling",
+            self.coupling,
+            self.coupling.is_finite(),
+            "a finite stiffness [N/m]",
+        )?;
         self.observer.validate()?;
         if let Estimator::Kalman(k) = &self.estimator {
             k.validate()?;
@@ -263,7 +273,7 @@ impl BacksteppingController {
     pub fn new(params: &ControllerParams, reference: Reference) -> Result<Self> {
         params.validate()?;
         reference.validate()?;
-        let model = StageModel::new(&params.model)?;
+        let model = StageModel::with_coupling(&params.model, params.coupling)?;
         let design = ObserverDesign::new(&model, &params.observer)?;
         let law = Law::new(&model, params.law)?;
         let d_inv = model

@@ -121,6 +121,7 @@ impl Setup {
         Setup {
             controller: ControllerParams {
                 model: s.stage.guess.clone(),
+                coupling: 0.0,
                 observer: ObserverParams {
                     gain: c.observer_gain,
                     sample_time: s.simulation.sample_time,

@@ -22,8 +22,8 @@ use nalgebra::{DMatrix, SymmetricEigen};
 use crate::data::StageRecord;
 use crate::error::{IdentifyError, Result, check};
 use crate::regression::{
-    OUT_KC, OUTPUT_REGRESSORS, PLATE_REGRESSORS, Physical, Rows, Scheme, Theta, Window, physical,
-    rows,
+    OUT_GAIN, OUT_KC, OUTPUT_REGRESSORS, PLATE_REGRESSORS, Physical, Rows, Scheme, Theta, Window,
+    physical, rows,
 };
 
 /// Positions are scaled to µm inside the estimator so that the regressors are O(1) and the
@@ -39,14 +39,31 @@ pub struct IdentifyParams {
     /// Initial covariance c of Cov(0) = c·I (positions in µm), > 0. Default 1e6.
     pub initial_covariance: f64,
     /// Prefilter cut-off \[Hz\] (second-order Butterworth, applied to every signal), ≥ 0 and
-    /// below the Nyquist frequency of the record; 0 switches it off. Default 300 Hz.
+    /// below the Nyquist frequency of the record; 0 switches it off. Default 150 Hz (the top
+    /// of the default low band; measured against 300 Hz in the crate docs). With
+    /// [`IdentifyParams::output_prefilter`] set, it filters the plate rows only.
     pub prefilter: f64,
+    /// Prefilter cut-off of the output (q_o1, q_o2) rows \[Hz\], same rules as `prefilter`;
+    /// `None` (default): the output rows use `prefilter`. Set it above the resonance band
+    /// of the excitation ([`crate::Band`]) so that the output rows see the modes (their
+    /// dampings) while the plate rows keep the low band (K_in, see the crate docs).
+    pub output_prefilter: Option<f64>,
     /// Decimation d ≥ 1: the regression runs at d·T_s. Default 1.
     pub decimation: usize,
     /// Sampling of the stiffness regressors. Default [`Scheme::Numerov`].
     pub scheme: Scheme,
     /// Estimate the cross-term coupling k_c (third column of the output rows). Default true.
     pub coupling: bool,
+    /// The excitation has a band around the output modes ([`crate::Band`]): correct the
+    /// output rows' stiffness and damping for the discretization at their natural frequencies
+    /// ([`crate::regression::physical`]). Default false (the low band alone: no correction).
+    pub resonant: bool,
+    /// Estimate the static gains of the output rows (a fourth column each: β of q_o1 on
+    /// (x_in1 + x_in2)/2, α' of q_o2 on x_in1 − x_in2; [`crate::regression::Theta`]) instead of
+    /// taking them from Eq. (32) with the known α. The identified α' replaces α in the
+    /// parameter set. For a structure whose kinematics differ from the reduced model's by more
+    /// than the dynamic deflection the rows see (the twin: α 1.5 % off). Default false.
+    pub static_gains: bool,
     /// Condition number (of the information matrix with unit-scaled columns) above which a
     /// warning says the excitation is not persistent in some direction, > 1. Default 1e5 (the
     /// default excitation gives 1–4e3 on the output rows and ≈ 6 on the plate rows).
@@ -62,10 +79,13 @@ impl Default for IdentifyParams {
         IdentifyParams {
             forgetting: 1.0,
             initial_covariance: 1e6,
-            prefilter: 300.0,
+            prefilter: 150.0,
+            output_prefilter: None,
             decimation: 1,
             scheme: Scheme::Numerov,
             coupling: true,
+            resonant: false,
+            static_gains: false,
             condition_warning: 1e5,
             sampling_tolerance: 1e-3,
             history_points: 400,
@@ -94,7 +114,19 @@ impl IdentifyParams {
                 "a frequency below the Nyquist frequency {} Hz",
                 0.5 / sample_time
             ),
-        )
+        )?;
+        match self.output_prefilter {
+            Some(f) => check(
+                "identify.output_prefilter",
+                f,
+                f < 0.5 / sample_time,
+                &format!(
+                    "a frequency below the Nyquist frequency {} Hz",
+                    0.5 / sample_time
+                ),
+            ),
+            None => Ok(()),
+        }
     }
 
     /// Checks the fields.
@@ -118,6 +150,14 @@ impl IdentifyParams {
             "0 (off) or a frequency ≥ 1 Hz below the Nyquist frequency [Hz] (a lower cut-off \
              removes the excitation itself)",
         )?;
+        if let Some(f) = self.output_prefilter {
+            check(
+                "identify.output_prefilter",
+                f,
+                f == 0.0 || f >= MIN_PREFILTER,
+                "0 (off) or a frequency ≥ 1 Hz below the Nyquist frequency [Hz]",
+            )?;
+        }
         check(
             "identify.decimation",
             self.decimation as f64,
@@ -198,14 +238,20 @@ pub struct StageIdentifier {
     ts: f64,
     decimation: usize,
     coupling: bool,
+    static_gains: bool,
+    resonant: bool,
     scheme: Scheme,
     filters: [Biquad; 6],
     window: Window,
+    /// The output rows' prefilter and window (same as the plates' without
+    /// [`IdentifyParams::output_prefilter`]).
+    filters_out: [Biquad; 6],
+    window_out: Window,
     seen: u64,
     filled: u8,
-    output: [Rls<3>; 2],
+    output: [Rls<4>; 2],
     plate: [Rls<5>; 2],
-    info_output: [[[f64; 3]; 3]; 2],
+    info_output: [[[f64; 4]; 4]; 2],
     info_plate: [[[f64; 5]; 5]; 2],
     updates: u64,
 }
@@ -235,14 +281,22 @@ impl StageIdentifier {
             max_trace: f64::INFINITY,
         };
         let filter = Biquad::lowpass(params.prefilter, sample_time);
+        let filter_out = Biquad::lowpass(
+            params.output_prefilter.unwrap_or(params.prefilter),
+            sample_time,
+        );
         Ok(StageIdentifier {
             known: guess.clone(),
             ts,
             decimation: params.decimation,
             coupling: params.coupling,
+            static_gains: params.static_gains,
+            resonant: params.resonant,
             scheme: params.scheme,
             filters: [filter; 6],
             window: Window::default(),
+            filters_out: [filter_out; 6],
+            window_out: Window::default(),
             seen: 0,
             filled: 0,
             output: [Rls::new(rls, theta.output1)?, Rls::new(rls, theta.output2)?],
@@ -250,7 +304,7 @@ impl StageIdentifier {
                 Rls::new(rls, theta.plate[0])?,
                 Rls::new(rls, theta.plate[1])?,
             ],
-            info_output: [[[0.0; 3]; 3]; 2],
+            info_output: [[[0.0; 4]; 4]; 2],
             info_plate: [[[0.0; 5]; 5]; 2],
             updates: 0,
         })
@@ -272,25 +326,31 @@ impl StageIdentifier {
     pub fn update(&mut self, x_nom: [f64; 2], x_in: [f64; 2], q: [f64; 2]) -> bool {
         let raw = [x_nom[0], x_nom[1], x_in[0], x_in[1], q[0], q[1]];
         let mut f = [0.0; 6];
+        let mut g = [0.0; 6];
         for i in 0..6 {
             let v = raw[i] * SCALE;
             if self.seen == 0 {
                 self.filters[i].settle(v);
+                self.filters_out[i].settle(v);
             }
             f[i] = self.filters[i].step(v);
+            g[i] = self.filters_out[i].step(v);
         }
         self.seen += 1;
         if (self.seen - 1) % self.decimation as u64 != 0 {
             return false;
         }
         self.window.push([f[0], f[1]], [f[2], f[3]], [f[4], f[5]]);
+        self.window_out
+            .push([g[0], g[1]], [g[2], g[3]], [g[4], g[5]]);
         if self.filled < 3 {
             self.filled += 1;
             if self.filled < 3 {
                 return false;
             }
         }
-        let r = rows(&self.window, self.known.alpha, self.scheme);
+        let mut r = rows(&self.window, self.known.alpha, self.scheme);
+        r.output = rows(&self.window_out, self.known.alpha, self.scheme).output;
         self.apply(&r);
         true
     }
@@ -301,6 +361,9 @@ impl StageIdentifier {
             let (mut phi, y) = r.output[i];
             if !self.coupling {
                 phi[OUT_KC] = 0.0;
+            }
+            if !self.static_gains {
+                phi[OUT_GAIN] = 0.0;
             }
             self.output[i].update(&phi, y);
             accumulate(&mut self.info_output[i], &phi);
@@ -323,7 +386,14 @@ impl StageIdentifier {
     /// The current physical estimates ([`physical`]).
     pub fn estimate(&self) -> Physical {
         let cov = [self.plate[0].covariance(), self.plate[1].covariance()];
-        physical(&self.theta(), &cov, &self.known, self.ts)
+        physical(
+            &self.theta(),
+            &cov,
+            &self.known,
+            self.ts,
+            self.scheme,
+            self.resonant,
+        )
     }
 
     /// Condition numbers of the information matrices Σφφᵀ of the four rows after scaling
@@ -331,12 +401,21 @@ impl StageIdentifier {
     /// q_o1 − x_in is left out: its direction carries the common scale that is taken from
     /// K_qo1 ([`physical`]); the rest must be excited. Infinite when a regressor is zero.
     pub fn conditioning(&self) -> [f64; 4] {
-        let out = |m: &[[f64; 3]; 3], coupling: bool| {
-            if coupling {
-                condition(m)
-            } else {
-                condition(&[[m[0][0], m[0][1]], [m[1][0], m[1][1]]])
+        let out = |m: &[[f64; 4]; 4]| {
+            let idx: Vec<usize> = (0..4)
+                .filter(|&j| (j != OUT_KC || self.coupling) && (j != OUT_GAIN || self.static_gains))
+                .collect();
+            let mut s = [[0.0; 4]; 4];
+            for (a, &i) in idx.iter().enumerate() {
+                for (b, &j) in idx.iter().enumerate() {
+                    s[a][b] = m[i][j];
+                }
             }
+            // Unused slots: unit diagonal, no coupling (they do not change the ratio).
+            for a in idx.len()..4 {
+                s[a][a] = 1.0;
+            }
+            condition_of(&s, idx.len())
         };
         let plate = |m: &[[f64; 5]; 5]| {
             let idx = [0, 1, 3, 4];
@@ -349,8 +428,8 @@ impl StageIdentifier {
             condition(&s)
         };
         [
-            out(&self.info_output[0], self.coupling),
-            out(&self.info_output[1], self.coupling),
+            out(&self.info_output[0]),
+            out(&self.info_output[1]),
             plate(&self.info_plate[0]),
             plate(&self.info_plate[1]),
         ]
@@ -366,9 +445,9 @@ impl StageIdentifier {
                           differently";
         let limit = 1e-12 * self.updates.max(1) as f64;
         for i in 0..2 {
-            let n = if self.coupling { 3 } else { 2 };
-            for j in 0..n {
-                if !(self.info_output[i][j][j] > limit) {
+            for j in 0..4 {
+                let used = (j != OUT_KC || self.coupling) && (j != OUT_GAIN || self.static_gains);
+                if used && !(self.info_output[i][j][j] > limit) {
                     return Err(IdentifyError::NotExcited {
                         row: rows_out[i],
                         regressor: OUTPUT_REGRESSORS[j],
@@ -401,9 +480,14 @@ fn accumulate<const P: usize>(m: &mut [[f64; P]; P], phi: &[f64; P]) {
 
 /// Condition number of a symmetric PSD matrix after unit-diagonal scaling.
 fn condition<const P: usize>(m: &[[f64; P]; P]) -> f64 {
-    let mut s = DMatrix::<f64>::zeros(P, P);
-    for a in 0..P {
-        for b in 0..P {
+    condition_of(m, P)
+}
+
+/// [`condition`] of the leading `n` × `n` block.
+fn condition_of<const P: usize>(m: &[[f64; P]; P], n: usize) -> f64 {
+    let mut s = DMatrix::<f64>::zeros(n, n);
+    for a in 0..n {
+        for b in 0..n {
             let d = (m[a][a] * m[b][b]).sqrt();
             if !(d > 0.0) {
                 return f64::INFINITY;

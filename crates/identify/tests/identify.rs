@@ -154,3 +154,173 @@ fn identified_coupling_is_the_plants_cross_stiffness() {
     };
     assert_eq!(identify(&record, &guess, &off).unwrap().coupling, 0.0);
 }
+
+/// The two-band excitation of the lumped stage (Table 4 truth with the plant's cross terms)
+/// for `seed`: the resonance band of the model's own modes and the output prefilter above it.
+fn two_band(seed: u64, duration: f64) -> (StageParams, f64, flexstage_identify::Identification) {
+    use flexstage_control::model::StageModel;
+    let mut sim = samples::paper_simulation(duration, false, true);
+    sim.plant.seed = seed;
+    let model = StageModel::with_coupling(&sim.plant.truth, sim.plant.coupling).unwrap();
+    let (band, cut) = flexstage_identify::resonance_plan(
+        &model,
+        sim.plant.sample_time,
+        flexstage_identify::RESONANCE_AMPLITUDE,
+    )
+    .unwrap();
+    sim.excitation.resonance = Some(band);
+    let params = IdentifyParams {
+        output_prefilter: Some(cut),
+        resonant: true,
+        ..IdentifyParams::default()
+    };
+    let record = simulate(&sim).unwrap();
+    let id = identify(&record, &samples::table4_guess(), &params).unwrap();
+    (sim.plant.truth.clone(), sim.plant.coupling, id)
+}
+
+#[test]
+fn two_band_excitation_meets_the_issue_18_targets_on_the_lumped_plant() {
+    // Reference: the simulated lumped stage's truth (Table 4 estimates, cross terms 5 % of
+    // √(2K_qo1K_qo2)), Bouc–Wen PEAs, the default sensor noise and quantization, 8 s records
+    // (the default), default estimator settings plus the resonance plan.
+    // Goal (issue #18, item 6): with the resonance band derived from the model's output modes,
+    // every stiffness within 3 % and the output dampings c_qo1, c_qo2 within 10 % of the
+    // truth, for each of four noise seeds; the coupling k_c within 10 %.
+    for seed in [1u64, 2, 3, 4] {
+        let (truth, k_c, id) = two_band(seed, 8.0);
+        let e = &id.raw.params;
+        let r = |a: f64, b: f64| 100.0 * (a - b) / b;
+        let damp = [
+            ("c_qo1", r(e.c_qo1, truth.c_qo1)),
+            ("c_qo2", r(e.c_qo2, truth.c_qo2)),
+        ];
+        let kc = r(id.coupling, k_c);
+        let stiff = stiffness_errors(e, &truth);
+        println!("seed {seed}: {stiff:?} {damp:?} k_c {kc:+.3} %");
+        for (name, v) in stiff {
+            assert!(v.abs() < 3.0, "seed {seed}: {name} {v:+.3} % (limit 3 %)");
+        }
+        for (name, v) in damp {
+            assert!(v.abs() < 10.0, "seed {seed}: {name} {v:+.3} % (limit 10 %)");
+        }
+        assert!(kc.abs() < 10.0, "seed {seed}: k_c {kc:+.3} %");
+    }
+}
+
+#[test]
+#[ignore = "a measurement, not a check: cargo test --release -p flexstage-identify --test identify explore -- --ignored --nocapture"]
+fn explore_two_band_settings() {
+    use flexstage_control::model::StageModel;
+    let var = |name: &str, default: f64| {
+        std::env::var(name)
+            .ok()
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(default)
+    };
+    let (dur, amp, pre, top) = (
+        var("ID_DUR", 4.0),
+        var("ID_AMP", 2e-6),
+        var("ID_PRE", 300.0),
+        var("ID_TOP", 0.0),
+    );
+    for seed in [1u64, 2, 3] {
+        let mut sim =
+            samples::paper_simulation(dur, var("ID_LIN", 0.0) > 0.0, var("ID_NOISE", 1.0) > 0.0);
+        sim.plant.seed = seed;
+        let model = StageModel::with_coupling(&sim.plant.truth, sim.plant.coupling).unwrap();
+        let (mut band, cut) =
+            flexstage_identify::resonance_plan(&model, sim.plant.sample_time, amp).unwrap();
+        if top > 0.0 {
+            band.f_hi = top;
+        }
+        sim.excitation.resonance = Some(band);
+        let params = IdentifyParams {
+            output_prefilter: Some(if top > 0.0 {
+                (1.2 * top).min(4750.0)
+            } else {
+                cut
+            }),
+            prefilter: pre,
+            resonant: var("ID_RES", 1.0) > 0.0,
+            ..IdentifyParams::default()
+        };
+        let record = simulate(&sim).unwrap();
+        let id = identify(&record, &samples::table4_guess(), &params).unwrap();
+        let (e, t) = (&id.raw.params, &sim.plant.truth);
+        let r = |a: f64, b: f64| 100.0 * (a - b) / b;
+        println!(
+            "seed {seed} band {:.0}-{:.0}: {:?} c_qo1 {:+.2} c_qo2 {:+.2} k_c {:+.2}",
+            band.f_lo,
+            band.f_hi,
+            stiffness_errors(e, t)
+                .iter()
+                .map(|(n, v)| format!("{n} {v:+.2}"))
+                .collect::<Vec<_>>(),
+            r(e.c_qo1, t.c_qo1),
+            r(e.c_qo2, t.c_qo2),
+            r(id.coupling, sim.plant.coupling)
+        );
+    }
+}
+
+#[test]
+#[ignore = "open defect (issue #18): the rig holds one voltage per sample and its 3 kHz \
+            amplifier moves the plates within the sample, which the sampled regression does not \
+            see; measured K_qo1 +2.3 %, K_in1 −13 %, c_qo1 +59 %, c_qo2 +20 % (K_qo2 −0.5 %, \
+            k_c +0.1 %). Needs a hold-aware discretization of the regression."]
+fn rig_record_of_the_lumped_stage_identifies_its_truth() {
+    // Reference: the lumped stage (Table 4 truth, cross terms 5 %) inside the scenario's rig
+    // with its Bouc–Wen PEAs and 3 kHz amplifiers, the sensors ideal and noise-free and no
+    // floor vibration, so that the record is the one the twin's path (`simulate_rig`) logs.
+    // Goal: `simulate_rig` logs a record from which the two-band identification recovers the
+    // stiffnesses within 1 % and the output dampings and k_c within 5 %.
+    use flexstage_control::experiment::Setup;
+    use flexstage_control::model::StageModel;
+    let scenario = flexstage_scenario::Scenario::paper();
+    let mut setup = Setup::from_scenario(&scenario);
+    let rig = &mut setup.rig;
+    rig.noise_std = [0.0; 2];
+    rig.resolution = [0.0; 2];
+    rig.sensor.bandwidth = 0.0;
+    rig.sensor.flicker_corner = 0.0;
+    rig.floor.velocity_rms = 0.0;
+    let sim = samples::paper_simulation(2.0, false, false);
+    let model = StageModel::with_coupling(&setup.plant.truth, setup.plant.coupling).unwrap();
+    let (band, cut) = flexstage_identify::resonance_plan(
+        &model,
+        setup.rig.sample_time,
+        flexstage_identify::RESONANCE_AMPLITUDE,
+    )
+    .unwrap();
+    let exp = flexstage_identify::RigExperiment {
+        excitation: flexstage_identify::Excitation {
+            resonance: Some(band),
+            ..sim.excitation.clone()
+        },
+        plate_sensor: [0.0; 2],
+        slope: sim.slope,
+        bias_voltage: setup.rig.bias_voltage,
+        voltage_range: setup.rig.voltage_range,
+        seed: 1,
+    };
+    let mut plant = setup.lumped_plant().unwrap();
+    let record = flexstage_identify::simulate_rig(&mut plant, &exp).unwrap();
+    let params = IdentifyParams {
+        output_prefilter: Some(cut),
+        resonant: true,
+        ..IdentifyParams::default()
+    };
+    let id = identify(&record, &samples::table4_guess(), &params).unwrap();
+    let (e, t) = (&id.raw.params, &setup.plant.truth);
+    let r = |a: f64, b: f64| 100.0 * (a - b) / b;
+    let damp = [r(e.c_qo1, t.c_qo1), r(e.c_qo2, t.c_qo2)];
+    let kc = r(id.coupling, setup.plant.coupling);
+    let stiff = stiffness_errors(e, t);
+    println!("rig: {stiff:?} c {damp:?} k_c {kc:+.3} %");
+    for (name, v) in stiff {
+        assert!(v.abs() < 1.0, "{name} {v:+.3} %");
+    }
+    assert!(damp.iter().all(|v| v.abs() < 5.0), "{damp:?}");
+    assert!(kc.abs() < 5.0, "k_c {kc:+.3} %");
+}

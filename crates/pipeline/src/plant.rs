@@ -78,18 +78,61 @@ pub fn designed(scenario: &Scenario, reduced: StageParams) -> Result<Scenario> {
     Ok(plant)
 }
 
-/// Reads and checks a stage parameter file (as written by `reduce` or `identify stage`).
+/// Reads and checks a stage parameter file (as written by `reduce` or `identify stage`); a
+/// `coupling` key (written by `identify stage`) is accepted and ignored here (see
+/// [`read_model_params`]).
 pub fn read_stage_params(path: &Path) -> Result<StageParams> {
+    Ok(read_model_params(path)?.params)
+}
+
+/// The key of the identified cross-axis coupling stiffness k_c \[N/m\] in a parameter file.
+pub const COUPLING_KEY: &str = "coupling";
+
+/// A controller's model read from a parameter file: the stage parameters and the cross-axis
+/// coupling stiffness k_c of Eq. (30) (`flexstage_control::model::StageModel::with_coupling`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ModelParams {
+    /// The stage parameters.
+    pub params: StageParams,
+    /// k_c \[N/m\]: the file's `coupling` key (written by `identify stage`), 0 without one (a
+    /// `reduce` file: the design model has no cross terms).
+    pub coupling: f64,
+}
+
+/// Reads a stage parameter file with its optional `coupling` key (a finite stiffness in N/m).
+pub fn read_model_params(path: &Path) -> Result<ModelParams> {
     let text = std::fs::read_to_string(path).map_err(|source| PipelineError::Read {
         path: path.to_path_buf(),
         source,
     })?;
-    let p: StageParams = toml::from_str(&text).map_err(|e| PipelineError::Format {
-        path: path.display().to_string(),
-        reason: format!("not a stage parameter table: {e}"),
-    })?;
-    p.validate("params")?;
-    Ok(p)
+    parse_model_params(&text, &path.display().to_string())
+}
+
+/// [`read_model_params`] on the text of a file named `path` (for messages).
+pub fn parse_model_params(text: &str, path: &str) -> Result<ModelParams> {
+    let format = |reason: String| PipelineError::Format {
+        path: path.to_string(),
+        reason,
+    };
+    let mut table: toml::Table =
+        toml::from_str(text).map_err(|e| format(format!("not a stage parameter table: {e}")))?;
+    let coupling = match table.remove(COUPLING_KEY) {
+        None => 0.0,
+        Some(v) => match v.as_float().or_else(|| v.as_integer().map(|i| i as f64)) {
+            Some(k) if k.is_finite() => k,
+            _ => {
+                return Err(format(format!(
+                    "{COUPLING_KEY} = {v} is not a finite stiffness [N/m] (the cross-axis \
+                     coupling k_c of Eq. 30)"
+                )));
+            }
+        },
+    };
+    let params: StageParams = toml::Value::Table(table)
+        .try_into()
+        .map_err(|e| format(format!("not a stage parameter table: {e}")))?;
+    params.validate("params")?;
+    Ok(ModelParams { params, coupling })
 }
 
 #[cfg(test)]
@@ -115,5 +158,25 @@ mod tests {
         let mut bad = reduced;
         bad.mass = -1.0;
         assert!(designed(&s, bad).is_err());
+    }
+
+    #[test]
+    fn a_parameter_file_keeps_its_coupling() {
+        // Goal: the identified k_c is a real field of params.toml and reads back; a file
+        // without it (reduce) has none; a bad value is refused with the key and the value.
+        let p = crate::folder::preset("quick").unwrap().stage.truth;
+        let body = toml::to_string(&p).unwrap();
+        let with = format!("{COUPLING_KEY} = 1234.5\n{body}");
+        let m = parse_model_params(&with, "params.toml").unwrap();
+        assert_eq!((m.params.clone(), m.coupling), (p.clone(), 1234.5));
+        assert_eq!(parse_model_params(&body, "p").unwrap().coupling, 0.0);
+        let e = parse_model_params(&format!("{COUPLING_KEY} = \"x\"\n{body}"), "p")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("coupling") && e.contains("\"x\""), "{e}");
+        let e = parse_model_params(&format!("typo = 1\n{body}"), "p")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("typo"), "unknown keys stay refused: {e}");
     }
 }

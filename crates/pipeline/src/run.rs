@@ -26,7 +26,9 @@ use crate::folder::{RunFolder, recorded_changes};
 use crate::pea::{PeaIdOptions, PeaIdSummary, PeaOptions, simulate_and_identify_each};
 use crate::progress::{Progress, RunEvent, StartOver};
 use crate::reduce::{ReduceOptions, ReduceSummary, reduce};
-use crate::stage_id::{ParameterRow, StageIdOptions, StageIdSummary, identify_stage, read_table};
+use crate::stage_id::{
+    ParameterRow, StageIdOptions, StageIdSummary, identify_stage_on, read_table,
+};
 use crate::state::{Mismatch, RunState, fnv1a};
 use crate::track::{TrackOptions, TrackSummary, TwinBuild, track_on, try_build};
 use crate::twin::{TwinOptions, TwinSummary, write_twin_of};
@@ -335,10 +337,11 @@ fn run_stage(
             &options.pea,
             &options.identify_pea,
         )?),
-        Stage::IdentifyStage => StageSummary::IdentifyStage(Box::new(identify_stage(
+        Stage::IdentifyStage => StageSummary::IdentifyStage(Box::new(identify_stage_on(
             folder,
             &options.identify_stage,
             progress,
+            twin.as_ref(),
         )?)),
         Stage::Track => {
             StageSummary::Track(track_on(folder, &options.track, progress, twin.take())?)

@@ -254,7 +254,32 @@ impl fmt::Display for StageIdSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let id = &self.identification;
         if let Some(p) = &self.plant {
-            writeln!(f, "simulated stage: {p}")?;
+            match self.simulated {
+                Some(PlantKind::Twin) => writeln!(
+                    f,
+                    "simulated stage: the twin of the design (band from the lumped model: {p})"
+                )?,
+                _ => writeln!(f, "simulated stage: {p}")?,
+            }
+        }
+        if let Some(b) = &self.band {
+            writeln!(
+                f,
+                "resonance band: {:.0}–{:.0} Hz every {:.0} Hz, peak {:.2} µm (the lumped model's \
+                 output modes)",
+                b.f_lo,
+                b.f_hi,
+                b.spacing,
+                b.amplitude * 1e6
+            )?;
+        }
+        if let Some(r) = self.truth.as_ref().and_then(|t| t.residual) {
+            writeln!(
+                f,
+                "truth: the lumped fit to the twin's frequency response in the band; its relative \
+                 residual (q_o1, q_o2, x_in1, x_in2): {:.2e}, {:.2e}, {:.2e}, {:.2e}",
+                r[0], r[1], r[2], r[3]
+            )?;
         }
         writeln!(
             f,
@@ -283,8 +308,18 @@ impl fmt::Display for StageIdSummary {
         let kc = id.raw.coupling;
         writeln!(
             f,
-            "k_c (cross terms, rows q_o1/q_o2): {:.3e} / {:.3e} N/m",
-            kc[0], kc[1]
+            "k_c (cross terms, rows q_o1/q_o2): {:.3e} / {:.3e} N/m, kept: {:.3e} N/m{}",
+            kc[0],
+            kc[1],
+            id.coupling,
+            self.truth
+                .as_ref()
+                .map(|t| format!(
+                    " (truth {:.3e}, {:+.2} %)",
+                    t.coupling,
+                    100.0 * (id.coupling - t.coupling) / t.coupling
+                ))
+                .unwrap_or_default()
         )?;
         let c = id.conditioning;
         writeln!(

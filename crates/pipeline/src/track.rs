@@ -49,7 +49,7 @@ use rayon::prelude::*;
 
 use crate::error::{PipelineError, Result, require};
 use crate::folder::RunFolder;
-use crate::plant::{Plant, PlantSource, read_stage_params};
+use crate::plant::{Plant, PlantSource, read_model_params};
 use crate::progress::Progress;
 use crate::source::plain;
 use crate::twin::Built;
@@ -528,7 +528,8 @@ pub fn track_on(
     let mut setup = Setup::from_scenario(&plant.scenario);
     let model = model_source(folder, options)?;
     if let ModelSource::File(p) | ModelSource::Identified(p) = &model {
-        setup.controller.model = read_stage_params(p)?;
+        let m = read_model_params(p)?;
+        (setup.controller.model, setup.controller.coupling) = (m.params, m.coupling);
     }
     let compensator = identified_peas(folder, &mut setup)?;
     let mut warnings = Vec::new();
