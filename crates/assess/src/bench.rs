@@ -91,7 +91,12 @@ pub fn plant_modes(twin: &Twin) -> Vec<PlantMode> {
 /// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay and the
 /// rig's sensor chain `sensor` (electronics and anti-aliasing filter) before the sampler.
 pub fn modal_plant(twin: &Twin, t: f64, delay: usize, sensor: &SensorParams) -> Result<ModalPlant> {
-    Ok(ModalPlant::with_sensor(plant_modes(twin), t, delay, sensor)?)
+    Ok(ModalPlant::with_sensor(
+        plant_modes(twin),
+        t,
+        delay,
+        sensor,
+    )?)
 }
 
 impl Bench {

@@ -196,7 +196,9 @@ impl ControllerParams {
     /// practitioner would set the backstepping up from a frequency-response
     /// identification: the model fitted to the response below Nyquist
     /// ([`crate::model::ResponseFit::from_modes`] with a 10 % share, then
-    /// [`crate::model::fit_to_response`]; kept as it is when the fit is refused), the
+    /// [`crate::model::fit_to_response`]; kept as it is when the fit is refused) with the
+    /// coupling that reproduces the response's static cross terms
+    /// ([`crate::model::fit_coupling`]), the
     /// notches of the sampled response's peaks on the measurement (`notches`, e.g. the
     /// tuned PI + notch's), and the law's gains scaled by `gain_scale` (in (0, 1], see
     /// [`GAIN_SCALES`]).
@@ -211,6 +213,11 @@ impl ControllerParams {
         let fit = crate::model::ResponseFit::from_modes(modes, nyquist, 0.1);
         if let Ok(m) = crate::model::fit_to_response(&self.model, &fit) {
             p.model = m;
+        }
+        // The coupling from the same static gain (a symmetric design has none): a coupling
+        // identified on another plant is not this one's.
+        if let Ok(k_c) = crate::model::fit_coupling(&p.model, fit.dc_gain) {
+            p.coupling = k_c;
         }
         p.measurement_notches = notches;
         let g = gain_scale;

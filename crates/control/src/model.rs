@@ -320,6 +320,49 @@ pub fn fit_to_response(guess: &StageParams, fit: &ResponseFit) -> Result<StagePa
     Ok(p)
 }
 
+/// The coupling stiffness k_c of Eq. (30) that reproduces the cross terms of a measured
+/// static gain `dc_gain` (rows q_o1, q_o2; columns PEA 1, 2) on the model `params`.
+///
+/// Without coupling the model's q_o1 responds equally to both PEAs and q_o2 oppositely
+/// (G₁₁ = G₁₂, G₂₁ = −G₂₂, the sums [`fit_to_response`] fits); the coupling shows as the
+/// other halves h₁ = (G₁₁ − G₁₂)/2 and h₂ = (G₂₁ + G₂₂)/2. k_c is their least-squares fit,
+/// each relative to its axis's gain, by two Gauss–Newton steps (h is smooth in k_c and
+/// nearly linear at the couplings a stage has). A mirror-symmetric design has h = 0 and gets
+/// k_c = 0. The result is clamped to |k_c| ≤ 0.9 √(K_qo1 K_qo2).
+pub fn fit_coupling(params: &StageParams, dc_gain: [[f64; 2]; 2]) -> Result<f64> {
+    validate(params)?;
+    let halves = |g: [[f64; 2]; 2]| {
+        let (g1, g2) = (
+            0.5 * (g[0][0] + g[0][1]).abs(),
+            0.5 * (g[1][0] - g[1][1]).abs(),
+        );
+        [
+            0.5 * (g[0][0] - g[0][1]) / g1.max(f64::MIN_POSITIVE),
+            0.5 * (g[1][0] + g[1][1]) / g2.max(f64::MIN_POSITIVE),
+        ]
+    };
+    let model = |k: f64| -> Result<[f64; 2]> {
+        let g = StageModel::with_coupling(params, k)?.dc_gain()?;
+        Ok(halves([[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]]))
+    };
+    let target = halves(dc_gain);
+    let bound = 0.9 * (params.k_qo1 * params.k_qo2).sqrt();
+    let step = 1e-6 * bound;
+    let mut k = 0.0;
+    for _ in 0..2 {
+        let h = model(k)?;
+        let hd = model(k + step)?;
+        let s = [(hd[0] - h[0]) / step, (hd[1] - h[1]) / step];
+        let den = s[0] * s[0] + s[1] * s[1];
+        if den == 0.0 {
+            return Ok(0.0);
+        }
+        k += (s[0] * (target[0] - h[0]) + s[1] * (target[1] - h[1])) / den;
+        k = k.clamp(-bound, bound);
+    }
+    Ok(k)
+}
+
 /// Checks a parameter set (all stiffnesses and masses > 0, dampings ≥ 0, α ≠ 0).
 pub fn validate(p: &StageParams) -> Result<()> {
     for (name, v) in [

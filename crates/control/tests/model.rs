@@ -117,3 +117,28 @@ fn fit_to_response_reproduces_static_gain_and_output_modes() {
     let g = StageModel::new(&p).unwrap().dc_gain().unwrap();
     assert!((g[(1, 0)] - 1.7).abs() < 1e-9 && (g[(0, 1)] - 0.41).abs() < 1e-9);
 }
+
+/// Reference: the statics of Eq. (30) with the coupling spring k_c (`StageModel::with_coupling`).
+/// Goal: the coupling fitted to a static gain recovers the k_c that made it (both signs, on
+/// the paper's guess), and a gain without cross terms (a mirror-symmetric stage) gives 0.
+#[test]
+fn fit_coupling_recovers_the_coupling_of_a_static_gain() {
+    use flexstage_control::model::fit_coupling;
+    let p = flexstage_scenario::Scenario::paper().stage.guess;
+    let scale = (2.0 * p.k_qo1 * p.k_qo2).sqrt();
+    for frac in [0.05, -0.1, 0.15] {
+        let k_c = frac * scale;
+        let g = StageModel::with_coupling(&p, k_c)
+            .unwrap()
+            .dc_gain()
+            .unwrap();
+        let got = fit_coupling(&p, [[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]]).unwrap();
+        assert!(
+            (got - k_c).abs() < 1e-6 * scale,
+            "k_c {k_c} fitted as {got} ({frac})"
+        );
+    }
+    let g = StageModel::new(&p).unwrap().dc_gain().unwrap();
+    let got = fit_coupling(&p, [[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]]).unwrap();
+    assert!(got.abs() < 1e-9 * scale, "{got}");
+}
