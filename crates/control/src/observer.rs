@@ -114,6 +114,18 @@ pub struct ObserverDesign {
 impl ObserverDesign {
     /// Builds and checks the design: B0 Hurwitz (Eq. 39 solvable with P > 0) and F Schur.
     pub fn new(model: &StageModel, params: &ObserverParams) -> Result<ObserverDesign> {
+        ObserverDesign::build(model, params, true)
+    }
+
+    /// The design without its stability checks, for a controller whose injection gain comes
+    /// from elsewhere (the Kalman estimate, [`crate::estimator`]): only Φ and Γ are used then,
+    /// and a K-filter injection that would not be stable on this model must not refuse it.
+    /// P is zero when B0 is not Hurwitz (Eq. 39 has no positive definite solution).
+    pub fn sampled_model(model: &StageModel, params: &ObserverParams) -> Result<ObserverDesign> {
+        ObserverDesign::build(model, params, false)
+    }
+
+    fn build(model: &StageModel, params: &ObserverParams, checked: bool) -> Result<ObserverDesign> {
         params.validate()?;
         let (b, b_in) = augmented(model)?;
         // Continuous injection K (Eq. 38 with k_ei = g_i e_i on the positions, and
@@ -141,19 +153,23 @@ impl ObserverDesign {
         }
         let b0d = to_dyn(&b0);
         let abscissa = spectral_abscissa(&b0d)?;
-        if abscissa >= 0.0 {
+        let p = if abscissa < 0.0 {
+            let p = lyap(&b0d.transpose(), &DMatrix::identity(NX, NX))?;
+            if checked && !is_positive_definite(&p) {
+                return Err(ControlError::Unstable {
+                    what: "observer matrix B0 (Eq. 39)".into(),
+                    detail: "the Lyapunov solution P is not positive definite".into(),
+                });
+            }
+            p
+        } else if checked {
             return Err(ControlError::Unstable {
                 what: "observer matrix B0 (Eq. 38)".into(),
                 detail: format!("max Re λ = {abscissa:e} ≥ 0"),
             });
-        }
-        let p = lyap(&b0d.transpose(), &DMatrix::identity(NX, NX))?;
-        if !is_positive_definite(&p) {
-            return Err(ControlError::Unstable {
-                what: "observer matrix B0 (Eq. 39)".into(),
-                detail: "the Lyapunov solution P is not positive definite".into(),
-            });
-        }
+        } else {
+            DMatrix::zeros(NX, NX)
+        };
         let t = params.sample_time;
         let (phi, gamma) = c2d(&to_dyn(&b), &to_dyn(&b_in), t)?;
         let phi0 = expm(&(&b0d * t))?;
@@ -161,7 +177,7 @@ impl ObserverDesign {
         let mut f = phi.clone();
         f.columns_mut(0, 2).copy_from(&phi0.columns(0, 2));
         let rho = spectral_radius(&f)?;
-        if rho >= 1.0 {
+        if checked && rho >= 1.0 {
             return Err(ControlError::Unstable {
                 what: "discrete observer error matrix F".into(),
                 detail: format!("spectral radius {rho} ≥ 1"),
