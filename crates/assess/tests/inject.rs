@@ -37,7 +37,8 @@ fn is_stable_separates_a_stable_and_an_unstable_loop() {
 /// sine injection (the method `margins_table` uses for the nonlinear controllers). Goal: the
 /// backstepping as `Bench::new` ships it (model fitted to the twin's sampled response,
 /// measurement notches, Kalman estimate, gains × 0.5) is stable on the twin and keeps the
-/// margins, robust and non-robust; the scenario's settings (design guess, no notches) are not.
+/// margins, robust and non-robust; the scenario's settings (design guess, no notches) do not
+/// keep them (on this sample twin they are barely stable: 2 dB / 14°).
 #[test]
 fn shipped_backstepping_keeps_the_margins_on_the_twin() {
     use flexstage_assess::inject::{InjectionParams, injected_margins};
@@ -57,5 +58,18 @@ fn shipped_backstepping_keeps_the_margins_on_the_twin() {
     let (s, _) = flexstage_twin::samples::quick_rhombus().unwrap();
     let mut scenario = b.clone();
     scenario.setup.controller = Setup::from_scenario(&s).controller;
-    assert!(!is_stable(&scenario, Candidate::Robust, d, 0.5).unwrap());
+    // The scenario's settings do not keep the margins here (unstable, or below 6 dB / 40°).
+    let m = injected_margins(
+        &scenario,
+        Candidate::Robust,
+        d,
+        &mp,
+        &InjectionParams::default(),
+    )
+    .unwrap();
+    eprintln!("scenario settings: {m:?}");
+    assert!(
+        m.is_none_or(|m| !m.iter().all(|m| m.meets(6.0, 40.0))),
+        "the scenario's settings keep the margins: {m:?}"
+    );
 }
