@@ -11,9 +11,10 @@
 //!    the integral gain (ω_z = ki/kp, one of [`TuningParams::zero_ratios`] × ki) and, for
 //!    the PID, kd = kp/ω_d with ω_d the derivative corner (one of
 //!    [`TuningParams::derivative_corners`]). Every shape candidate is tried.
-//! 3. **Gain**: for each shape, the largest common scale s of ki (both axes) such that both
-//!    loop-at-a-time margins (with the other loop closed, the rig's delay included) are at
-//!    least [`TuningParams::gain_margin_db`] and [`TuningParams::phase_margin_deg`], by
+//! 3. **Gain**: for each shape, the largest common scale s of ki (both axes) such that the
+//!    closed loop is stable ([`closed_loop_stable`], the multivariable Nyquist criterion) and
+//!    both loop-at-a-time margins (with the other loop closed, the rig's delay included) are
+//!    at least [`TuningParams::gain_margin_db`] and [`TuningParams::phase_margin_deg`], by
 //!    bisection in log s (the margins fall monotonically with the gain for these loops;
 //!    the result is re-checked).
 //!    **3b.** Then each axis's ki (with its kp, kd) is raised on its own by the same
@@ -136,6 +137,16 @@ pub trait LoopPlant {
 /// The two loop-at-a-time return ratios (output side: L = P G⁻¹ diag(c)) of a PI-notch
 /// controller on a plant, at `f` \[Hz\].
 pub fn loop_response(plant: &dyn LoopPlant, params: &PiNotchParams, f: f64) -> [Complex<f64>; 2] {
+    let l = return_ratio(plant, params, f);
+    [0, 1].map(|i| crate::margins::loop_at_a_time(&l, i))
+}
+
+/// The MIMO return ratio L = P G⁻¹ diag(c) (output side) at `f` \[Hz\].
+pub fn return_ratio(
+    plant: &dyn LoopPlant,
+    params: &PiNotchParams,
+    f: f64,
+) -> [[Complex<f64>; 2]; 2] {
     let p = plant.response(f);
     let g = params.static_gain;
     let det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
@@ -152,7 +163,86 @@ pub fn loop_response(plant: &dyn LoopPlant, params: &PiNotchParams, f: f64) -> [
             }
         }
     }
-    [0, 1].map(|i| crate::margins::loop_at_a_time(&l, i))
+    l
+}
+
+/// Whether the closed loop of `params` on `plant` is stable, by the multivariable Nyquist
+/// criterion on the sampled loop (Skogestad & Postlethwaite, *Multivariable Feedback
+/// Control*, 2nd ed., Theorem 4.9, with the unit circle as contour).
+///
+/// The open loop has no pole outside the unit circle (stable modes, sensor filters, delay,
+/// Tustin notches) and one pole at z = 1 per axis with integral action (n_I of them). With
+/// the contour indented outside z = 1, the closed loop has Z = −W poles outside the unit
+/// circle, W the counter-clockwise winding number of det(I + L(z)) around the origin. By
+/// conjugate symmetry and the indentation (near z = 1, det(I + L) ∝ (z − 1)^{−n_I}, which
+/// turns by −n_I π), W = (2Δ − n_I π)/2π with Δ the phase change of det(I + L(e^{jωT})) from
+/// ω = 0⁺ to the Nyquist frequency: the loop is stable iff Δ = n_I π/2.
+///
+/// Δ is unwrapped on a grid that is refined wherever the phase turns by more than 0.3 rad
+/// between neighbours, and that holds points across every mode's half-power band (aliases
+/// folded into the Nyquist band), so a lightly damped mode's loop cannot slip between
+/// two points. A loop that passes within 1e-9 of the origin is reported unstable
+/// (marginal).
+///
+/// The margins alone do not show this: a loop whose gain never crosses 1 in the band reports
+/// an infinite phase margin, however it encircles −1 (found on the paper design's twin,
+/// where the tuned PI + notch met 6 dB "with no gain crossover" and diverged).
+pub fn closed_loop_stable(plant: &dyn LoopPlant, params: &PiNotchParams) -> bool {
+    let t = plant.sample_time();
+    let nyquist = 0.5 / t;
+    let det = |f: f64| {
+        let l = return_ratio(plant, params, f);
+        let one = Complex::new(1.0, 0.0);
+        (one + l[0][0]) * (one + l[1][1]) - l[0][1] * l[1][0]
+    };
+    // The grid: log-spaced from 1e-5 of Nyquist, plus each mode's band.
+    let lo = 1e-5 * nyquist;
+    let mut grid: Vec<f64> = (0..=400)
+        .map(|k| lo * (nyquist / lo).powf(k as f64 / 400.0))
+        .collect();
+    grid.extend((1..1000).map(|k| nyquist * k as f64 / 1000.0));
+    for (f, zeta) in plant.modes() {
+        let fa = {
+            let r = f.rem_euclid(2.0 * nyquist);
+            if r > nyquist { 2.0 * nyquist - r } else { r }
+        };
+        let w = (zeta.max(1e-4) * fa).max(1e-6 * nyquist);
+        grid.extend((-40..=40).map(|k| fa + w * k as f64 / 8.0));
+    }
+    grid.retain(|&f| f >= lo && f <= nyquist);
+    grid.sort_by(f64::total_cmp);
+    grid.dedup();
+    let mut phase = 0.0;
+    let mut prev = det(grid[0]);
+    let start = prev.arg();
+    let mut fp = grid[0];
+    let mut stack = Vec::new();
+    for &f in &grid[1..] {
+        // Bisect [fp, f] until every step turns by at most 0.3 rad.
+        stack.push((f, det(f)));
+        while let Some(&(fb, db)) = stack.last() {
+            if prev.norm() < 1e-9 || db.norm() < 1e-9 {
+                return false;
+            }
+            let step = (db / prev).arg();
+            if step.abs() > 0.3 && fb - fp > 1e-9 * nyquist {
+                let fm = 0.5 * (fp + fb);
+                stack.push((fm, det(fm)));
+            } else {
+                phase += step;
+                prev = db;
+                fp = fb;
+                stack.pop();
+            }
+        }
+    }
+    let n_int = params.axes.iter().filter(|a| a.ki > 0.0).count() as f64;
+    // At ω = 0⁺ det(I + L) → (−j∞)^{n_I} (phase −n_I π/2): the turn from there to the
+    // grid's first point is added; W is then an integer.
+    let from_zero = Complex::from_polar(1.0, start + n_int * std::f64::consts::FRAC_PI_2).arg();
+    let delta = phase + from_zero;
+    let w = (2.0 * delta - n_int * std::f64::consts::PI) / std::f64::consts::TAU;
+    w.abs() < 0.25
 }
 
 /// Margins of both loops of `params` on `plant`.
@@ -242,10 +332,13 @@ pub fn tune(plant: &dyn LoopPlant, structure: Structure, p: &TuningParams) -> Re
                 }
             };
             let ok = |ki: [f64; 2]| -> Result<Option<[Margins; 2]>> {
-                let m = loop_margins(plant, &shape(ki), &p.margins)?;
-                Ok(m.iter()
+                let params = shape(ki);
+                let m = loop_margins(plant, &params, &p.margins)?;
+                Ok((m
+                    .iter()
                     .all(|m| m.meets(p.gain_margin_db, p.phase_margin_deg))
-                    .then_some(m))
+                    && closed_loop_stable(plant, &params))
+                .then_some(m))
             };
             if ok([1.0; 2])?.is_none() {
                 continue;
@@ -260,9 +353,9 @@ pub fn tune(plant: &dyn LoopPlant, structure: Structure, p: &TuningParams) -> Re
                     k[a] *= f;
                     let Some(m) = ok(k)? else { return Ok(None) };
                     let late = margin(|f| loop_response(&later, &shape(k), f)[a], &p.margins)?;
-                    Ok(late
-                        .meets(p.gain_margin_db, p.phase_margin_deg)
-                        .then_some(m))
+                    Ok((late.meets(p.gain_margin_db, p.phase_margin_deg)
+                        && closed_loop_stable(&later, &shape(k)))
+                    .then_some(m))
                 })?;
                 ki[a] *= factor;
             }
@@ -511,6 +604,135 @@ mod tests {
         assert_eq!(p.static_gain(), [[1.0, 0.0], [0.0, 1.0]]);
     }
 
+    /// A static, coupled plant A z^{−d} (no modes): its closed loop with a PI is a polynomial.
+    struct StaticDelay {
+        a: [[f64; 2]; 2],
+        d: i32,
+    }
+
+    impl LoopPlant for StaticDelay {
+        fn response(&self, f: f64) -> [[Complex<f64>; 2]; 2] {
+            let zd = Complex::from_polar(1.0, -std::f64::consts::TAU * f * 1e-4 * self.d as f64);
+            self.a.map(|row| row.map(|x| zd * x))
+        }
+        fn static_gain(&self) -> [[f64; 2]; 2] {
+            self.a
+        }
+        fn modes(&self) -> Vec<(f64, f64)> {
+            Vec::new()
+        }
+        fn sample_time(&self) -> f64 {
+            1e-4
+        }
+    }
+
+    /// Product of two polynomials (coefficients in ascending powers of z).
+    fn mul(p: &[f64], q: &[f64]) -> Vec<f64> {
+        let mut r = vec![0.0; p.len() + q.len() - 1];
+        for (i, a) in p.iter().enumerate() {
+            for (j, b) in q.iter().enumerate() {
+                r[i + j] += a * b;
+            }
+        }
+        r
+    }
+
+    /// Largest root modulus of a polynomial (ascending coefficients), from the eigenvalues
+    /// of its companion matrix.
+    fn spectral_radius(p: &[f64]) -> f64 {
+        let n = p.len() - 1;
+        let lead = p[n];
+        let c = nalgebra::DMatrix::from_fn(n, n, |i, j| {
+            if j == n - 1 {
+                -p[i] / lead
+            } else if i == j + 1 {
+                1.0
+            } else {
+                0.0
+            }
+        });
+        c.complex_eigenvalues()
+            .iter()
+            .map(|z| z.norm())
+            .fold(0.0, f64::max)
+    }
+
+    /// Reference: the closed-loop characteristic polynomial. With P = A z^{−d}, the
+    /// controller's static gain G (B = A G⁻¹) and the Tustin PI c_i = n_i(z)/(2(z − 1)),
+    /// n_i = 2kp_i(z − 1) + ki_i T(z + 1), the closed-loop poles are the roots of
+    /// (2(z − 1)z^d + B₀₀n₀)(2(z − 1)z^d + B₁₁n₁) − B₀₁B₁₀n₀n₁; for d = 1, one axis, kp = 0
+    /// the loop is stable iff ki T < 2. Goal: [`closed_loop_stable`] agrees with the roots
+    /// on a grid of gains, delays and couplings, both sides of the boundary.
+    #[test]
+    fn nyquist_test_agrees_with_the_closed_loop_poles() {
+        let t = 1e-4;
+        let pi = |kp: [f64; 2], ki: [f64; 2], g: [[f64; 2]; 2]| PiNotchParams {
+            axes: [0, 1].map(|i| AxisGains {
+                kp: kp[i],
+                ki: ki[i],
+                kd: 0.0,
+                notches: [None, None],
+            }),
+            static_gain: g,
+            sample_time: t,
+        };
+        let id = [[1.0, 0.0], [0.0, 1.0]];
+        let p1 = StaticDelay { a: id, d: 1 };
+        assert!(closed_loop_stable(&p1, &pi([0.0; 2], [1.9 / t; 2], id)));
+        assert!(!closed_loop_stable(&p1, &pi([0.0; 2], [2.1 / t; 2], id)));
+        assert!(!closed_loop_stable(
+            &p1,
+            &pi([0.0; 2], [1.0 / t, 2.1 / t], id)
+        ));
+        let mut checked = [0, 0];
+        for d in 1..=3 {
+            for a in [id, [[1.0, 0.3], [-0.2, 0.8]], [[0.6, 0.6], [1.5, -1.5]]] {
+                let plant = StaticDelay { a, d };
+                // The controller's decoupler is a little off (5 %) so the loops couple.
+                let g = [[a[0][0] * 1.05, a[0][1]], [a[1][0], a[1][1] * 0.95]];
+                let det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
+                let gi = [
+                    [g[1][1] / det, -g[0][1] / det],
+                    [-g[1][0] / det, g[0][0] / det],
+                ];
+                let mut b = [[0.0; 2]; 2];
+                for i in 0..2 {
+                    for j in 0..2 {
+                        b[i][j] = a[i][0] * gi[0][j] + a[i][1] * gi[1][j];
+                    }
+                }
+                for kp in [0.0, 0.2, 0.6] {
+                    for s in [0.1, 0.3, 0.5, 0.7, 0.9, 1.1, 1.3, 1.6, 2.0] {
+                        let ki = [s / t, 0.7 * s / t];
+                        let n = [0, 1].map(|i| [-2.0 * kp + ki[i] * t, 2.0 * kp + ki[i] * t]);
+                        let mut den = vec![0.0; d as usize + 2];
+                        den[d as usize] = -2.0;
+                        den[d as usize + 1] = 2.0;
+                        let diag = [0, 1].map(|i| {
+                            let mut q = den.clone();
+                            q[0] += b[i][i] * n[i][0];
+                            q[1] += b[i][i] * n[i][1];
+                            q
+                        });
+                        let mut ch = mul(&diag[0], &diag[1]);
+                        for (k, c) in mul(&n[0], &n[1]).iter().enumerate() {
+                            ch[k] -= b[0][1] * b[1][0] * c;
+                        }
+                        let r = spectral_radius(&ch);
+                        if (r - 1.0).abs() < 1e-3 {
+                            continue;
+                        }
+                        let stable = closed_loop_stable(&plant, &pi([kp; 2], ki, g));
+                        assert_eq!(stable, r < 1.0, "d {d} a {a:?} kp {kp} s {s}: ρ = {r}");
+                        checked[usize::from(stable)] += 1;
+                    }
+                }
+            }
+        }
+        // Both verdicts occur often enough for the comparison to mean something.
+        assert!(checked[0] > 20 && checked[1] > 20, "{checked:?}");
+    }
+
     /// Goal: the procedure returns gains whose margins meet the targets, and each axis's gain
     /// is the largest that does: 10 % more integral gain on either axis breaks a target
     /// (nominal, or that axis's loop with one more sample of delay, step 3b). Both structures; the notch
@@ -522,6 +744,7 @@ mod tests {
         for s in [Structure::PiNotch, Structure::Pid] {
             let t = tune(&p, s, &tp).unwrap();
             assert!(t.margins.iter().all(|m| m.meets(6.0, 40.0)), "{s:?} {t:?}");
+            assert!(closed_loop_stable(&p, &t.params), "{s:?} {t:?}");
             // Maximal per axis (step 3b): 10 % more on either axis alone breaks a target.
             for axis in 0..2 {
                 let mut more = t.params;
@@ -532,7 +755,10 @@ mod tests {
                 let m = loop_margins(&p, &more, &tp.margins).unwrap();
                 let late = loop_margins(&OneMoreSample(&p), &more, &tp.margins).unwrap();
                 assert!(
-                    !(m.iter().all(|m| m.meets(6.0, 40.0)) && late[axis].meets(6.0, 40.0)),
+                    !(m.iter().all(|m| m.meets(6.0, 40.0))
+                        && late[axis].meets(6.0, 40.0)
+                        && closed_loop_stable(&p, &more)
+                        && closed_loop_stable(&OneMoreSample(&p), &more)),
                     "{s:?} not maximal on axis {axis}"
                 );
             }
