@@ -1,0 +1,118 @@
+//! Iterative learning on the twin of the designed stage (flexstage-control's `learning`) on
+//! top of each shipped controller: the learning plant T measured at every harmonic of the
+//! 3:1 Lissajous period on the twin in its rig with that controller closed, the learning
+//! layer designed from it (monotone-convergence factor ρ < 1) and told the measurement's lag
+//! behind the true output measured in the same runs, then PERIODS periods (default
+//! 20) with learning beside the same controller without; RMS error against the true output
+//! of the last period, and the period from which it stays within 10 % of that.
+//!
+//! The controllers are set up as `flexstage track` sets them up on the twin
+//! ([`Bench::new`]: the tuned PI + notch and PID, the backstepping fitted to the sampled
+//! response).
+//!
+//! `cargo run --release -p flexstage-assess --example learn -- quick runs/quick/design/design.json [PERIODS]`
+
+use flexstage_assess::{Bench, Candidate};
+use flexstage_control::ControlError;
+use flexstage_control::actuator::Compensation;
+use flexstage_control::controller::StageControl;
+use flexstage_control::experiment::run;
+use flexstage_control::learning::{
+    DesignParams, Learning, design, measure_learning_plant, rms_per_period,
+};
+use flexstage_control::rig::StagePlant;
+use flexstage_control::trajectory::Reference;
+use flexstage_scenario::{Preset, Scenario, Trajectory};
+use flexstage_topopt::DesignFile;
+use flexstage_twin::DesignedStage;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let preset = args
+        .get(1)
+        .and_then(|p| Preset::from_name(p))
+        .ok_or("usage: learn quick|paper DESIGN.json [PERIODS]")?;
+    let design_file = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
+    let periods: usize = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(20);
+    let DesignedStage {
+        scenario: s,
+        setup,
+        twin,
+        ..
+    } = DesignedStage::new(&Scenario::preset(preset), &design_file.rho)?;
+    let bench = Bench::new(setup, twin, Default::default())?;
+    let trajectory = s
+        .trajectories
+        .iter()
+        .find(|t| matches!(t, Trajectory::Lissajous { ratio, .. } if *ratio == 3.0))
+        .ok_or("the scenario has no 3:1 Lissajous")?;
+    let (reference, _) = Reference::from_scenario(trajectory);
+    let Trajectory::Lissajous { frequency, .. } = trajectory else {
+        unreachable!()
+    };
+    let t = bench.setup.rig.sample_time;
+    let period = (1.0 / (frequency * t)).round() as usize;
+    println!(
+        "twin f1 = {:.0} Hz; 3:1 Lissajous at {frequency} Hz ({period} samples per period), \
+         {periods} periods; RMS against the true output",
+        bench.twin.first_resonance()
+    );
+    println!(
+        "controller       without q1/q2 [nm]  with learning q1/q2 [nm]  settled from  \
+         design γ, λ, M, ρ  sensor lag q1/q2 [samples]"
+    );
+    for c in [
+        Candidate::PiNotch,
+        Candidate::PidTuned,
+        Candidate::Robust,
+        Candidate::NonRobust,
+    ] {
+        let make = || -> flexstage_control::Result<(Box<dyn StageControl>, Box<dyn StagePlant>)> {
+            let ctrl = bench
+                .controller(c, Compensation::Inverse, reference)
+                .map_err(|e| ControlError::Infeasible {
+                    what: "controller".into(),
+                    detail: e.to_string(),
+                })?;
+            let plant =
+                bench
+                    .twin
+                    .plant(&bench.setup.rig)
+                    .map_err(|e| ControlError::Infeasible {
+                        what: "twin plant".into(),
+                        detail: e.to_string(),
+                    })?;
+            Ok((ctrl, Box::new(plant)))
+        };
+        let plant = measure_learning_plant(&mut || make(), period, 3, 20e-9)?;
+        let (learning, rho) = design(&plant, &DesignParams::default())?;
+        let duration = periods as f64 * period as f64 * t;
+        let (ctrl, mut p) = make()?;
+        let mut with = Learning::new(ctrl, learning)?.with_sensor_lag(plant.sensor_lag)?;
+        let rec = run(&mut with, p.as_mut(), duration, t, |_| {});
+        let (mut c0, mut p0) = make()?;
+        let rec0 = run(c0.as_mut(), p0.as_mut(), duration, t, |_| {});
+        let with = rms_per_period(&rec.error, period);
+        let without = rms_per_period(&rec0.error, period);
+        let (last, last0) = (with[with.len() - 1], without[without.len() - 1]);
+        let settled = with
+            .iter()
+            .rposition(|r| (0..2).any(|a| r[a] > 1.1 * last[a]))
+            .map_or(1, |j| j + 2);
+        println!(
+            "{:<16} {:>8.1}/{:<8.1}  {:>12.1}/{:<10.1}  {:>12}  {}, {}, {}, {rho:.3}  {:.2}/{:.2}",
+            c.name(),
+            last0[0] * 1e9,
+            last0[1] * 1e9,
+            last[0] * 1e9,
+            last[1] * 1e9,
+            settled,
+            learning.gain,
+            learning.lead,
+            learning.q_half_width,
+            plant.sensor_lag[0],
+            plant.sensor_lag[1],
+        );
+    }
+    Ok(())
+}
