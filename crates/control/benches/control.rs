@@ -109,3 +109,35 @@ fn pi_notch_step(b: Bencher) {
         black_box(c.step(black_box(y[k])))
     });
 }
+
+/// One step of a controller with the learning layer (issue #18: ≤ 1 µs including it): the
+/// robust backstepping (Kalman estimate) under learning with the twin's design (γ = 0.7,
+/// λ = 7, M = 1) and a fractional sensor lag, in its learning periods.
+#[divan::bench(sample_size = 1000)]
+fn learning_step(b: Bencher) {
+    use flexstage_control::controller::StageControl;
+    use flexstage_control::learning::{Learning, LearningParams};
+    let (setup, r) = setup();
+    let y = measurements(4096);
+    let c = setup
+        .controller(Variant::Robust, Compensation::Inverse, r)
+        .expect("controller");
+    let params = LearningParams {
+        period: 5000,
+        gain: 0.7,
+        lead: 7,
+        q_half_width: 1,
+    };
+    let mut c = Learning::new(c, params)
+        .and_then(|l| l.with_sensor_lag([0.34, 0.09]))
+        .expect("learning");
+    // Past the first period, so every step learns.
+    for k in 0..6000 {
+        c.step(y[k & 4095]);
+    }
+    let mut k = 0usize;
+    b.bench_local(|| {
+        k = (k + 1) & 4095;
+        black_box(c.step(black_box(y[k])))
+    });
+}
