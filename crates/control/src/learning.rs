@@ -222,9 +222,11 @@ pub struct LearningPlant {
 
 /// The lag τ \[samples\] of the measurement behind the true output on axis `axis` of one
 /// period of the loop (periodic records): the least-squares fit of y − q − mean = −τ q̇ with
-/// q̇ the central difference, τ = −Σ (y − q) q̇ / Σ q̇²; 0 when q does not move.
+/// q̇ the central difference, τ = −Σ (y − q) q̇ / Σ q̇²; 0 when q does not move. Records of
+/// different lengths are cut to the shorter.
 pub fn sensor_lag(truth: &[[f64; 2]], measured: &[[f64; 2]], axis: usize) -> f64 {
-    let n = truth.len();
+    let n = truth.len().min(measured.len());
+    let truth = &truth[..n];
     let mean = truth
         .iter()
         .zip(measured)
