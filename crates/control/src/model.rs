@@ -184,7 +184,7 @@ impl StageModel {
 pub struct ResponseFit {
     /// Static gain x_nom → q, rows q_o1, q_o2 (dimensionless).
     pub dc_gain: [[f64; 2]; 2],
-    /// First output mode of q_o1 and of q_o2 [Hz], > 0; `None` when the sampled response
+    /// First output mode of q_o1 and of q_o2 \[Hz\], > 0; `None` when the sampled response
     /// shows none below Nyquist (that axis's stiffness is then kept from the design).
     pub frequency: [Option<f64>; 2],
     /// Their damping ratios, in [0, 1) (used only with a frequency).

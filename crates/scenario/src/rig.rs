@@ -34,7 +34,7 @@ pub struct SensorDynamics {
     /// 1/f corner \[Hz\] (where the 1/f and white spectra are equal); 0 = white only.
     pub flicker_corner: f64,
     /// Corner \[Hz\] of the ADC's anti-aliasing filter (2nd-order Butterworth after the
-    /// sensor electronics); 0 = none. Absent in a file: [`ANTI_ALIAS_CORNER`].
+    /// sensor electronics); 0 = none. Absent in a file: 0 (none).
     #[serde(default = "default_anti_alias")]
     pub anti_alias: f64,
 }
