@@ -164,6 +164,11 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
         self.periods
     }
 
+    /// The index k (0 ≤ k < N) within its period of the sample about to be recorded.
+    pub fn sample(&self) -> usize {
+        self.k
+    }
+
     /// Freezes (false) or resumes (true) learning: frozen, the last correction is replayed.
     pub fn set_learning(&mut self, on: bool) {
         self.learning = on;

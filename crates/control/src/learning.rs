@@ -76,10 +76,8 @@ pub struct Learning<C> {
     ilc: Ilc<Vec<[f64; 2]>>,
     /// The measurement's lag behind the true output per axis \[samples\].
     lag: [f64; 2],
-    /// The references of the last N samples (index k mod N).
+    /// The references of the last N samples (index: the sample's index in its period).
     references: Vec<[f64; 2]>,
-    /// Samples so far.
-    k: usize,
 }
 
 impl<C: StageControl> Learning<C> {
@@ -97,7 +95,6 @@ impl<C: StageControl> Learning<C> {
             ilc: Ilc::new(params, buffers).map_err(core_error)?,
             lag: [0.0; 2],
             references: vec![[0.0; 2]; n],
-            k: 0,
         })
     }
 
@@ -124,10 +121,12 @@ impl<C: StageControl> Learning<C> {
         Ok(self)
     }
 
-    /// The reference at sample k − τ_a of axis a (after `references[k mod N]` was written).
+    /// The reference at sample k − τ_a of axis a, k the current sample's index in its period
+    /// (after `references[k]` was written).
     fn lagged_reference(&self, now: [f64; 2]) -> [f64; 2] {
         let n = self.references.len();
-        let k = self.k as f64;
+        let k = self.ilc.sample() as f64;
+        let first_period = self.ilc.periods() == 0;
         core::array::from_fn(|a| {
             let p = k - self.lag[a];
             let i0 = p.floor();
@@ -135,7 +134,7 @@ impl<C: StageControl> Learning<C> {
             let at = |i: f64| {
                 // A sample ahead of now is the last period's (periodic reference); in the
                 // first period there is none, and the current reference stands in.
-                if i > k && self.k < n {
+                if i > k && first_period {
                     now[a]
                 } else {
                     self.references[(i as i64).rem_euclid(n as i64) as usize][a]
@@ -156,15 +155,9 @@ impl<C: StageControl> StageControl for Learning<C> {
     fn step(&mut self, y: [f64; 2]) -> Command {
         let c = self.ilc.correction();
         let cmd = self.inner.step([y[0] - c[0], y[1] - c[1]]);
-        let n = self.references.len();
-        self.references[self.k % n] = cmd.reference;
-        let r = if self.lag == [0.0; 2] {
-            cmd.reference
-        } else {
-            self.lagged_reference(cmd.reference)
-        };
+        self.references[self.ilc.sample()] = cmd.reference;
+        let r = self.lagged_reference(cmd.reference);
         self.ilc.record(y, r);
-        self.k += 1;
         cmd
     }
 

@@ -352,9 +352,10 @@ pub fn tune(plant: &dyn LoopPlant, structure: Structure, p: &TuningParams) -> Re
                     let mut k = ki;
                     k[a] *= f;
                     let Some(m) = ok(k)? else { return Ok(None) };
-                    let late = margin(|f| loop_response(&later, &shape(k), f)[a], &p.margins)?;
+                    let params = shape(k);
+                    let late = margin(|f| loop_response(&later, &params, f)[a], &p.margins)?;
                     Ok((late.meets(p.gain_margin_db, p.phase_margin_deg)
-                        && closed_loop_stable(&later, &shape(k)))
+                        && closed_loop_stable(&later, &params))
                     .then_some(m))
                 })?;
                 ki[a] *= factor;
