@@ -4,6 +4,7 @@
 use flexstage_control::actuator::Compensation;
 use flexstage_control::controller::{PidController, StageControl};
 use flexstage_control::experiment::{Setup, Variant};
+use flexstage_control::model::ResponseFit;
 use flexstage_control::pi_notch::{AxisGains, PiNotchController, PiNotchParams};
 use flexstage_control::rig::{AmplifierParams, PlantActuator, RigParams, RigPlant, SensorParams};
 use flexstage_control::trajectory::Reference;
@@ -72,6 +73,10 @@ pub struct Bench {
     pub pi_notch: Tuned,
     /// The tuning settings used.
     pub tuning: TuningParams,
+    /// The response fit the backstepping's model comes from: one identified on the stage
+    /// (`flexstage_identify::response`), or `None` for the fit of the twin's exact modes
+    /// ([`flexstage_control::model::ResponseFit::from_modes`]).
+    pub identified: Option<ResponseFit>,
 }
 
 /// The twin's modes (PEA inputs and outputs only).
@@ -103,6 +108,17 @@ impl Bench {
     /// Tunes the loop-shaping baselines on the twin's sampled loop with the rig's delay and
     /// returns the bench.
     pub fn new(setup: Setup, twin: Twin, tuning: TuningParams) -> Result<Bench> {
+        Bench::with_identified(setup, twin, tuning, None)
+    }
+
+    /// [`Bench::new`] with the backstepping's model from an `identified` response fit
+    /// ([`Bench::identified`]).
+    pub fn with_identified(
+        setup: Setup,
+        twin: Twin,
+        tuning: TuningParams,
+        identified: Option<ResponseFit>,
+    ) -> Result<Bench> {
         let plant = modal_plant(
             &twin,
             setup.rig.sample_time,
@@ -117,6 +133,7 @@ impl Bench {
             pid,
             pi_notch,
             tuning,
+            identified,
         };
         // The backstepping set up from the twin's sampled response, gains sized by the
         // margins (issue #18).

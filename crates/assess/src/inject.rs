@@ -9,6 +9,7 @@
 
 use flexstage_control::actuator::Compensation;
 use flexstage_control::margins::{MarginParams, Margins, margin};
+use flexstage_control::model::ResponseFit;
 use flexstage_control::rig::StagePlant;
 use flexstage_control::trajectory::{Reference, Shape};
 use nalgebra::Complex;
@@ -168,8 +169,9 @@ pub fn injected_margins(
 }
 
 /// Sets the backstepping up from the twin's sampled response
-/// ([`flexstage_control::controller::ControllerParams::for_sampled_plant`]: fitted model,
-/// the tuned PI + notch's notches on the measurement) with the largest gain scale of
+/// ([`flexstage_control::controller::ControllerParams::for_response`] on the bench's
+/// identified fit, else on the fit of the twin's exact modes: fitted model, the tuned PI +
+/// notch's notches on the measurement) with the largest gain scale of
 /// [`flexstage_control::controller::GAIN_SCALES`] whose robust and non-robust loops keep
 /// the margin targets of the bench's tuning (6 dB / 40°) with the rig's delay, by sine
 /// injection; the smallest scale when none does (the margins table then flags it). Returns
@@ -177,7 +179,10 @@ pub fn injected_margins(
 pub fn size_backstepping(bench: &mut Bench) -> Result<f64> {
     use flexstage_control::controller::GAIN_SCALES;
     let base = bench.setup.controller.clone();
-    let modes = crate::bench::plant_modes(&bench.twin);
+    let fit = bench.identified.unwrap_or_else(|| {
+        let nyquist = 0.5 / base.observer.sample_time;
+        ResponseFit::from_modes(&crate::bench::plant_modes(&bench.twin), nyquist, 0.1)
+    });
     let notches = bench.pi_notch.params.axes.map(|a| a.notches);
     let delay = bench.setup.rig.delay;
     let (gm, pm) = (bench.tuning.gain_margin_db, bench.tuning.phase_margin_deg);
@@ -186,7 +191,7 @@ pub fn size_backstepping(bench: &mut Bench) -> Result<f64> {
     mp.points = 40;
     mp.refine = 8;
     for &scale in &GAIN_SCALES {
-        bench.setup.controller = base.for_sampled_plant(&modes, notches, scale);
+        bench.setup.controller = base.for_response(&fit, notches, scale);
         let mut ok = true;
         for c in [Candidate::Robust, Candidate::NonRobust] {
             ok &= match injected_margins(bench, c, delay, &mp, &InjectionParams::default())? {

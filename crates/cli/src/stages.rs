@@ -323,19 +323,24 @@ Examples:
     /// Identify the stage stiffnesses and dampings by online least squares (Section 4.2,
     /// Eq. 54-56, Table 4), from the run's simulated stage or a record.
     #[command(
-        after_help = "Without --data, a two-band multisine (5-150 Hz, plus a band around the \
-output modes of the run's lumped model for the dampings) excites the digital twin of the \
-run's design (--plant lumped: the lumped model of the design once `flexstage reduce` has run, \
-the scenario's stage.truth before); the twin is scored against the lumped parameters that best \
-fit its exact frequency response in the band. A \
-record needs the columns t [s], x_nom1, x_nom2 [m] (or U1, U2 [V]), x_in1, x_in2, q1, q2 [m], \
-sampled uniformly. Masses and alpha are the known values of the guess (Eq. 27). Writes \
-<run>/identify/stage/: params.toml (the controller's model of `flexstage track` in this run), \
-table.csv (guess / estimate / truth, like Table 4), convergence.svg/csv, record.csv.
+        after_help = "Without --data, an 8 s two-band multisine (5-150 Hz, plus a band around \
+the output modes of the run's lumped model for the dampings) excites the lumped model of the \
+design (once `flexstage reduce` has run; the scenario's stage.truth before), scored against its \
+own parameters. --plant twin instead identifies what the controller takes from the digital twin \
+of the design: its frequency response (16 s multisine up to 1.2x the controller's Nyquist \
+frequency, sampled 5x faster), the static gain and the output modes below Nyquist, scored \
+against the same fit of the twin's exact modes; `track` on the twin sets the backstepping up \
+from it. A record needs the columns t [s], x_nom1, x_nom2 [m] (or U1, U2 [V]), x_in1, x_in2, \
+q1, q2 [m], sampled uniformly. Masses and alpha are the known values of the guess (Eq. 27). \
+Writes <run>/identify/stage/: params.toml (the controller's model of `flexstage track` in this \
+run), table.csv (guess / estimate / truth, like Table 4), convergence.svg/csv, record.csv; \
+on the twin <run>/identify/stage/twin/: response_fit.toml, params.toml, table.csv, \
+response.csv/svg.
 
 Examples:
-  flexstage identify stage                                # 4 s multisine on the twin, noise on
-  flexstage identify stage --plant lumped --actuator linear --noise-free --duration 1
+  flexstage identify stage                                # 8 s multisine on the lumped model
+  flexstage identify stage --actuator linear --noise-free --duration 1
+  flexstage identify stage --plant twin                   # the twin's response fit
   flexstage identify stage --data lab.csv --out runs/lab"
     )]
     Stage(IdentifyStageArgs),
@@ -372,18 +377,21 @@ pub struct IdentifyStageArgs {
     /// Excite the simulated stage (the default without --data).
     #[arg(long)]
     pub simulate: bool,
-    /// Excitation length for the simulation [s].
-    #[arg(long, default_value_t = Simulation::default().duration)]
-    pub duration: f64,
+    /// Excitation length for the simulation [s]. Default: 8 on the lumped model, 16 on the
+    /// twin.
+    #[arg(long)]
+    pub duration: Option<f64>,
     /// Highest frequency of the low excitation band [Hz].
     #[arg(long, default_value_t = Simulation::default().f_max)]
     pub f_max: f64,
-    /// Peak per PEA of the resonance band around the lumped model's output modes [µm] (0:
-    /// the low band alone; the dampings are then not identifiable).
+    /// Peak per PEA of the resonance band [µm] (around the lumped model's output modes; on
+    /// the twin up to 1.2× Nyquist) (0: the low band alone; the dampings are then not
+    /// identifiable).
     #[arg(long, default_value_t = Simulation::default().resonance_amplitude * 1e6)]
     pub resonance_um: f64,
-    /// The simulated stage: the digital twin of the run's design in the scenario's rig (the
-    /// lumped model before the run has a design), or the lumped 8-state model.
+    /// The simulated stage: the lumped 8-state model (the paper's regression), or the digital
+    /// twin of the run's design in the scenario's rig (its response fit; the lumped model
+    /// before the run has a design).
     #[arg(long, default_value = Simulation::default().plant.name(), value_parser = TRACK_PLANTS)]
     pub plant: String,
     /// Simulated actuator: "hysteretic" (Bouc–Wen PEAs, cross terms) or "linear" (x_nom

@@ -194,24 +194,33 @@ pub const GAIN_SCALES: [f64; 8] = [1.0, 0.7, 0.5, 0.35, 0.25, 0.18, 0.12, 0.08];
 impl ControllerParams {
     /// The settings for a plant known by its modal response (e.g. the twin's modes), as a
     /// practitioner would set the backstepping up from a frequency-response
-    /// identification: the model fitted to the response below Nyquist
-    /// ([`crate::model::ResponseFit::from_modes`] with a 10 % share, then
-    /// [`crate::model::fit_to_response`]; kept as it is when the fit is refused) with the
-    /// coupling that reproduces the response's static cross terms
-    /// ([`crate::model::fit_coupling`]), the
-    /// notches of the sampled response's peaks on the measurement (`notches`, e.g. the
-    /// tuned PI + notch's), and the law's gains scaled by `gain_scale` (in (0, 1], see
-    /// [`GAIN_SCALES`]).
+    /// identification: [`ControllerParams::for_response`] on the fit that identification
+    /// would give below Nyquist ([`crate::model::ResponseFit::from_modes`] with a 10 % share).
     pub fn for_sampled_plant(
         &self,
         modes: &[crate::tuning::PlantMode],
         notches: [[Option<Notch>; 2]; 2],
         gain_scale: f64,
     ) -> ControllerParams {
-        let mut p = self.clone();
         let nyquist = 0.5 / self.observer.sample_time;
         let fit = crate::model::ResponseFit::from_modes(modes, nyquist, 0.1);
-        if let Ok(m) = crate::model::fit_to_response(&self.model, &fit) {
+        self.for_response(&fit, notches, gain_scale)
+    }
+
+    /// The settings for a plant known by a response fit (identified, or from its modes): the
+    /// model fitted to it ([`crate::model::fit_to_response`]; kept as it is when the fit is
+    /// refused) with the coupling that reproduces its static cross terms
+    /// ([`crate::model::fit_coupling`]), the notches of the sampled response's peaks on the
+    /// measurement (`notches`, e.g. the tuned PI + notch's), and the law's gains scaled by
+    /// `gain_scale` (in (0, 1], see [`GAIN_SCALES`]).
+    pub fn for_response(
+        &self,
+        fit: &crate::model::ResponseFit,
+        notches: [[Option<Notch>; 2]; 2],
+        gain_scale: f64,
+    ) -> ControllerParams {
+        let mut p = self.clone();
+        if let Ok(m) = crate::model::fit_to_response(&self.model, fit) {
             p.model = m;
         }
         // The coupling from the same static gain (a symmetric design has none): a coupling

@@ -40,3 +40,28 @@ fn estimate(bencher: divan::Bencher) {
     .unwrap();
     bencher.bench_local(|| divan::black_box(&id).estimate());
 }
+
+/// The frequency-response identification of a 16 s record at 50 kHz (the twin's default
+/// experiment: 80 periods of the two-band multisine, 615 lines, both outputs).
+#[divan::bench(sample_count = 10)]
+fn response_16s(bencher: divan::Bencher) {
+    use flexstage_control::rig::SensorParams;
+    use flexstage_identify::response::{ResponseParams, identify_response, response_excitation};
+    use flexstage_identify::{Excitation, Multisine, StageRecord};
+    let ts = 2e-5;
+    let e = response_excitation(&Excitation::default(), 5000.0);
+    let ms = Multisine::new(&e).unwrap();
+    let n = (1.0 / (e.f_min * ts)).round() as usize;
+    let period: Vec<[f64; 2]> = (0..n).map(|m| ms.value(m as f64 * ts)).collect();
+    let len = 80 * n + 1;
+    let x: [Vec<f64>; 2] = [0, 1].map(|i| (0..len).map(|m| period[m % n][i]).collect());
+    let q = [
+        x[0].iter().zip(&x[1]).map(|(a, b)| 0.5 * (a + b)).collect(),
+        x[0].iter().zip(&x[1]).map(|(a, b)| 2.0 * (a - b)).collect(),
+    ];
+    let t = (0..len).map(|m| m as f64 * ts).collect();
+    let zeros = [vec![0.0; len], vec![0.0; len]];
+    let record = StageRecord::new(t, x, zeros, q, None, 1e-6).unwrap();
+    let p = ResponseParams::new(1e-4, SensorParams::ideal());
+    bencher.bench_local(|| identify_response(divan::black_box(&record), &e, &p).unwrap());
+}

@@ -18,6 +18,9 @@
 //! * [`frequency`]: the lumped parameters that best represent an exact frequency response
 //!   (the reference on a structure richer than the lumped model), the model's natural
 //!   frequencies.
+//! * [`response`]: the frequency-response identification of what the controller's model
+//!   takes from a structure (static gain, the output modes below Nyquist), for the digital
+//!   twin, where no lumped parameter set is the truth.
 //! * [`samples`]: the paper's scenario (guess = Table 4 guess, truth = Table 4 estimates).
 //!
 //! ```
@@ -64,8 +67,8 @@
 //! Measured alternatives (seeds 1–3): 4 s / 300 Hz plate prefilter gave K_in up to −4.9 %;
 //! a 4 µm band up to −5.9 % (it takes amplitude from the low band, where K_in is seen);
 //! without the correction at the modes K_qo1 −1.21 % and C_qo1 +16 % (even noise-free).
-//! On the twin of a design the lumped model does not hold (`docs/DECISIONS.md`): the
-//! reference there is [`frequency::fit`], whose residual says how far off the model is.
+//! On the twin of a design the lumped model does not hold ([`frequency::fit`]'s residual says
+//! how far off it is); there the stage is identified by its response ([`response`]).
 //!
 //! # Excitation length, prefilter, decimation (low band alone; measured before issue #18)
 //! Default multisine 5–150 Hz, 27 µm peak per PEA, Numerov regressors, 300 Hz prefilter,
@@ -97,6 +100,7 @@ pub mod estimator;
 pub mod excitation;
 pub mod frequency;
 pub mod regression;
+pub mod response;
 pub mod samples;
 
 pub use data::StageRecord;

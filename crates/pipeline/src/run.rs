@@ -27,10 +27,11 @@ use crate::pea::{PeaIdOptions, PeaIdSummary, PeaOptions, simulate_and_identify_e
 use crate::progress::{Progress, RunEvent, StartOver};
 use crate::reduce::{ReduceOptions, ReduceSummary, reduce};
 use crate::stage_id::{
-    ParameterRow, StageIdOptions, StageIdSummary, identify_stage_on, read_table,
+    MIN_TWIN_DURATION, ParameterRow, Simulation, StageData, StageIdOptions, StageIdSummary,
+    identify_stage_on, read_table,
 };
 use crate::state::{Mismatch, RunState, fnv1a};
-use crate::track::{TrackOptions, TrackSummary, TwinBuild, track_on, try_build};
+use crate::track::{PlantKind, TrackOptions, TrackSummary, TwinBuild, track_on, try_build};
 use crate::twin::{TwinOptions, TwinSummary, write_twin_of};
 
 /// The stages of `run`, in order.
@@ -188,8 +189,8 @@ pub fn run(
     }
     let (mut state, resume) = start_state(&folder, options, progress)?;
     state.save(folder.dir())?;
-    // The twin of the design, built once by the twin stage and simulated on by track (a run
-    // resumed after the twin stage builds it in track).
+    // The twin of the design, built once by the twin stage and used by identify-stage and
+    // track (a run resumed after the twin stage builds it in identify-stage or track).
     let mut twin: Option<TwinBuild> = None;
     for stage in Stage::ALL {
         if state.finished(stage) {
@@ -337,12 +338,34 @@ fn run_stage(
             &options.pea,
             &options.identify_pea,
         )?),
-        Stage::IdentifyStage => StageSummary::IdentifyStage(Box::new(identify_stage_on(
-            folder,
-            &options.identify_stage,
-            progress,
-            twin.as_ref(),
-        )?)),
+        Stage::IdentifyStage => {
+            // A run resumed after the twin stage builds the twin here (then hands it to track).
+            if twin.is_none() && run.exists(layout::design::DESIGN) {
+                progress.note(
+                    "building the twin of the design (FE model, Craig–Bampton, nonlinear fit)",
+                );
+                *twin = Some(try_build(folder)?);
+            }
+            let mut s =
+                identify_stage_on(folder, &options.identify_stage, progress, twin.as_ref())?;
+            // Then on the twin, by its response: the fit `track` sets the backstepping up from.
+            if let (StageData::Simulate(sim), Some(Ok(_))) = (&options.identify_stage.data, &twin)
+                && sim.plant == PlantKind::Lumped
+            {
+                let o = StageIdOptions {
+                    data: StageData::Simulate(Simulation {
+                        plant: PlantKind::Twin,
+                        duration: sim.duration.map(|d| d.max(MIN_TWIN_DURATION)),
+                        ..*sim
+                    }),
+                    ..options.identify_stage.clone()
+                };
+                let t = identify_stage_on(folder, &o, progress, twin.as_ref())?;
+                s.warnings.extend(t.warnings.iter().cloned());
+                s.on_twin = Some(Box::new(t));
+            }
+            StageSummary::IdentifyStage(Box::new(s))
+        }
         Stage::Track => {
             StageSummary::Track(track_on(folder, &options.track, progress, twin.take())?)
         }

@@ -252,12 +252,12 @@ impl Summary for PeaIdSummary {
 
 impl fmt::Display for StageIdSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let id = &self.identification;
         if let Some(p) = &self.plant {
             match self.simulated {
                 Some(PlantKind::Twin) => writeln!(
                     f,
-                    "simulated stage: the twin of the design (band from the lumped model: {p})"
+                    "simulated stage: the twin of the design ({p}), identified by its frequency \
+                     response"
                 )?,
                 _ => writeln!(f, "simulated stage: {p}")?,
             }
@@ -265,30 +265,68 @@ impl fmt::Display for StageIdSummary {
         if let Some(b) = &self.band {
             writeln!(
                 f,
-                "resonance band: {:.0}–{:.0} Hz every {:.0} Hz, peak {:.2} µm (the lumped model's \
-                 output modes)",
+                "band: {:.0}–{:.0} Hz every {:.0} Hz, peak {:.2} µm",
                 b.f_lo,
                 b.f_hi,
                 b.spacing,
                 b.amplitude * 1e6
             )?;
         }
-        if let Some(r) = self.truth.as_ref().and_then(|t| t.residual) {
+        if let Some((r, exact)) = &self.response {
             writeln!(
                 f,
-                "truth: the lumped fit to the twin's frequency response in the band; its relative \
-                 residual (q_o1, q_o2, x_in1, x_in2): {:.2e}, {:.2e}, {:.2e}, {:.2e}",
-                r[0], r[1], r[2], r[3]
+                "{} samples at {:.0} kHz, {} whole periods averaged, {} lines",
+                self.samples,
+                1e-3 / self.sample_time,
+                r.periods,
+                r.lines.len()
+            )?;
+            let g = r.fit.dc_gain;
+            writeln!(
+                f,
+                "static gain x_nom → q: [[{:.6}, {:.6}], [{:.5}, {:.5}]]",
+                g[0][0], g[0][1], g[1][0], g[1][1]
+            )?;
+            for m in &r.modes {
+                writeln!(
+                    f,
+                    "  peak of q_o{}: {:.1} Hz, ζ {:.4}, share of the axis's static gain {:+.3}",
+                    m.axis + 1,
+                    m.frequency,
+                    m.damping,
+                    m.share
+                )?;
+            }
+            for i in 0..2 {
+                let mode = |fit: &flexstage_control::model::ResponseFit| {
+                    fit.frequency[i].map_or("none".to_string(), |fr| {
+                        format!("{fr:.1} Hz, ζ {:.4}", fit.damping[i])
+                    })
+                };
+                writeln!(
+                    f,
+                    "q_o{} mode kept for the model: {} (exact: {})",
+                    i + 1,
+                    mode(&r.fit),
+                    mode(exact)
+                )?;
+            }
+        }
+        if let Some(id) = &self.identification {
+            writeln!(
+                f,
+                "{} samples at T_s = {} s (regression at {} s), {} updates",
+                self.samples, id.sample_time, id.regression_time, id.updates
             )?;
         }
         writeln!(
             f,
-            "{} samples at T_s = {} s (regression at {} s), {} updates",
-            self.samples, id.sample_time, id.regression_time, id.updates
-        )?;
-        writeln!(
-            f,
-            "param           guess     estimate        truth   error %  unit"
+            "param    {:>12}     estimate        truth   error %  unit",
+            if self.response.is_some() {
+                "design"
+            } else {
+                "guess"
+            }
         )?;
         let dash = || "-".to_string();
         for r in &self.rows {
@@ -305,41 +343,60 @@ impl fmt::Display for StageIdSummary {
                 r.unit
             )?;
         }
-        let kc = id.raw.coupling;
-        writeln!(
-            f,
-            "k_c (cross terms, rows q_o1/q_o2): {:.3e} / {:.3e} N/m, kept: {:.3e} N/m{}",
-            kc[0],
-            kc[1],
-            id.coupling,
-            self.truth
-                .as_ref()
-                .map(|t| format!(
-                    " (truth {:.3e}, {:+.2} %)",
-                    t.coupling,
-                    100.0 * (id.coupling - t.coupling) / t.coupling
-                ))
-                .unwrap_or_default()
-        )?;
-        let c = id.conditioning;
-        writeln!(
-            f,
-            "condition numbers (q_o1, q_o2, x_in1, x_in2): {:.3e}, {:.3e}, {:.3e}, {:.3e}",
-            c[0], c[1], c[2], c[3]
-        )?;
-        writeln!(
-            f,
-            "(params.toml is the controller's model of `track` in this run folder)"
-        )
+        let truth = self
+            .truth
+            .as_ref()
+            .map(|t| format!(" (truth {:.3e} N/m)", t.coupling))
+            .unwrap_or_default();
+        match &self.identification {
+            Some(id) => {
+                let kc = id.raw.coupling;
+                writeln!(
+                    f,
+                    "k_c (cross terms, rows q_o1/q_o2): {:.3e} / {:.3e} N/m, kept: {:.3e} N/m{truth}",
+                    kc[0], kc[1], self.coupling,
+                )?;
+                let c = id.conditioning;
+                writeln!(
+                    f,
+                    "condition numbers (q_o1, q_o2, x_in1, x_in2): {:.3e}, {:.3e}, {:.3e}, {:.3e}",
+                    c[0], c[1], c[2], c[3]
+                )?;
+            }
+            None => writeln!(
+                f,
+                "k_c (from the static gain's cross terms): {:.3e} N/m{truth}",
+                self.coupling
+            )?,
+        }
+        match self.response {
+            Some(_) => writeln!(
+                f,
+                "(track on the twin sets the backstepping up from response_fit.toml)"
+            )?,
+            None => writeln!(
+                f,
+                "(params.toml is the controller's model of `track` in this run folder)"
+            )?,
+        }
+        if let Some(t) = &self.on_twin {
+            writeln!(f, "then on the twin of the design:")?;
+            t.fmt(f)?;
+        }
+        Ok(())
     }
 }
 
 impl Summary for StageIdSummary {
     fn written(&self) -> (Vec<&Path>, bool) {
-        (vec![&self.dir], self.replaced)
+        let mut dirs = vec![self.dir.as_path()];
+        if let Some(t) = &self.on_twin {
+            dirs.push(t.dir.as_path());
+        }
+        (dirs, self.replaced)
     }
     fn warnings(&self) -> &[String] {
-        &self.identification.warnings
+        &self.warnings
     }
 }
 

@@ -39,6 +39,7 @@ use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::{
     Metrics, Record, Setup, Variant, experiment_on, experiment_with_progress,
 };
+use flexstage_control::model::ResponseFit;
 use flexstage_control::trajectory::Reference;
 use flexstage_control::tuning::TuningParams;
 use flexstage_piezo::BoucWenParams;
@@ -333,6 +334,7 @@ fn candidate(v: Variant) -> Candidate {
 /// is tuned: the PI + notch is skipped with a warning and `pid-ff` runs the scenario's gains.
 fn tune_and_margins(
     setup: &mut Setup,
+    identified: Option<ResponseFit>,
     sim: &Simulated,
     controllers: &[Variant],
     scenario: &flexstage_scenario::Scenario,
@@ -349,7 +351,12 @@ fn tune_and_margins(
         }
         return Ok((Vec::new(), None, None));
     };
-    let bench = Bench::new(setup.clone(), (**twin).clone(), TuningParams::default())?;
+    let bench = Bench::with_identified(
+        setup.clone(),
+        (**twin).clone(),
+        TuningParams::default(),
+        identified,
+    )?;
     setup.pi_notch = Some(bench.pi_notch.params);
     setup.pid_tuned = Some(bench.pid.params);
     setup.controller = bench.setup.controller.clone();
@@ -451,7 +458,7 @@ fn simulated(
         "twin: {} modes, first resonance {:.0} Hz, built in {seconds:.1} s{}",
         twin.modal.modes.len(),
         twin.first_resonance(),
-        if reused { " (by the twin stage)" } else { "" }
+        if reused { " (earlier in this run)" } else { "" }
     ));
     Ok(Simulated::Twin(Box::new(twin)))
 }
@@ -538,8 +545,23 @@ pub fn track_on(
         Simulated::Twin(_) => PlantKind::Twin,
         Simulated::Lumped => PlantKind::Lumped,
     };
+    // The response fit identified on the twin (else the fit of its exact modes).
+    let identified = if folder.dir().exists(layout::stage::RESPONSE_FIT) {
+        Some(crate::stage_id::read_response_fit(
+            &folder.dir().path(layout::stage::RESPONSE_FIT),
+        )?)
+    } else {
+        None
+    };
+    if identified.is_some() {
+        progress.note(&format!(
+            "the backstepping's model on the twin: the identified response fit ({})",
+            layout::stage::RESPONSE_FIT
+        ));
+    }
     let (margins, montecarlo, scan) = tune_and_margins(
         &mut setup,
+        identified,
         &sim,
         &options.controllers,
         &plant.scenario,

@@ -219,8 +219,20 @@ pub mod stage {
     pub const CONVERGENCE_CSV: &str = "identify/stage/convergence.csv";
     /// Figure: convergence.
     pub const CONVERGENCE_SVG: &str = "identify/stage/convergence.svg";
-    /// The simulated excitation record.
+    /// The simulated excitation record (on the lumped model).
     pub const RECORD: &str = "identify/stage/record.csv";
+    /// The identification on the twin (`--plant twin`, and `run` once the twin is built).
+    pub const TWIN_DIR: &str = "identify/stage/twin";
+    /// Its parameter set (the response fit on the design's reduced model).
+    pub const TWIN_PARAMS: &str = "identify/stage/twin/params.toml";
+    /// Its identified quantities, guess / estimate / truth.
+    pub const TWIN_TABLE: &str = "identify/stage/twin/table.csv";
+    /// The measured frequency response per line.
+    pub const RESPONSE_CSV: &str = "identify/stage/twin/response.csv";
+    /// The identified response fit, the backstepping's model of `track` on the twin.
+    pub const RESPONSE_FIT: &str = "identify/stage/twin/response_fit.toml";
+    /// Figure: the measured response against the twin's exact one.
+    pub const RESPONSE_SVG: &str = "identify/stage/twin/response.svg";
 }
 
 /// A folder of tracking results (Section 4, Figures 9–11): `track/` for the default

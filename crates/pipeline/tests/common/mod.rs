@@ -41,7 +41,7 @@ pub fn short(iterations: usize, checkpoint_every: usize, validity: bool) -> RunO
     o.pea.cycles = 2;
     o.identify_stage = StageIdOptions {
         data: StageData::Simulate(Simulation {
-            duration: 0.2,
+            duration: Some(0.2),
             ..Simulation::default()
         }),
         ..StageIdOptions::default()

@@ -96,9 +96,65 @@ pub(super) fn stage(b: &mut Builder) {
          then the estimator and controller gains this run used beside the paper's.",
     );
     parameters(b);
-    gains(b);
     if b.exists(files::CONVERGENCE_SVG) {
         b.img(files::CONVERGENCE_SVG, "Stage estimates over the record");
+    }
+    twin(b);
+    gains(b);
+}
+
+/// The identification on the twin: what its frequency response gives the controller's
+/// model, against the same quantities from the twin's exact modes.
+fn twin(b: &mut Builder) {
+    let Some(text) = b.text(files::TWIN_TABLE) else {
+        return;
+    };
+    b.h3("On the twin: the response fit that sets the backstepping up");
+    b.note(
+        "The twin of the design is no lumped model, so its stage is identified by its \
+         frequency response (multisine sampled at 5× the controller's rate, static gain and the \
+         output modes below the controller's Nyquist frequency). Design: the reduced model \
+         (the prior for what the response cannot show); truth: the same chain on the twin's \
+         exact modes. `track` on the twin sets the backstepping up from this fit \
+         (docs/DECISIONS.md, \"Stage identification on the twin\").",
+    );
+    let rows: Vec<Vec<String>> = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            let num = |i: usize| {
+                c.get(i)
+                    .and_then(|v| v.parse::<f64>().ok())
+                    .map(fmt_num)
+                    .unwrap_or_else(|| "–".into())
+            };
+            vec![
+                c.first().unwrap_or(&"").to_string(),
+                c.get(1).unwrap_or(&"").to_string(),
+                num(2),
+                num(3),
+                num(4),
+                num(5),
+            ]
+        })
+        .collect();
+    b.table(
+        &[
+            "quantity".into(),
+            "unit".into(),
+            "design".into(),
+            "estimate".into(),
+            "truth (exact modes)".into(),
+            "error [%]".into(),
+        ],
+        &rows,
+    );
+    if b.exists(files::RESPONSE_SVG) {
+        b.img(
+            files::RESPONSE_SVG,
+            "Measured frequency response of the twin",
+        );
     }
 }
 
