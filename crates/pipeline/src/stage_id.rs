@@ -23,8 +23,8 @@
 //!   gain, K_qo1 and C_qo1 from a q_o1 mode when one lies below Nyquist, else the design's)
 //!   and the coupling by `fit_coupling`. The truth is
 //!   the same chain on the twin's exact modes (`ResponseFit::from_modes`), and only the
-//!   identified quantities are scored (`docs/DECISIONS.md`, "Stage identification on the
-//!   twin").
+//!   identified quantities are scored (`docs/DECISIONS.md`, "Stage identification that
+//!   closes the loop").
 //!
 //! The identified `params.toml` carries the cross-axis `coupling` k_c as a field; `track`
 //! builds the controller's model with it ([`crate::plant::read_model_params`]).

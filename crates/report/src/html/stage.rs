@@ -116,7 +116,7 @@ fn twin(b: &mut Builder) {
          output modes below the controller's Nyquist frequency). Design: the reduced model \
          (the prior for what the response cannot show); truth: the same chain on the twin's \
          exact modes. `track` on the twin sets the backstepping up from this fit \
-         (docs/DECISIONS.md, \"Stage identification on the twin\").",
+         (docs/DECISIONS.md, \"Stage identification that closes the loop\").",
     );
     let rows: Vec<Vec<String>> = text
         .lines()
