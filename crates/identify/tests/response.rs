@@ -202,3 +202,41 @@ fn sensor_noise_leaves_the_fit_within_the_issue_18_tolerances() {
         assert_eq!(id.fit.frequency[0], None);
     }
 }
+
+#[test]
+fn a_record_without_a_whole_period_or_on_another_grid_is_refused_by_name() {
+    // Goal: bad input gets an error that names what is wrong and what is accepted.
+    let e = excitation();
+    let short = record(&e, 1, 0.0, 1);
+    let p = ResponseParams {
+        settle: 0.1,
+        ..params()
+    };
+    let err = identify_response(&short, &e, &p).unwrap_err().to_string();
+    assert!(err.contains("no whole period"), "{err}");
+    let off_grid = Excitation {
+        f_min: 7.0,
+        ..e.clone()
+    };
+    let err = identify_response(&short, &off_grid, &params())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("excitation.f_min") && err.contains("whole number"),
+        "{err}"
+    );
+    let err = identify_response(
+        &short,
+        &e,
+        &ResponseParams {
+            share: 0.0,
+            ..params()
+        },
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("response.share") && err.contains("(0, 1]"),
+        "{err}"
+    );
+}
