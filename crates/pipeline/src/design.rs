@@ -149,10 +149,7 @@ pub fn design(
         DesignStart::Fresh { .. } => Optimizer::new(&problem, params)?,
         DesignStart::Resume => {
             let path = run.path(files::CHECKPOINT);
-            let bytes = std::fs::read(&path).map_err(|source| PipelineError::Read {
-                path: path.clone(),
-                source,
-            })?;
+            let bytes = crate::error::read_bytes(&path)?;
             let payload = crate::envelope::payload_for(&path, &bytes, folder.scenario())?;
             let o = Optimizer::resume(&problem, params, payload)?;
             progress.note(&format!(

@@ -175,6 +175,22 @@ pub type Result<T> = std::result::Result<T, PipelineError>;
 
 /// `Ok` when `ok`, else [`PipelineError::Option`] naming the option, the value and the
 /// accepted range. Non-finite floats never pass (callers include `value.is_finite()`).
+/// The bytes of `path`, or [`PipelineError::Read`] naming it.
+pub(crate) fn read_bytes(path: &std::path::Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|source| PipelineError::Read {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The text of `path`, or [`PipelineError::Read`] naming it.
+pub(crate) fn read_text(path: &std::path::Path) -> Result<String> {
+    std::fs::read_to_string(path).map_err(|source| PipelineError::Read {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
 pub(crate) fn require(
     ok: bool,
     option: &'static str,

@@ -101,10 +101,7 @@ pub struct ModelParams {
 
 /// Reads a stage parameter file with its optional `coupling` key (a finite stiffness in N/m).
 pub fn read_model_params(path: &Path) -> Result<ModelParams> {
-    let text = std::fs::read_to_string(path).map_err(|source| PipelineError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = crate::error::read_text(path)?;
     parse_model_params(&text, &path.display().to_string())
 }
 

@@ -141,10 +141,7 @@ pub fn load_design(
 
 /// Densities in fem order from a design.json, density CSV or density PNG.
 fn read_file(path: &Path, nl: usize, nw: usize) -> Result<Vec<f64>> {
-    let bytes = std::fs::read(path).map_err(|source| PipelineError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let bytes = crate::error::read_bytes(path)?;
     let format = |reason: String| PipelineError::Format {
         path: path.display().to_string(),
         reason,

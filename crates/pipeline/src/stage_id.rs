@@ -21,10 +21,9 @@
 //!   by `fit_to_response` on the design's reduced model (K_in from the static gain, M from
 //!   the q_o2 mode with the design's K_qo2, C_qo2 from its damping, α from the differential
 //!   gain, K_qo1 and C_qo1 from a q_o1 mode when one lies below Nyquist, else the design's)
-//!   and the coupling by `fit_coupling`. The truth is
-//!   the same chain on the twin's exact modes (`ResponseFit::from_modes`), and only the
-//!   identified quantities are scored (`docs/DECISIONS.md`, "Stage identification that
-//!   closes the loop").
+//!   and the coupling by `fit_coupling`. The truth is the same chain on the twin's exact
+//!   modes (`ResponseFit::from_modes`), and only the identified quantities are scored
+//!   (`docs/DECISIONS.md`, "Stage identification that closes the loop").
 //!
 //! The identified `params.toml` carries the cross-axis `coupling` k_c as a field; `track`
 //! builds the controller's model with it ([`crate::plant::read_model_params`]).
@@ -504,10 +503,7 @@ pub fn response_fit_toml(fit: &ResponseFit) -> String {
 /// Reads a response fit written by [`response_fit_toml`]; checks it
 /// ([`ResponseFit::validate`]).
 pub fn read_response_fit(path: &std::path::Path) -> Result<ResponseFit> {
-    let text = std::fs::read_to_string(path).map_err(|source| PipelineError::Read {
-        path: path.to_path_buf(),
-        source,
-    })?;
+    let text = crate::error::read_text(path)?;
     let format = |reason: String| PipelineError::Format {
         path: path.display().to_string(),
         reason,
