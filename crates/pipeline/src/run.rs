@@ -313,12 +313,10 @@ fn run_stage(
         Stage::Export => StageSummary::Export(export(folder, &options.export)?),
         Stage::Reduce => StageSummary::Reduce(Box::new(reduce(folder, &options.reduce, progress)?)),
         Stage::Twin => {
-            progress
-                .note("building the twin of the design (FE model, Craig–Bampton, nonlinear fit)");
             // The twin is report data and `track`'s plant; a design it cannot model (e.g. solid
             // islands of an unconverged design) must not stop the run: `track` then runs on
             // the lumped model and says so.
-            match twin.insert(try_build(folder)?) {
+            match twin.insert(try_build(folder, progress)?) {
                 Ok(built) => StageSummary::Twin(Some(Box::new(write_twin_of(
                     folder,
                     &options.twin,
@@ -341,10 +339,7 @@ fn run_stage(
         Stage::IdentifyStage => {
             // A run resumed after the twin stage builds the twin here (then hands it to track).
             if twin.is_none() && run.exists(layout::design::DESIGN) {
-                progress.note(
-                    "building the twin of the design (FE model, Craig–Bampton, nonlinear fit)",
-                );
-                *twin = Some(try_build(folder)?);
+                *twin = Some(try_build(folder, progress)?);
             }
             let mut s =
                 identify_stage_on(folder, &options.identify_stage, progress, twin.as_ref())?;

@@ -721,9 +721,7 @@ fn twin_of(
     let built = match prebuilt {
         Some(b) => b,
         None => {
-            progress
-                .note("building the twin of the design (FE model, Craig–Bampton, nonlinear fit)");
-            built = try_build(folder)?;
+            built = try_build(folder, progress)?;
             &built
         }
     };

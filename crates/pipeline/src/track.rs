@@ -436,11 +436,7 @@ fn simulated(
     let reused = prebuilt.is_some();
     let built = match prebuilt {
         Some(b) => b,
-        None => {
-            progress
-                .note("building the twin of the design (FE model, Craig–Bampton, nonlinear fit)");
-            try_build(folder)?
-        }
+        None => try_build(folder, progress)?,
     };
     let Built { twin, seconds } = match built {
         Ok(t) => t,
@@ -499,9 +495,14 @@ fn read_estimates(rel: &str, text: &str) -> Result<BoucWenParams> {
 /// model this design (a `TwinError`'s message; tracking then runs on the lumped model).
 pub type TwinBuild = std::result::Result<Built, String>;
 
-/// Builds the twin of the run's design; a design the twin cannot model is an `Ok(Err(why))`,
-/// any other failure (an unreadable design) an error.
-pub fn try_build(folder: &RunFolder) -> Result<TwinBuild> {
+/// What a twin build says on the progress before it starts.
+pub(crate) const BUILDING_TWIN: &str =
+    "building the twin of the design (FE model, Craig–Bampton, nonlinear fit)";
+
+/// Builds the twin of the run's design (saying so on `progress`); a design the twin cannot
+/// model is an `Ok(Err(why))`, any other failure (an unreadable design) an error.
+pub fn try_build(folder: &RunFolder, progress: &dyn Progress) -> Result<TwinBuild> {
+    progress.note(BUILDING_TWIN);
     match crate::twin::build(folder) {
         Ok(b) => Ok(Ok(b)),
         Err(PipelineError::Twin(e)) => Ok(Err(e.to_string())),

@@ -103,7 +103,7 @@ pub fn write_twin(
     progress: &dyn Progress,
 ) -> Result<TwinSummary> {
     options.validate()?;
-    progress.note("building the twin of the design (FE model, Craig–Bampton, nonlinear fit)");
+    progress.note(crate::track::BUILDING_TWIN);
     write_twin_of(folder, options, progress, &build(folder)?)
 }
 

@@ -27,7 +27,10 @@ fn twin_identification_meets_the_issue_18_targets_on_the_default_design() {
         &flexstage_pipeline::Silent,
     )
     .unwrap();
-    let twin = try_build(&folder).unwrap().unwrap().twin;
+    let twin = try_build(&folder, &flexstage_pipeline::Silent)
+        .unwrap()
+        .unwrap()
+        .twin;
     let plant = Plant::of_run(&folder).unwrap();
     let sim = Simulation {
         plant: PlantKind::Twin,
