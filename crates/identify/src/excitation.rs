@@ -237,18 +237,34 @@ fn lines(f0: f64, k_lo: usize, k_hi: usize, step: usize) -> [Vec<(f64, f64)>; 2]
     l
 }
 
+impl Excitation {
+    /// The harmonics of f₀ each band excites, as (first, last, step): the low band 1..=f_max/f₀
+    /// every line, the resonance band from f_lo to f_hi every `spacing` (rounded to a multiple
+    /// of f₀). The lines alternate between the PEAs within each band ([`Multisine`]).
+    pub fn harmonics(&self) -> Vec<(usize, usize, usize)> {
+        let mut h = vec![(1, (self.f_max / self.f_min).floor() as usize, 1)];
+        if let Some(b) = &self.resonance {
+            h.push((
+                (b.f_lo / self.f_min).ceil().max(1.0) as usize,
+                (b.f_hi / self.f_min).floor() as usize,
+                (b.spacing / self.f_min).round().max(1.0) as usize,
+            ));
+        }
+        h
+    }
+}
+
 impl Multisine {
     /// Builds the signals (module docs).
     pub fn new(e: &Excitation) -> Result<Multisine> {
         e.validate()?;
-        let k_max = (e.f_max / e.f_min).floor() as usize;
-        let mut bands = vec![lines(e.f_min, 1, k_max, 1)];
+        let bands: Vec<_> = e
+            .harmonics()
+            .into_iter()
+            .map(|(lo, hi, step)| lines(e.f_min, lo, hi, step))
+            .collect();
         let mut peaks = vec![e.amplitude];
         if let Some(b) = &e.resonance {
-            let step = (b.spacing / e.f_min).round().max(1.0) as usize;
-            let k_lo = (b.f_lo / e.f_min).ceil().max(1.0) as usize;
-            let k_hi = (b.f_hi / e.f_min).floor() as usize;
-            bands.push(lines(e.f_min, k_lo, k_hi, step));
             peaks[0] -= b.amplitude;
             peaks.push(b.amplitude);
         }

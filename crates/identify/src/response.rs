@@ -20,12 +20,14 @@
 //!    lines alternate between the PEAs ([`crate::excitation::Multisine`]), so a line's driver j
 //!    is the PEA with the larger x_nom there, and H_ij = Q_i / X_nom,j / S(f), with S the
 //!    sensor chain's known response ([`flexstage_control::rig::SensorParams::response`]).
-//! 2. **Static gain.** Below `static_band` each H_ij is fitted by the low-frequency expansion
-//!    of a modal sum, Re H = g + a ω², Im H = b ω (linear least squares); g is the static gain.
+//! 2. **Static gain.** Below `static_band`, per output i, the low-frequency expansion of a
+//!    modal sum through both PEAs' x_nom, `Q_i = Σ_j (g_ij + a_ij ω² + j b_ij ω) X_j`, is fitted
+//!    by linear least squares (the hysteresis puts a little of each PEA's x_nom on the
+//!    other's lines); g_ij is the static gain.
 //! 3. **Modes.** Around every peak of |H_i·| (a local maximum within ±`window` that exceeds
 //!    `peak_factor` × the row's static gain) a rational model with one shared denominator,
 //!    `H_ij(s) = N_j(s) / (s² + 2ζω_k s + ω_k²)`, N_j of degree 2 (the background of the
-//!    other modes), is fitted by Levy's linearized least squares with Sanathanan–Koerner
+//!    other modes), is fitted to `Q_i = Σ_j H_ij X_j` by Levy's linearized least squares with Sanathanan–Koerner
 //!    reweighting (5 iterations). The mode's residue r_ij is the remainder of N_j modulo the
 //!    denominator at the pole; its share of axis i's static gain is
 //!    `(r_i1 ± r_i2)/ω_k² / (g_i1 ± g_i2)` (+ for q_o1, driven by both PEAs alike; − for
@@ -222,12 +224,12 @@ pub fn identify_response(
         static_gains(&lines, 0, p.static_band)?,
         static_gains(&lines, 1, p.static_band)?,
     ];
+    let band: Vec<&Line> = lines.iter().filter(|l| l.f > p.static_band).collect();
     let mut modes = Vec::new();
     for axis in 0..2 {
         let scale = g[axis][0].abs().max(g[axis][1].abs());
         let sign = if axis == 0 { 1.0 } else { -1.0 };
         let total = g[axis][0] + sign * g[axis][1];
-        let band: Vec<&Line> = lines.iter().filter(|l| l.f > p.static_band).collect();
         for peak in peaks(&band, axis, p.peak_factor * scale, p.window) {
             let Some((w, zeta, r)) = fit_mode(&band, axis, peak, p.window) else {
                 continue;
@@ -312,12 +314,11 @@ fn line_spectra(
             m
         })
         .collect();
-    let mut ks: Vec<usize> = (1..=(e.f_max / e.f_min).floor() as usize).collect();
-    if let Some(b) = &e.resonance {
-        let step = (b.spacing / e.f_min).round().max(1.0) as usize;
-        let lo = (b.f_lo / e.f_min).ceil().max(1.0) as usize;
-        ks.extend((lo..=(b.f_hi / e.f_min).floor() as usize).step_by(step));
-    }
+    let mut ks: Vec<usize> = e
+        .harmonics()
+        .into_iter()
+        .flat_map(|(lo, hi, step)| (lo..=hi).step_by(step))
+        .collect();
     ks.retain(|&k| 2 * k < n);
     ks.sort_unstable();
     ks.dedup();

@@ -587,20 +587,22 @@ fn response_rows(
         estimate: f(estimate),
         truth: Some(f(truth)),
     };
+    // Whether each axis has a mode (in either fit): its stiffness and damping are scored.
+    let mode = [0, 1].map(|i| fit.frequency[i].is_some() || exact.frequency[i].is_some());
     let mut rows = Vec::new();
-    if fit.frequency[0].is_some() || exact.frequency[0].is_some() {
+    if mode[0] {
         rows.push(row("k_qo1", "N/m", |p| p.k_qo1));
     }
     rows.push(row("k_in1", "N/m", |p| p.k_in1));
     rows.push(row("k_in2", "N/m", |p| p.k_in2));
-    if fit.frequency[1].is_some() || exact.frequency[1].is_some() {
+    if mode[1] {
         rows.push(row("mass", "kg", |p| p.mass));
     }
     rows.push(row("alpha", "-", |p| p.alpha));
-    if fit.frequency[0].is_some() || exact.frequency[0].is_some() {
+    if mode[0] {
         rows.push(row("c_qo1", "N s/m", |p| p.c_qo1));
     }
-    if fit.frequency[1].is_some() || exact.frequency[1].is_some() {
+    if mode[1] {
         rows.push(row("c_qo2", "N s/m", |p| p.c_qo2));
     }
     rows
