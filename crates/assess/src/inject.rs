@@ -9,7 +9,6 @@
 
 use flexstage_control::actuator::Compensation;
 use flexstage_control::margins::{MarginParams, Margins, margin};
-use flexstage_control::model::ResponseFit;
 use flexstage_control::rig::StagePlant;
 use flexstage_control::trajectory::{Reference, Shape};
 use nalgebra::Complex;
@@ -179,10 +178,7 @@ pub fn injected_margins(
 pub fn size_backstepping(bench: &mut Bench) -> Result<f64> {
     use flexstage_control::controller::GAIN_SCALES;
     let base = bench.setup.controller.clone();
-    let fit = bench.identified.unwrap_or_else(|| {
-        let nyquist = 0.5 / base.observer.sample_time;
-        ResponseFit::from_modes(&crate::bench::plant_modes(&bench.twin), nyquist, 0.1)
-    });
+    let modes = crate::bench::plant_modes(&bench.twin);
     let notches = bench.pi_notch.params.axes.map(|a| a.notches);
     let delay = bench.setup.rig.delay;
     let (gm, pm) = (bench.tuning.gain_margin_db, bench.tuning.phase_margin_deg);
@@ -191,7 +187,10 @@ pub fn size_backstepping(bench: &mut Bench) -> Result<f64> {
     mp.points = 40;
     mp.refine = 8;
     for &scale in &GAIN_SCALES {
-        bench.setup.controller = base.for_response(&fit, notches, scale);
+        bench.setup.controller = match &bench.identified {
+            Some(fit) => base.for_response(fit, notches, scale),
+            None => base.for_sampled_plant(&modes, notches, scale),
+        };
         let mut ok = true;
         for c in [Candidate::Robust, Candidate::NonRobust] {
             ok &= match injected_margins(bench, c, delay, &mp, &InjectionParams::default())? {

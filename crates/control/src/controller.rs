@@ -195,7 +195,8 @@ impl ControllerParams {
     /// The settings for a plant known by its modal response (e.g. the twin's modes), as a
     /// practitioner would set the backstepping up from a frequency-response
     /// identification: [`ControllerParams::for_response`] on the fit that identification
-    /// would give below Nyquist ([`crate::model::ResponseFit::from_modes`] with a 10 % share).
+    /// would give below Nyquist ([`crate::model::ResponseFit::from_modes`] with
+    /// [`crate::model::RESPONSE_SHARE`]).
     pub fn for_sampled_plant(
         &self,
         modes: &[crate::tuning::PlantMode],
@@ -203,7 +204,8 @@ impl ControllerParams {
         gain_scale: f64,
     ) -> ControllerParams {
         let nyquist = 0.5 / self.observer.sample_time;
-        let fit = crate::model::ResponseFit::from_modes(modes, nyquist, 0.1);
+        let fit =
+            crate::model::ResponseFit::from_modes(modes, nyquist, crate::model::RESPONSE_SHARE);
         self.for_response(&fit, notches, gain_scale)
     }
 

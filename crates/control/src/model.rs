@@ -178,6 +178,11 @@ impl StageModel {
     }
 }
 
+/// The least share of an axis's static gain a mode carries to be the axis's mode of a
+/// [`ResponseFit`] (what `ControllerParams::for_sampled_plant` and the response
+/// identification use).
+pub const RESPONSE_SHARE: f64 = 0.1;
+
 /// What a frequency-response identification of the stage gives, to fit the lumped model
 /// to ([`fit_to_response`]).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -64,7 +64,8 @@ pub struct ResponseParams {
     pub peak_factor: f64,
     /// The controller's Nyquist frequency \[Hz\], > 0: modes at or above it are not selected.
     pub nyquist: f64,
-    /// Least share of an axis's static gain a selected mode carries, in (0, 1]. Default 0.1.
+    /// Least share of an axis's static gain a selected mode carries, in (0, 1]. Default
+    /// [`flexstage_control::model::RESPONSE_SHARE`] (0.1).
     pub share: f64,
     /// The sensor chain, divided out of the measured response.
     pub sensor: SensorParams,
@@ -79,7 +80,7 @@ impl ResponseParams {
             window: 0.08,
             peak_factor: 3.0,
             nyquist: 0.5 / sample_time,
-            share: 0.1,
+            share: flexstage_control::model::RESPONSE_SHARE,
             sensor,
         }
     }
