@@ -95,6 +95,7 @@ pub enum Selector {
     /// The node nearest to a point \[m\].
     Nearest {
         /// (x, y) \[m\].
+        #[serde(deserialize_with = "crate::strict::array")]
         point: [f64; 2],
     },
     /// Every node on one edge of the domain.
@@ -105,8 +106,10 @@ pub enum Selector {
     /// Every node (or element centroid) inside an axis-aligned box \[m\].
     Box {
         /// Lower-left corner (x, y) \[m\].
+        #[serde(deserialize_with = "crate::strict::array")]
         min: [f64; 2],
         /// Upper-right corner (x, y) \[m\].
+        #[serde(deserialize_with = "crate::strict::array")]
         max: [f64; 2],
     },
 }
@@ -243,7 +246,11 @@ pub struct Output {
     /// Direction `d` of the output displacement to maximize (`objective = "displacement"`):
     /// any non-zero finite vector, normalized on use. Unset: `(sin θ, cos θ)` of `tilt_deg`
     /// (negated in the reversed configuration). Required with `[[ports]]`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::strict::option_array"
+    )]
     pub direction: Option<[f64; 2]>,
 }
 
@@ -302,6 +309,7 @@ pub struct Port {
     /// The input node (exactly one).
     pub at: Selector,
     /// Direction of the load, along x or y (`[±1, 0]` or `[0, ±1]`).
+    #[serde(deserialize_with = "crate::strict::array")]
     pub direction: [f64; 2],
     /// Input spring `k_in` \[N/m\], > 0: the source's stiffness.
     pub spring: f64,

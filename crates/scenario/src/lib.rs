@@ -51,6 +51,7 @@ mod docs;
 mod error;
 mod rig;
 mod stage;
+mod strict;
 
 use std::path::Path;
 

@@ -204,27 +204,39 @@ impl Stage {
 #[serde(deny_unknown_fields)]
 pub struct Controller {
     /// K-filter observer gains k_e1, k_e2 (Eq. 37–38). Table 4: 1e5.
+    #[serde(deserialize_with = "crate::strict::array")]
     pub observer_gain: [f64; 2],
     /// Error gains k_ε1, k_ε2 of s = ε̇ + k_ε ε. Table 4: 2e4, 1.5e4 (retuned to 3e3 for the
     /// sampled loop).
+    #[serde(deserialize_with = "crate::strict::array")]
     pub error_gain: [f64; 2],
     /// Feedback gains k1, k2 of Eq. (A34). Table 4: 1.2e4, 1.2e3 (retuned to 3e3).
+    #[serde(deserialize_with = "crate::strict::array")]
     pub feedback_gain: [f64; 2],
     /// Bandwidth κ_d of the observer's estimate of the model error Δ_η [1/s] (flexstage-control
     /// docs).
     #[serde(default = "default_disturbance_gain")]
     pub disturbance_gain: f64,
     /// Linear feedback gains k_η1, k_η2 > 1 of Eq. (A21) [1/s] (not in Table 4).
-    #[serde(default = "default_eta_gain")]
+    #[serde(
+        default = "default_eta_gain",
+        deserialize_with = "crate::strict::array"
+    )]
     pub eta_gain: [f64; 2],
     /// Disturbance bounds max|Δ_η| of Eq. (A22, A25) [m/s²].
-    #[serde(default = "default_eta_bound")]
+    #[serde(
+        default = "default_eta_bound",
+        deserialize_with = "crate::strict::array"
+    )]
     pub eta_bound: [f64; 2],
     /// Disturbance bounds max|Δ_ε| of Eq. (A36–A37) [m/s].
-    #[serde(default = "default_a_bound")]
+    #[serde(default = "default_a_bound", deserialize_with = "crate::strict::array")]
     pub a_bound: [f64; 2],
     /// Boundary layers (φ_s [m/s], φ_a \[m\]) of the robust terms; 0 selects sgn().
-    #[serde(default = "default_boundary_layer")]
+    #[serde(
+        default = "default_boundary_layer",
+        deserialize_with = "crate::strict::array"
+    )]
     pub boundary_layer: [f64; 2],
     /// Take q̇ from the observer instead of finite differences of the positions.
     #[serde(default)]
@@ -233,7 +245,7 @@ pub struct Controller {
     #[serde(default = "default_stroke")]
     pub stroke: f64,
     /// PID baseline gains [kp, ki [1/s], kd \[s\]] on the output error.
-    #[serde(default = "default_pid")]
+    #[serde(default = "default_pid", deserialize_with = "crate::strict::array")]
     pub pid: [f64; 3],
 }
 
@@ -305,8 +317,10 @@ impl Controller {
 #[serde(deny_unknown_fields)]
 pub struct Sensors {
     /// Quantization step of the q1 and q2 sensors \[m\]. Section 4.1: 7.5e-9, 10e-9.
+    #[serde(deserialize_with = "crate::strict::array")]
     pub resolution: [f64; 2],
     /// Standard deviation of white measurement noise \[m\].
+    #[serde(deserialize_with = "crate::strict::array")]
     pub noise_std: [f64; 2],
 }
 
@@ -361,6 +375,7 @@ pub enum Trajectory {
         /// Frequency ratio r of q1 to q2 (3 and 2 in the paper).
         ratio: f64,
         /// Amplitudes (A1, A2) \[m\].
+        #[serde(deserialize_with = "crate::strict::array")]
         amplitude: [f64; 2],
         /// Base frequency f \[Hz\].
         frequency: f64,
