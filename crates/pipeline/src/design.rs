@@ -87,6 +87,12 @@ pub enum DesignStart {
     Resume,
 }
 
+/// A constraint whose normalized value g (≤ 0 feasible) ends above this is reported as
+/// violated: 5 %, well above the quick preset's stress constraint at its iteration cap
+/// (1.6 %), far below what an unusable design shows (a start almost void ended at g = 3 on
+/// the volume).
+pub const INFEASIBLE_ABOVE: f64 = 0.05;
+
 /// What the design stage produced.
 #[derive(Debug, Clone)]
 pub struct DesignSummary {
@@ -115,6 +121,9 @@ pub struct DesignSummary {
     pub constraints: Vec<(&'static str, f64)>,
     /// Load cases that needed a cutback retry, summed over iterations.
     pub retried_load_cases: usize,
+    /// What the user must know about the result: each constraint violated by more than
+    /// [`INFEASIBLE_ABOVE`] at the last iteration.
+    pub warnings: Vec<String>,
     /// The stage folder.
     pub dir: PathBuf,
 }
@@ -358,6 +367,7 @@ fn finish(
             .zip(last.constraints.iter().copied())
             .collect(),
         retried_load_cases: h.iter().map(|r| r.retried_cases.len()).sum(),
+        warnings: infeasible(&opt.constraint_names(), &last.constraints),
         dir: run.path(files::DIR),
     };
     let file = DesignFile {
@@ -610,6 +620,26 @@ pub(crate) fn two_pea_stage(s: &Scenario, stage: &str) -> Result<()> {
         .into());
     }
     Ok(())
+}
+
+/// A warning naming the constraints the last iteration violates by more than
+/// [`INFEASIBLE_ABOVE`] (`history.csv` has their columns `g_<name>`), if any.
+fn infeasible(names: &[&str], g: &[f64]) -> Vec<String> {
+    let violated: Vec<String> = names
+        .iter()
+        .zip(g)
+        .filter(|(_, g)| !(**g <= INFEASIBLE_ABOVE))
+        .map(|(name, g)| format!("g_{name} = {}", flexstage_report::html::fmt_num(*g)))
+        .collect();
+    if violated.is_empty() {
+        return Vec::new();
+    }
+    vec![format!(
+        "the design ends infeasible: {} (≤ 0 is feasible; design/history.csv): it does not meet \
+         these constraints (give it more iterations, or start nearer the bounds: \
+         optimization.initial_density)",
+        violated.join(", ")
+    )]
 }
 
 #[cfg(test)]
