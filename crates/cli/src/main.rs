@@ -250,6 +250,15 @@ fn init(path: &std::path::Path, name: &str, force: bool) -> anyhow::Result<()> {
 fn check(scenario: &ScenarioArgs) -> anyhow::Result<()> {
     let s: Scenario = scenario.load()?;
     outln!("{}: valid", scenario.describe());
+    let e = flexstage_pipeline::DesignEstimate::of(&s);
+    let estimate = format!(
+        "design estimate: {:.2} GiB of memory (allocated at the peak, limit {:.0} GiB), {:.1e} \
+         flop (limit {:.0e})",
+        e.bytes / GIB,
+        flexstage_pipeline::limit::DESIGN_BYTES / GIB,
+        e.flops,
+        flexstage_pipeline::limit::DESIGN_FLOPS
+    );
     let mesh = format!(
         "mesh {} x {} elements over {} x {} mm",
         s.mesh.nl,
@@ -274,6 +283,7 @@ fn check(scenario: &ScenarioArgs) -> anyhow::Result<()> {
             s.regions.len(),
             default_root(&s).display()
         );
+        outln!("  {estimate}");
         return Ok(());
     }
     outln!(
@@ -288,8 +298,11 @@ fn check(scenario: &ScenarioArgs) -> anyhow::Result<()> {
         s.trajectories.len(),
         default_root(&s).display()
     );
+    outln!("  {estimate}");
     Ok(())
 }
+
+const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 
 fn run(a: RunArgs) -> anyhow::Result<()> {
     let s = a.scenario.load()?;

@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use flexstage_fem::{AdditiveYeoh, Kinematics};
 use flexstage_report::{RunDir, csv_columns, layout::design as files};
-use flexstage_scenario::Scenario;
+use flexstage_scenario::{DesignEstimate, Scenario};
 use flexstage_topopt::check::{CheckSetup, check_gradients};
 use flexstage_topopt::summary::{FinalAnalysis, final_analysis};
 use flexstage_topopt::{
@@ -136,6 +136,7 @@ pub fn design(
     progress: &dyn Progress,
 ) -> Result<DesignSummary> {
     options.validate()?;
+    fits_address_space(folder.scenario(), options)?;
     let run = folder.dir();
     match start {
         DesignStart::Fresh { force } => prepare_fresh(folder, force)?,
@@ -158,6 +159,19 @@ pub fn design(
         DesignStart::Fresh { .. } => Optimizer::new(&problem, params)?,
         DesignStart::Resume => {
             let path = run.path(files::CHECKPOINT);
+            if !path.exists() {
+                return Err(PipelineError::Missing {
+                    what: "checkpoint",
+                    path,
+                    hint: format!(
+                        "there is nothing to resume: the design stopped before its first \
+                         checkpoint (one every {} iterations, --checkpoint-every) or never \
+                         started; start it over with `flexstage design --out {}`",
+                        options.checkpoint_every,
+                        folder.root().display()
+                    ),
+                });
+            }
             let bytes = crate::error::read_bytes(&path)?;
             let payload = crate::envelope::payload_for(&path, &bytes, folder.scenario())?;
             let o = Optimizer::resume(&problem, params, payload)?;
@@ -186,6 +200,41 @@ pub fn design(
     )?;
     let seconds = t0.elapsed().as_secs_f64();
     finish(&s, &problem, &opt, folder, stop, seconds, resumed_at)
+}
+
+/// Refuses a design whose memory estimate ([`DesignEstimate`]: allocated at the peak) exceeds
+/// the address space this process may allocate (`ulimit -v`, the soft `RLIMIT_AS` as Linux's
+/// `/proc/self/limits` shows it): it would abort in an allocation, possibly hours in.
+fn fits_address_space(s: &Scenario, options: &DesignOptions) -> Result<()> {
+    let Some(cap) = address_space_limit() else {
+        return Ok(());
+    };
+    let mut s = s.clone();
+    if let Some(n) = options.max_iterations {
+        s.optimization.max_iterations = n;
+    }
+    let need = DesignEstimate::of(&s).bytes;
+    if need <= cap {
+        return Ok(());
+    }
+    let gib = |b: f64| format!("{:.1} GiB", b / 1024f64.powi(3));
+    Err(PipelineError::Resources {
+        what: "the design (memory allocated at its peak, `flexstage check` prints the estimate)",
+        need: gib(need),
+        available: format!(
+            "the {} of address space this process may allocate (ulimit -v)",
+            gib(cap)
+        ),
+        hint: "it would abort in an allocation. Raise the limit, or lower optimization.samples \
+               or the mesh",
+    })
+}
+
+/// The soft limit of the address space \[bytes\], if there is one and it can be read.
+fn address_space_limit() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let line = text.lines().find(|l| l.starts_with("Max address space"))?;
+    line.split_whitespace().nth(3)?.parse().ok()
 }
 
 /// Refuses to replace an earlier design unless forced; clears `design/` for a new one.

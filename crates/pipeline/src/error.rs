@@ -126,6 +126,18 @@ pub enum PipelineError {
         /// The likely cause and how to go on.
         hint: String,
     },
+    /// The work needs more of a resource than the process may use.
+    #[error("{what} needs an estimated {need}, more than {available}; {hint}")]
+    Resources {
+        /// The work and the resource.
+        what: &'static str,
+        /// The estimate, formatted.
+        need: String,
+        /// What the process may use, formatted.
+        available: String,
+        /// How to go on.
+        hint: &'static str,
+    },
     /// Scenario errors (also of the derived plant).
     #[error(transparent)]
     Scenario(#[from] flexstage_scenario::ScenarioError),

@@ -96,5 +96,5 @@ pub use twin::{TwinOptions, TwinSummary, TwinValidation, write_twin};
 pub use flexstage_control::{actuator::Compensation, experiment::Variant};
 pub use flexstage_piezo::WaveShape;
 pub use flexstage_report::outline::Unit;
-pub use flexstage_scenario::Scenario;
+pub use flexstage_scenario::{DesignEstimate, Scenario, limit};
 pub use flexstage_verify::{Verification, VerifyParams};

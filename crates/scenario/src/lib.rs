@@ -62,6 +62,7 @@ pub use design::{
     Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Limits, Material, Mesh,
     ObjectiveKind, Optimization, Output, Port, Projection, Region, RegionKind, Selector, Support,
 };
+pub(crate) use error::compact;
 pub use error::{RangeError, Result, ScenarioError};
 pub use rig::{Amplifier, Creep, FloorVibration, Rig, SensorDynamics, Twin};
 pub use stage::{

@@ -131,7 +131,14 @@ fn a_huge_mesh_is_refused_with_its_estimate() {
         s.mesh.nw = 500;
         s.optimization.samples = 4000;
     });
-    has(&e, &["optimization.samples", "GiB", "at most 8 GiB"]);
+    has(&e, &["optimization.samples", "GiB", "at most 16 GiB"]);
+    // Issue #32: 4000 samples on the quick mesh passed `check` (an estimate of 1.4 GiB) and
+    // aborted allocating past 4 and 9.5 GB caps.
+    let e = refused(|s| s.optimization.samples = 4000);
+    has(
+        &e,
+        &["optimization.samples", "4000 samples × 3", "at most 16 GiB"],
+    );
 }
 
 #[test]
