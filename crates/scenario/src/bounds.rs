@@ -304,6 +304,7 @@ const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 /// Every check of this module.
 pub(crate) fn validate(s: &Scenario) -> Result<()> {
     mesh_size(s)?;
+    stiffness_contrast(s)?;
     if s.ports.is_empty() {
         ports(s)?;
         rigid_body_modes(s)?;
@@ -359,6 +360,53 @@ fn mesh_size(s: &Scenario) -> Result<()> {
             format!("at most {:.0e} flop (about a day)", limit::DESIGN_FLOPS),
         )
         .into());
+    }
+    Ok(())
+}
+
+/// Margin of [`stiffness_contrast`] over the solver's round-off level.
+const CONTRAST_MARGIN: f64 = 10.0;
+
+/// The stiffnesses the FE solver can resolve together. Its factorization refuses a pivot at
+/// or below `n·ε·max a_ii` (a floating structure's zero pivot after round-off; flexstage-fem's
+/// `singular_pivot_threshold`), and a void region's pivots are about `E_min·t` while the
+/// largest diagonal is about `E0·t` plus the stiffest spring. So that only a floating
+/// structure trips that test, `E0·t` and each spring must stay below half of
+/// `E_min·t / (10·n·ε)`: a solid or a spring stiffer than that was refused as "the structure
+/// floats" (`E0 = 1e308`, `output_spring = 1e308`), and is refused here by its own range.
+fn stiffness_contrast(s: &Scenario) -> Result<()> {
+    let m = &s.material;
+    let dofs = 2.0 * (s.mesh.nl as f64 + 1.0) * (s.mesh.nw as f64 + 1.0);
+    let t = s.mesh.thickness;
+    let cap = m.min_modulus * t / (CONTRAST_MARGIN * dofs * f64::EPSILON) / 2.0;
+    let why = |unit: &str, limit: f64| {
+        format!(
+            "at most {limit:.3e} {unit}: half the stiffness the solver resolves against the \
+             void (material.min_modulus × mesh.thickness / (10·n·ε), n = {dofs} DOFs)"
+        )
+    };
+    if !(m.youngs_modulus * t <= cap) {
+        return Err(RangeError::number(
+            "material.youngs_modulus",
+            m.youngs_modulus,
+            why("Pa", cap / t),
+        )
+        .into());
+    }
+    let mut springs = vec![(
+        "optimization.output_spring".to_string(),
+        s.optimization.output_spring,
+    )];
+    if s.ports.is_empty() {
+        springs.push(("actuators.stiffness".into(), s.actuators.stiffness));
+    }
+    for (i, p) in s.ports.iter().enumerate() {
+        springs.push((format!("ports[{i}].spring"), p.spring));
+    }
+    for (field, k) in springs {
+        if !(k <= cap) {
+            return Err(RangeError::number(field, k, why("N/m", cap)).into());
+        }
     }
     Ok(())
 }

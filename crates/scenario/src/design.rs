@@ -56,7 +56,9 @@ impl Mesh {
 pub struct Material {
     /// Young's modulus E0 of the solid \[Pa\]. Table 3: 73e9 (aluminium 6061).
     pub youngs_modulus: f64,
-    /// Young's modulus E_min given to void \[Pa\], 0 < E_min < E0. Table 3: 1e3.
+    /// Young's modulus E_min given to void \[Pa\], 0 < E_min < E0, and E0 (like every
+    /// spring) at most what the solver resolves against it (a contrast of about
+    /// 1e11 on the quick mesh; `flexstage check` names the bound). Table 3: 1e3.
     pub min_modulus: f64,
     /// Poisson ratio ν, in (−1, 0.5). Table 3: 0.33.
     pub poisson_ratio: f64,
@@ -192,6 +194,9 @@ pub enum Configuration {
     Reversed,
 }
 
+/// The smallest stroke amplitude \[m\] (1 nm).
+pub const MIN_STROKE: f64 = 1e-9;
+
 /// The two piezo actuators (Table 1, Eq. 2–3, DECISIONS.md).
 ///
 /// Each PEA acts on its input node as a grounded spring `stiffness` along x plus the force
@@ -201,11 +206,12 @@ pub enum Configuration {
 pub struct Actuators {
     /// PEA stiffness K_pea [N/m]. Table 1: 250 N/µm = 2.5e8.
     pub stiffness: f64,
-    /// Maximum nominal stroke max x_nom \[m\]. Table 1: 60e-6.
+    /// Maximum nominal stroke max x_nom \[m\], in [2e-9, 1]. Table 1: 60e-6.
     pub max_stroke: f64,
     /// Blocking force f_block \[N\]. Table 1: 1.5e4.
     pub blocking_force: f64,
-    /// Half range of the preloaded nominal stroke \[m\]: x_nom ∈ [−a, a]. Section 4.1: 30e-6.
+    /// Half range of the preloaded nominal stroke \[m\]: x_nom ∈ [−a, a], a in
+    /// [1e-9, max_stroke/2]. Section 4.1: 30e-6.
     pub stroke_amplitude: f64,
     /// Table 2 configuration.
     pub configuration: Configuration,
@@ -219,14 +225,22 @@ impl Actuators {
     /// Checks every field.
     pub fn validate(&self, mesh: &Mesh) -> Result<()> {
         positive("actuators.stiffness", self.stiffness)?;
-        positive("actuators.max_stroke", self.max_stroke)?;
+        // A stroke below a nanometre is below any sensor of Section 4.1 (7.5 nm); its
+        // workspace, ∝ a², underflowed to 0 at a = 1e-308 (area 0, "NaN × the input stroke
+        // square"). A metre is beyond any piezo actuator.
+        within(
+            "actuators.max_stroke",
+            self.max_stroke,
+            2.0 * MIN_STROKE,
+            1.0,
+        )?;
         positive("actuators.blocking_force", self.blocking_force)?;
         check(
             "actuators.stroke_amplitude",
             self.stroke_amplitude,
-            self.stroke_amplitude > 0.0 && 2.0 * self.stroke_amplitude <= self.max_stroke,
+            self.stroke_amplitude >= MIN_STROKE && 2.0 * self.stroke_amplitude <= self.max_stroke,
             &format!(
-                "a number in (0, max_stroke/2 = {:e}] m",
+                "a number in [{MIN_STROKE:e}, max_stroke/2 = {:e}] m",
                 0.5 * self.max_stroke
             ),
         )?;
