@@ -38,7 +38,7 @@ pub enum RecordError {
     },
     /// A line is malformed: a missing or non-numeric cell, NaN or infinity, time that does
     /// not increase; line 0 stands for the record as a whole.
-    #[error("{origin}, line {line}: {reason}")]
+    #[error("{origin}{}: {reason}", at_line(*.line))]
     Line {
         /// File name or other origin.
         origin: String,
@@ -47,6 +47,15 @@ pub enum RecordError {
         /// What is wrong with the line.
         reason: String,
     },
+}
+
+/// ", line N" for a line, nothing for the whole record (line 0).
+fn at_line(line: u64) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(", line {line}")
+    }
 }
 
 impl RecordError {
