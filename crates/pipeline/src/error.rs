@@ -185,8 +185,6 @@ pub enum PipelineError {
 /// Result alias of this crate.
 pub type Result<T> = std::result::Result<T, PipelineError>;
 
-/// `Ok` when `ok`, else [`PipelineError::Option`] naming the option, the value and the
-/// accepted range. Non-finite floats never pass (callers include `value.is_finite()`).
 /// The bytes of `path`, or [`PipelineError::Read`] naming it.
 pub(crate) fn read_bytes(path: &std::path::Path) -> Result<Vec<u8>> {
     std::fs::read(path).map_err(|source| PipelineError::Read {
@@ -203,6 +201,9 @@ pub(crate) fn read_text(path: &std::path::Path) -> Result<String> {
     })
 }
 
+/// `Ok` when `ok`, else [`PipelineError::Option`] naming the option, the value and the
+/// accepted range. Non-finite floats never pass (callers include `value.is_finite()`). A
+/// value that is one number is shown compactly (`1e308`, not 309 digits).
 pub(crate) fn require(
     ok: bool,
     option: &'static str,
@@ -210,14 +211,16 @@ pub(crate) fn require(
     expected: &str,
 ) -> Result<()> {
     if ok {
-        Ok(())
-    } else {
-        Err(PipelineError::Option {
-            option,
-            value: value.to_string(),
-            expected: expected.to_string(),
-        })
+        return Ok(());
     }
+    let value = value.to_string();
+    Err(PipelineError::Option {
+        option,
+        value: value
+            .parse::<f64>()
+            .map_or(value, flexstage_numerics::compact),
+        expected: expected.to_string(),
+    })
 }
 
 /// `Ok` when the workspace `area` \[m²\] of `what` (e.g. `analyze`) is finite and ≥ 0, else

@@ -585,7 +585,11 @@ fn ports(s: &Scenario) -> Result<()> {
                         "[{:e}, {:e}] .. [{:e}, {:e}]",
                         min[0], min[1], max[0], max[1]
                     ),
-                    "a box that holds at least one element centroid",
+                    format!(
+                        "a box that holds at least one element centroid (elements of {:e} × \
+                         {:e} m: mesh.length / mesh.nl × mesh.width / mesh.nw)",
+                        grid.dx, grid.dy
+                    ),
                 )
                 .into());
             }

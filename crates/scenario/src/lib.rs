@@ -421,7 +421,7 @@ impl Scenario {
                 reason: format!(
                     "a tilted output (tilt_deg = {}) is not mirror-symmetric: set \
                      optimization.mirror_symmetry = false",
-                    self.output.tilt_deg
+                    compact(self.output.tilt_deg)
                 ),
             });
         }
