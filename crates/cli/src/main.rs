@@ -185,7 +185,9 @@ struct RunArgs {
 }
 
 fn main() -> ExitCode {
-    let result = dispatch(Cli::parse().command);
+    let command = Cli::parse().command;
+    bars::plain_when_not_a_terminal(command.name());
+    let result = dispatch(command);
     // A reader that went away (`| head`) ends the printing, never the command.
     let stdout_failure = out::finish();
     match (result, stdout_failure) {
@@ -200,6 +202,25 @@ fn main() -> ExitCode {
         (Err(e), _) => {
             errln!("error: {e:#}");
             ExitCode::FAILURE
+        }
+    }
+}
+
+impl Command {
+    /// The subcommand's name, for progress lines.
+    fn name(&self) -> &'static str {
+        match self {
+            Command::Init { .. } => "init",
+            Command::Check(_) => "check",
+            Command::Analyze(_) => "analyze",
+            Command::Design(_) => "design",
+            Command::Reduce(_) => "reduce",
+            Command::Identify { .. } => "identify",
+            Command::Pea { .. } => "pea",
+            Command::Track(_) => "track",
+            Command::Export(_) => "export",
+            Command::Run(_) => "run",
+            Command::Report { .. } => "report",
         }
     }
 }
