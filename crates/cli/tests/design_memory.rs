@@ -1,4 +1,4 @@
-//! Reference: issue #32, "Abort": `optimization.samples = 4000` passed `check` with a design
+//! Reference: the second hardening review, "Abort": `optimization.samples = 4000` passed `check` with a design
 //! memory estimate of 1.4 GiB and aborted in an allocation under a 4 GB and a 9.5 GB cap
 //! (every FE workspace keeps about 60 vectors a load case, and six sets of workspaces are
 //! alive at the peak). Goal: the estimate `flexstage check` prints bounds what `flexstage

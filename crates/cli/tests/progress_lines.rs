@@ -1,4 +1,4 @@
-//! Reference: issue #32, "Silent long work": with output not on a terminal, a design that
+//! Reference: the second hardening review, "Silent long work": with output not on a terminal, a design that
 //! runs for hours printed nothing (619 iterations in 20 s, no line). Goal: with standard error
 //! a pipe, a design prints plain lines (start, at least one intermediate position, done), and
 //! a stage without steps (stage identification) prints "still working" lines at the period

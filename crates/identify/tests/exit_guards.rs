@@ -77,7 +77,7 @@ fn ljung_non_finite_estimate_is_refused() {
     );
 }
 
-/// Issue #32: stage identification on a record whose x_nom1 is 1e300 times too large returned
+/// The second hardening review: stage identification on a record whose x_nom1 is 1e300 times too large returned
 /// k_in1, k_pea1 and c_in1 exactly at the guess with exit 0 (only the x_in1 row was stuck; the
 /// guard needed every row stuck). The record itself is now refused by its range, and a row
 /// stuck at the guess is refused by name even when the others moved.

@@ -300,7 +300,7 @@ mod tests {
         assert_eq!(line_of(read("t,x\n\n\n0,1\n1,z\n").unwrap_err()), 5);
     }
 
-    /// Reference: issue #32, "a CSV with a truncated last row or one extra field is read
+    /// Reference: the second hardening review, "a CSV with a truncated last row or one extra field is read
     /// silently". Goal: a row with a field too few or too many (also in a column not read)
     /// and a last line without its line end are refused with their line.
     #[test]

@@ -693,6 +693,23 @@ fn infeasible(names: &[&str], g: &[f64]) -> Vec<String> {
 
 #[cfg(test)]
 mod tests {
+    /// The second hardening review: a design from a start almost void ended at three times the
+    /// volume bound and twice the stress bound with exit 0 and no word. Goal: every constraint
+    /// above [`super::INFEASIBLE_ABOVE`] is named in one warning; none below it.
+    #[test]
+    fn a_design_ending_infeasible_is_flagged() {
+        let names = ["worst_eroded", "stress", "volume", "energy"];
+        let w = super::infeasible(&names, &[0.0, 1.039, 2.975, 0.049]);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].contains("g_stress = 1.039") && w[0].contains("g_volume = 2.975"),
+            "{w:?}"
+        );
+        assert!(!w[0].contains("energy") && !w[0].contains("worst"), "{w:?}");
+        assert!(super::infeasible(&names, &[0.0, 0.016, -0.1, -0.9]).is_empty());
+        assert_eq!(super::infeasible(&["volume"], &[f64::NAN]).len(), 1);
+    }
+
     use super::*;
 
     #[test]

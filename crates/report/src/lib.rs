@@ -280,7 +280,7 @@ pub fn csv_columns(header: &[&str], columns: &[&[f64]]) -> String {
 mod tests {
     use super::*;
 
-    /// Reference: issue #32, "a dangling `--out` symlink gives 'File exists'". Goal: a folder
+    /// Reference: the second hardening review, "a dangling `--out` symlink gives 'File exists'". Goal: a folder
     /// behind a dangling symbolic link, or under a file, is refused saying what is in the way.
     #[cfg(unix)]
     #[test]

@@ -689,8 +689,10 @@ impl Limits {
 
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
-        positive("limits.fatigue_strength", self.fatigue_strength)?;
-        positive("limits.yield_strength", self.yield_strength)?;
+        // The ranges export's verification accepts (flexstage-verify): from a pascal (far
+        // below any material; a subnormal strength made the allowable stress 0) to 10 GPa.
+        within("limits.fatigue_strength", self.fatigue_strength, 1.0, 1e10)?;
+        within("limits.yield_strength", self.yield_strength, 1.0, 1e10)?;
         if self.fatigue_strength > self.yield_strength {
             return Err(ScenarioError::Inconsistent {
                 fields: "limits.fatigue_strength, limits.yield_strength".into(),
@@ -707,18 +709,14 @@ impl Limits {
             1.0,
             10.0,
         )?;
-        check(
+        // From a micrometre to the 5 cm export's verification accepts.
+        within(
             "limits.min_hinge_thickness",
             self.min_hinge_thickness,
-            self.min_hinge_thickness > 0.0 && self.min_hinge_thickness <= 0.1,
-            "a length in (0, 0.1] m",
+            1e-6,
+            0.05,
         )?;
-        check(
-            "limits.min_slot_width",
-            self.min_slot_width,
-            self.min_slot_width > 0.0 && self.min_slot_width <= 0.1,
-            "a length in (0, 0.1] m",
-        )
+        within("limits.min_slot_width", self.min_slot_width, 1e-6, 0.05)
     }
 }
 

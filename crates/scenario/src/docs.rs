@@ -301,11 +301,11 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "limits.fatigue_strength",
-        "Fatigue strength [Pa], > 0: fully reversed stress amplitude survived for the design life. Al 6061-T6: 96.5e6 (5e8 cycles, R. R. Moore; ASM Handbook Vol. 2).",
+        "Fatigue strength [Pa], in [1, 1e10]: fully reversed stress amplitude survived for the design life. Al 6061-T6: 96.5e6 (5e8 cycles, R. R. Moore; ASM Handbook Vol. 2).",
     ),
     (
         "limits.yield_strength",
-        "Tensile yield strength [Pa], ≥ fatigue_strength. Al 6061-T6: 276e6 (ASM Handbook Vol. 2).",
+        "Tensile yield strength [Pa], in [fatigue_strength, 1e10]. Al 6061-T6: 276e6 (ASM Handbook Vol. 2).",
     ),
     (
         "limits.safety_factor",
@@ -317,11 +317,11 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "limits.min_hinge_thickness",
-        "Smallest solid member (hinge) thickness [m], in (0, 0.1]. Default 0.5 mm. Sets the robust formulation's erosion threshold and filter radius.",
+        "Smallest solid member (hinge) thickness [m], in [1e-6, 0.05]. Default 0.5 mm. Sets the robust formulation's erosion threshold and filter radius.",
     ),
     (
         "limits.min_slot_width",
-        "Smallest void (slot) width [m], in (0, 0.1], e.g. the wire-EDM kerf. Default 0.4 mm. Sets the dilation threshold.",
+        "Smallest void (slot) width [m], in [1e-6, 0.05], e.g. the wire-EDM kerf. Default 0.4 mm. Sets the dilation threshold.",
     ),
     (
         "hysteresis",
@@ -333,7 +333,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "hysteresis.voltage_max",
-        "Highest amplifier voltage [V], > voltage_min. DECISIONS.md: 1000.",
+        "Highest amplifier voltage [V], in [voltage_min + 1, 2000]. DECISIONS.md: 1000.",
     ),
     ("hysteresis.pea1", "PEA1, Table A1 estimates."),
     ("hysteresis.pea2", "PEA2, Table A1 estimates."),
@@ -699,11 +699,11 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "trajectories.amplitude",
-        "Amplitudes (A1, A2) [m], ≥ 0. Paper silent; default 8 and 16 µm: at most 65 % of what the amplifier range delivers (the rest is headroom for the controller), checked before a run.",
+        "Amplitudes (A1, A2) [m], each 0 or ≥ 1e-9. Paper silent; default 8 and 16 µm: at most 65 % of what the amplifier range delivers (the rest is headroom for the controller), checked before a run.",
     ),
     (
         "trajectories.radius",
-        "Circle radius [m], > 0. Paper silent; default 8 µm, sized like the Lissajous amplitudes.",
+        "Circle radius [m], ≥ 1e-9. Paper silent; default 8 µm, sized like the Lissajous amplitudes.",
     ),
     (
         "trajectories.frequency",

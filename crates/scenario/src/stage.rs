@@ -65,11 +65,12 @@ impl Hysteresis {
             self.voltage_min >= -2000.0,
             "a number ≥ -2000 V",
         )?;
+        // A span below a volt drives no PEA (Table A1's d_p: 0.06 µm/V).
         check(
             "hysteresis.voltage_max",
             self.voltage_max,
-            self.voltage_max > self.voltage_min && self.voltage_max <= 2000.0,
-            "a number in (voltage_min, 2000] V",
+            self.voltage_max >= self.voltage_min + 1.0 && self.voltage_max <= 2000.0,
+            "a number in [voltage_min + 1, 2000] V",
         )?;
         self.pea1.validate("hysteresis.pea1")?;
         self.pea2.validate("hysteresis.pea2")
@@ -405,6 +406,21 @@ impl Trajectory {
 
     /// Checks every field; `field` is the TOML path of this entry.
     pub fn validate(&self, field: &str) -> Result<()> {
+        /// A trajectory amplitude: 0 (a still axis, if `zero`) or at least a nanometre, below
+        /// every sensor's resolution (a subnormal amplitude gave an error of ∞ % of range).
+        fn amplitude_range(field: &str, a: f64, zero: bool) -> Result<()> {
+            let min = crate::design::MIN_STROKE;
+            if zero {
+                check(
+                    field,
+                    a,
+                    a == 0.0 || a >= min,
+                    &format!("0 or a number ≥ {min:e} m"),
+                )
+            } else {
+                check(field, a, a >= min, &format!("a number ≥ {min:e} m"))
+            }
+        }
         let name_ok = |name: &str| file_name(&format!("{field}.name"), name);
         match self {
             Trajectory::Lissajous {
@@ -416,8 +432,9 @@ impl Trajectory {
             } => {
                 name_ok(name)?;
                 positive(&format!("{field}.ratio"), *ratio)?;
-                non_negative(&format!("{field}.amplitude[0]"), amplitude[0])?;
-                non_negative(&format!("{field}.amplitude[1]"), amplitude[1])?;
+                for (i, a) in amplitude.iter().enumerate() {
+                    amplitude_range(&format!("{field}.amplitude[{i}]"), *a, true)?;
+                }
                 positive(&format!("{field}.frequency"), *frequency)?;
                 positive(&format!("{field}.duration"), *duration)
             }
@@ -428,7 +445,7 @@ impl Trajectory {
                 duration,
             } => {
                 name_ok(name)?;
-                positive(&format!("{field}.radius"), *radius)?;
+                amplitude_range(&format!("{field}.radius"), *radius, false)?;
                 positive(&format!("{field}.frequency"), *frequency)?;
                 positive(&format!("{field}.duration"), *duration)
             }

@@ -1,4 +1,4 @@
-//! Reference: issue #32, "Look for the next ones yourselves: drive every numeric scenario
+//! Reference: the second hardening review, "Look for the next ones yourselves: drive every numeric scenario
 //! field … to its edges (minimum, maximum, just beyond, subnormal, huge, NaN)". Goal, for
 //! `flexstage check` (`Scenario::from_toml_str`): every numeric leaf of the quick preset and of
 //! the inverter example, at the edges of its own accepted range (found by bisection, so the

@@ -132,7 +132,7 @@ fn a_huge_mesh_is_refused_with_its_estimate() {
         s.optimization.samples = 4000;
     });
     has(&e, &["optimization.samples", "GiB", "at most 16 GiB"]);
-    // Issue #32: 4000 samples on the quick mesh passed `check` (an estimate of 1.4 GiB) and
+    // The second hardening review: 4000 samples on the quick mesh passed `check` (an estimate of 1.4 GiB) and
     // aborted allocating past 4 and 9.5 GB caps.
     let e = refused(|s| s.optimization.samples = 4000);
     has(
@@ -182,7 +182,7 @@ fn trajectories_beyond_nyquist_stroke_or_record_limits_are_refused() {
     has(&e, &["simulation.sample_time = 1e-308", "[1e-7, 0.1]"]);
 }
 
-/// Reference: issue #32, "Lenient parsing" (`pid = [1, 2, 3, 4]`, a 3-element
+/// Reference: the second hardening review, "Lenient parsing" (`pid = [1, 2, 3, 4]`, a 3-element
 /// `observer_gain`, 3 `rig.floor.bands` were accepted). Goal: every fixed-length array of the
 /// scenario (the quick preset's and the mechanism example's `output.direction`,
 /// `ports[].direction`), one element longer or shorter, is refused by the parser with its line
@@ -276,4 +276,27 @@ fn chain(e: &dyn std::error::Error) -> String {
         s = x.source();
     }
     m
+}
+
+/// The second hardening review, "Messages": `E0 = 1e308` or `output_spring = 1e308` were
+/// refused as "the structure floats" (by the solver's round-off pivot test, after the element
+/// stiffness overflowed or the spring swamped every pivot), and `stroke_amplitude = 1e-308`
+/// designed to an area of 0 ("NaN × the input stroke square"). Goal: each is refused by
+/// `check`, by the field's own range.
+#[test]
+fn a_modulus_spring_or_stroke_beyond_what_the_solver_resolves_is_refused_by_its_range() {
+    let e = refused(|s| s.material.youngs_modulus = 1e308);
+    has(
+        &e,
+        &["material.youngs_modulus = 1e308", "at most", "min_modulus"],
+    );
+    assert!(!e.contains("floats"), "{e}");
+    let e = refused(|s| s.optimization.output_spring = 1e308);
+    has(&e, &["optimization.output_spring = 1e308", "at most"]);
+    let e = refused(|s| s.actuators.stiffness = 1e300);
+    has(&e, &["actuators.stiffness = 1e300", "at most"]);
+    let e = refused(|s| s.material.min_modulus = 1e-6);
+    has(&e, &["material.youngs_modulus", "min_modulus"]);
+    let e = refused(|s| s.actuators.stroke_amplitude = 1e-308);
+    has(&e, &["actuators.stroke_amplitude = 1e-308", "[1e-9, "]);
 }

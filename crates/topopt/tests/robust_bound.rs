@@ -1,4 +1,4 @@
-//! Reference: issue #32, "Panic": `optimization.initial_density = 1.0000001e-6` (just above
+//! Reference: the second hardening review, "Panic": `optimization.initial_density = 1.0000001e-6` (just above
 //! ρ_min) ended `design` with exit 101 in the robust bound's rescale ("a rescaled state …
 //! NonFinite state.xold1 inf"): from an almost void start a realization's workspace turns
 //! inside out (worst case ≤ 0), and the bound's unit T = 2τ became zero. Goal: the run goes on

@@ -1,6 +1,8 @@
 //! The numeric leaves of a scenario's TOML and how to set one (shared by the scenario's and
 //! the CLI's edge tests).
 
+#![allow(dead_code)] // each test uses a part of it
+
 use toml::Value;
 
 /// A leaf of a TOML value as a path of keys and `[index]`es, e.g. `["controller", "pid", "[2]"]`.
@@ -77,24 +79,24 @@ pub fn accepts(base: &Value, leaf: &[String], x: f64) -> bool {
 
 /// A key that orders every float (total order, -0 before +0) as the integers order it; its own
 /// inverse.
-fn key(x: f64) -> i64 {
+pub fn key(x: f64) -> i64 {
     let b = x.to_bits() as i64;
     b ^ ((((b >> 63) as u64) >> 1) as i64)
 }
 
-fn from_key(k: i64) -> f64 {
+pub fn from_key(k: i64) -> f64 {
     f64::from_bits(key(f64::from_bits(k as u64)).cast_unsigned())
 }
 
 /// The last key accepted going from `from` (accepted) towards `to` (refused), and the first
 /// refused: bisection on the ordered keys.
-fn boundary(accept: &dyn Fn(i64) -> bool, from: i64, to: i64) -> (i64, i64) {
-    let (mut a, mut r) = (from, to);
+pub fn boundary(accept: &dyn Fn(i64) -> bool, from: i64, to: i64) -> (i64, i64) {
+    let (mut a, mut r) = (i128::from(from), i128::from(to));
     while (r - a).abs() > 1 {
         let mid = a + (r - a) / 2;
-        if accept(mid) { a = mid } else { r = mid }
+        if accept(mid as i64) { a = mid } else { r = mid }
     }
-    (a, r)
+    (a as i64, r as i64)
 }
 
 /// The edges of a numeric leaf: the smallest and largest value of the accepted range around
