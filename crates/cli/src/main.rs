@@ -22,6 +22,7 @@ use flexstage_pipeline::{
     DEFAULT_PRESET, PRESETS, RunFolder, RunOptions, Scenario, default_root, default_run,
 };
 
+use anyhow::Context;
 use args::ScenarioArgs;
 
 /// flexstage: design, reduce, identify and control a piezo-driven compliant positioning stage.
@@ -270,6 +271,7 @@ fn init(path: &std::path::Path, name: &str, force: bool) -> anyhow::Result<()> {
 
 fn check(scenario: &ScenarioArgs) -> anyhow::Result<()> {
     let s: Scenario = scenario.load()?;
+    flexstage_pipeline::design::check_problem(&s).context("invalid scenario")?;
     outln!("{}: valid", scenario.describe());
     let e = flexstage_pipeline::DesignEstimate::of(&s);
     let estimate = format!(

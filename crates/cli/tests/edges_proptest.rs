@@ -57,7 +57,8 @@ struct Case {
     prepared: bool,
     /// Documented to take minutes (a record of more than [`HEAVY_STEPS`] plant steps, an
     /// option at the end of its range that sets the length of the work): only in
-    /// `every_edge_case`, with [`HEAVY_BOUND`].
+    /// `every_edge_case`, with [`HEAVY_BOUND`]; likewise a design mesh of more than
+    /// [`HEAVY_DOFS`].
     heavy: bool,
 }
 
@@ -66,6 +67,16 @@ struct Case {
 const HEAVY_STEPS: f64 = 2e7;
 /// Longest a heavy case may run (a 1e7-sample record is documented at about five minutes).
 const HEAVY_BOUND: Duration = Duration::from_secs(900);
+
+/// DOFs of the design mesh above which a design case is heavy (the 4000 × 12 mesh, 10⁵ DOFs,
+/// takes a minute for two iterations and the final analysis).
+const HEAVY_DOFS: f64 = 5e4;
+
+/// Whether a design case's mesh has more than [`HEAVY_DOFS`] DOFs.
+fn heavy_design(scenario: &str) -> bool {
+    let s = Scenario::from_toml_str(scenario, "edge.toml").expect("accepted");
+    flexstage_scenario::DesignEstimate::of(&s).dofs > HEAVY_DOFS
+}
 
 /// Whether a field case runs a tracking record of more than [`HEAVY_STEPS`] steps.
 fn heavy_track(scenario: &str) -> bool {
@@ -110,7 +121,11 @@ fn field_cases(base: &Value) -> Vec<Case> {
             }
             let scenario = toml::to_string(&with(base, &leaf, x)).unwrap();
             let design = DESIGN_GROUPS.contains(&leaf[0].as_str());
-            let heavy = !design && heavy_track(&scenario);
+            let heavy = if design {
+                heavy_design(&scenario)
+            } else {
+                heavy_track(&scenario)
+            };
             let args: Vec<String> = if design {
                 vec!["design".into(), "--max-iterations".into(), "2".into()]
             } else {

@@ -202,6 +202,16 @@ pub fn design(
     finish(&s, &problem, &opt, folder, stop, seconds, resumed_at)
 }
 
+/// The design problem's own checks, without solving anything: the scenario's selectors on the
+/// FE mesh, the mirror symmetry of the passive regions, supports, springs and ports, the
+/// constraints' settings ([`Problem::validate`]). `flexstage check` runs them, so that it
+/// refuses what `design` would (a passive region whose mirror image is designed passed
+/// `check` and stopped `design`).
+pub fn check_problem(s: &Scenario) -> Result<()> {
+    Problem::from_scenario(s, None)?.validate()?;
+    Ok(())
+}
+
 /// Refuses a design whose memory estimate ([`DesignEstimate`]: allocated at the peak) exceeds
 /// the address space this process may allocate (`ulimit -v`, the soft `RLIMIT_AS` as Linux's
 /// `/proc/self/limits` shows it): it would abort in an allocation, possibly hours in.
