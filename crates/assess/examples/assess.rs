@@ -12,6 +12,7 @@
 //! 0 = none); every controller is tuned with them in the loop.
 
 use flexstage_assess::{AssessParams, Assessment, Bench};
+use flexstage_control::experiment::Setup;
 use flexstage_scenario::{Preset, Scenario};
 use flexstage_topopt::DesignFile;
 use flexstage_twin::DesignedStage;
@@ -25,11 +26,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let out = args.get(3).cloned();
     let DesignedStage {
-        scenario: s,
-        mut setup,
-        twin,
-        ..
+        scenario: s, twin, ..
     } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
+    let mut setup = Setup::from_scenario(&s);
     if let Some(bw) = args.get(4) {
         setup.rig.sensor.bandwidth = bw.parse()?;
     }

@@ -6,7 +6,7 @@
 //! 2. Kick test and loop-at-a-time margins (sine injection, one sample of delay) of the
 //!    backstepping variants: the design guess with the K-filter (the paper's estimator), the
 //!    guess with the Kalman estimate, and the model fitted to the twin's response below
-//!    Nyquist ("what identification would give", `model::ResponseFit::from_modes`).
+//!    Nyquist ("what identification would give", `response::ResponseFit::from_modes`).
 //! 3. The law's gains k_ε = k_η = k scaled down until both loops keep 6 dB / 40°.
 //! 4. The disturbance bound max|Δ̂_η| measured on the twin in the full rig (non-robust,
 //!    default Lissajous), ρ_η of A25 set to it, and the tracking table: robust, non-robust,
@@ -24,12 +24,15 @@ use flexstage_assess::inject::{InjectionParams, injected_margins, is_stable};
 use flexstage_control::actuator::Compensation;
 use flexstage_control::backstepping::LawParams;
 use flexstage_control::controller::Estimator;
-use flexstage_control::experiment::{Setup, run};
+use flexstage_control::experiment::Setup;
+use flexstage_control::fit::fit_to_response;
 use flexstage_control::margins::Margins;
-use flexstage_control::model::{ResponseFit, StageModel, fit_to_response};
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::Reference;
+use flexstage_identify::response::ResponseFit;
 use flexstage_scenario::{Preset, Scenario, StageParams};
+use flexstage_sim::experiment::run;
+use flexstage_sim::model::StageModel;
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::Reference;
 use flexstage_topopt::DesignFile;
 use flexstage_twin::DesignedStage;
 
@@ -336,7 +339,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("usage: diagnose quick|paper DESIGN.json")?;
     let scenario = Scenario::preset(preset);
     let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
-    let DesignedStage { setup, twin, .. } = DesignedStage::new(&scenario, &design.rho)?;
+    let DesignedStage {
+        scenario: s, twin, ..
+    } = DesignedStage::new(&scenario, &design.rho)?;
+    let setup = Setup::from_scenario(&s);
     // The scenario's backstepping settings (design guess, scenario gains, no notches);
     // `Bench::new` sets the shipped ones up from the twin's response.
     let original = setup.controller.clone();

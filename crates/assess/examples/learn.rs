@@ -15,14 +15,15 @@
 use flexstage_assess::{Bench, Candidate};
 use flexstage_control::ControlError;
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::StageControl;
-use flexstage_control::experiment::run;
+use flexstage_control::experiment::Setup;
 use flexstage_control::learning::{
     DesignParams, Learning, design, measure_learning_plant, rms_per_period,
 };
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::Reference;
 use flexstage_scenario::{Preset, Scenario, Trajectory};
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::experiment::run;
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::Reference;
 use flexstage_topopt::DesignFile;
 use flexstage_twin::DesignedStage;
 
@@ -35,11 +36,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let design_file = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let periods: usize = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(20);
     let DesignedStage {
-        scenario: s,
-        setup,
-        twin,
-        ..
+        scenario: s, twin, ..
     } = DesignedStage::new(&Scenario::preset(preset), &design_file.rho)?;
+    let setup = Setup::from_scenario(&s);
     let bench = Bench::new(setup, twin, Default::default())?;
     let trajectory = s
         .trajectories

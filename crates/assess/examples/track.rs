@@ -14,9 +14,9 @@
 
 use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::{Setup, Variant, experiment, experiment_on};
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::Reference;
 use flexstage_scenario::{Preset, Scenario};
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::Reference;
 use flexstage_topopt::DesignFile;
 use flexstage_twin::{DesignedStage, Twin};
 
@@ -30,28 +30,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let seconds: Option<f64> = args.get(3).map(|s| s.parse()).transpose()?;
     let t0 = std::time::Instant::now();
     let DesignedStage {
-        scenario: s,
-        setup,
-        twin,
-        ..
+        scenario: s, twin, ..
     } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
+    let setup = Setup::from_scenario(&s);
     println!(
         "twin: {} modes (f1 = {:.0} Hz), reduced and built in {:.1} s; lumped model f = {:?} Hz",
         twin.modal.modes.len(),
         twin.first_resonance(),
         t0.elapsed().as_secs_f64(),
-        flexstage_control::model::StageModel::with_coupling(
-            &setup.plant.truth,
-            setup.plant.coupling
-        )?
-        .natural_frequencies()
-        .map(|f| f.round())
+        flexstage_sim::model::StageModel::with_coupling(&setup.plant.truth, setup.plant.coupling)?
+            .natural_frequencies()
+            .map(|f| f.round())
     );
-    let lumped = flexstage_control::model::StageModel::with_coupling(
-        &setup.plant.truth,
-        setup.plant.coupling,
-    )?
-    .dc_gain()?;
+    let lumped =
+        flexstage_sim::model::StageModel::with_coupling(&setup.plant.truth, setup.plant.coupling)?
+            .dc_gain()?;
     println!(
         "static gain x_nom → q: twin {:?}, lumped [[{:.4}, {:.4}], [{:.4}, {:.4}]]",
         twin.dc_gain().map(|r| r.map(|x| (x * 1e4).round() / 1e4)),
@@ -137,11 +130,11 @@ fn ablation(
     let ideal = {
         let mut q = s.clone();
         q.rig = flexstage_scenario::Rig::ideal(&s.hysteresis);
-        flexstage_control::rig::RigParams::from_scenario(&q)
+        flexstage_sim::rig::RigParams::from_scenario(&q)
     };
     let full = setup.rig.clone();
-    let mut cases: Vec<(&str, flexstage_control::rig::RigParams)> = vec![("none", ideal.clone())];
-    let mut one = |name: &'static str, f: &dyn Fn(&mut flexstage_control::rig::RigParams)| {
+    let mut cases: Vec<(&str, flexstage_sim::rig::RigParams)> = vec![("none", ideal.clone())];
+    let mut one = |name: &'static str, f: &dyn Fn(&mut flexstage_sim::rig::RigParams)| {
         let mut r = ideal.clone();
         f(&mut r);
         cases.push((name, r));

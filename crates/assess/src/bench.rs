@@ -2,15 +2,15 @@
 //! each one, its linear loop for margins and its full rig for tracking.
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::{PidController, StageControl};
+use flexstage_control::controller::PidController;
 use flexstage_control::experiment::{Setup, Variant};
-use flexstage_control::model::ResponseFit;
 use flexstage_control::pi_notch::{AxisGains, PiNotchController, PiNotchParams};
-use flexstage_control::rig::{AmplifierParams, PlantActuator, RigParams, RigPlant, SensorParams};
-use flexstage_control::trajectory::Reference;
-use flexstage_control::tuning::{
-    ModalPlant, PlantMode, Structure, Tuned, TuningParams, loop_margins, tune,
-};
+use flexstage_control::tuning::{Structure, Tuned, TuningParams, loop_margins, tune};
+use flexstage_identify::response::ResponseFit;
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::modal::{ModalPlant, PlantMode};
+use flexstage_sim::rig::{AmplifierParams, PlantActuator, RigParams, RigPlant, SensorParams};
+use flexstage_sim::trajectory::Reference;
 use flexstage_twin::{Twin, TwinStage};
 
 use crate::error::Result;
@@ -75,7 +75,7 @@ pub struct Bench {
     pub tuning: TuningParams,
     /// The response fit the backstepping's model comes from: one identified on the stage
     /// (`flexstage_identify::response`), or `None` for the fit of the twin's exact modes
-    /// ([`flexstage_control::model::ResponseFit::from_modes`]).
+    /// ([`flexstage_identify::response::ResponseFit::from_modes`]).
     pub identified: Option<ResponseFit>,
 }
 
@@ -148,7 +148,7 @@ impl Bench {
             Candidate::PidTuned => Some(self.pid.params),
             Candidate::PiNotch => Some(self.pi_notch.params),
             Candidate::PidScenario => {
-                let m = flexstage_control::model::StageModel::new(&self.setup.controller.model)?
+                let m = flexstage_sim::model::StageModel::new(&self.setup.controller.model)?
                     .dc_gain()?;
                 let p = self.setup.pid;
                 let axis = AxisGains {

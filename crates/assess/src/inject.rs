@@ -9,8 +9,8 @@
 
 use flexstage_control::actuator::Compensation;
 use flexstage_control::margins::{MarginParams, Margins, margin};
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::{Reference, Shape};
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::{Reference, Shape};
 use nalgebra::Complex;
 
 use crate::bench::{Bench, Candidate};
@@ -43,7 +43,7 @@ fn closed_loop(
     c: Candidate,
     delay: usize,
 ) -> Result<(
-    Box<dyn flexstage_control::controller::StageControl>,
+    Box<dyn flexstage_sim::experiment::StageControl>,
     Box<dyn StagePlant>,
 )> {
     let r = Reference::new(Shape::Step { target: [0.0; 2] });

@@ -33,8 +33,8 @@ pub mod track;
 pub use bench::{Bench, Candidate};
 pub use error::{AssessError, Result};
 
-use flexstage_control::trajectory::Reference;
 use flexstage_scenario::{Scenario, Trajectory};
+use flexstage_sim::trajectory::Reference;
 
 /// Settings of a whole assessment.
 #[derive(Debug, Clone, PartialEq)]

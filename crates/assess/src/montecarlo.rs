@@ -15,8 +15,8 @@
 //! A plant passes when the run does not diverge and the RMS error of each axis is within
 //! [`MonteCarloParams::rms_bound_pct`] of that axis's reference range (peak to peak).
 
-use flexstage_control::trajectory::Reference;
 use flexstage_numerics::noise::SplitMix64;
+use flexstage_sim::trajectory::Reference;
 use rayon::prelude::*;
 
 use crate::bench::{Bench, Candidate};

@@ -4,8 +4,8 @@
 //! deliver the scan (amplifier range, current, stroke: `Setup::check_reference`); the RMS is
 //! taken over the second half of the run (after the smooth start), also in % of the range.
 
-use flexstage_control::trajectory::{Reference, Shape};
 use flexstage_report::plot::{Figure, Series};
+use flexstage_sim::trajectory::{Reference, Shape};
 
 use crate::bench::{Bench, Candidate};
 use crate::error::{Result, check};

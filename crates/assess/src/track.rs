@@ -1,9 +1,10 @@
 //! One tracking run of a candidate on the twin in the full rig, and its metrics.
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::{Metrics, Setup, run};
-use flexstage_control::rig::RigParams;
-use flexstage_control::trajectory::{Reference, Shape};
+use flexstage_control::experiment::Setup;
+use flexstage_sim::experiment::{Metrics, run};
+use flexstage_sim::rig::RigParams;
+use flexstage_sim::trajectory::{Reference, Shape};
 use flexstage_twin::Twin;
 
 use crate::bench::{Bench, Candidate};

@@ -5,8 +5,9 @@ use flexstage_assess::inject::{InjectionParams, return_ratio};
 use flexstage_assess::montecarlo::{MonteCarloParams, monte_carlo};
 use flexstage_assess::{Bench, Candidate};
 use flexstage_control::experiment::Setup;
-use flexstage_control::trajectory::Reference;
-use flexstage_control::tuning::{LoopPlant, loop_response};
+use flexstage_control::tuning::loop_response;
+use flexstage_sim::modal::LoopPlant;
+use flexstage_sim::trajectory::Reference;
 
 fn bench() -> Bench {
     let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
@@ -44,7 +45,7 @@ fn injection_equals_transfer_function_for_the_pi_notch() {
             .unwrap();
             let expect = loop_response(&plant, &p, f)[axis];
             if f == 20.0 {
-                let ideal = flexstage_control::rig::SensorParams::ideal();
+                let ideal = flexstage_sim::rig::SensorParams::ideal();
                 let bare = flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, &ideal).unwrap();
                 let e0 = loop_response(&bare, &p, f)[axis];
                 let d = (measured.arg() - expect.arg()).to_degrees();
@@ -124,8 +125,8 @@ fn zero_perturbation_reproduces_the_nominal_run() {
 /// substeps: measured 1.2e-3 and 0.012° at 700 Hz); open loop, no controller.
 #[test]
 fn rig_sensor_chain_equals_its_sampled_transfer_function() {
-    use flexstage_control::controller::Command;
-    use flexstage_control::rig::{RigPlant, SensorParams, StagePlant};
+    use flexstage_sim::experiment::Command;
+    use flexstage_sim::rig::{RigPlant, SensorParams, StagePlant};
     let mut b = bench();
     b.setup.rig.sensor.anti_alias = 3000.0;
     let sensor = b.setup.rig.sensor;

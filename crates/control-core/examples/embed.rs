@@ -7,11 +7,11 @@
 //! `cargo run --release -p flexstage-control-core --example embed`
 
 use flexstage_control::actuator::{Actuator, Compensation};
-use flexstage_control::controller::Command;
 use flexstage_control::experiment::Setup;
-use flexstage_control::model::StageModel;
-use flexstage_control::rig::StagePlant;
 use flexstage_control_core::{Controller, Ilc, IlcBuffers, IlcParams, PidGains, PidLaw};
+use flexstage_sim::experiment::Command;
+use flexstage_sim::model::StageModel;
+use flexstage_sim::rig::StagePlant;
 
 /// Samples per period: the 3:1 Lissajous at 2 Hz, 10 kHz.
 const N: usize = 5000;

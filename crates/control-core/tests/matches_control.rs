@@ -7,19 +7,19 @@
 // fails if a gain, the feed-forward, the trapezoidal integral or the anti-windup differs.
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::{PidController, PidParams, StageControl};
+use flexstage_control::controller::{PidController, PidParams};
 use flexstage_control::experiment::Setup;
-use flexstage_control::model::StageModel;
-use flexstage_control::plant::Plant;
-use flexstage_control::trajectory::Reference;
 use flexstage_control_core::{PidGains, PidLaw};
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::model::StageModel;
+use flexstage_sim::plant::Plant;
+use flexstage_sim::trajectory::Reference;
 
 fn compare(pid: PidParams, amplitude_scale: f64) -> (f64, usize) {
     let scenario = flexstage_scenario::Scenario::paper();
     let setup = Setup::from_scenario(&scenario);
     let (mut reference, _) = Reference::from_scenario(&scenario.trajectories[0]);
-    if let flexstage_control::trajectory::Shape::Lissajous { amplitude, .. } = &mut reference.shape
-    {
+    if let flexstage_sim::trajectory::Shape::Lissajous { amplitude, .. } = &mut reference.shape {
         *amplitude = amplitude.map(|a| a * amplitude_scale);
     }
     let mut actuator = setup.controller.actuator;

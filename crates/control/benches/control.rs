@@ -7,8 +7,8 @@
 use divan::{Bencher, black_box};
 use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::{Setup, Variant, experiment};
-use flexstage_control::trajectory::Reference;
 use flexstage_scenario::Scenario;
+use flexstage_sim::trajectory::Reference;
 
 fn main() {
     divan::main();
@@ -80,8 +80,8 @@ fn experiment_one_second_two_in_parallel(b: Bencher) {
 /// One step of the PI + two notches + FF controller (inverse-hysteresis compensation on).
 #[divan::bench(sample_size = 1000)]
 fn pi_notch_step(b: Bencher) {
-    use flexstage_control::controller::StageControl;
     use flexstage_control::pi_notch::{AxisGains, Notch, PiNotchController, PiNotchParams};
+    use flexstage_sim::experiment::StageControl;
     let (setup, r) = setup();
     let y = measurements(4096);
     let notch = |f: f64| {
@@ -115,8 +115,8 @@ fn pi_notch_step(b: Bencher) {
 /// λ = 7, M = 1) and a fractional sensor lag, in its learning periods.
 #[divan::bench(sample_size = 1000)]
 fn learning_step(b: Bencher) {
-    use flexstage_control::controller::StageControl;
     use flexstage_control::learning::{Learning, LearningParams};
+    use flexstage_sim::experiment::StageControl;
     let (setup, r) = setup();
     let y = measurements(4096);
     let c = setup

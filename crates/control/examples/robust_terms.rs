@@ -13,12 +13,12 @@
 //! ```
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::StageControl;
 use flexstage_control::experiment::{Setup, Variant};
 use flexstage_control::observer::DISTURBANCE;
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::Reference;
 use flexstage_scenario::{Preset, Scenario};
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::Reference;
 
 /// RMS error per axis over the second half \[m\] and the largest |d̂| per axis after the
 /// first tenth \[m/s²\]; `None` when the run diverges (|error| > 10 µm).

@@ -60,35 +60,12 @@ use crate::actuator::{Actuator, ActuatorParams};
 use crate::backstepping::{Law, LawOutput, LawParams};
 use crate::error::{Result, check};
 use crate::estimator::{KalmanDesign, KalmanParams};
-use crate::model::StageModel;
-use crate::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
 use crate::observer::{DISTURBANCE, FILTER_LEN, KFilter, ObserverDesign, ObserverParams, Vector10};
 use crate::pi_notch::{Biquad, Notch};
-use crate::trajectory::{RefSample, Reference};
-
-/// One sample of controller output.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Command {
-    /// Amplifier voltages \[V\], always finite and inside the range.
-    pub voltage: [f64; 2],
-    /// The x_nom \[m\] the actuator model expects from the voltages (Eq. 36 input).
-    pub x_nom: [f64; 2],
-    /// The reference q_d at this sample \[m\].
-    pub reference: [f64; 2],
-    /// True when the stroke or the amplifier range clipped the command.
-    pub saturated: bool,
-    /// True when the measurement was not finite and the last valid one was used.
-    pub dropout: bool,
-}
-
-/// A sampled position controller: one call per sample.
-pub trait StageControl {
-    /// Takes the measured output y_k = [q_o1, q_o2] \[m\] and returns the command held until
-    /// the next sample.
-    fn step(&mut self, y: [f64; 2]) -> Command;
-    /// The state estimate [ẑ, d̂] \[SI\] (zeros for controllers without an observer).
-    fn estimate(&self) -> [f64; 10];
-}
+use flexstage_sim::experiment::{Command, StageControl};
+use flexstage_sim::model::StageModel;
+use flexstage_sim::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
+use flexstage_sim::trajectory::{RefSample, Reference};
 
 /// Where the controller takes the output velocity q̇ from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -169,7 +146,7 @@ impl ControllerParams {
             self.delay <= MAX_DELAY,
             "0–2 samples",
         )?;
-        crate::model::validate(&self.model)?;
+        flexstage_sim::model::validate(&self.model)?;
         check(
             "controller.coupling",
             self.coupling,
@@ -195,39 +172,42 @@ impl ControllerParams {
     /// The settings for a plant known by its modal response (e.g. the twin's modes), as a
     /// practitioner would set the backstepping up from a frequency-response
     /// identification: [`ControllerParams::for_response`] on the fit that identification
-    /// would give below Nyquist ([`crate::model::ResponseFit::from_modes`] with
-    /// [`crate::model::RESPONSE_SHARE`]).
+    /// would give below Nyquist ([`flexstage_identify::response::ResponseFit::from_modes`] with
+    /// [`flexstage_identify::response::RESPONSE_SHARE`]).
     pub fn for_sampled_plant(
         &self,
-        modes: &[crate::tuning::PlantMode],
+        modes: &[flexstage_sim::modal::PlantMode],
         notches: [[Option<Notch>; 2]; 2],
         gain_scale: f64,
     ) -> ControllerParams {
         let nyquist = 0.5 / self.observer.sample_time;
-        let fit =
-            crate::model::ResponseFit::from_modes(modes, nyquist, crate::model::RESPONSE_SHARE);
+        let fit = flexstage_identify::response::ResponseFit::from_modes(
+            modes,
+            nyquist,
+            flexstage_identify::response::RESPONSE_SHARE,
+        );
         self.for_response(&fit, notches, gain_scale)
     }
 
     /// The settings for a plant known by a response fit (identified, or from its modes): the
-    /// model fitted to it ([`crate::model::fit_to_response`]; kept as it is when the fit is
+    /// model fitted to it ([`crate::fit::fit_to_response`]; kept as it is when the fit is
     /// refused) with the coupling that reproduces its static cross terms
-    /// ([`crate::model::fit_coupling`]), the notches of the sampled response's peaks on the
+    /// ([`crate::fit::fit_coupling`]), the notches of the sampled response's peaks on the
     /// measurement (`notches`, e.g. the tuned PI + notch's), and the law's gains scaled by
     /// `gain_scale` (in (0, 1], see [`GAIN_SCALES`]).
     pub fn for_response(
         &self,
-        fit: &crate::model::ResponseFit,
+        fit: &flexstage_identify::response::ResponseFit,
         notches: [[Option<Notch>; 2]; 2],
         gain_scale: f64,
     ) -> ControllerParams {
         let mut p = self.clone();
-        if let Ok(m) = crate::model::fit_to_response(&self.model, fit) {
+        if let Ok(m) = crate::fit::fit_to_response(&self.model, fit) {
             p.model = m;
         }
         // The coupling from the same static gain (a symmetric design has none): a coupling
         // identified on another plant is not this one's.
-        if let Ok(k_c) = crate::model::fit_coupling(&p.model, fit.dc_gain) {
+        if let Ok(k_c) = crate::fit::fit_coupling(&p.model, fit.dc_gain) {
             p.coupling = k_c;
         }
         p.measurement_notches = notches;

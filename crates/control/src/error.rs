@@ -9,6 +9,9 @@ pub enum ControlError {
     /// from the scenario).
     #[error(transparent)]
     OutOfRange(#[from] RangeError),
+    /// The simulated stage, its lumped model or a reference (`flexstage-sim`).
+    #[error(transparent)]
+    Sim(#[from] flexstage_sim::SimError),
     /// A matrix that must be invertible is singular (or numerically so).
     #[error("{what} is singular")]
     Singular {

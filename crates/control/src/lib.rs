@@ -1,34 +1,28 @@
-//! # flexstage-control — model, observer, controller and simulated experiment
+//! # flexstage-control — the controllers and their design
 //!
-//! Section 3.2, Section 4 and Appendices C–D of the paper, with the defaults of DECISIONS.md:
+//! Section 3.2, Section 4 and Appendices C–D of the paper, with the defaults of DECISIONS.md.
+//! The simulated world they run in (the rig, the plants, the lumped model of Eq. 36, the
+//! trajectories and the experiment runner) is `flexstage-sim`; a controller meets it through
+//! [`flexstage_sim::experiment::StageControl`].
 //!
-//! * [`model`]: the linear 8-state model of Eq. (36) with B and D of (A13–A14), from a
-//!   [`flexstage_scenario::StageParams`] (Table 4 or the file of `flexstage reduce`);
 //! * [`observer`]: the K-filter of Eq. (37–42), B0 checked with the Lyapunov equation (39),
 //!   discretized exactly for the sample time;
 //! * [`estimator`]: the steady-state discrete Kalman gain of the same filters (sensor noise,
 //!   documented process noise; DARE by structure-preserving doubling), the backstepping's
 //!   default estimate in place of finite differences;
 //! * [`backstepping`]: the robust backstepping law of Section 3.2.2 / Appendix D;
-//! * [`controller`]: the real-time controllers ([`controller::StageControl`]:
-//!   `step(measurement) -> command`, no allocation, no I/O, deterministic): the backstepping
-//!   controller (robust or not) and the PID + inverse-hysteresis feedforward baseline;
-//! * [`actuator`]: preload, inverse hysteresis compensation (inside the loop, Figure 7),
-//!   amplifier range;
-//! * [`rig`]: the loop around a simulated stage as on a rig, in composable parts (delay,
-//!   amplifier bandwidth / slew / current limit, the plant's own Bouc–Wen PEAs with creep,
-//!   floor vibration, sensor bandwidth, white + 1/f noise, quantization); the [`rig::Mechanics`]
-//!   trait for what sits inside and the [`rig::StagePlant`] trait the experiment runner drives;
-//! * [`plant`]: the lumped mechanics of Eq. (36) with the cross terms of Eq. (30)
-//!   ([`plant::LumpedStage`]) and the lumped plant in its minimal loop ([`plant::Plant`]); the
-//!   finite-element twin of the designed stage is `flexstage-twin`;
-//! * [`trajectory`]: Lissajous curves of any ratio, circle, steps and ramps with a smooth
-//!   start; the designed workspace; [`trajectory::feasibility`]: a reference is refused if it
-//!   reaches the Nyquist frequency or needs more stroke, voltage or amplifier current than the
-//!   rig has;
+//! * [`controller`]: the real-time controllers (`step(measurement) -> command`, no
+//!   allocation, no I/O, deterministic): the backstepping controller (robust or not) and the
+//!   PID + inverse-hysteresis feedforward baseline;
+//! * [`actuator`]: inverse hysteresis compensation (inside the loop, Figure 7), amplifier
+//!   range;
+//! * [`fit`]: the controller's lumped model fitted to a measured response (static gain and
+//!   output modes below Nyquist) and the coupling of Eq. (30) from its cross terms;
+//! * [`feasibility`]: a reference is refused if it reaches the Nyquist frequency or needs more
+//!   stroke, voltage or amplifier current than the rig has with the controller's feed-forward;
 //! * [`experiment`]: one run of a variant on a plant ([`experiment::experiment_on`] takes any
-//!   [`rig::StagePlant`]: the lumped model in the rig, [`experiment::Setup::lumped_plant`], or
-//!   the twin of `flexstage-twin`), its time series and metrics;
+//!   [`flexstage_sim::rig::StagePlant`]: the lumped model in the rig,
+//!   [`experiment::Setup::lumped_plant`], or the twin of `flexstage-twin`);
 //! * [`learning`]: iterative learning on top of any controller for periodic scans, designed
 //!   from the loop's measured frequency response (monotone-convergence check);
 //! * [`pi_notch`]: the industry baseline: per-axis PI(D) with up to two notches, static
@@ -37,15 +31,14 @@
 //!   (python-control's `margin`), loop-at-a-time for the 2 × 2 loop;
 //! * [`tuning`]: one documented tuning procedure (notches on the peaks of the sampled
 //!   response, largest integral gain with ≥ 6 dB / 40°) applied with equal budget to every
-//!   loop-shaping structure, on an exact ZOH modal plant;
+//!   loop-shaping structure, on a sampled response ([`flexstage_sim::modal::LoopPlant`]);
 //! * [`analysis`]: closed-loop poles of the sampled loop on the nominal linear model;
-//! * [`linalg`]: `expm`, `c2d` (ZOH), `lyap`, `dlyap`, `poles` in python-control style;
-//! * [`samples`]: problems with known answers.
+//! * [`samples`]: settings with known answers.
 //!
 //! ```
 //! use flexstage_control::experiment::{Setup, Variant, experiment};
 //! use flexstage_control::actuator::Compensation;
-//! use flexstage_control::trajectory::Reference;
+//! use flexstage_sim::trajectory::Reference;
 //! let scenario = flexstage_scenario::Scenario::paper();
 //! let setup = Setup::from_scenario(&scenario);
 //! let (reference, _) = Reference::from_scenario(&scenario.trajectories[0]);
@@ -63,7 +56,7 @@
 //! Each is documented where it is implemented, with the equation number:
 //!
 //! * **Eq. (33)**: the second input plate's damper is C_qo1 (not C_qo2), as in Eq. (35)
-//!   and (A14) ([`model`]).
+//!   and (A14) ([`flexstage_sim::model`]).
 //! * **Eq. (38)**: Table 4's scalar observer gains are read as injection vectors
 //!   k_ei = g_i e_i ([`observer`]).
 //! * **Eq. (40)–(41)**: Ωᵀ already carries D, so ẑ = ζ + Σ Ω_i (not ζ + Ωᵀb) ([`observer`]).
@@ -76,7 +69,7 @@
 //! * **Discretization.** Forward Euler of the observer is unstable at 0.1 ms (pole −9 for
 //!   g = 1e5). The observer is discretized exactly for sampled measurements
 //!   (ε_{k+1} = F ε_k, F = Φ − L C matching e^{B0 T} in the injectable columns), the plant
-//!   with the exact matrix exponential per substep ([`plant`]).
+//!   with the exact matrix exponential per substep ([`flexstage_sim::plant`]).
 //! * **A16, A23**: the output damping (β55, β66) is part of Z.
 //! * **A23, stiffness kept.** Z uses N at the *reference* (q_d, q̇_d) instead of the
 //!   measured output, so the mechanism's own spring and damper act on the error rather than
@@ -122,7 +115,7 @@
 //! has them. [`controller::ControllerParams::for_sampled_plant`] sets them up as a
 //! practitioner would from the sampled response: the Kalman estimate
 //! ([`controller::Estimator::Kalman`], the default), the model fitted to the static gain and
-//! the modes below Nyquist ([`model::fit_to_response`]), the folded peaks notched on the
+//! the modes below Nyquist ([`fit::fit_to_response`]), the folded peaks notched on the
 //! measurement ([`controller::ControllerParams::measurement_notches`]) and the gains scaled
 //! by the margins (`flexstage-assess` picks the largest of [`controller::GAIN_SCALES`]
 //! keeping 6 dB / 40°). On the quick design that is × 0.5: 7.6 dB / 61° (q1) and
@@ -151,16 +144,13 @@ pub mod controller;
 mod error;
 pub mod estimator;
 pub mod experiment;
+pub mod feasibility;
+pub mod fit;
 pub mod learning;
-pub mod linalg;
 pub mod margins;
-pub mod model;
 pub mod observer;
 pub mod pi_notch;
-pub mod plant;
-pub mod rig;
 pub mod samples;
-pub mod trajectory;
 pub mod tuning;
 
 pub use error::{ControlError, Result};

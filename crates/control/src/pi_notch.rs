@@ -23,9 +23,9 @@
 use nalgebra::{Complex, Matrix2, Vector2};
 
 use crate::actuator::{Actuator, ActuatorParams};
-use crate::controller::{Command, StageControl};
 use crate::error::{ControlError, Result, check};
-use crate::trajectory::Reference;
+use flexstage_sim::experiment::{Command, StageControl};
+use flexstage_sim::trajectory::Reference;
 
 /// A notch filter N(s) = (s² + 2ζ_z ω s + ω²)/(s² + 2ζ_p ω s + ω²) at f = ω/2π.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -329,7 +329,7 @@ mod tests {
     #[test]
     fn simulated_sine_matches_axis_response() {
         use crate::actuator::Compensation;
-        use crate::trajectory::{Reference, Shape};
+        use flexstage_sim::trajectory::{Reference, Shape};
         let p = params(Some(Notch {
             frequency: 1500.0,
             zero_damping: 0.05,

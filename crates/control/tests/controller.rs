@@ -7,12 +7,13 @@
 
 use flexstage_control::actuator::Compensation;
 use flexstage_control::analysis::closed_loop_poles;
-use flexstage_control::controller::{BacksteppingController, Estimator, StageControl};
+use flexstage_control::controller::{BacksteppingController, Estimator};
 use flexstage_control::experiment::{Setup, Variant};
-use flexstage_control::model::StageModel;
-use flexstage_control::plant::{Plant, PlantActuator};
-use flexstage_control::trajectory::{Reference, Shape};
 use flexstage_scenario::Scenario;
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::model::StageModel;
+use flexstage_sim::plant::{Plant, PlantActuator};
+use flexstage_sim::trajectory::{Reference, Shape};
 
 fn setup() -> Setup {
     Setup::from_scenario(&Scenario::paper())
@@ -234,8 +235,8 @@ fn never_nan_or_out_of_range_under_faults() {
 /// last 20 ms above a tenth of the kick: the loop oscillates at ≈ 2.2 kHz).
 #[test]
 fn one_sample_delay_needs_the_predictor() {
-    use flexstage_control::plant::LumpedStage;
-    use flexstage_control::rig::{
+    use flexstage_sim::plant::LumpedStage;
+    use flexstage_sim::rig::{
         AmplifierParams, PlantActuator as RigActuator, RigPlant, SensorParams, StagePlant,
     };
     let s = setup();
@@ -297,7 +298,7 @@ fn one_sample_delay_needs_the_predictor() {
 /// reference was taken half a sample earlier; controller docs, "Reference timing").
 #[test]
 fn output_is_on_time_with_one_sample_of_delay() {
-    use flexstage_control::experiment::run;
+    use flexstage_sim::experiment::run;
     let s = Scenario::paper();
     let setup = Setup::from_scenario(&s);
     assert_eq!(setup.controller.delay, 1);

@@ -9,9 +9,10 @@
 //! margins are printed (run with --nocapture).
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::{Metrics, Setup, Variant, experiment};
-use flexstage_control::trajectory::Reference;
+use flexstage_control::experiment::{Setup, Variant, experiment};
 use flexstage_scenario::Scenario;
+use flexstage_sim::experiment::Metrics;
+use flexstage_sim::trajectory::Reference;
 
 const DURATION: f64 = 0.5;
 

@@ -7,14 +7,15 @@
 // error falls period after period, well below the baseline's.
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::StageControl;
-use flexstage_control::experiment::{Setup, Variant, run};
+use flexstage_control::experiment::{Setup, Variant};
 use flexstage_control::learning::{
     DesignParams, Learning, LearningParams, LearningPlant, convergence_factor, design,
     measure_learning_plant, q_response, rms_per_period, sensor_lag,
 };
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::Reference;
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::experiment::run;
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::Reference;
 
 #[test]
 fn bartlett_q_response_is_the_fejer_kernel() {
@@ -166,7 +167,7 @@ impl StagePlant for LateSensor {
     fn output(&self) -> [f64; 2] {
         self.inner.output()
     }
-    fn apply(&mut self, cmd: &flexstage_control::controller::Command) {
+    fn apply(&mut self, cmd: &flexstage_sim::experiment::Command) {
         self.inner.apply(cmd)
     }
     fn voltage(&self) -> [f64; 2] {

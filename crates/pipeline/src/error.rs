@@ -144,6 +144,9 @@ pub enum PipelineError {
     /// Controllers and the simulated experiment.
     #[error(transparent)]
     Control(#[from] flexstage_control::ControlError),
+    /// The simulated stage, its lumped model or a reference.
+    #[error(transparent)]
+    Sim(#[from] flexstage_sim::SimError),
     /// Margins and tuning of the controllers on the twin.
     #[error(transparent)]
     Assess(#[from] flexstage_assess::AssessError),
@@ -268,7 +271,8 @@ pub(crate) fn to_json(value: &impl serde::Serialize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flexstage_control::experiment::{Metrics, Variant};
+    use flexstage_control::experiment::Variant;
+    use flexstage_sim::experiment::Metrics;
 
     #[test]
     fn issue16_area_refused_when_nan_infinite_or_negative() {

@@ -298,7 +298,7 @@ impl fmt::Display for StageIdSummary {
                 )?;
             }
             for i in 0..2 {
-                let mode = |fit: &flexstage_control::model::ResponseFit| {
+                let mode = |fit: &flexstage_identify::response::ResponseFit| {
                     fit.frequency[i].map_or("none".to_string(), |fr| {
                         format!("{fr:.1} Hz, ζ {:.4}", fit.damping[i])
                     })

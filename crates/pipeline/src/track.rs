@@ -36,16 +36,15 @@ use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, monte_carlo};
 use flexstage_assess::{Bench, Candidate};
 use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::{
-    Metrics, Record, Setup, Variant, experiment_on, experiment_with_progress,
-};
-use flexstage_control::model::ResponseFit;
-use flexstage_control::trajectory::Reference;
+use flexstage_control::experiment::{Setup, Variant, experiment_on, experiment_with_progress};
 use flexstage_control::tuning::TuningParams;
+use flexstage_identify::response::ResponseFit;
 use flexstage_piezo::BoucWenParams;
 use flexstage_report::layout::{self, Tracking};
 use flexstage_report::plot::{Figure, Series};
 use flexstage_report::{RunDir, csv_columns, read_csv_columns};
+use flexstage_sim::experiment::{Metrics, Record};
+use flexstage_sim::trajectory::Reference;
 use rayon::prelude::*;
 
 use crate::error::{PipelineError, Result, require};

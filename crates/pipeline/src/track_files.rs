@@ -1,10 +1,10 @@
 //! The tables and figures of a tracking folder that span several runs: `metrics.csv` (merged
 //! by trajectory and controller) and the 2D paths of Figure 11.
 
-use flexstage_control::trajectory::Reference;
 use flexstage_report::RunDir;
 use flexstage_report::layout::Tracking;
 use flexstage_report::plot::{Figure, Series};
+use flexstage_sim::trajectory::Reference;
 
 use crate::error::Result;
 use crate::track::{Path2D, TrackRow, read_paths};
@@ -131,7 +131,8 @@ pub(crate) fn write_paths(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flexstage_control::experiment::{Metrics, Variant};
+    use flexstage_control::experiment::Variant;
+    use flexstage_sim::experiment::Metrics;
 
     fn row(controller: Variant, rms: f64) -> TrackRow {
         TrackRow {

@@ -44,7 +44,7 @@ pub mod state {
     pub const X_IN_DOT: [usize; 2] = [6, 7];
 }
 
-use crate::error::{ControlError, Result, check, non_negative, positive};
+use crate::error::{Result, SimError, check, non_negative, positive};
 
 /// 8 × 8 matrix.
 pub type Matrix8 = SMatrix<f64, 8, 8>;
@@ -159,7 +159,7 @@ impl StageModel {
         let inv = self
             .b
             .try_inverse()
-            .ok_or_else(|| ControlError::Singular { what: "B".into() })?;
+            .ok_or_else(|| SimError::Singular { what: "B".into() })?;
         let x = -(inv * self.input_matrix());
         Ok(Matrix2::new(x[(0, 0)], x[(0, 1)], x[(1, 0)], x[(1, 1)]))
     }
@@ -176,196 +176,6 @@ impl StageModel {
             f(p.k_in1 + p.k_pea1 + p.k_qo1, p.m_in1),
         ]
     }
-}
-
-/// The least share of an axis's static gain a mode carries to be the axis's mode of a
-/// [`ResponseFit`] (what `ControllerParams::for_sampled_plant` and the response
-/// identification use).
-pub const RESPONSE_SHARE: f64 = 0.1;
-
-/// What a frequency-response identification of the stage gives, to fit the lumped model
-/// to ([`fit_to_response`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ResponseFit {
-    /// Static gain x_nom → q, rows q_o1, q_o2 (dimensionless).
-    pub dc_gain: [[f64; 2]; 2],
-    /// First output mode of q_o1 and of q_o2 \[Hz\], > 0; `None` when the sampled response
-    /// shows none below Nyquist (that axis's stiffness is then kept from the design).
-    pub frequency: [Option<f64>; 2],
-    /// Their damping ratios, in [0, 1) (used only with a frequency).
-    pub damping: [f64; 2],
-}
-
-impl ResponseFit {
-    /// What a frequency-response identification below Nyquist reads off a modal plant
-    /// (e.g. the twin's modes): the static gain Σ out inᵀ/ω², and per output axis the
-    /// lowest mode below `nyquist` \[Hz\] whose share of that axis's static gain is at least
-    /// `share` (in (0, 1]). An axis with no such mode (its flexibility sits in modes above
-    /// Nyquist, which the sampled response shows only folded) gets `None`: its mode is not
-    /// identifiable from the sampled response and is not fitted.
-    pub fn from_modes(modes: &[crate::tuning::PlantMode], nyquist: f64, share: f64) -> ResponseFit {
-        let mut g = [[0.0; 2]; 2];
-        for m in modes {
-            let w2 = (std::f64::consts::TAU * m.frequency).powi(2);
-            for i in 0..2 {
-                for j in 0..2 {
-                    g[i][j] += m.output[i] * m.input[j] / w2;
-                }
-            }
-        }
-        let mut frequency = [None; 2];
-        let mut damping = [0.0; 2];
-        for i in 0..2 {
-            let axis = |m: &crate::tuning::PlantMode| {
-                let w2 = (std::f64::consts::TAU * m.frequency).powi(2);
-                let drive = if i == 0 {
-                    m.input[0] + m.input[1]
-                } else {
-                    m.input[0] - m.input[1]
-                };
-                m.output[i] * drive / w2
-            };
-            let total = g[i][0] + if i == 0 { g[i][1] } else { -g[i][1] };
-            if let Some(m) = modes
-                .iter()
-                .filter(|m| m.frequency < nyquist && axis(m) / total >= share)
-                .min_by(|a, b| a.frequency.total_cmp(&b.frequency))
-            {
-                frequency[i] = Some(m.frequency);
-                damping[i] = m.damping;
-            }
-        }
-        ResponseFit {
-            dc_gain: g,
-            frequency,
-            damping,
-        }
-    }
-
-    /// Checks the fields.
-    pub fn validate(&self) -> Result<()> {
-        for i in 0..2 {
-            if let Some(f) = self.frequency[i] {
-                positive(&format!("fit.frequency[{i}]"), f)?;
-            }
-            check(
-                &format!("fit.damping[{i}]"),
-                self.damping[i],
-                (0.0..1.0).contains(&self.damping[i]),
-                "a damping ratio in [0, 1)",
-            )?;
-            check(
-                &format!("fit.dc_gain[0][{i}]"),
-                self.dc_gain[0][i],
-                self.dc_gain[0][i] > 0.0 && self.dc_gain[0][i] < 0.5,
-                "a static gain of q_o1 in (0, 0.5) (each PEA drives half the output)",
-            )?;
-            check(
-                &format!("fit.dc_gain[1][{i}]"),
-                self.dc_gain[1][i],
-                self.dc_gain[1][i].is_finite() && self.dc_gain[1][i] != 0.0,
-                "a finite non-zero static gain of q_o2",
-            )?;
-        }
-        Ok(())
-    }
-}
-
-/// The lumped parameters fitted to a measured response (the PEA stiffnesses and plate
-/// masses of `guess` kept): the symmetric static gain (rows averaged over the two PEAs) and
-/// the output modes that the response shows. An axis without a mode keeps the design's
-/// stiffness (K_qo1 or K_qo2) and damping ratio; without the q_o2 mode the mass is kept too.
-///
-/// With the plates statically condensed (their modes, ≈ 12 kHz, are far above the output
-/// modes), Eq. (31)–(35) give, with k_p = K_in + K_pea:
-///
-/// ```text
-/// G_dc,1i = K_pea / (2 k_p)                → K_in = K_pea (1/(2 g₁) − 1)
-/// G_dc,2i = ± α K_pea / (k_p + K_qo1)      → α = g₂ (k_p + K_qo1) / K_pea
-/// ω₁² = 2 K_qo1 k_p / ((k_p + K_qo1) M)    → K_qo1 = K₁ k_p / (2 k_p − K₁), K₁ = M ω₁²
-/// ω₂² = K_qo2 / M                          → M = K_qo2 / ω₂² (K_qo2 kept)
-/// C_qo1 = ζ₁ √(K₁ M) (two dampers in parallel), C_qo2 = 2 ζ₂ √(K_qo2 M)
-/// ```
-///
-/// The fit is exact for the static gain and within the plates' mass effect (≪ 1 %) for the
-/// modes (`tests/model.rs`). Errors when ω₁ needs K₁ ≥ 2 k_p (no stiffness can give it).
-pub fn fit_to_response(guess: &StageParams, fit: &ResponseFit) -> Result<StageParams> {
-    validate(guess)?;
-    fit.validate()?;
-    let mut p = guess.clone();
-    let g1 = 0.5 * (fit.dc_gain[0][0] + fit.dc_gain[0][1]);
-    let g2 = 0.5 * (fit.dc_gain[1][0] - fit.dc_gain[1][1]);
-    let tau = std::f64::consts::TAU;
-    if let Some(f2) = fit.frequency[1] {
-        p.mass = guess.k_qo2 / (tau * f2).powi(2);
-        p.c_qo2 = 2.0 * fit.damping[1] * (p.k_qo2 * p.mass).sqrt();
-    } else {
-        // The design's damping ratio at the kept stiffness and mass.
-        p.c_qo2 = guess.c_qo2;
-    }
-    p.k_in1 = p.k_pea1 * (0.5 / g1 - 1.0);
-    p.k_in2 = p.k_pea2 * (0.5 / g1 - 1.0);
-    let k_p = 0.5 * (p.k_in1 + p.k_pea1 + p.k_in2 + p.k_pea2);
-    if let Some(f1) = fit.frequency[0] {
-        let k1 = p.mass * (tau * f1).powi(2);
-        check(
-            "fit.frequency[0]",
-            f1,
-            k1 < 2.0 * k_p,
-            "a q_o1 mode below the one of rigid output springs, √(2 k_p / M)",
-        )?;
-        p.k_qo1 = k1 * k_p / (2.0 * k_p - k1);
-        p.c_qo1 = fit.damping[0] * (k1 * p.mass).sqrt();
-    } else {
-        // Same damping ratio as the design at the new mass.
-        p.c_qo1 = guess.c_qo1 * (p.mass / guess.mass).sqrt();
-    }
-    p.alpha = g2 * (k_p + p.k_qo1) / (0.5 * (p.k_pea1 + p.k_pea2));
-    validate(&p)?;
-    Ok(p)
-}
-
-/// The coupling stiffness k_c of Eq. (30) that reproduces the cross terms of a measured
-/// static gain `dc_gain` (rows q_o1, q_o2; columns PEA 1, 2) on the model `params`.
-///
-/// Without coupling the model's q_o1 responds equally to both PEAs and q_o2 oppositely
-/// (G₁₁ = G₁₂, G₂₁ = −G₂₂, the sums [`fit_to_response`] fits); the coupling shows as the
-/// other halves h₁ = (G₁₁ − G₁₂)/2 and h₂ = (G₂₁ + G₂₂)/2. k_c is their least-squares fit,
-/// each relative to its axis's gain, by two Gauss–Newton steps (h is smooth in k_c and
-/// nearly linear at the couplings a stage has). A mirror-symmetric design has h = 0 and gets
-/// k_c = 0. The result is clamped to |k_c| ≤ 0.9 √(K_qo1 K_qo2).
-pub fn fit_coupling(params: &StageParams, dc_gain: [[f64; 2]; 2]) -> Result<f64> {
-    validate(params)?;
-    let halves = |g: [[f64; 2]; 2]| {
-        let (g1, g2) = (
-            0.5 * (g[0][0] + g[0][1]).abs(),
-            0.5 * (g[1][0] - g[1][1]).abs(),
-        );
-        [
-            0.5 * (g[0][0] - g[0][1]) / g1.max(f64::MIN_POSITIVE),
-            0.5 * (g[1][0] + g[1][1]) / g2.max(f64::MIN_POSITIVE),
-        ]
-    };
-    let model = |k: f64| -> Result<[f64; 2]> {
-        let g = StageModel::with_coupling(params, k)?.dc_gain()?;
-        Ok(halves([[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]]))
-    };
-    let target = halves(dc_gain);
-    let bound = 0.9 * (params.k_qo1 * params.k_qo2).sqrt();
-    let step = 1e-6 * bound;
-    let mut k = 0.0;
-    for _ in 0..2 {
-        let h = model(k)?;
-        let hd = model(k + step)?;
-        let s = [(hd[0] - h[0]) / step, (hd[1] - h[1]) / step];
-        let den = s[0] * s[0] + s[1] * s[1];
-        if den == 0.0 {
-            return Ok(0.0);
-        }
-        k += (s[0] * (target[0] - h[0]) + s[1] * (target[1] - h[1])) / den;
-        k = k.clamp(-bound, bound);
-    }
-    Ok(k)
 }
 
 /// Checks a parameter set (all stiffnesses and masses > 0, dampings ≥ 0, α ≠ 0).
