@@ -19,7 +19,6 @@
 
 use flexstage_assess::Bench;
 use flexstage_assess::Candidate;
-use flexstage_assess::bench::plant_modes;
 use flexstage_assess::inject::{InjectionParams, injected_margins, is_stable};
 use flexstage_control::actuator::Compensation;
 use flexstage_control::backstepping::LawParams;
@@ -155,7 +154,7 @@ fn model_against_twin(
             m.output[1] * (m.input[0] - m.input[1]) / w2 / (gt[1][0] - gt[1][1])
         );
     }
-    let mut fit = ResponseFit::from_modes(&plant_modes(&bench.twin), 0.5 * fs, 0.1);
+    let mut fit = ResponseFit::from_modes(&bench.twin.modal.plant_modes(), 0.5 * fs, 0.1);
     if let Some(f) = env("BS_F1") {
         fit.frequency[0] = Some(f);
     }

@@ -2,13 +2,12 @@
 //! each one, its linear loop for margins and its full rig for tracking.
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::PidController;
 use flexstage_control::experiment::{Setup, Variant};
-use flexstage_control::pi_notch::{AxisGains, PiNotchController, PiNotchParams};
+use flexstage_control::pi_notch::{PiNotchController, PiNotchParams};
 use flexstage_control::tuning::{Structure, Tuned, TuningParams, loop_margins, tune};
 use flexstage_identify::response::ResponseFit;
 use flexstage_sim::experiment::StageControl;
-use flexstage_sim::modal::{ModalPlant, PlantMode};
+use flexstage_sim::modal::ModalPlant;
 use flexstage_sim::rig::{AmplifierParams, PlantActuator, RigParams, RigPlant, SensorParams};
 use flexstage_sim::trajectory::Reference;
 use flexstage_twin::{Twin, TwinStage};
@@ -79,25 +78,11 @@ pub struct Bench {
     pub identified: Option<ResponseFit>,
 }
 
-/// The twin's modes (PEA inputs and outputs only).
-pub fn plant_modes(twin: &Twin) -> Vec<PlantMode> {
-    twin.modal
-        .modes
-        .iter()
-        .map(|m| PlantMode {
-            frequency: m.frequency,
-            damping: m.damping,
-            input: [m.input[0], m.input[1]],
-            output: m.output,
-        })
-        .collect()
-}
-
 /// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay and the
 /// rig's sensor chain `sensor` (electronics and anti-aliasing filter) before the sampler.
 pub fn modal_plant(twin: &Twin, t: f64, delay: usize, sensor: &SensorParams) -> Result<ModalPlant> {
     Ok(ModalPlant::with_sensor(
-        plant_modes(twin),
+        twin.modal.plant_modes(),
         t,
         delay,
         sensor,
@@ -147,22 +132,11 @@ impl Bench {
         Ok(match c {
             Candidate::PidTuned => Some(self.pid.params),
             Candidate::PiNotch => Some(self.pi_notch.params),
-            Candidate::PidScenario => {
-                let m = flexstage_sim::model::StageModel::new(&self.setup.controller.model)?
-                    .dc_gain()?;
-                let p = self.setup.pid;
-                let axis = AxisGains {
-                    kp: p.kp,
-                    ki: p.ki,
-                    kd: p.kd,
-                    notches: [None, None],
-                };
-                Some(PiNotchParams {
-                    axes: [axis; 2],
-                    static_gain: [[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]],
-                    sample_time: self.setup.rig.sample_time,
-                })
-            }
+            Candidate::PidScenario => Some(
+                self.setup
+                    .pid
+                    .with_model(&self.setup.controller.model, self.setup.rig.sample_time)?,
+            ),
             Candidate::Robust | Candidate::NonRobust => None,
         })
     }
@@ -183,13 +157,12 @@ impl Bench {
             Candidate::NonRobust => {
                 setup.controller(Variant::NonRobust, compensation, reference)?
             }
-            Candidate::PidScenario => Box::new(PidController::new(
-                &setup.controller.model,
-                setup.pid,
-                actuator,
-                setup.rig.sample_time,
-                reference,
-            )?),
+            Candidate::PidScenario => {
+                let p = setup
+                    .pid
+                    .with_model(&setup.controller.model, setup.rig.sample_time)?;
+                Box::new(PiNotchController::new(p, actuator, reference)?)
+            }
             Candidate::PidTuned | Candidate::PiNotch => {
                 let p = self.linear_params(c)?.expect("linear candidate");
                 Box::new(PiNotchController::new(p, actuator, reference)?)

@@ -178,7 +178,7 @@ pub fn injected_margins(
 pub fn size_backstepping(bench: &mut Bench) -> Result<f64> {
     use flexstage_control::controller::GAIN_SCALES;
     let base = bench.setup.controller.clone();
-    let modes = crate::bench::plant_modes(&bench.twin);
+    let modes = bench.twin.modal.plant_modes();
     let notches = bench.pi_notch.params.axes.map(|a| a.notches);
     let delay = bench.setup.rig.delay;
     let (gm, pm) = (bench.tuning.gain_margin_db, bench.tuning.phase_margin_deg);

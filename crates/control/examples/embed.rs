@@ -4,7 +4,7 @@
 //! delay and sensor noise). Nothing in the loop allocates. After 10 periods of the 3:1
 //! Lissajous the learning layer is frozen and the RMS error of the last period is printed.
 //!
-//! `cargo run --release -p flexstage-control-core --example embed`
+//! `cargo run --release -p flexstage-control --example embed`
 
 use flexstage_control::actuator::{Actuator, Compensation};
 use flexstage_control::experiment::Setup;
@@ -37,7 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let stroke = setup.controller.actuator.stroke;
     let law = PidLaw::new(
-        gains,
+        [gains; 2],
         [[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]],
         t,
         stroke,

@@ -1,7 +1,8 @@
-//! The real-time controllers: the backstepping robust controller (observer + law + input
-//! transformation + hysteresis compensation, Figure 7) and the PID + inverse-hysteresis
-//! feedforward baseline. Both implement [`StageControl`]: `step(measurement) -> command`,
-//! once per sample, with no allocation, no I/O and no randomness.
+//! The backstepping robust controller (observer + law + input transformation + hysteresis
+//! compensation, Figure 7), and the scenario's PID gains ([`PidParams`], run by the PID +
+//! feed-forward law of [`crate::pi_notch`]). It implements [`StageControl`]:
+//! `step(measurement) -> command`, once per sample, with no allocation, no I/O and no
+//! randomness.
 //!
 //! # Input transformation, Eq. (44) corrected
 //! Eq. (44), u = D⁻¹[−(B̂_ξη η̂ + B̂_ξξ ξ̂̇) + v̇], is meant to turn the second line of Eq. (43)
@@ -61,7 +62,8 @@ use crate::backstepping::{Law, LawOutput, LawParams};
 use crate::error::{Result, check};
 use crate::estimator::{KalmanDesign, KalmanParams};
 use crate::observer::{DISTURBANCE, FILTER_LEN, KFilter, ObserverDesign, ObserverParams, Vector10};
-use crate::pi_notch::{Biquad, Notch};
+use crate::pi_notch::{AxisGains, Notch, PiNotchParams, notch_section};
+use flexstage_control_core::Biquad;
 use flexstage_sim::experiment::{Command, StageControl};
 use flexstage_sim::model::StageModel;
 use flexstage_sim::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
@@ -319,8 +321,8 @@ impl BacksteppingController {
             }),
             notch: params.measurement_notches.map(|a| {
                 a.map(|n| {
-                    n.map_or_else(Biquad::identity, |n| {
-                        Biquad::notch(&n, params.observer.sample_time)
+                    n.map_or(Biquad::IDENTITY, |n| {
+                        notch_section(&n, params.observer.sample_time)
                     })
                 })
             }),
@@ -578,109 +580,26 @@ impl PidParams {
         check("controller.pid[1]", self.ki, self.ki >= 0.0, "ki ≥ 0 [1/s]")?;
         check("controller.pid[2]", self.kd, self.kd >= 0.0, "kd ≥ 0 [s]")
     }
-}
 
-/// The industry-default baseline: feedforward of the reference through the static inverse of
-/// the model (x_nom = G_dc⁻¹ q_d), a PID on each output error mapped through the same
-/// inverse, and the same inverse hysteresis compensation and amplifier stage.
-#[derive(Debug, Clone)]
-pub struct PidController {
-    pid: PidParams,
-    g_inv: nalgebra::Matrix2<f64>,
-    actuator: Actuator,
-    reference: Reference,
-    t: f64,
-    k: u64,
-    integral: [f64; 2],
-    e_prev: [f64; 2],
-    y_prev: [f64; 2],
-    have_prev: bool,
-    last: Command,
-}
-
-impl PidController {
-    /// Builds the baseline for the controller's model `model` and sample time `t` \[s\].
-    pub fn new(
-        model: &StageParams,
-        pid: PidParams,
-        actuator: ActuatorParams,
-        t: f64,
-        reference: Reference,
-    ) -> Result<Self> {
-        pid.validate()?;
-        crate::error::positive("simulation.sample_time", t)?;
-        reference.validate()?;
-        let m = StageModel::new(model)?;
-        let g_inv =
-            m.dc_gain()?
-                .try_inverse()
-                .ok_or_else(|| crate::error::ControlError::Singular {
-                    what: "static gain G_dc".into(),
-                })?;
-        Ok(PidController {
-            pid,
-            g_inv,
-            actuator: Actuator::new(actuator)?,
-            reference,
-            t,
-            k: 0,
-            integral: [0.0; 2],
-            e_prev: [0.0; 2],
-            y_prev: [0.0; 2],
-            have_prev: false,
-            last: Command::default(),
-        })
-    }
-}
-
-impl StageControl for PidController {
-    #[inline]
-    fn step(&mut self, y_in: [f64; 2]) -> Command {
-        let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
-        let y = if dropout { self.y_prev } else { y_in };
-        let r = self.reference.sample(self.k as f64 * self.t);
-        let mut w = Vector2::zeros();
-        let mut e = [0.0; 2];
-        for i in 0..2 {
-            e[i] = r.q[i] - y[i];
-            let de = if self.have_prev {
-                (e[i] - self.e_prev[i]) / self.t
-            } else {
-                0.0
-            };
-            w[i] = r.q[i]
-                + self.pid.kp * e[i]
-                + self.pid.ki * (self.integral[i] + 0.5 * self.t * e[i])
-                + self.pid.kd * de;
-        }
-        let u = self.g_inv * w;
-        let mut u = [u[0], u[1]];
-        if !(u[0].is_finite() && u[1].is_finite()) {
-            u = self.last.x_nom;
-        }
-        let act = self.actuator.command(u, self.t);
-        let cmd = Command {
-            voltage: act.voltage,
-            x_nom: act.x_nom,
-            reference: r.q,
-            saturated: act.saturated,
-            dropout,
+    /// These gains on both axes of the PID + feed-forward law without notches
+    /// ([`crate::pi_notch`]), with the static gain of the controller's model `model` and the
+    /// sample time `t` \[s\]: the industry-default baseline (feed-forward of the reference
+    /// through the static inverse of the model, x_nom = G_dc⁻¹ q_d, and a PID on each output
+    /// error mapped through the same inverse).
+    pub fn with_model(&self, model: &StageParams, t: f64) -> Result<PiNotchParams> {
+        self.validate()?;
+        let g = StageModel::new(model)?.dc_gain()?;
+        let axis = AxisGains {
+            kp: self.kp,
+            ki: self.ki,
+            kd: self.kd,
+            notches: [None, None],
         };
-        if !act.saturated {
-            for (i, ei) in e.iter().enumerate() {
-                self.integral[i] += self.t * ei;
-            }
-        }
-        self.e_prev = e;
-        self.y_prev = y;
-        self.have_prev = true;
-        self.k += 1;
-        self.last = cmd;
-        cmd
-    }
-
-    fn estimate(&self) -> [f64; 10] {
-        [0.0; 10]
+        Ok(PiNotchParams {
+            axes: [axis; 2],
+            static_gain: [[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]],
+            sample_time: t,
+        })
     }
 }
 
@@ -704,7 +623,7 @@ mod tests {
         };
         let analog = 2.0 * (n.pole_damping - n.zero_damping) / (std::f64::consts::TAU * 1000.0);
         let tau = notch_delay(&n, t);
-        let mut b = Biquad::notch(&n, t);
+        let mut b = notch_section(&n, t);
         let f = 5.0;
         let w = std::f64::consts::TAU * f;
         let (mut c, mut s) = (0.0, 0.0);

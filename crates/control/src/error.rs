@@ -44,6 +44,25 @@ pub enum ControlError {
     },
 }
 
+/// A setting the embeddable core refused (its message names the field and the range).
+impl From<flexstage_control_core::CoreError> for ControlError {
+    fn from(e: flexstage_control_core::CoreError) -> Self {
+        use flexstage_control_core::CoreError;
+        match e {
+            CoreError::Range {
+                field,
+                value,
+                expected,
+            } => RangeError::number(field, value, expected).into(),
+            CoreError::Buffer {
+                field,
+                len,
+                expected,
+            } => RangeError::new(field, len.to_string(), format!("length {expected}")).into(),
+        }
+    }
+}
+
 /// Result alias of this crate.
 pub type Result<T> = std::result::Result<T, ControlError>;
 

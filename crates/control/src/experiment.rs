@@ -20,7 +20,7 @@ use flexstage_sim::trajectory::{Reference, Workspace};
 use crate::actuator::{ActuatorParams, Compensation};
 use crate::backstepping::LawParams;
 use crate::controller::{
-    BacksteppingController, ControllerParams, Estimator, Inner, PidController, PidParams, Velocity,
+    BacksteppingController, ControllerParams, Estimator, Inner, PidParams, Velocity,
 };
 use crate::error::{ControlError, Result};
 use crate::estimator::KalmanParams;
@@ -235,13 +235,12 @@ impl Setup {
                 let p = self.pid_tuned.expect("checked");
                 Box::new(PiNotchController::new(p, actuator, reference)?)
             }
-            Variant::PidFeedforward | Variant::PidScenario => Box::new(PidController::new(
-                &self.controller.model,
-                self.pid,
-                actuator,
-                self.controller.observer.sample_time,
-                reference,
-            )?),
+            Variant::PidFeedforward | Variant::PidScenario => {
+                let p = self
+                    .pid
+                    .with_model(&self.controller.model, self.controller.observer.sample_time)?;
+                Box::new(PiNotchController::new(p, actuator, reference)?)
+            }
             Variant::PiNotch => {
                 let p = self.pi_notch.ok_or_else(|| ControlError::Infeasible {
                     what: "controller pi-notch-ff".into(),

@@ -41,7 +41,7 @@
 //! does ([`acquisition_rig`]).
 
 use flexstage_numerics::RangeError;
-use flexstage_sim::modal::PlantMode;
+use flexstage_sim::modal::{PlantMode, static_gain};
 use flexstage_sim::rig::{RigParams, SensorParams};
 use nalgebra::{DMatrix, DVector};
 
@@ -76,15 +76,7 @@ impl ResponseFit {
     /// Nyquist, which the sampled response shows only folded) gets `None`: its mode is not
     /// identifiable from the sampled response and is not fitted.
     pub fn from_modes(modes: &[PlantMode], nyquist: f64, share: f64) -> ResponseFit {
-        let mut g = [[0.0; 2]; 2];
-        for m in modes {
-            let w2 = (std::f64::consts::TAU * m.frequency).powi(2);
-            for i in 0..2 {
-                for j in 0..2 {
-                    g[i][j] += m.output[i] * m.input[j] / w2;
-                }
-            }
-        }
+        let g = static_gain(modes);
         let mut frequency = [None; 2];
         let mut damping = [0.0; 2];
         for i in 0..2 {

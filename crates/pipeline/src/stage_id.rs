@@ -467,7 +467,7 @@ pub fn identify_twin_response(
     let guess = &scenario.stage.truth;
     let params = fit_to_response(guess, &response.fit)?;
     let coupling = fit_coupling(&params, response.fit.dc_gain)?;
-    let modes = flexstage_assess::bench::plant_modes(twin);
+    let modes = twin.modal.plant_modes();
     let exact = ResponseFit::from_modes(&modes, nyquist, rp.share);
     let truth_params = fit_to_response(guess, &exact)?;
     let truth = Truth {

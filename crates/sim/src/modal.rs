@@ -36,6 +36,21 @@ pub struct PlantMode {
     pub output: [f64; 2],
 }
 
+/// The static gain x_nom → q of a modal plant, `Σ_k out_k in_kᵀ / ω_k²` (2 × 2), summed in
+/// the order of `modes`.
+pub fn static_gain(modes: &[PlantMode]) -> [[f64; 2]; 2] {
+    let mut g = [[0.0; 2]; 2];
+    for m in modes {
+        let w2 = (std::f64::consts::TAU * m.frequency).powi(2);
+        for i in 0..2 {
+            for j in 0..2 {
+                g[i][j] += m.output[i] * m.input[j] / w2;
+            }
+        }
+    }
+    g
+}
+
 /// One partial fraction of a filtered mode: its residue r_j and e^{p_j T}.
 type Residue = (Complex<f64>, Complex<f64>);
 
@@ -155,16 +170,7 @@ impl LoopPlant for ModalPlant {
     }
 
     fn static_gain(&self) -> [[f64; 2]; 2] {
-        let mut g = [[0.0; 2]; 2];
-        for m in &self.modes {
-            let w2 = (std::f64::consts::TAU * m.frequency).powi(2);
-            for i in 0..2 {
-                for j in 0..2 {
-                    g[i][j] += m.output[i] * m.input[j] / w2;
-                }
-            }
-        }
-        g
+        static_gain(&self.modes)
     }
 
     fn modes(&self) -> Vec<(f64, f64)> {
