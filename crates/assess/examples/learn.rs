@@ -12,13 +12,14 @@
 //!
 //! `cargo run --release -p flexstage-assess --example learn -- quick runs/quick/design/design.json [PERIODS]`
 
-use flexstage_assess::{Bench, Candidate};
+use flexstage_assess::Bench;
 use flexstage_control::ControlError;
 use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::Setup;
 use flexstage_control::learning::{
     DesignParams, Learning, design, measure_learning_plant, rms_per_period,
 };
+use flexstage_control::registry::Controller;
 use flexstage_scenario::{Preset, Scenario, Trajectory};
 use flexstage_sim::experiment::StageControl;
 use flexstage_sim::experiment::run;
@@ -60,12 +61,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "controller       without q1/q2 [nm]  with learning q1/q2 [nm]  settled from  \
          design γ, λ, M, ρ  sensor lag q1/q2 [samples]"
     );
-    for c in [
-        Candidate::PiNotch,
-        Candidate::PidTuned,
-        Candidate::Robust,
-        Candidate::NonRobust,
-    ] {
+    for c in Controller::defaults() {
         let make = || -> flexstage_control::Result<(Box<dyn StageControl>, Box<dyn StagePlant>)> {
             let ctrl = bench
                 .controller(c, Compensation::Inverse, reference)
@@ -100,7 +96,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .map_or(1, |j| j + 2);
         println!(
             "{:<16} {:>8.1}/{:<8.1}  {:>12.1}/{:<10.1}  {:>12}  {}, {}, {}, {rho:.3}  {:.2}/{:.2}",
-            c.name(),
+            c.name,
             last0[0] * 1e9,
             last0[1] * 1e9,
             last[0] * 1e9,

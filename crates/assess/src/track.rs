@@ -7,7 +7,9 @@ use flexstage_sim::rig::RigParams;
 use flexstage_sim::trajectory::{Reference, Shape};
 use flexstage_twin::Twin;
 
-use crate::bench::{Bench, Candidate};
+use flexstage_control::registry::Controller;
+
+use crate::bench::Bench;
 use crate::error::Result;
 
 /// Runs `c` (built with `setup`) on `twin` in `rig` for `duration` seconds; returns the
@@ -17,7 +19,7 @@ pub fn track_on(
     setup: &Setup,
     twin: &Twin,
     rig: &RigParams,
-    c: Candidate,
+    c: &Controller,
     reference: Reference,
     duration: f64,
 ) -> Result<Metrics> {
@@ -34,7 +36,7 @@ pub fn diverged(m: &Metrics) -> bool {
 
 /// The standstill noise of a candidate: RMS of the true output over the second half of
 /// `duration` with a zero reference in the full rig (sensor noise fed back) \[m\].
-pub fn standstill(bench: &Bench, c: Candidate, duration: f64) -> Result<[f64; 2]> {
+pub fn standstill(bench: &Bench, c: &Controller, duration: f64) -> Result<[f64; 2]> {
     let r = Reference::new(Shape::Step { target: [0.0; 2] });
     let m = track_on(
         bench,

@@ -1,8 +1,8 @@
 //! The backstepping robust controller (observer + law + input transformation + hysteresis
-//! compensation, Figure 7), and the scenario's PID gains ([`PidParams`], run by the PID +
-//! feed-forward law of [`crate::pi_notch`]). It implements [`StageControl`]:
-//! `step(measurement) -> command`, once per sample, with no allocation, no I/O and no
-//! randomness.
+//! compensation, Figure 7), robust ([`ROBUST`]) or not ([`NONROBUST`]). It implements
+//! [`StageControl`]: `step(measurement) -> command`, once per sample, with no allocation,
+//! no I/O and no randomness. On a stage with a sampled response it is set up from the
+//! response fit and its gains are sized by its margins ([`sized`]).
 //!
 //! # Input transformation, Eq. (44) corrected
 //! Eq. (44), u = D⁻¹[−(B̂_ξη η̂ + B̂_ξξ ξ̂̇) + v̇], is meant to turn the second line of Eq. (43)
@@ -62,12 +62,15 @@ use crate::backstepping::{Law, LawOutput, LawParams};
 use crate::error::{Result, check};
 use crate::estimator::{KalmanDesign, KalmanParams};
 use crate::observer::{DISTURBANCE, FILTER_LEN, KFilter, ObserverDesign, ObserverParams, Vector10};
-use crate::pi_notch::{AxisGains, Notch, PiNotchParams, notch_section};
+use crate::pi_notch::{Notch, notch_section};
+use crate::registry::{Controller, Design, Stage};
+use crate::tuning::{Structure, tuned};
 use flexstage_control_core::Biquad;
 use flexstage_sim::experiment::{Command, StageControl};
 use flexstage_sim::model::StageModel;
 use flexstage_sim::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
 use flexstage_sim::trajectory::{RefSample, Reference};
+use std::sync::Arc;
 
 /// Where the controller takes the output velocity q̇ from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -165,32 +168,109 @@ impl ControllerParams {
 }
 
 /// The scales of the law's gains k_ε, k_η − 1, k tried, largest first, when the
-/// backstepping is sized by its margins on a sampled plant
-/// ([`ControllerParams::for_sampled_plant`]; `flexstage-assess` picks the largest that keeps
-/// 6 dB / 40° on both loops with the rig's delay).
+/// backstepping is sized by its margins on a stage ([`sized`]: the largest that keeps the
+/// tuning's margin targets, 6 dB / 40°, on both loops of both variants with the rig's delay).
 pub const GAIN_SCALES: [f64; 8] = [1.0, 0.7, 0.5, 0.35, 0.25, 0.18, 0.12, 0.08];
 
-impl ControllerParams {
-    /// The settings for a plant known by its modal response (e.g. the twin's modes), as a
-    /// practitioner would set the backstepping up from a frequency-response
-    /// identification: [`ControllerParams::for_response`] on the fit that identification
-    /// would give below Nyquist ([`flexstage_identify::response::ResponseFit::from_modes`] with
-    /// [`flexstage_identify::response::RESPONSE_SHARE`]).
-    pub fn for_sampled_plant(
-        &self,
-        modes: &[flexstage_sim::modal::PlantMode],
-        notches: [[Option<Notch>; 2]; 2],
-        gain_scale: f64,
-    ) -> ControllerParams {
-        let nyquist = 0.5 / self.observer.sample_time;
-        let fit = flexstage_identify::response::ResponseFit::from_modes(
-            modes,
-            nyquist,
-            flexstage_identify::response::RESPONSE_SHARE,
-        );
-        self.for_response(&fit, notches, gain_scale)
-    }
+/// Robust backstepping with the disturbance observer (Figure 9b), set up for the stage
+/// ([`sized`]).
+pub static ROBUST: Controller = Controller {
+    name: "robust",
+    label: "robust backstepping (Figure 9b), fitted to the response, gains sized by margins",
+    default: true,
+    design: design_robust,
+};
 
+/// Backstepping without the robust terms (Figure 9a), set up as [`ROBUST`].
+pub static NONROBUST: Controller = Controller {
+    name: "nonrobust",
+    label: "backstepping without robust terms (Figure 9a), set up as robust",
+    default: true,
+    design: design_nonrobust,
+};
+
+fn design_robust(stage: &Stage<'_>) -> Result<Option<Arc<dyn Design>>> {
+    Ok(Some(Arc::new(Backstepping::new(sized(stage)?, true))))
+}
+
+fn design_nonrobust(stage: &Stage<'_>) -> Result<Option<Arc<dyn Design>>> {
+    Ok(Some(Arc::new(Backstepping::new(sized(stage)?, false))))
+}
+
+/// The backstepping as designed: its settings, with the robust terms on or off.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Backstepping(pub ControllerParams);
+
+impl Backstepping {
+    /// The design of `params` with the robust terms on (`robust`) or off.
+    pub fn new(params: ControllerParams, robust: bool) -> Backstepping {
+        let mut p = params;
+        p.law.robust = robust;
+        Backstepping(p)
+    }
+}
+
+impl Design for Backstepping {
+    fn build(
+        &self,
+        actuator: ActuatorParams,
+        delay: usize,
+        reference: Reference,
+    ) -> Result<Box<dyn StageControl>> {
+        let mut p = self.0.clone();
+        p.actuator = actuator;
+        p.delay = delay;
+        Ok(Box::new(BacksteppingController::new(&p, reference)?))
+    }
+}
+
+/// The backstepping's settings for a stage (once per stage, shared by both variants): the
+/// scenario's as they are where the stage offers no response fit (the lumped plant);
+/// otherwise set up as a practitioner would from the sampled response
+/// ([`ControllerParams::for_response`]: the model fitted to the stage's response fit, the
+/// tuned PI + notch's notches on the measurement) with the largest of [`GAIN_SCALES`] whose
+/// robust and non-robust loops keep the tuning's margin targets (the stage's probe, sine
+/// injection with the rig's delay); the smallest when none does (the margins table then
+/// flags it), the full gains when the stage cannot measure margins.
+pub fn sized(stage: &Stage<'_>) -> Result<ControllerParams> {
+    stage.shared("controller::sized", || {
+        let base = &stage.setup.controller;
+        let Some(fit) = &stage.fit else {
+            return Ok(base.clone());
+        };
+        let notches = tuned(stage, Structure::PiNotch)?
+            .map_or([[None; 2]; 2], |t| t.params.axes.map(|a| a.notches));
+        let Some(probe) = stage.probe else {
+            return Ok(base.for_response(fit, notches, 1.0));
+        };
+        let (gm, pm) = (stage.tuning.gain_margin_db, stage.tuning.phase_margin_deg);
+        let mut mp = stage.tuning.margins;
+        mp.f_min = 10.0;
+        mp.points = 40;
+        mp.refine = 8;
+        let mut p = base.clone();
+        for &scale in &GAIN_SCALES {
+            p = base.for_response(fit, notches, scale);
+            let mut ok = true;
+            for robust in [true, false] {
+                let design = Backstepping::new(p.clone(), robust);
+                ok &= match probe.margins(&design, &mp)? {
+                    Some(m) => m.iter().all(|m| m.meets(gm, pm)),
+                    None => false,
+                };
+                if !ok {
+                    break;
+                }
+            }
+            if ok {
+                break;
+            }
+        }
+        Ok(p)
+    })
+}
+
+impl ControllerParams {
     /// The settings for a plant known by a response fit (identified, or from its modes): the
     /// model fitted to it ([`crate::fit::fit_to_response`]; kept as it is when the fit is
     /// refused) with the coupling that reproduces its static cross terms
@@ -204,14 +284,7 @@ impl ControllerParams {
         gain_scale: f64,
     ) -> ControllerParams {
         let mut p = self.clone();
-        if let Ok(m) = crate::fit::fit_to_response(&self.model, fit) {
-            p.model = m;
-        }
-        // The coupling from the same static gain (a symmetric design has none): a coupling
-        // identified on another plant is not this one's.
-        if let Ok(k_c) = crate::fit::fit_coupling(&p.model, fit.dc_gain) {
-            p.coupling = k_c;
-        }
+        (p.model, p.coupling) = crate::fit::fitted_model(&self.model, self.coupling, fit);
         p.measurement_notches = notches;
         let g = gain_scale;
         p.law.error_gain = self.law.error_gain.map(|k| g * k);
@@ -559,47 +632,6 @@ impl StageControl for BacksteppingController {
         let mut out = [0.0; 10];
         out.copy_from_slice(z.as_slice());
         out
-    }
-}
-
-/// Gains of the PID baseline (per axis, on the output error e = q_d − y).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PidParams {
-    /// Proportional gain (dimensionless).
-    pub kp: f64,
-    /// Integral gain [1/s].
-    pub ki: f64,
-    /// Derivative gain \[s\] (on the finite-difference derivative of e).
-    pub kd: f64,
-}
-
-impl PidParams {
-    /// Checks the fields.
-    pub fn validate(&self) -> Result<()> {
-        check("controller.pid[0]", self.kp, self.kp >= 0.0, "kp ≥ 0")?;
-        check("controller.pid[1]", self.ki, self.ki >= 0.0, "ki ≥ 0 [1/s]")?;
-        check("controller.pid[2]", self.kd, self.kd >= 0.0, "kd ≥ 0 [s]")
-    }
-
-    /// These gains on both axes of the PID + feed-forward law without notches
-    /// ([`crate::pi_notch`]), with the static gain of the controller's model `model` and the
-    /// sample time `t` \[s\]: the industry-default baseline (feed-forward of the reference
-    /// through the static inverse of the model, x_nom = G_dc⁻¹ q_d, and a PID on each output
-    /// error mapped through the same inverse).
-    pub fn with_model(&self, model: &StageParams, t: f64) -> Result<PiNotchParams> {
-        self.validate()?;
-        let g = StageModel::new(model)?.dc_gain()?;
-        let axis = AxisGains {
-            kp: self.kp,
-            ki: self.ki,
-            kd: self.kd,
-            notches: [None, None],
-        };
-        Ok(PiNotchParams {
-            axes: [axis; 2],
-            static_gain: [[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]],
-            sample_time: t,
-        })
     }
 }
 

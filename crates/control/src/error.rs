@@ -34,6 +34,14 @@ pub enum ControlError {
         /// By how much, and what to change.
         detail: String,
     },
+    /// A measurement a design asked for (e.g. margins by sine injection on the stage) failed.
+    #[error("measuring {what}: {detail}")]
+    Measurement {
+        /// What was measured.
+        what: String,
+        /// Why it failed.
+        detail: String,
+    },
     /// Matrices of incompatible sizes.
     #[error("{what}: dimension mismatch ({detail})")]
     Dimension {

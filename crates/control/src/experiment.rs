@@ -1,6 +1,6 @@
 //! The tracking experiment (Section 4, Figures 9–11) with the controllers of this crate: a
-//! controller variant built from the scenario's settings ([`Setup`]), run on a simulated
-//! stage by `flexstage_sim::experiment::run`.
+//! controller of the registry ([`crate::registry`]) designed for a stage from the scenario's
+//! settings ([`Setup`]), run on a simulated stage by `flexstage_sim::experiment::run`.
 //!
 //! The runner takes any [`StagePlant`]: the lumped plant in its minimal loop
 //! ([`experiment`], the controller's ideal-loop tests), the lumped plant in the scenario's
@@ -8,6 +8,8 @@
 //! (`flexstage-twin`), through [`experiment_on`]. Before a run, [`Setup::check_reference`]
 //! refuses references the rig cannot follow (above the Nyquist frequency, beyond the
 //! amplifier range, the amplifier current or the controller's stroke).
+
+use std::sync::Arc;
 
 use flexstage_piezo::BoucWenParams;
 use flexstage_scenario::Scenario;
@@ -19,75 +21,13 @@ use flexstage_sim::trajectory::{Reference, Workspace};
 
 use crate::actuator::{ActuatorParams, Compensation};
 use crate::backstepping::LawParams;
-use crate::controller::{
-    BacksteppingController, ControllerParams, Estimator, Inner, PidParams, Velocity,
-};
+use crate::controller::{ControllerParams, Estimator, Inner, Velocity};
 use crate::error::{ControlError, Result};
 use crate::estimator::KalmanParams;
 use crate::feasibility::{Feasibility, feasibility};
 use crate::observer::ObserverParams;
-use crate::pi_notch::{PiNotchController, PiNotchParams};
-
-/// The controller variants compared.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Variant {
-    /// Backstepping with the robust terms (Figure 9b).
-    Robust,
-    /// Backstepping without the robust terms (Figure 9a).
-    NonRobust,
-    /// PID with inverse-hysteresis feedforward, tuned on the simulated plant's sampled
-    /// frequency response by the same procedure as [`Variant::PiNotch`] ([`crate::tuning`],
-    /// [`Setup::pid_tuned`]); where nothing was tuned (the lumped plant), the scenario's
-    /// gains (`controller.pid`), as [`Variant::PidScenario`].
-    PidFeedforward,
-    /// PID with inverse-hysteresis feedforward with the scenario's gains (`controller.pid`)
-    /// and the controller model's static gain, untuned: not among the defaults
-    /// ([`Variant::ALL`]), run only when asked for by name (`--variant pid-ff-scenario`).
-    PidScenario,
-    /// PI + notches + inverse-hysteresis feedforward tuned on the simulated plant's sampled
-    /// frequency response ([`crate::tuning`], [`Setup::pi_notch`]): the default, the one
-    /// controller that meets 6 dB / 40° on the twin with one sample of delay.
-    PiNotch,
-}
-
-impl Variant {
-    /// All variants, in report order (the default first).
-    pub const ALL: [Variant; 4] = [
-        Variant::PiNotch,
-        Variant::Robust,
-        Variant::NonRobust,
-        Variant::PidFeedforward,
-    ];
-
-    /// The default controller (DECISIONS.md, Control).
-    pub const DEFAULT: Variant = Variant::PiNotch;
-
-    /// Short name for files and tables.
-    pub fn name(self) -> &'static str {
-        match self {
-            Variant::Robust => "robust",
-            Variant::NonRobust => "nonrobust",
-            Variant::PidFeedforward => "pid-ff",
-            Variant::PidScenario => "pid-ff-scenario",
-            Variant::PiNotch => "pi-notch-ff",
-        }
-    }
-
-    /// Every variant that can be asked for by name: [`Variant::ALL`] and
-    /// [`Variant::PidScenario`].
-    pub const NAMED: [Variant; 5] = [
-        Variant::PiNotch,
-        Variant::Robust,
-        Variant::NonRobust,
-        Variant::PidFeedforward,
-        Variant::PidScenario,
-    ];
-
-    /// Parses [`Variant::name`] (any of [`Variant::NAMED`]).
-    pub fn from_name(s: &str) -> Option<Variant> {
-        Variant::NAMED.into_iter().find(|v| v.name() == s)
-    }
-}
+use crate::pid::PidParams;
+use crate::registry::{Controller, Design, Stage};
 
 /// Everything needed to run experiments: controller, baseline and plant settings.
 #[derive(Debug, Clone, PartialEq)]
@@ -100,13 +40,6 @@ pub struct Setup {
     pub plant: PlantParams,
     /// The loop of the scenario's rig (`[rig]`), for [`Setup::lumped_plant`] and the twin.
     pub rig: RigParams,
-    /// The PI + notch gains of [`Variant::PiNotch`], tuned on the plant that is simulated
-    /// ([`crate::tuning::tune`]); `None` until tuned (that variant is then refused).
-    pub pi_notch: Option<PiNotchParams>,
-    /// The PID gains of [`Variant::PidFeedforward`] tuned by the same procedure
-    /// ([`crate::tuning::tune`] with [`crate::tuning::Structure::Pid`]); `None`: that variant
-    /// runs the scenario's gains.
-    pub pid_tuned: Option<PiNotchParams>,
 }
 
 impl Setup {
@@ -162,8 +95,6 @@ impl Setup {
             },
             plant: PlantParams::from_scenario(s),
             rig: RigParams::from_scenario(s),
-            pi_notch: None,
-            pid_tuned: None,
         }
     }
 
@@ -215,62 +146,60 @@ impl Setup {
         })
     }
 
-    /// Builds the controller of a variant with the given compensation mode.
+    /// The controllers' actuator stage with the compensation mode `compensation`.
+    pub fn actuator(&self, compensation: Compensation) -> ActuatorParams {
+        let mut a = self.controller.actuator;
+        a.compensation = compensation;
+        a
+    }
+
+    /// `controller` designed from the scenario's settings ([`Setup::design`]) and built with
+    /// `compensation` for `reference`, predicting over the rig's delay.
     pub fn controller(
         &self,
-        variant: Variant,
+        controller: &Controller,
         compensation: Compensation,
         reference: Reference,
     ) -> Result<Box<dyn StageControl>> {
-        let mut actuator = self.controller.actuator;
-        actuator.compensation = compensation;
-        Ok(match variant {
-            Variant::Robust | Variant::NonRobust => {
-                let mut p = self.controller.clone();
-                p.actuator = actuator;
-                p.law.robust = variant == Variant::Robust;
-                Box::new(BacksteppingController::new(&p, reference)?)
-            }
-            Variant::PidFeedforward if self.pid_tuned.is_some() => {
-                let p = self.pid_tuned.expect("checked");
-                Box::new(PiNotchController::new(p, actuator, reference)?)
-            }
-            Variant::PidFeedforward | Variant::PidScenario => {
-                let p = self
-                    .pid
-                    .with_model(&self.controller.model, self.controller.observer.sample_time)?;
-                Box::new(PiNotchController::new(p, actuator, reference)?)
-            }
-            Variant::PiNotch => {
-                let p = self.pi_notch.ok_or_else(|| ControlError::Infeasible {
-                    what: "controller pi-notch-ff".into(),
-                    detail: "its gains are tuned on the simulated plant's frequency response \
-                             (Setup::pi_notch), and none were given"
-                        .into(),
-                })?;
-                Box::new(PiNotchController::new(p, actuator, reference)?)
-            }
+        self.design(controller)?.build(
+            self.actuator(compensation),
+            self.controller.delay,
+            reference,
+        )
+    }
+
+    /// The design of `controller` from the scenario's settings alone
+    /// ([`Stage::scenario`]: nothing tuned); refused for a controller whose design needs the
+    /// stage's sampled response.
+    pub fn design(&self, controller: &Controller) -> Result<Arc<dyn Design>> {
+        (controller.design)(&Stage::scenario(self))?.ok_or_else(|| ControlError::Infeasible {
+            what: format!("controller {}", controller.name),
+            detail: "it is designed from the stage's sampled response, and this stage has none"
+                .into(),
         })
     }
 }
 
-/// One experiment: variant, compensation, reference and duration on the setup's lumped
-/// plant in its minimal loop ([`Setup::plant`]: the controller's ideal-loop conditions).
+/// One experiment: `controller` designed from the scenario's settings ([`Setup::design`]),
+/// compensation, reference and duration on the setup's lumped plant in its minimal loop
+/// ([`Setup::plant`]: the controller's ideal-loop conditions).
 pub fn experiment(
     setup: &Setup,
-    variant: Variant,
+    controller: &Controller,
     compensation: Compensation,
     reference: Reference,
     duration: f64,
 ) -> Result<Record> {
-    experiment_with_progress(setup, variant, compensation, reference, duration, |_| {})
+    let design = setup.design(controller)?;
+    experiment_with_progress(setup, &*design, compensation, reference, duration, |_| {})
 }
 
-/// [`experiment`] with a progress callback (called with the number of samples done since the
-/// last call, every 1000 samples).
+/// The design `design` on the setup's lumped plant in its minimal loop, with a progress
+/// callback (called with the number of samples done since the last call, every 1000
+/// samples).
 pub fn experiment_with_progress(
     setup: &Setup,
-    variant: Variant,
+    design: &dyn Design,
     compensation: Compensation,
     reference: Reference,
     duration: f64,
@@ -278,9 +207,7 @@ pub fn experiment_with_progress(
 ) -> Result<Record> {
     crate::error::positive("duration", duration)?;
     // The minimal loop has no delay: the controller predicts over none.
-    let mut minimal = setup.clone();
-    minimal.controller.delay = 0;
-    let mut c = minimal.controller(variant, compensation, reference)?;
+    let mut c = design.build(setup.actuator(compensation), 0, reference)?;
     let mut plant = Plant::new(setup.plant.clone())?;
     Ok(run(
         c.as_mut(),
@@ -291,12 +218,13 @@ pub fn experiment_with_progress(
     ))
 }
 
-/// One experiment on a given plant (e.g. [`Setup::lumped_plant`] or the twin of
-/// `flexstage-twin`), from the plant's current state. `progress` is called with the number of
-/// samples done since the last call, every 1000 samples.
+/// One experiment of the design `design` on a given plant (e.g. [`Setup::lumped_plant`] or
+/// the twin of `flexstage-twin`) with the rig's delay, from the plant's current state.
+/// `progress` is called with the number of samples done since the last call, every 1000
+/// samples.
 pub fn experiment_on(
     setup: &Setup,
-    variant: Variant,
+    design: &dyn Design,
     compensation: Compensation,
     reference: Reference,
     duration: f64,
@@ -304,7 +232,8 @@ pub fn experiment_on(
     progress: impl FnMut(usize),
 ) -> Result<Record> {
     crate::error::positive("duration", duration)?;
-    let mut c = setup.controller(variant, compensation, reference)?;
+    let delay = setup.controller.delay;
+    let mut c = design.build(setup.actuator(compensation), delay, reference)?;
     Ok(run(
         c.as_mut(),
         plant,

@@ -8,6 +8,17 @@ use flexstage_sim::model::{StageModel, validate};
 
 use crate::error::{Result, check};
 
+/// The controller's lumped model on a stage with the response fit `fit`: `model` fitted to
+/// it ([`fit_to_response`]; kept when the fit is refused) and the coupling k_c that
+/// reproduces its static cross terms ([`fit_coupling`]; `coupling` kept when refused). A
+/// mirror-symmetric design gets k_c = 0: a coupling identified on another plant is not this
+/// one's.
+pub fn fitted_model(model: &StageParams, coupling: f64, fit: &ResponseFit) -> (StageParams, f64) {
+    let m = fit_to_response(model, fit).unwrap_or_else(|_| model.clone());
+    let k_c = fit_coupling(&m, fit.dc_gain).unwrap_or(coupling);
+    (m, k_c)
+}
+
 /// The lumped parameters fitted to a measured response (the PEA stiffnesses and plate
 /// masses of `guess` kept): the symmetric static gain (rows averaged over the two PEAs) and
 /// the output modes that the response shows. An axis without a mode keeps the design's

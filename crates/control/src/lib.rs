@@ -11,22 +11,28 @@
 //!   documented process noise; DARE by structure-preserving doubling), the backstepping's
 //!   default estimate in place of finite differences;
 //! * [`backstepping`]: the robust backstepping law of Section 3.2.2 / Appendix D;
-//! * [`controller`]: the real-time controllers (`step(measurement) -> command`, no
-//!   allocation, no I/O, deterministic): the backstepping controller (robust or not) and the
-//!   PID + inverse-hysteresis feedforward baseline;
+//! * [`registry`]: the one list of controllers ([`registry::CONTROLLERS`]): a controller is
+//!   one module and one entry (name, label, default or on request, how it is designed for a
+//!   stage; its design says how it steps);
+//! * [`controller`]: the backstepping controller (robust or not), real time
+//!   (`step(measurement) -> command`, no allocation, no I/O, deterministic), and its design
+//!   from a stage's response fit with gains sized by its margins;
 //! * [`actuator`]: inverse hysteresis compensation (inside the loop, Figure 7), amplifier
 //!   range;
 //! * [`fit`]: the controller's lumped model fitted to a measured response (static gain and
 //!   output modes below Nyquist) and the coupling of Eq. (30) from its cross terms;
 //! * [`feasibility`]: a reference is refused if it reaches the Nyquist frequency or needs more
 //!   stroke, voltage or amplifier current than the rig has with the controller's feed-forward;
-//! * [`experiment`]: one run of a variant on a plant ([`experiment::experiment_on`] takes any
+//! * [`experiment`]: one run of a controller on a plant ([`experiment::experiment_on`] takes any
 //!   [`flexstage_sim::rig::StagePlant`]: the lumped model in the rig,
 //!   [`experiment::Setup::lumped_plant`], or the twin of `flexstage-twin`);
 //! * [`learning`]: iterative learning on top of any controller for periodic scans, designed
 //!   from the loop's measured frequency response (monotone-convergence check);
-//! * [`pi_notch`]: the industry baseline: per-axis PI(D) with up to two notches, static
-//!   feed-forward through a measured static gain, inverse-hysteresis compensation;
+//! * [`pi_notch`]: the industry baseline and the default controller: per-axis PI(D) with up
+//!   to two notches, static feed-forward through a measured static gain, inverse-hysteresis
+//!   compensation, tuned on the stage's sampled response;
+//! * [`pid`]: the PID + feed-forward baseline (the same law without notches), tuned or with
+//!   the scenario's gains;
 //! * [`margins`]: gain, phase and delay margins of a loop from its frequency response
 //!   (python-control's `margin`), loop-at-a-time for the 2 × 2 loop;
 //! * [`tuning`]: one documented tuning procedure (notches on the peaks of the sampled
@@ -36,13 +42,14 @@
 //! * [`samples`]: settings with known answers.
 //!
 //! ```
-//! use flexstage_control::experiment::{Setup, Variant, experiment};
+//! use flexstage_control::controller::ROBUST;
+//! use flexstage_control::experiment::{Setup, experiment};
 //! use flexstage_control::actuator::Compensation;
 //! use flexstage_sim::trajectory::Reference;
 //! let scenario = flexstage_scenario::Scenario::paper();
 //! let setup = Setup::from_scenario(&scenario);
 //! let (reference, _) = Reference::from_scenario(&scenario.trajectories[0]);
-//! let rec = experiment(&setup, Variant::Robust, Compensation::Inverse, reference, 0.05)?;
+//! let rec = experiment(&setup, &ROBUST, Compensation::Inverse, reference, 0.05)?;
 //! let m = rec.metrics(reference.half_range(0.05, 1e-4));
 //! assert!(m.rms[0] < 1e-6 && m.peak_voltage <= 1000.0);
 //! # Ok::<(), flexstage_control::ControlError>(())
@@ -98,7 +105,7 @@
 
 //! # Which controller wins where (on the twin of the designed stage)
 //! Measured with `flexstage-assess` on the quick design (README): the PI + notch + FF
-//! ([`experiment::Variant::PiNotch`], the default), tuned by [`tuning`] on the twin's
+//! ([`pi_notch::PI_NOTCH_FF`], the default), tuned by [`tuning`] on the twin's
 //! sampled frequency response, meets 6 dB / 40° on both loops with one sample of delay
 //! (6.0 dB, 69° / 9.5 dB, 58°), tracks the default Lissajous to 10.2/5.9 nm RMS (the sensor
 //! noise floor is 7.8/10.4 nm) and passes 96 % of 100 perturbed twins. It wins because the
@@ -150,6 +157,8 @@ pub mod learning;
 pub mod margins;
 pub mod observer;
 pub mod pi_notch;
+pub mod pid;
+pub mod registry;
 pub mod samples;
 pub mod tuning;
 

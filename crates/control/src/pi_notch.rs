@@ -23,13 +23,49 @@
 //! one), with the notches as its sections; this controller adds the reference, the
 //! inverse-hysteresis compensation and the amplifier range.
 
+use std::sync::Arc;
+
 use flexstage_control_core::{Biquad, PidGains, PidLaw};
 use nalgebra::{Complex, Matrix2};
 
 use crate::actuator::{Actuator, ActuatorParams};
 use crate::error::{ControlError, Result, check};
+use crate::registry::{Controller, Design, Stage};
+use crate::tuning::{Structure, tuned};
 use flexstage_sim::experiment::{Command, StageControl};
 use flexstage_sim::trajectory::Reference;
+
+/// The default controller: PI + notches + inverse-hysteresis feed-forward, tuned on the
+/// stage's sampled response ([`crate::tuning`], structure [`Structure::PiNotch`]); not
+/// designed where the stage offers no response (the lumped plant).
+pub static PI_NOTCH_FF: Controller = Controller {
+    name: "pi-notch-ff",
+    label: "PI + notches + inverse-hysteresis feed-forward, tuned on the sampled response",
+    default: true,
+    design: design_tuned,
+};
+
+fn design_tuned(stage: &Stage<'_>) -> Result<Option<Arc<dyn Design>>> {
+    Ok(tuned(stage, Structure::PiNotch)?.map(|t| Arc::new(t.params) as Arc<dyn Design>))
+}
+
+/// The PI(D) + notch + FF structure is a design: [`PiNotchController`] with these gains.
+impl Design for PiNotchParams {
+    fn build(
+        &self,
+        actuator: ActuatorParams,
+        _delay: usize,
+        reference: Reference,
+    ) -> Result<Box<dyn StageControl>> {
+        Ok(Box::new(PiNotchController::new(
+            *self, actuator, reference,
+        )?))
+    }
+
+    fn linear(&self) -> Option<&PiNotchParams> {
+        Some(self)
+    }
+}
 
 /// A notch filter N(s) = (s² + 2ζ_z ω s + ω²)/(s² + 2ζ_p ω s + ω²) at f = ω/2π.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -33,6 +33,7 @@ use nalgebra::Complex;
 use crate::error::{Result, check};
 use crate::margins::{MarginParams, Margins, margin};
 use crate::pi_notch::{AxisGains, Notch, PiNotchParams};
+use crate::registry::Stage;
 use flexstage_sim::modal::LoopPlant;
 
 /// Settings of the tuning procedure (module docs).
@@ -364,6 +365,21 @@ pub fn tune(plant: &dyn LoopPlant, structure: Structure, p: &TuningParams) -> Re
         what: "tuning".into(),
         detail: "no candidate shape meets the margins even at ki = 1 s⁻¹".into(),
     })
+}
+
+/// The tuning of `structure` on the stage's sampled response by [`tune`] with the stage's
+/// settings, computed once per stage; `None` when the stage has no response to tune on.
+pub fn tuned(stage: &Stage<'_>, structure: Structure) -> Result<Option<Tuned>> {
+    let Some(plant) = stage.response else {
+        return Ok(None);
+    };
+    let key = match structure {
+        Structure::PiNotch => "tuning::pi_notch",
+        Structure::Pid => "tuning::pid",
+    };
+    stage
+        .shared(key, || tune(plant, structure, &stage.tuning))
+        .map(Some)
 }
 
 /// A plant with one more sample of delay than `.0` (step 3b of the procedure).

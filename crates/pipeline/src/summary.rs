@@ -480,9 +480,7 @@ impl fmt::Display for TrackSummary {
                 "{:<14} {:<10} {rms1:>8.1}/{rms2:<8.1} {rms1_pct:>7.3}/{rms2_pct:<7.3} \
                  {max1:>8.1}/{max2:<8.1} {max1_pct:>7.3}/{max2_pct:<7.3} {settling:>9.4} \
                  {peak:>8.0} {:>5}",
-                r.trajectory,
-                r.controller.name(),
-                r.metrics.saturated
+                r.trajectory, r.controller.name, r.metrics.saturated
             )?;
         }
         writeln!(

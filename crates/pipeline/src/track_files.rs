@@ -20,7 +20,7 @@ fn line(r: &TrackRow, compensation: &str, model: &str, plant: &str) -> String {
     format!(
         "{},{},{compensation},{model},{plant},{},{},{},{}",
         r.trajectory,
-        r.controller.name(),
+        r.controller.name,
         errors.join(","),
         m.saturated,
         m.dropouts,
@@ -131,10 +131,11 @@ pub(crate) fn write_paths(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flexstage_control::experiment::Variant;
+    use flexstage_control::controller::{NONROBUST, ROBUST};
+    use flexstage_control::registry::Controller;
     use flexstage_sim::experiment::Metrics;
 
-    fn row(controller: Variant, rms: f64) -> TrackRow {
+    fn row(controller: &'static Controller, rms: f64) -> TrackRow {
         TrackRow {
             trajectory: "circle".into(),
             controller,
@@ -153,12 +154,12 @@ mod tests {
         let root = std::env::temp_dir().join(format!("flexstage-metrics-{}", std::process::id()));
         let run = RunDir::create(&root).unwrap();
         let out = Tracking::main();
-        let all = [row(Variant::Robust, 1e-9), row(Variant::NonRobust, 2e-9)];
+        let all = [row(&ROBUST, 1e-9), row(&NONROBUST, 2e-9)];
         write_metrics(&run, &out, &all, "inverse", "guess", "twin").unwrap();
         let keys = write_metrics(
             &run,
             &out,
-            &[row(Variant::Robust, 3e-9)],
+            &[row(&ROBUST, 3e-9)],
             "inverse",
             "guess",
             "twin",
@@ -181,7 +182,7 @@ mod tests {
         let keys = write_metrics(
             &run,
             &out,
-            &[row(Variant::Robust, 4e-9)],
+            &[row(&ROBUST, 4e-9)],
             "inverse",
             "x.toml",
             "twin",
@@ -191,7 +192,7 @@ mod tests {
         let keys = write_metrics(
             &run,
             &out,
-            &[row(Variant::NonRobust, 5e-9)],
+            &[row(&NONROBUST, 5e-9)],
             "inverse",
             "x.toml",
             "lumped",
