@@ -119,13 +119,14 @@
 //! (1570/2324 Hz) are not the twin's (q2 at 3220 Hz; q1 has no mode below Nyquist, its
 //! static gain is three modes above it whose shares cancel), and those modes fold into the
 //! sampled loop (8.99 kHz at 1.01 kHz on q1, 3.6× the static gain) where no lumped model
-//! has them. [`controller::ControllerParams::for_sampled_plant`] sets them up as a
-//! practitioner would from the sampled response: the Kalman estimate
+//! has them. [`controller::sized`] sets them up as a practitioner would from the sampled
+//! response ([`controller::ControllerParams::for_response`]): the Kalman estimate
 //! ([`controller::Estimator::Kalman`], the default), the model fitted to the static gain and
 //! the modes below Nyquist ([`fit::fit_to_response`]), the folded peaks notched on the
 //! measurement ([`controller::ControllerParams::measurement_notches`]) and the gains scaled
-//! by the margins (`flexstage-assess` picks the largest of [`controller::GAIN_SCALES`]
-//! keeping 6 dB / 40°). On the quick design that is × 0.5: 7.6 dB / 61° (q1) and
+//! by the margins (the largest of [`controller::GAIN_SCALES`] keeping 6 dB / 40°, measured by
+//! the stage's [`registry::MarginProbe`]: sine injection on the twin's linear loop in
+//! `flexstage-assess`). On the quick design that is × 0.5: 7.6 dB / 61° (q1) and
 //! 23.7 dB / 75° (q2) with one sample of delay, 3.8/12.4 nm RMS on the default Lissajous
 //! (the PI + notch: 10.2/5.9 nm; Monte-Carlo pass 67 % against its 96 %). The notches delay
 //! the measurement and (44*)'s mid-sample ξ_d makes the output half a sample early; the law

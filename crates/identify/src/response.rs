@@ -10,7 +10,7 @@
 //! design no lumped parameter set reproduces the response (its modes, the second output mode
 //! above Nyquist, the input-inertia term; [`crate::frequency`]), so its estimates have no
 //! truth to meet. What the controller actually uses on such a plant is the response fit
-//! (`flexstage_control::controller::ControllerParams::for_sampled_plant`); this module
+//! (`flexstage_control::controller::sized`); this module
 //! measures exactly that, and its truth is the same fit computed from the plant's exact modes
 //! ([`ResponseFit::from_modes`]).
 //!
@@ -33,7 +33,7 @@
 //!    `(r_i1 ± r_i2)/ω_k² / (g_i1 ± g_i2)` (+ for q_o1, driven by both PEAs alike; − for
 //!    q_o2), as in `ResponseFit::from_modes`.
 //! 4. **Selection.** Per axis, the lowest fitted mode below `nyquist` with a share of at least
-//!    `share` ([`ResponseParams::share`], 0.1 as in `for_sampled_plant`).
+//!    `share` ([`ResponseParams::share`], [`RESPONSE_SHARE`] as in the fit of the exact modes).
 //!
 //! The record must be free of aliasing below the controller's Nyquist frequency: a mode above
 //! it, sampled at the controller's rate, folds into the band and would be fitted as a mode
@@ -51,7 +51,7 @@ use crate::excitation::{Band, Excitation, RESONANCE_AMPLITUDE, RESONANCE_SPACING
 use crate::frequency::C64;
 
 /// The least share of an axis's static gain a mode carries to be the axis's mode of a
-/// [`ResponseFit`] (what `ControllerParams::for_sampled_plant` and the response
+/// [`ResponseFit`] (what the fit of a plant's exact modes and the response
 /// identification use).
 pub const RESPONSE_SHARE: f64 = 0.1;
 

@@ -78,7 +78,7 @@
 //!
 //! ## The existing controllers on the twin (issue #15, reported as measured)
 //!
-//! `cargo run --release -p flexstage-twin --example track -- quick|paper DESIGN.json`, with the
+//! `cargo run --release -p flexstage-assess --example track -- quick|paper DESIGN.json`, with the
 //! controller's model the design's reduced lumped model (`flexstage reduce`, i.e. a perfect
 //! identification of the lumped parameters) and the default 3:1 Lissajous (8/16 µm, 2 Hz):
 //!
