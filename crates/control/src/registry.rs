@@ -232,15 +232,6 @@ impl Designs {
     pub fn get(&self, c: &Controller) -> Option<&Arc<dyn Design>> {
         self.designs.iter().find(|(k, _)| *k == c).map(|(_, d)| d)
     }
-
-    /// Replaces (or adds) the design of `c`.
-    pub fn set(&mut self, c: &'static Controller, design: Arc<dyn Design>) {
-        match self.designs.iter_mut().find(|(k, _)| *k == c) {
-            Some(slot) => slot.1 = design,
-            None => self.designs.push((c, design)),
-        }
-        self.not_designed.retain(|k| *k != c);
-    }
 }
 
 #[cfg(test)]
@@ -281,19 +272,7 @@ mod tests {
         assert!(designs.not_designed.contains(&DEFAULT));
         // With one (two decoupled 1 %-damped modes, one sample of delay), every controller
         // is designed.
-        let mode = |f: f64, axis: usize| {
-            let w2 = (std::f64::consts::TAU * f).powi(2);
-            let mut m = flexstage_sim::modal::PlantMode {
-                frequency: f,
-                damping: 0.01,
-                input: [0.0; 2],
-                output: [0.0; 2],
-            };
-            m.input[axis] = w2;
-            m.output[axis] = 1.0;
-            m
-        };
-        let modes = vec![mode(2700.0, 0), mode(3900.0, 1)];
+        let modes = flexstage_sim::samples::decoupled_modes();
         let fit = ResponseFit::from_modes(&modes, 5000.0, 0.1);
         let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
         let stage = Stage::new(

@@ -423,24 +423,11 @@ fn largest(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flexstage_sim::modal::{ModalPlant, PlantMode};
+    use flexstage_sim::modal::ModalPlant;
 
-    /// Two decoupled axes, one 1 %-damped mode each (2.7 and 5.7 kHz scaled to unit static
-    /// gain), one sample of delay at 10 kHz.
+    /// [`flexstage_sim::samples::decoupled_modes`] with one sample of delay at 10 kHz.
     fn plant() -> ModalPlant {
-        let mode = |f: f64, axis: usize| {
-            let w2 = (std::f64::consts::TAU * f).powi(2);
-            let mut m = PlantMode {
-                frequency: f,
-                damping: 0.01,
-                input: [0.0; 2],
-                output: [0.0; 2],
-            };
-            m.input[axis] = w2;
-            m.output[axis] = 1.0;
-            m
-        };
-        ModalPlant::new(vec![mode(2700.0, 0), mode(3900.0, 1)], 1e-4, 1).unwrap()
+        ModalPlant::new(flexstage_sim::samples::decoupled_modes(), 1e-4, 1).unwrap()
     }
 
     /// A static, coupled plant A z^{−d} (no modes): its closed loop with a PI is a polynomial.

@@ -189,22 +189,9 @@ impl LoopPlant for ModalPlant {
 mod tests {
     use super::*;
 
-    /// Two decoupled axes, one 1 %-damped mode each (2.7 and 5.7 kHz scaled to unit static
-    /// gain), one sample of delay at 10 kHz.
+    /// [`crate::samples::decoupled_modes`] with one sample of delay at 10 kHz.
     fn plant() -> ModalPlant {
-        let mode = |f: f64, axis: usize| {
-            let w2 = (std::f64::consts::TAU * f).powi(2);
-            let mut m = PlantMode {
-                frequency: f,
-                damping: 0.01,
-                input: [0.0; 2],
-                output: [0.0; 2],
-            };
-            m.input[axis] = w2;
-            m.output[axis] = 1.0;
-            m
-        };
-        ModalPlant::new(vec![mode(2700.0, 0), mode(3900.0, 1)], 1e-4, 1).unwrap()
+        ModalPlant::new(crate::samples::decoupled_modes(), 1e-4, 1).unwrap()
     }
 
     /// Reference: at z = 1 the exact ZOH discretization keeps the static gain Σ out inᵀ/ω²

@@ -42,3 +42,22 @@ pub fn diagonal_lyapunov(lambda: &[f64]) -> (DMatrix<f64>, DMatrix<f64>) {
     ));
     (a, x)
 }
+
+/// Two decoupled axes, one 1 %-damped mode each at 2.7 kHz (q1, driven by PEA1) and
+/// 3.9 kHz (q2, driven by PEA2), scaled to unit static gain: a modal plant whose sampled
+/// response, peaks and tuning are known by hand.
+pub fn decoupled_modes() -> Vec<crate::modal::PlantMode> {
+    let mode = |f: f64, axis: usize| {
+        let w2 = (std::f64::consts::TAU * f).powi(2);
+        let mut m = crate::modal::PlantMode {
+            frequency: f,
+            damping: 0.01,
+            input: [0.0; 2],
+            output: [0.0; 2],
+        };
+        m.input[axis] = w2;
+        m.output[axis] = 1.0;
+        m
+    };
+    vec![mode(2700.0, 0), mode(3900.0, 1)]
+}
