@@ -359,10 +359,9 @@ fn tune_and_margins(
         identified,
     )?;
     setup.controller = bench.setup.controller.clone();
-    let candidates = controllers.to_vec();
     let mut rows = margins_table(
         &bench,
-        &candidates,
+        controllers,
         setup.rig.delay,
         MarginTargets::default(),
         &InjectionParams::default(),
@@ -373,23 +372,23 @@ fn tune_and_margins(
     let (reference, _) = Reference::from_scenario(first);
     let t0 = std::time::Instant::now();
     let mp = MonteCarloParams::default();
-    let mc = monte_carlo(&bench, &candidates, reference, &mp)?;
+    let mc = monte_carlo(&bench, controllers, reference, &mp)?;
     progress.note(&format!(
         "Monte-Carlo: {} perturbed twins × {} controller(s) in {:.1} s",
         mp.plants,
-        candidates.len(),
+        controllers.len(),
         t0.elapsed().as_secs_f64()
     ));
     for (j, r) in rows.iter_mut().enumerate() {
         r.montecarlo_pass = Some(mc.pass_rate(j));
     }
     let t0 = std::time::Instant::now();
-    let scan = scan_frequency(&bench, scenario, &candidates)?;
+    let scan = scan_frequency(&bench, scenario, controllers)?;
     if let Some(sc) = &scan {
         progress.note(&format!(
             "error against scan frequency: {} frequencies × {} controller(s) in {:.1} s",
             sc.points.len(),
-            candidates.len(),
+            controllers.len(),
             t0.elapsed().as_secs_f64()
         ));
     }
