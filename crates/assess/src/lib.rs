@@ -165,16 +165,4 @@ impl Assessment {
         }
         s
     }
-
-    /// The files (name, content): `margins.csv`, `montecarlo.csv`, `scan_frequency.csv`,
-    /// `scan_frequency.svg`.
-    pub fn files(&self) -> Result<Vec<(&'static str, String)>> {
-        let cands = self.montecarlo.candidates.clone();
-        Ok(vec![
-            ("margins.csv", margins::csv(&self.margins, self.sample_time)),
-            ("montecarlo.csv", self.montecarlo.csv()),
-            ("scan_frequency.csv", sweep::csv(&self.sweep)),
-            ("scan_frequency.svg", sweep::figure(&self.sweep, &cands)?),
-        ])
-    }
 }

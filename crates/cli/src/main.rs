@@ -240,9 +240,9 @@ fn init(path: &std::path::Path, name: &str, force: bool) -> anyhow::Result<()> {
     }
     if path.exists() && !force {
         let path = path.to_path_buf();
-        return Err(flexstage_report::ReportError::Exists { path }.into());
+        return Err(flexstage_run::RunError::Exists { path }.into());
     }
-    flexstage_report::write_atomic(path, text.as_bytes())?;
+    flexstage_run::write_atomic(path, text.as_bytes())?;
     errln!("wrote {}", path.display());
     Ok(())
 }
