@@ -12,9 +12,9 @@
 //! 0 = none); every controller is tuned with them in the loop.
 
 use flexstage_assess::{AssessParams, Assessment, Bench};
-use flexstage_scenario::{Preset, Scenario};
 use flexstage_run::Format;
 use flexstage_run::files::design::DesignFile;
+use flexstage_scenario::{Preset, Scenario};
 use flexstage_twin::DesignedStage;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -29,9 +29,9 @@ use flexstage_control::margins::Margins;
 use flexstage_control::model::{ResponseFit, StageModel, fit_to_response};
 use flexstage_control::rig::StagePlant;
 use flexstage_control::trajectory::Reference;
-use flexstage_scenario::{Preset, Scenario, StageParams};
 use flexstage_run::Format;
 use flexstage_run::files::design::DesignFile;
+use flexstage_scenario::{Preset, Scenario, StageParams};
 use flexstage_twin::DesignedStage;
 
 /// Margins of a backstepping variant (None: unstable).

@@ -22,9 +22,9 @@ use flexstage_control::learning::{
 };
 use flexstage_control::rig::StagePlant;
 use flexstage_control::trajectory::Reference;
-use flexstage_scenario::{Preset, Scenario, Trajectory};
 use flexstage_run::Format;
 use flexstage_run::files::design::DesignFile;
+use flexstage_scenario::{Preset, Scenario, Trajectory};
 use flexstage_twin::DesignedStage;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -98,4 +98,3 @@ pub fn margins_table(
     }
     Ok(rows)
 }
-

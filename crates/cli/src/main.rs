@@ -47,7 +47,7 @@ enum Command {
   flexstage init -                        # print to standard output")]
     Init {
         /// Where to write ("-" for standard output).
-        #[arg(default_value = "scenario.toml")]
+        #[arg(default_value = flexstage_run::layout::SCENARIO)]
         path: PathBuf,
         /// Built-in scenario: "quick" (coarse and fast) or "paper" (Tables 1, 3, 4, A1).
         #[arg(long, default_value = DEFAULT_PRESET, value_parser = PRESETS)]

@@ -12,7 +12,9 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use flexstage_fem::{AdditiveYeoh, Kinematics};
-use flexstage_run::files::design::{DESIGN_VERSION, DesignFile, DesignSummaryFile, SUMMARY_VERSION};
+use flexstage_run::files::design::{
+    DESIGN_VERSION, DesignFile, DesignSummaryFile, SUMMARY_VERSION,
+};
 use flexstage_run::{RunDir, Table, layout::design as files};
 use flexstage_scenario::Scenario;
 use flexstage_topopt::check::{CheckSetup, check_gradients};
@@ -22,8 +24,8 @@ use flexstage_topopt::{
     OptimizerParams, Problem, StopReason, density_csv, perimeter_walk, shoelace,
 };
 
-use crate::error::{PipelineError, Result, require, to_json};
 use crate::convert::design_record;
+use crate::error::{PipelineError, Result, require, to_json};
 use crate::figures::{cases_table, polygon_svg, polygon_table, table_polygon, write_vtu};
 use crate::folder::RunFolder;
 use crate::progress::Progress;

@@ -162,7 +162,7 @@ mod tests {
     fn every_single_bit_flip_is_refused() {
         // Goal: a bit flip anywhere (header, scenario, payload) is detected, never resumed.
         let (s, bytes) = sample();
-        let path = Path::new("design/checkpoint.bin");
+        let path = Path::new(flexstage_run::layout::design::CHECKPOINT);
         for bit in 0..bytes.len() * 8 {
             let mut b = bytes.clone();
             b[bit / 8] ^= 1 << (bit % 8);

@@ -271,12 +271,10 @@ mod tests {
         let mut child = std::process::Command::new("true").spawn().unwrap();
         let dead = child.id();
         child.wait().unwrap();
-        let tmp = root
-            .join("design")
-            .join(flexstage_run::temporary_name(
-                layout::design::DESIGN.rsplit('/').next().unwrap(),
-                dead,
-            ));
+        let tmp = root.join("design").join(flexstage_run::temporary_name(
+            layout::design::DESIGN.rsplit('/').next().unwrap(),
+            dead,
+        ));
         std::fs::create_dir_all(tmp.parent().unwrap()).unwrap();
         std::fs::write(&tmp, "half").unwrap();
         let f = RunFolder::existing(&root).unwrap();

@@ -100,6 +100,6 @@ pub use twin::{TwinOptions, TwinSummary, TwinValidation, write_twin};
 /// The stage crates' types that appear in options and summaries.
 pub use flexstage_control::{actuator::Compensation, experiment::Variant};
 pub use flexstage_piezo::WaveShape;
-pub use flexstage_verify::outline::Unit;
 pub use flexstage_scenario::Scenario;
+pub use flexstage_verify::outline::Unit;
 pub use flexstage_verify::{Verification, VerifyParams};

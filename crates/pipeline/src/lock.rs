@@ -380,7 +380,7 @@ mod tests {
         let msg = e.to_string();
         assert!(matches!(e, PipelineError::Locked { .. }), "{msg}");
         assert!(
-            msg.contains(&format!("PID {}", std::process::id())) && msg.contains("run.lock"),
+            msg.contains(&format!("PID {}", std::process::id())) && msg.contains(layout::LOCK),
             "{msg}"
         );
         drop(lock);

@@ -4,11 +4,11 @@
 
 use std::path::{Path, PathBuf};
 
+use flexstage_figures::plot::{Figure, Series};
 use flexstage_piezo::{
     BoucWenParams, CompensatorParams, LoopMetrics, LoopParams, PeaData, WaveShape, Waveform,
     compensated_loop, loop_metrics, steady_state_loop, synthesize,
 };
-use flexstage_figures::plot::{Figure, Series};
 use flexstage_run::layout::{self, PeaIdentification};
 use flexstage_run::{RunError, Table, write_atomic};
 use flexstage_scenario::Scenario;
@@ -624,9 +624,9 @@ mod tests {
             let out = PeaIdentification { pea: sum.pea };
             assert!(folder.dir().exists(out.estimates()), "PEA{}", sum.pea);
         }
-        let records: Vec<String> = PEAS
+        let records: Vec<Vec<u8>> = PEAS
             .iter()
-            .map(|&n| folder.dir().read_to_string(layout::pea::record(n)).unwrap())
+            .map(|&n| folder.dir().read(&layout::pea::record(n)).unwrap().unwrap())
             .collect();
         assert_ne!(records[0], records[1]);
         std::fs::remove_dir_all(&root).unwrap();

@@ -124,7 +124,10 @@ impl Outputs<'_> {
     fn write_loop(&self) -> Result<()> {
         let d = self.data;
         let x_model = simulate(&self.best, d.t(), d.u(), 0.0);
-        let table = Table::of(&["t", "U", "x", "x_model"], &[d.t(), d.u(), d.x(), &x_model]);
+        let table = Table::of(
+            &["t", "U", "x", "x_model"],
+            &[d.t(), d.u(), d.x(), &x_model],
+        );
         self.run.store(&self.out.loop_csv(), table)?;
         let pairs = |x: &[f64], y: &[f64]| x.iter().copied().zip(y.iter().copied()).collect();
         let fig = Figure::new(

@@ -53,7 +53,10 @@ impl Plant {
     /// scenario's truth. The reduced model `reduce` stored in this process is not read again.
     pub fn of_run(folder: &RunFolder) -> Result<Plant> {
         let path = folder.dir().path(layout::reduce::PARAMS);
-        let Some(file) = folder.dir().load::<StageParamsFile>(layout::reduce::PARAMS)? else {
+        let Some(file) = folder
+            .dir()
+            .load::<StageParamsFile>(layout::reduce::PARAMS)?
+        else {
             return Ok(Plant {
                 scenario: folder.scenario().clone(),
                 source: PlantSource::Scenario,

@@ -6,8 +6,7 @@ use flexstage_figures::plot::{Figure, Series};
 use flexstage_figures::vtk::{PointField, QuadMesh};
 use flexstage_reduce::{MassLumping, ReduceParams, Reduction, ValidityMap, ValiditySample};
 use flexstage_run::files::reduce::{
-    ModalSummary, ReduceSummaryFile, ReduceSummaryJson, ReduceSummaryToml, ValiditySummary,
-    VERSION,
+    ModalSummary, ReduceSummaryFile, ReduceSummaryJson, ReduceSummaryToml, VERSION, ValiditySummary,
 };
 use flexstage_run::files::stage::StageParamsFile;
 use flexstage_run::layout::reduce as files;

@@ -427,8 +427,7 @@ pub fn write_report(folder: &RunFolder) -> Result<PathBuf> {
                 layout::SCENARIO,
                 layout::RUN_STATE
             ),
-            hint: "restore it, or run the stages again with it (`flexstage run --restart`)"
-                .into(),
+            hint: "restore it, or run the stages again with it (`flexstage run --restart`)".into(),
         });
     }
     let report = flexstage_report::build_report(dir);

@@ -34,6 +34,7 @@ use std::path::PathBuf;
 use flexstage_control::experiment::Setup;
 use flexstage_control::model::{ResponseFit, StageModel, fit_coupling, fit_to_response};
 use flexstage_control::plant::PlantActuator;
+use flexstage_figures::plot::{Figure, Series};
 use flexstage_identify::frequency::{C64, Response};
 use flexstage_identify::regression::paper_theta;
 use flexstage_identify::response::{
@@ -44,10 +45,8 @@ use flexstage_identify::{
     Band, Excitation, Identification, IdentifyParams, RESONANCE_AMPLITUDE, RigExperiment,
     StageRecord, resonance_plan, samples,
 };
-use flexstage_figures::plot::{Figure, Series};
 use flexstage_run::files::stage::{
-    ParameterRow as TableRow, RESPONSE_FIT_VERSION, ResponseFitFile, ResponseRow,
-    StageParamsFile,
+    ParameterRow as TableRow, RESPONSE_FIT_VERSION, ResponseFitFile, ResponseRow, StageParamsFile,
 };
 use flexstage_run::format::Rows;
 use flexstage_run::layout::{self, stage as files};
@@ -992,7 +991,10 @@ mod tests {
         let table = std::fs::read(folder.dir().path(files::TABLE)).unwrap();
         let back = table_rows(&flexstage_run::Format::decode(&table).unwrap());
         for (b, r) in back.iter().zip(&s.rows) {
-            assert_eq!((&b.name, b.estimate, b.truth), (&r.name, r.estimate, r.truth));
+            assert_eq!(
+                (&b.name, b.estimate, b.truth),
+                (&r.name, r.estimate, r.truth)
+            );
         }
         assert_eq!(back.len(), s.rows.len(), "table.csv reads back");
         let model = crate::plant::read_model_params(&s.params_file).unwrap();

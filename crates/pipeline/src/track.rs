@@ -42,8 +42,8 @@ use flexstage_control::experiment::{
 use flexstage_control::model::ResponseFit;
 use flexstage_control::trajectory::Reference;
 use flexstage_control::tuning::TuningParams;
-use flexstage_piezo::BoucWenParams;
 use flexstage_figures::plot::{Figure, Series};
+use flexstage_piezo::BoucWenParams;
 use flexstage_run::files::pea::PeaEstimates;
 use flexstage_run::files::stage::{ResponseFitFile, StageParamsFile};
 use flexstage_run::format::Rows;

@@ -176,7 +176,10 @@ mod tests {
             ]
         );
         let back = RunDir::create(&root).unwrap();
-        let table = back.load::<Rows<MetricsRow>>(&out.metrics()).unwrap().unwrap();
+        let table = back
+            .load::<Rows<MetricsRow>>(&out.metrics())
+            .unwrap()
+            .unwrap();
         let rms: Vec<f64> = table.0.iter().map(|r| r.rms1_nm).collect();
         assert_eq!(rms, [3.0, 2.0], "robust updated in place, nonrobust kept");
         let keys = write_metrics(
@@ -208,7 +211,10 @@ mod tests {
         let fresh = RunDir::create(&root).unwrap();
         let keys = write_metrics(&fresh, &out, &all, "inverse", "guess", "twin", w).unwrap();
         assert_eq!(keys.len(), 2);
-        assert!(w.iter().any(|m| m.contains("metrics.csv is damaged")), "{w:?}");
+        assert!(
+            w.iter().any(|m| m.contains("metrics.csv is damaged")),
+            "{w:?}"
+        );
         std::fs::remove_dir_all(&root).unwrap();
     }
 }

@@ -176,13 +176,21 @@ impl RunDir {
     }
 
     /// Stores `value` in its format ([`Format::encode`]) at `relative` and keeps it for
-    /// [`RunDir::load`].
+    /// [`RunDir::load`] (as read back from the bytes when the format is not exact).
     pub fn store<F: Format>(&self, relative: &str, value: F) -> Result<Arc<F>> {
         let bytes = value.encode().map_err(|reason| RunError::Encode {
             path: self.path(relative),
             reason,
         })?;
         self.write(relative, &bytes)?;
+        let value = if F::EXACT {
+            value
+        } else {
+            F::decode(&bytes).map_err(|reason| RunError::Encode {
+                path: self.path(relative),
+                reason: format!("does not read back: {reason}"),
+            })?
+        };
         let value = Arc::new(value);
         lock(&self.session.cache).insert(relative.to_string(), value.clone());
         Ok(value)

@@ -9,6 +9,12 @@ use serde::de::DeserializeOwned;
 /// A file format: how a value is written and read back. `decode(encode(v)) == v` for every
 /// value (numbers included) unless a field's documentation states a fixed precision.
 pub trait Format: Sized + Send + Sync + 'static {
+    /// Whether `decode(encode(v)) == v` holds for every value. A format with a stated fixed
+    /// precision is not exact; [`crate::RunDir::store`] then keeps the value as a reader of the
+    /// file gets it (decoded from the bytes written), so that a value is the same from memory
+    /// and from the file.
+    const EXACT: bool = true;
+
     /// The bytes of the file.
     fn encode(&self) -> Result<Vec<u8>, String>;
     /// The value of a file's bytes; the error says what is wrong, in words.
@@ -54,6 +60,8 @@ pub fn check_version(found: u32, expected: u32) -> Result<(), String> {
 pub trait Row: Serialize + DeserializeOwned + Send + Sync + 'static {
     /// The header row.
     const HEADER: &'static [&'static str];
+    /// Whether every field reads back exactly (no stated fixed precision).
+    const EXACT: bool = true;
 }
 
 /// A CSV file of typed rows, written and read by the `csv` crate (quoting included); the
@@ -62,6 +70,8 @@ pub trait Row: Serialize + DeserializeOwned + Send + Sync + 'static {
 pub struct Rows<T>(pub Vec<T>);
 
 impl<T: Row> Format for Rows<T> {
+    const EXACT: bool = T::EXACT;
+
     fn encode(&self) -> Result<Vec<u8>, String> {
         let mut w = csv::WriterBuilder::new()
             .has_headers(false)
@@ -177,7 +187,11 @@ impl Format for Table {
                     f64::NAN
                 } else {
                     cell.parse().map_err(|_| {
-                        format!("line {}, column {}: {cell:?} is not a number", i + 2, header[j])
+                        format!(
+                            "line {}, column {}: {cell:?} is not a number",
+                            i + 2,
+                            header[j]
+                        )
                     })?
                 });
             }
@@ -250,7 +264,10 @@ mod tests {
         let back = Table::decode(&bytes).unwrap();
         assert_eq!(back.column("a").unwrap(), [0.1, 1e-9, -3.0]);
         assert_eq!(back.column("b").unwrap()[0], 2.5);
-        assert!(back.column("b").unwrap()[1].is_nan(), "padding reads as NaN");
+        assert!(
+            back.column("b").unwrap()[1].is_nan(),
+            "padding reads as NaN"
+        );
         assert!(back.columns(&["c"]).unwrap_err().contains("\"c\""));
         let e = Table::decode(b"a,b\n1,2\n3\n").unwrap_err();
         assert!(e.contains("line 3"), "a short row is refused: {e}");
@@ -268,6 +285,7 @@ mod tests {
     }
     impl Row for R {
         const HEADER: &'static [&'static str] = &["name", "v", "w"];
+        const EXACT: bool = false;
     }
 
     #[test]

@@ -80,7 +80,7 @@ pub mod design {
 
     /// The polygon snapshot of one iteration.
     pub fn snapshot(iteration: usize) -> String {
-        format!("{DIR}/{SNAPSHOT_PREFIX}{iteration:05}.csv")
+        format!("{DIR}/workspace_iter{iteration:05}.csv")
     }
 
     /// The iteration of a snapshot file name (the name only, e.g. `workspace_iter00025.csv`).

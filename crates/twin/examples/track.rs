@@ -16,9 +16,9 @@ use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::{Setup, Variant, experiment, experiment_on};
 use flexstage_control::rig::StagePlant;
 use flexstage_control::trajectory::Reference;
-use flexstage_scenario::{Preset, Scenario};
 use flexstage_run::Format;
 use flexstage_run::files::design::DesignFile;
+use flexstage_scenario::{Preset, Scenario};
 use flexstage_twin::{DesignedStage, Twin};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -7,8 +7,8 @@
 //! cargo run --release -p flexstage-twin --example validate -- paper runs/paper/design/design.json
 //! ```
 
-use flexstage_run::files::design::DesignFile;
 use flexstage_run::Format;
+use flexstage_run::files::design::DesignFile;
 use flexstage_scenario::{Preset, Scenario};
 use flexstage_twin::designed::reduced_model;
 use flexstage_twin::report::{bode_for, validity_lines};
@@ -60,6 +60,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .zip(&bode.twin)
         .map(|(f, g)| (f, g[1][0].0.hypot(g[1][0].1)))
         .fold((0.0, 0.0), |a, (f, m)| if m > a.1 { (*f, m) } else { a });
-    println!("largest |q2/x_nom1| of the twin: {:.3e} at {:.0} Hz", peak.1, peak.0);
+    println!(
+        "largest |q2/x_nom1| of the twin: {:.3e} at {:.0} Hz",
+        peak.1, peak.0
+    );
     Ok(())
 }

@@ -41,8 +41,8 @@ use flexstage_run::files::stage::ParameterRow;
 use flexstage_run::files::track::MetricsRow;
 use flexstage_run::format::Rows;
 use flexstage_run::layout::{self, Tracking};
-use flexstage_run::{Format, RunDir};
 use flexstage_run::scenario::Scenario;
+use flexstage_run::{Format, RunDir};
 
 /// One section of the report.
 pub struct Section {
@@ -420,7 +420,11 @@ pub fn build_report(dir: &RunDir) -> Report {
         .scenario()
         .map(|s| s.name.clone())
         .unwrap_or_else(|| "unknown".into());
-    page::head(&mut b.html, &scenario_name, &dir.root().display().to_string());
+    page::head(
+        &mut b.html,
+        &scenario_name,
+        &dir.root().display().to_string(),
+    );
     for s in SECTIONS {
         let _ = writeln!(
             b.html,
@@ -473,12 +477,7 @@ pub fn headline_rows(h: &Headline) -> Vec<(String, String)> {
         ));
         rows.push((
             "design iterations".into(),
-            format!(
-                "{} in {} s ({})",
-                d.iterations,
-                fmt_num(d.seconds),
-                d.stop
-            ),
+            format!("{} in {} s ({})", d.iterations, fmt_num(d.seconds), d.stop),
         ));
     }
     if let Some(r) = h.reduce {
@@ -564,7 +563,8 @@ mod tests {
     #[test]
     fn empty_run_folder_gives_every_section_as_not_run() {
         // Goal: the report works on a partial run: missing results are "not run", not errors.
-        let root = std::env::temp_dir().join(format!("flexstage-html-empty-{}", std::process::id()));
+        let root =
+            std::env::temp_dir().join(format!("flexstage-html-empty-{}", std::process::id()));
         let dir = RunDir::create(&root).unwrap();
         let report = build_report(&dir);
         assert!(report.errors.is_empty(), "{:?}", report.errors);

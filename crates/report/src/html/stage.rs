@@ -31,7 +31,9 @@ type Known = fn(&StageParams) -> f64;
 /// quantity, value).
 const KNOWN: [(&str, &str, &str, Known); 4] = [
     ("mass", "kg", "moving mass M", |p| p.mass),
-    ("alpha", "–", "amplification ratio α (Eq. 27)", |p| p.alpha),
+    ("alpha", "–", "amplification ratio α (Eq. 27)", |p| {
+        p.alpha
+    }),
     ("m_in1", "kg", "input plate mass M_in1", |p| p.m_in1),
     ("m_in2", "kg", "input plate mass M_in2", |p| p.m_in2),
 ];
@@ -56,7 +58,13 @@ const GAINS: [(&str, Gain, usize, &str, &str); 11] = [
         "1e5",
         "state estimator (K-filter, Eq. 37–38)",
     ),
-    ("k_ε1", |c| c.error_gain.to_vec(), 0, "2e4", "error gain, s = ε̇ + k_ε ε"),
+    (
+        "k_ε1",
+        |c| c.error_gain.to_vec(),
+        0,
+        "2e4",
+        "error gain, s = ε̇ + k_ε ε",
+    ),
     (
         "k_ε2",
         |c| c.error_gain.to_vec(),
@@ -64,8 +72,20 @@ const GAINS: [(&str, Gain, usize, &str, &str); 11] = [
         "1.5e4",
         "error gain, s = ε̇ + k_ε ε",
     ),
-    ("k_1", |c| c.feedback_gain.to_vec(), 0, "1.2e4", "feedback gain (A34)"),
-    ("k_2", |c| c.feedback_gain.to_vec(), 1, "1.2e3", "feedback gain (A34)"),
+    (
+        "k_1",
+        |c| c.feedback_gain.to_vec(),
+        0,
+        "1.2e4",
+        "feedback gain (A34)",
+    ),
+    (
+        "k_2",
+        |c| c.feedback_gain.to_vec(),
+        1,
+        "1.2e3",
+        "feedback gain (A34)",
+    ),
     (
         "k_η1",
         |c| c.eta_gain.to_vec(),
@@ -87,7 +107,13 @@ const GAINS: [(&str, Gain, usize, &str, &str); 11] = [
         "–",
         "observer bandwidth of Δ_η [1/s]",
     ),
-    ("k_p, k_i, k_d", |c| c.pid.to_vec(), 0, "–", "PID + feedforward baseline"),
+    (
+        "k_p, k_i, k_d",
+        |c| c.pid.to_vec(),
+        0,
+        "–",
+        "PID + feedforward baseline",
+    ),
     (
         "φ_s, φ_a",
         |c| c.boundary_layer.to_vec(),
@@ -218,7 +244,8 @@ fn parameters(b: &mut Builder) {
                     cell(r.error_pct)
                 ));
             } else if let Some((_, unit, what, get)) = KNOWN.iter().find(|k| k.0 == key) {
-                let value = |p: Option<&StageParams>| p.map_or_else(|| "–".into(), |p| fmt_num(get(p)));
+                let value =
+                    |p: Option<&StageParams>| p.map_or_else(|| "–".into(), |p| fmt_num(get(p)));
                 html.push_str(&format!(
                     "<tr><td class=\"l\">{}</td><td>{unit}</td><td>{}</td><td>— (known)</td>\
                      <td>{}</td><td>–</td></tr>\n",

@@ -186,7 +186,10 @@ mod tests {
         };
         dir.store(
             files::MODES,
-            Rows(vec![mode(1, 412.5, 412.0, 0.0012), mode(2, 1530.0, 1528.0, 0.0013)]),
+            Rows(vec![
+                mode(1, 412.5, 412.0, 0.0012),
+                mode(2, 1530.0, 1528.0, 0.0013),
+            ]),
         )
         .unwrap();
         let svg = |t: &str| {
@@ -226,7 +229,10 @@ mod tests {
         assert_eq!(report.errors.len(), 1, "{:?}", report.errors);
         assert!(report.errors[0].contains("validity.json is damaged"));
         let twin = section(&report.html);
-        assert!(twin.contains("class=\"error\"") && !twin.contains("notrun"), "{twin}");
+        assert!(
+            twin.contains("class=\"error\"") && !twin.contains("notrun"),
+            "{twin}"
+        );
         std::fs::remove_dir_all(&root).unwrap();
     }
 }

@@ -120,8 +120,15 @@ pub struct ParameterRow {
 }
 
 impl Row for ParameterRow {
-    const HEADER: &'static [&'static str] =
-        &["parameter", "unit", "guess", "estimate", "truth", "error_pct"];
+    const HEADER: &'static [&'static str] = &[
+        "parameter",
+        "unit",
+        "guess",
+        "estimate",
+        "truth",
+        "error_pct",
+    ];
+    const EXACT: bool = false;
 }
 
 /// [`num::exp`], but 0 as `0` (the coupling row's guess).
@@ -197,7 +204,8 @@ impl Format for ResponseFitFile {
     }
 
     fn decode(bytes: &[u8]) -> Result<Self, String> {
-        let f: ResponseFitFile = from_toml(bytes).map_err(|e| format!("not a response fit: {e}"))?;
+        let f: ResponseFitFile =
+            from_toml(bytes).map_err(|e| format!("not a response fit: {e}"))?;
         check_version(f.version, RESPONSE_FIT_VERSION)?;
         Ok(f)
     }
@@ -238,6 +246,33 @@ mod tests {
     }
 
     #[test]
+    fn a_stored_value_is_the_value_a_reader_of_the_file_gets() {
+        use crate::format::Rows;
+        // Goal: a table with a stated precision (error_pct to 4 decimals) gives the same
+        // numbers from this process's memory as from the file read by another process.
+        let root = std::env::temp_dir().join(format!("flexstage-exact-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let dir = crate::RunDir::create(&root).unwrap();
+        let row = ParameterRow {
+            parameter: "k_c".into(),
+            unit: "N/m".into(),
+            guess: 0.0,
+            estimate: 3.3694794832e5,
+            truth: Some(3.42e5),
+            error_pct: Some(-1.495497_f64),
+        };
+        let stored = dir.store("t.csv", Rows(vec![row])).unwrap();
+        let read = crate::RunDir::create(&root)
+            .unwrap()
+            .load::<Rows<ParameterRow>>("t.csv")
+            .unwrap()
+            .unwrap();
+        assert_eq!(*stored, *read);
+        assert_eq!(read.0[0].error_pct, Some(-1.4955));
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
     fn a_response_fit_reads_back_exactly() {
         let fit = ResponseFitFile {
             version: RESPONSE_FIT_VERSION,
@@ -245,6 +280,9 @@ mod tests {
             frequency: [0.0, 3221.5],
             damping: [0.0, 0.0102],
         };
-        assert_eq!(ResponseFitFile::decode(&fit.encode().unwrap()).unwrap(), fit);
+        assert_eq!(
+            ResponseFitFile::decode(&fit.encode().unwrap()).unwrap(),
+            fit
+        );
     }
 }
