@@ -28,7 +28,7 @@
 //!   every command is [`DEFAULT_PRESET`].
 //! * **One typed run folder.** Every file of a run folder is named in
 //!   [`flexstage_run::layout`] and has its type in [`flexstage_run::files`]; the stages store
-//!   their results through it ([`convert`] turns the stage crates' values into the file
+//!   their results through it (the private `convert` module turns the stage crates' values into the file
 //!   types), and a value a stage holds is passed on in memory (the folder's session keeps
 //!   what was stored or loaded, so no file is parsed twice in one process).
 //! * **Nothing overwritten silently.** `design` refuses to replace a finished or interrupted

@@ -204,10 +204,10 @@ mod tests {
         )
         .unwrap();
         assert_eq!(keys.len(), 1, "another plant starts a new table");
-        let text = std::fs::read_to_string(run.path(&out.metrics())).unwrap();
+        let text = std::fs::read_to_string(run.path(out.metrics())).unwrap();
         assert!(text.contains(",x.toml,lumped,"), "the plant column: {text}");
         // A damaged table is replaced, with a warning.
-        std::fs::write(run.path(&out.metrics()), "trajectory,variant\ncircle\n").unwrap();
+        std::fs::write(run.path(out.metrics()), "trajectory,variant\ncircle\n").unwrap();
         let fresh = RunDir::create(&root).unwrap();
         let keys = write_metrics(&fresh, &out, &all, "inverse", "guess", "twin", w).unwrap();
         assert_eq!(keys.len(), 2);

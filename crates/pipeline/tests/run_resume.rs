@@ -146,7 +146,9 @@ fn run_redoes_a_stage_whose_files_are_gone_or_damaged() {
             .cloned()
             .unwrap_or_default()
     };
-    let cases: [(&str, &str, Box<dyn Fn()>); 3] = [
+    // (the stage redone, the file it names, the damage)
+    type Case<'a> = (&'a str, &'a str, Box<dyn Fn() + 'a>);
+    let cases: [Case; 3] = [
         (
             "pea",
             "identify/pea1/",

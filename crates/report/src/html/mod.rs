@@ -12,7 +12,7 @@
 //! then fails). Figures are embedded: SVG inline (text stays
 //! text, searchable and sharp at any zoom), PNG as `data:` URIs; the file opens offline
 //! and can be mailed around. Each figure fills the page width (at most 960 px) with text
-//! ≥ 11 px at 100 % zoom ([`crate::plot::MIN_TEXT_PX`] at its own size), and a click
+//! ≥ 11 px at 100 % zoom ([`flexstage_figures::plot::MIN_TEXT_PX`] at its own size), and a click
 //! enlarges it to the whole window (a few lines of inline script, no network).
 //!
 //! # Adding a section

@@ -13,8 +13,11 @@ use flexstage_run::layout::Tracking;
 
 use super::{Builder, Width, cell, fmt_num};
 
+/// One shown cell of a `metrics.csv` row.
+type MetricCell = fn(&MetricsRow) -> String;
+
 /// The columns of `metrics.csv` the report shows, in the file's order.
-const METRICS_SHOWN: [(&str, fn(&MetricsRow) -> String); 10] = [
+const METRICS_SHOWN: [(&str, MetricCell); 10] = [
     ("trajectory", |r| r.trajectory.clone()),
     ("variant", |r| r.variant.clone()),
     ("rms1_nm", |r| cell(r.rms1_nm)),
