@@ -50,7 +50,7 @@ fn export_prints_the_verdict_and_require_safe_sets_the_exit_status() {
         layout::export::VERIFICATION_TXT,
         layout::export::BODY_FITTED_VTU,
     ] {
-        assert!(dir.join("export").join(f).is_file(), "{f} missing");
+        assert!(dir.join(f).is_file(), "{f} missing");
     }
     // Without --require-safe the verdict is printed and the command succeeds.
     let (out, text) = export(&dir, &["--fatigue-strength-mpa", "1"]);

@@ -779,7 +779,10 @@ fn write_results(
     for ((job, usage), rec) in jobs.iter().zip(records) {
         let rec = rec?;
         let (t, v) = (job.trajectory, job.controller.name());
-        run.write(&out.record(t, v), &record_table(&rec))?;
+        // Written, not stored: the series is large, and its paths stay in memory for
+        // Figure 11.
+        let table = Table::of(&Record::header(), &rec.columns());
+        run.write(&out.record(t, v), &table.to_csv())?;
         // Every sample: the figure draws the M4 envelope of each pixel column, which keeps
         // the peaks that taking every k-th sample would hide.
         let err = |i: usize| -> Vec<(f64, f64)> {
@@ -806,13 +809,6 @@ fn write_results(
         });
     }
     Ok((rows, paths))
-}
-
-/// The CSV of one record's time series (a [`Table`] of its columns). Written, not stored:
-/// the series is large and its paths are kept in memory for Figure 11.
-fn record_table(rec: &Record) -> Vec<u8> {
-    let table = Table::of(&Record::header(), &rec.columns());
-    flexstage_run::Format::encode(&table).unwrap_or_default()
 }
 
 /// The true output paths of a record \[m\] (columns `true1_m`, `true2_m`).

@@ -152,8 +152,9 @@ impl Table {
     }
 }
 
-impl Format for Table {
-    fn encode(&self) -> Result<Vec<u8>, String> {
+impl Table {
+    /// The CSV bytes ([`Format::encode`], which cannot fail for a table).
+    pub fn to_csv(&self) -> Vec<u8> {
         let rows = self.columns.iter().map(Vec::len).max().unwrap_or(0);
         let mut out = self.header.join(",");
         out.push('\n');
@@ -168,7 +169,13 @@ impl Format for Table {
             }
             out.push('\n');
         }
-        Ok(out.into_bytes())
+        out.into_bytes()
+    }
+}
+
+impl Format for Table {
+    fn encode(&self) -> Result<Vec<u8>, String> {
+        Ok(self.to_csv())
     }
 
     fn decode(bytes: &[u8]) -> Result<Self, String> {
