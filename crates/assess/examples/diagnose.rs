@@ -28,12 +28,13 @@ use flexstage_control::margins::Margins;
 use flexstage_control::pi_notch::PI_NOTCH_FF;
 use flexstage_control::registry::Design;
 use flexstage_identify::response::ResponseFit;
+use flexstage_run::Format;
+use flexstage_run::files::design::DesignFile;
 use flexstage_scenario::{Preset, Scenario, StageParams};
 use flexstage_sim::experiment::run;
 use flexstage_sim::model::StageModel;
 use flexstage_sim::rig::StagePlant;
 use flexstage_sim::trajectory::Reference;
-use flexstage_topopt::DesignFile;
 use flexstage_twin::DesignedStage;
 
 /// Margins of a backstepping design (None: unstable).
@@ -347,7 +348,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .and_then(|p| Preset::from_name(p))
         .ok_or("usage: diagnose quick|paper DESIGN.json")?;
     let scenario = Scenario::preset(preset);
-    let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
+    let design = DesignFile::decode(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let DesignedStage {
         scenario: s, twin, ..
     } = DesignedStage::new(&scenario, &design.rho)?;

@@ -17,10 +17,11 @@ use flexstage_control::controller::ROBUST;
 use flexstage_control::experiment::{Setup, experiment, experiment_on};
 use flexstage_control::pid::PID_FF;
 use flexstage_control::registry::Controller;
+use flexstage_run::Format;
+use flexstage_run::files::design::DesignFile;
 use flexstage_scenario::{Preset, Scenario};
 use flexstage_sim::rig::StagePlant;
 use flexstage_sim::trajectory::Reference;
-use flexstage_topopt::DesignFile;
 use flexstage_twin::{DesignedStage, Twin};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -29,7 +30,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .get(1)
         .and_then(|p| Preset::from_name(p))
         .ok_or("usage: track quick|paper DESIGN.json [SECONDS]")?;
-    let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
+    let design = DesignFile::decode(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let seconds: Option<f64> = args.get(3).map(|s| s.parse()).transpose()?;
     let t0 = std::time::Instant::now();
     let DesignedStage {

@@ -7,7 +7,7 @@
 use std::fmt;
 use std::path::Path;
 
-use flexstage_report::html::fmt_num;
+use flexstage_report::fmt_num;
 
 use crate::pea::PeaRecord;
 use crate::{
