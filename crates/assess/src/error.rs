@@ -6,12 +6,15 @@ pub enum AssessError {
     /// A controller, tuning or margin setting (names the field, value and range).
     #[error(transparent)]
     Control(#[from] flexstage_control::ControlError),
+    /// The simulated stage or a reference (`flexstage-sim`).
+    #[error(transparent)]
+    Sim(#[from] flexstage_sim::SimError),
     /// Building or running the twin.
     #[error(transparent)]
     Twin(#[from] flexstage_twin::TwinError),
     /// Drawing a figure.
     #[error(transparent)]
-    Plot(#[from] flexstage_report::plot::PlotError),
+    Plot(#[from] flexstage_figures::plot::PlotError),
     /// A setting of the assessment itself out of range.
     #[error(transparent)]
     OutOfRange(#[from] flexstage_numerics::RangeError),

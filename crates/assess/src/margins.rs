@@ -2,8 +2,9 @@
 //! twin's sampled loop with the rig's delay, flagged against the targets.
 
 use flexstage_control::margins::Margins;
+use flexstage_control::registry::Controller;
 
-use crate::bench::{Bench, Candidate};
+use crate::bench::Bench;
 use crate::error::Result;
 use crate::inject::{InjectionParams, injected_margins};
 
@@ -29,7 +30,7 @@ impl Default for MarginTargets {
 #[derive(Debug, Clone, PartialEq)]
 pub struct MarginRow {
     /// The controller.
-    pub candidate: Candidate,
+    pub candidate: &'static Controller,
     /// The rig delay \[samples\].
     pub delay: usize,
     /// How the margins were obtained ("transfer function" or "sine injection").
@@ -63,24 +64,26 @@ impl MarginRow {
 /// The margins of every candidate in `candidates` with `delay` samples of delay.
 pub fn margins_table(
     bench: &Bench,
-    candidates: &[Candidate],
+    candidates: &[&'static Controller],
     delay: usize,
     targets: MarginTargets,
     injection: &InjectionParams,
 ) -> Result<Vec<MarginRow>> {
     let mut rows = Vec::new();
+    let probe = bench.probe();
     for &c in candidates {
-        let (method, m) = if c.is_linear() {
-            let stable = crate::inject::is_stable(bench, c, delay, 1.0)?;
-            let m = bench.analytic_margins(c, delay)?;
-            ("transfer function", if stable { m } else { None })
+        let design = bench.design(c)?;
+        let (method, m) = if let Some(p) = design.linear() {
+            let stable = crate::inject::is_stable(&probe, &**design, delay, 1.0)?;
+            let m = bench.analytic_margins_of(p, delay)?;
+            ("transfer function", stable.then_some(m))
         } else {
             let mut mp = bench.tuning.margins;
             mp.points = 48;
             mp.refine = 10;
             (
                 "sine injection",
-                injected_margins(bench, c, delay, &mp, injection)?,
+                injected_margins(&probe, &**design, delay, &mp, injection)?,
             )
         };
         let meets = m.is_some_and(|m| {
@@ -97,45 +100,4 @@ pub fn margins_table(
         });
     }
     Ok(rows)
-}
-
-/// CSV of the table: controller, delay, loop, GM \[dB\], f_pc \[Hz\], PM \[deg\], f_gc \[Hz\],
-/// delay margin \[samples\], method, meets, Monte-Carlo pass rate \[%\] (empty when not run).
-pub fn csv(rows: &[MarginRow], sample_time: f64) -> String {
-    let mut s = String::from(
-        "controller,delay_samples,loop,gain_margin_dB,phase_crossover_Hz,phase_margin_deg,gain_crossover_Hz,delay_margin_samples,method,meets_targets,montecarlo_pass_pct\n",
-    );
-    for r in rows {
-        let mc = r
-            .montecarlo_pass
-            .map_or(String::new(), |p| format!("{:.0}", 100.0 * p));
-        for l in 0..2 {
-            match &r.margins {
-                Some(m) => {
-                    let m = m[l];
-                    s.push_str(&format!(
-                        "{},{},q{},{:.2},{:.1},{:.1},{:.1},{:.2},{},{},{mc}\n",
-                        r.candidate.name(),
-                        r.delay,
-                        l + 1,
-                        m.gain_db,
-                        m.phase_crossover,
-                        m.phase_deg,
-                        m.gain_crossover,
-                        m.delay / sample_time,
-                        r.method,
-                        r.meets
-                    ));
-                }
-                None => s.push_str(&format!(
-                    "{},{},q{},unstable,,,,,{},false,{mc}\n",
-                    r.candidate.name(),
-                    r.delay,
-                    l + 1,
-                    r.method
-                )),
-            }
-        }
-    }
-    s
 }

@@ -15,11 +15,12 @@
 //! A plant passes when the run does not diverge and the RMS error of each axis is within
 //! [`MonteCarloParams::rms_bound_pct`] of that axis's reference range (peak to peak).
 
-use flexstage_control::trajectory::Reference;
+use flexstage_control::registry::Controller;
 use flexstage_numerics::noise::SplitMix64;
+use flexstage_sim::trajectory::Reference;
 use rayon::prelude::*;
 
-use crate::bench::{Bench, Candidate};
+use crate::bench::Bench;
 use crate::error::{Result, check};
 use crate::track::{diverged, track_on};
 
@@ -126,14 +127,14 @@ pub struct PlantResult {
     /// Delay \[samples\].
     pub delay: usize,
     /// Per candidate: RMS error per axis \[m\] and pass.
-    pub results: Vec<(Candidate, [f64; 2], bool)>,
+    pub results: Vec<(&'static Controller, [f64; 2], bool)>,
 }
 
 /// The study's result.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MonteCarlo {
     /// The candidates, in column order.
-    pub candidates: Vec<Candidate>,
+    pub candidates: Vec<&'static Controller>,
     /// One entry per plant.
     pub plants: Vec<PlantResult>,
 }
@@ -144,39 +145,12 @@ impl MonteCarlo {
         let n = self.plants.iter().filter(|p| p.results[j].2).count();
         n as f64 / self.plants.len().max(1) as f64
     }
-
-    /// CSV: one row per plant and candidate.
-    pub fn csv(&self) -> String {
-        let mut s = String::from(
-            "plant,stiffness,mass,alpha,damping,coupling1,coupling2,delay,controller,rms1_nm,rms2_nm,pass\n",
-        );
-        for p in &self.plants {
-            for (c, rms, pass) in &p.results {
-                s.push_str(&format!(
-                    "{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{:.2},{:.2},{}\n",
-                    p.index,
-                    p.stiffness,
-                    p.mass,
-                    p.alpha,
-                    p.damping,
-                    p.coupling[0],
-                    p.coupling[1],
-                    p.delay,
-                    c.name(),
-                    rms[0] * 1e9,
-                    rms[1] * 1e9,
-                    pass
-                ));
-            }
-        }
-        s
-    }
 }
 
 /// Runs the study on `reference` for the `candidates`, plants in parallel.
 pub fn monte_carlo(
     bench: &Bench,
-    candidates: &[Candidate],
+    candidates: &[&'static Controller],
     reference: Reference,
     p: &MonteCarloParams,
 ) -> Result<MonteCarlo> {
@@ -193,7 +167,7 @@ pub fn monte_carlo(
 
 fn one_plant(
     bench: &Bench,
-    candidates: &[Candidate],
+    candidates: &[&'static Controller],
     reference: Reference,
     p: &MonteCarloParams,
     i: usize,

@@ -4,10 +4,12 @@
 //! deliver the scan (amplifier range, current, stroke: `Setup::check_reference`); the RMS is
 //! taken over the second half of the run (after the smooth start), also in % of the range.
 
-use flexstage_control::trajectory::{Reference, Shape};
-use flexstage_report::plot::{Figure, Series};
+use flexstage_figures::plot::{Figure, Series};
+use flexstage_sim::trajectory::{Reference, Shape};
 
-use crate::bench::{Bench, Candidate};
+use flexstage_control::registry::Controller;
+
+use crate::bench::Bench;
 use crate::error::{Result, check};
 use crate::track::{diverged, track_on};
 
@@ -39,13 +41,13 @@ pub struct SweepPoint {
     /// Amplitudes used (A1, A2) \[m\].
     pub amplitude: [f64; 2],
     /// Per candidate: steady RMS error per axis \[m\] (∞: diverged), and in % of the range.
-    pub results: Vec<(Candidate, [f64; 2], [f64; 2])>,
+    pub results: Vec<(&'static Controller, [f64; 2], [f64; 2])>,
 }
 
 /// Runs the sweep for `candidates`, starting from the Lissajous amplitudes `amplitude`.
 pub fn sweep(
     bench: &Bench,
-    candidates: &[Candidate],
+    candidates: &[&'static Controller],
     amplitude: [f64; 2],
     p: &SweepParams,
 ) -> Result<Vec<SweepPoint>> {
@@ -107,33 +109,9 @@ pub fn sweep(
     Ok(out)
 }
 
-/// CSV of the sweep: one row per point and candidate.
-pub fn csv(points: &[SweepPoint]) -> String {
-    let mut s = String::from(
-        "fraction_of_f1,fast_frequency_Hz,amplitude1_m,amplitude2_m,controller,rms1_nm,rms2_nm,rms1_pct_range,rms2_pct_range\n",
-    );
-    for p in points {
-        for (c, rms, pct) in &p.results {
-            s.push_str(&format!(
-                "{},{:.2},{:e},{:e},{},{:.3},{:.3},{:.5},{:.5}\n",
-                p.fraction,
-                p.frequency,
-                p.amplitude[0],
-                p.amplitude[1],
-                c.name(),
-                rms[0] * 1e9,
-                rms[1] * 1e9,
-                pct[0],
-                pct[1]
-            ));
-        }
-    }
-    s
-}
-
 /// The figure: RMS error (mean of both axes, % of range, log10) against the fast
 /// component's frequency in % of the first resonance, one line per candidate.
-pub fn figure(points: &[SweepPoint], candidates: &[Candidate]) -> Result<String> {
+pub fn figure(points: &[SweepPoint], candidates: &[&Controller]) -> Result<String> {
     let mut fig = Figure::new(
         "Lissajous 3:1 on the twin: error against scan frequency",
         "fast component [% of first resonance]",
@@ -148,7 +126,7 @@ pub fn figure(points: &[SweepPoint], candidates: &[Candidate]) -> Result<String>
                 v.is_finite().then(|| (100.0 * p.fraction, v.log10()))
             })
             .collect();
-        fig = fig.with(Series::line(c.name(), pts));
+        fig = fig.with(Series::line(c.name, pts));
     }
     Ok(fig.to_svg()?)
 }

@@ -244,6 +244,11 @@ impl Progress for Bars {
             RunEvent::Skipped(s) => {
                 errln!("[{}/{n}] {}: done earlier, skipped", s.number(), s.name())
             }
+            RunEvent::Redoing { stage, why } => errln!(
+                "[{}/{n}] {}: done earlier, but {why}: doing it again (and every later stage)",
+                stage.number(),
+                stage.name()
+            ),
             RunEvent::Started(s) => {
                 with_plain(|p| {
                     p.what = format!("[{}/{n}] {}", s.number(), s.name());

@@ -48,7 +48,7 @@ enum Command {
   flexstage init -                        # print to standard output")]
     Init {
         /// Where to write ("-" for standard output).
-        #[arg(default_value = "scenario.toml")]
+        #[arg(default_value = flexstage_run::layout::SCENARIO)]
         path: PathBuf,
         /// Built-in scenario: "quick" (coarse and fast) or "paper" (Tables 1, 3, 4, A1).
         #[arg(long, default_value = DEFAULT_PRESET, value_parser = PRESETS)]
@@ -262,9 +262,9 @@ fn init(path: &std::path::Path, name: &str, force: bool) -> anyhow::Result<()> {
     }
     if path.exists() && !force {
         let path = path.to_path_buf();
-        return Err(flexstage_report::ReportError::Exists { path }.into());
+        return Err(flexstage_run::RunError::Exists { path }.into());
     }
-    flexstage_report::write_atomic(path, text.as_bytes())?;
+    flexstage_run::write_atomic(path, text.as_bytes())?;
     errln!("wrote {}", path.display());
     Ok(())
 }
@@ -337,4 +337,30 @@ fn run(a: RunArgs) -> anyhow::Result<()> {
     let summary = flexstage_pipeline::run::run(s, &root, &options, &bars::Bars::default())?;
     out!("{summary}");
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flexstage_pipeline::{CONTROLLERS, Controller};
+
+    /// Goal: the controllers of `track --variant` are the registry's, in its words: every
+    /// registry entry is accepted by its name and selects exactly itself, `all` selects the
+    /// defaults, and a name outside the registry is refused by the parser.
+    #[test]
+    fn every_registry_controller_is_a_track_variant() {
+        let variant = |name: &str| -> Vec<&'static Controller> {
+            match Cli::try_parse_from(["flexstage", "track", "--variant", name]) {
+                Ok(Cli {
+                    command: Command::Track(a),
+                }) => args::controllers(&a.variant),
+                other => panic!("{name}: {other:?}"),
+            }
+        };
+        for &c in &CONTROLLERS {
+            assert_eq!(variant(c.name), vec![c]);
+        }
+        assert_eq!(variant("all"), Controller::defaults());
+        assert!(Cli::try_parse_from(["flexstage", "track", "--variant", "pid"]).is_err());
+    }
 }

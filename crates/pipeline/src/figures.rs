@@ -2,9 +2,10 @@
 //! workspace polygons.
 
 use flexstage_fem::Design;
-use flexstage_report::plot::{Figure, Series};
-use flexstage_report::vtk::{PointField, QuadMesh};
-use flexstage_report::{RunDir, csv_columns, read_csv_columns};
+use flexstage_figures::plot::{Figure, Series};
+use flexstage_figures::vtk::{PointField, QuadMesh};
+use flexstage_run::files::design::POLYGON;
+use flexstage_run::{RunDir, Table};
 use flexstage_topopt::{CaseResults as Response, Problem};
 
 use crate::error::Result;
@@ -48,7 +49,7 @@ pub(crate) fn write_vtu(
 }
 
 /// Per-case table: nominal strokes, input displacements, output (µm) and strain energy (J).
-pub(crate) fn cases_csv(problem: &Problem, r: &Response) -> String {
+pub(crate) fn cases_table(problem: &Problem, r: &Response) -> Table {
     let col = |f: &dyn Fn(usize) -> f64| (0..r.outputs.len()).map(f).collect::<Vec<f64>>();
     let second = |v: &[f64]| v.get(1).copied().unwrap_or(0.0) * 1e6;
     let x1 = col(&|k| problem.cases[k][0] * 1e6);
@@ -57,7 +58,7 @@ pub(crate) fn cases_csv(problem: &Problem, r: &Response) -> String {
     let u2 = col(&|k| second(&r.inputs[k]));
     let xo = col(&|k| r.outputs[k][0] * 1e6);
     let yo = col(&|k| r.outputs[k][1] * 1e6);
-    csv_columns(
+    Table::new(
         &[
             "x_nom1_um",
             "x_nom2_um",
@@ -67,7 +68,7 @@ pub(crate) fn cases_csv(problem: &Problem, r: &Response) -> String {
             "y_out_um",
             "strain_energy_J",
         ],
-        &[&x1, &x2, &u1, &u2, &xo, &yo, &r.energies],
+        vec![x1, x2, u1, u2, xo, yo, r.energies.clone()],
     )
 }
 
@@ -83,22 +84,20 @@ pub(crate) fn polygon_svg(title: &str, polys: &[(String, &[[f64; 2]])]) -> Resul
     Ok(fig.to_svg()?)
 }
 
-const POLYGON_HEADER: [&str; 2] = ["x_out_um", "y_out_um"];
-
-/// An output polygon \[m\] as CSV in µm.
-pub(crate) fn polygon_csv(p: &[[f64; 2]]) -> String {
+/// An output polygon \[m\] as a table in µm.
+pub(crate) fn polygon_table(p: &[[f64; 2]]) -> Table {
     let x: Vec<f64> = p.iter().map(|q| q[0] * 1e6).collect();
     let y: Vec<f64> = p.iter().map(|q| q[1] * 1e6).collect();
-    csv_columns(&POLYGON_HEADER, &[&x, &y])
+    Table::new(&POLYGON, vec![x, y])
 }
 
-/// Reads back [`polygon_csv`] (metres); rows with a missing value are skipped.
-pub(crate) fn read_polygon_csv(text: &str) -> Vec<[f64; 2]> {
-    let Some(c) = read_csv_columns(text, &POLYGON_HEADER) else {
+/// Reads back [`polygon_table`] (metres); rows with a missing value are skipped.
+pub(crate) fn table_polygon(t: &Table) -> Vec<[f64; 2]> {
+    let Ok(c) = t.columns(&POLYGON) else {
         return Vec::new();
     };
     c[0].iter()
-        .zip(&c[1])
+        .zip(c[1])
         .filter(|(x, y)| x.is_finite() && y.is_finite())
         .map(|(x, y)| [x * 1e-6, y * 1e-6])
         .collect()
@@ -107,15 +106,16 @@ pub(crate) fn read_polygon_csv(text: &str) -> Vec<[f64; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flexstage_run::Format;
 
     #[test]
     fn polygons_round_trip_through_csv() {
         let p = [[1e-6, -2.5e-6], [3.25e-6, 4e-7]];
-        let back = read_polygon_csv(&polygon_csv(&p));
+        let back = table_polygon(&Table::decode(&polygon_table(&p).encode().unwrap()).unwrap());
         assert_eq!(back.len(), 2);
         for (a, b) in p.iter().zip(&back) {
             assert!((a[0] - b[0]).abs() < 1e-18 && (a[1] - b[1]).abs() < 1e-18);
         }
-        assert!(read_polygon_csv("a,b\n1,2\n").is_empty());
+        assert!(table_polygon(&Table::decode(b"a,b\n1,2\n").unwrap()).is_empty());
     }
 }

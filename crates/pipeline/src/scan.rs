@@ -4,10 +4,12 @@
 //! `scan_frequency.csv` and `scan_frequency.svg` (the report's figure). Only on the twin: the
 //! sweep's frequencies are fractions of the twin's first resonance.
 
+use flexstage_assess::Bench;
 use flexstage_assess::sweep::{self, SweepParams, SweepPoint};
-use flexstage_assess::{Bench, Candidate};
-use flexstage_report::RunDir;
-use flexstage_report::layout::Tracking;
+use flexstage_control::registry::Controller;
+use flexstage_run::RunDir;
+use flexstage_run::format::Rows;
+use flexstage_run::layout::Tracking;
 use flexstage_scenario::{Scenario, Trajectory};
 
 use crate::error::Result;
@@ -18,7 +20,7 @@ pub struct ScanFrequency {
     /// The points, each with one result per candidate.
     pub points: Vec<SweepPoint>,
     /// The candidates.
-    pub candidates: Vec<Candidate>,
+    pub candidates: Vec<&'static Controller>,
 }
 
 /// The amplitudes the sweep starts from: those of the scenario's first trajectory (a
@@ -35,7 +37,7 @@ pub fn start_amplitude(s: &Scenario) -> Option<[f64; 2]> {
 pub fn scan_frequency(
     bench: &Bench,
     scenario: &Scenario,
-    candidates: &[Candidate],
+    candidates: &[&'static Controller],
 ) -> Result<Option<ScanFrequency>> {
     let Some(amplitude) = start_amplitude(scenario) else {
         return Ok(None);
@@ -50,12 +52,10 @@ pub fn scan_frequency(
 impl ScanFrequency {
     /// Writes `scan_frequency.csv` and `scan_frequency.svg` into `out`.
     pub fn write(&self, run: &RunDir, out: &Tracking) -> Result<()> {
+        let rows = crate::convert::scan_rows(&self.points);
+        run.store(&out.scan_frequency_csv(), Rows(rows))?;
         run.write(
-            out.scan_frequency_csv(),
-            sweep::csv(&self.points).as_bytes(),
-        )?;
-        run.write(
-            out.scan_frequency_svg(),
+            &out.scan_frequency_svg(),
             sweep::figure(&self.points, &self.candidates)?.as_bytes(),
         )?;
         Ok(())

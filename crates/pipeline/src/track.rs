@@ -31,26 +31,29 @@ use flexstage_scenario::RecordEstimate;
 use std::path::{Path, PathBuf};
 
 use crate::scan::{ScanFrequency, scan_frequency};
+use flexstage_assess::Bench;
 use flexstage_assess::inject::InjectionParams;
 use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, monte_carlo};
-use flexstage_assess::{Bench, Candidate};
 use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::{
-    Metrics, Record, Setup, Variant, experiment_on, experiment_with_progress,
-};
-use flexstage_control::model::ResponseFit;
-use flexstage_control::trajectory::Reference;
+use flexstage_control::experiment::{Setup, experiment_on, experiment_with_progress};
+use flexstage_control::registry::{Controller, Designs, Stage};
 use flexstage_control::tuning::TuningParams;
+use flexstage_figures::plot::{Figure, Series};
+use flexstage_identify::response::ResponseFit;
 use flexstage_piezo::BoucWenParams;
-use flexstage_report::layout::{self, Tracking};
-use flexstage_report::plot::{Figure, Series};
-use flexstage_report::{RunDir, csv_columns, read_csv_columns};
+use flexstage_run::files::pea::PeaEstimates;
+use flexstage_run::files::stage::{ResponseFitFile, StageParamsFile};
+use flexstage_run::format::Rows;
+use flexstage_run::layout::{self, Tracking};
+use flexstage_run::{RunDir, Table};
+use flexstage_sim::experiment::{Metrics, Record};
+use flexstage_sim::trajectory::Reference;
 use rayon::prelude::*;
 
 use crate::error::{PipelineError, Result, require};
 use crate::folder::RunFolder;
-use crate::plant::{Plant, PlantSource, read_model_params};
+use crate::plant::{ModelParams, Plant, PlantSource, read_model_params};
 use crate::progress::Progress;
 use crate::source::plain;
 use crate::twin::Built;
@@ -94,8 +97,8 @@ pub struct TrackOptions {
     pub plant: PlantKind,
     /// One trajectory of the scenario by name; `None`: all.
     pub trajectory: Option<String>,
-    /// The controllers to run. Default all ([`Variant::ALL`]).
-    pub controllers: Vec<Variant>,
+    /// The controllers to run. Default: the registry's defaults ([`Controller::defaults`]).
+    pub controllers: Vec<&'static Controller>,
     /// Hysteresis compensation. Default [`Compensation::Inverse`] (Eq. 21, in the loop).
     pub compensation: Compensation,
     /// The controller's model (a `StageParams` TOML); `None`: the run's identified parameters
@@ -113,7 +116,7 @@ impl Default for TrackOptions {
         TrackOptions {
             plant: PlantKind::Twin,
             trajectory: None,
-            controllers: Variant::ALL.to_vec(),
+            controllers: Controller::defaults(),
             compensation: Compensation::Inverse,
             params: None,
             allow_foreign_params: false,
@@ -225,7 +228,7 @@ pub struct TrackRow {
     /// Trajectory name.
     pub trajectory: String,
     /// Controller.
-    pub controller: Variant,
+    pub controller: &'static Controller,
     /// Errors against the true output.
     pub metrics: Metrics,
     /// Largest fraction of the designed workspace the reference uses.
@@ -305,7 +308,7 @@ impl TrackSummary {
                 };
                 s.push_str(&format!(
                     "{:<16} q{}   {m}{mc}{flag}\n",
-                    r.candidate.name(),
+                    r.candidate.name,
                     l + 1
                 ));
             }
@@ -314,42 +317,43 @@ impl TrackSummary {
     }
 }
 
-/// The assessment candidate of a variant.
-fn candidate(v: Variant) -> Candidate {
-    match v {
-        Variant::Robust => Candidate::Robust,
-        Variant::NonRobust => Candidate::NonRobust,
-        Variant::PidFeedforward => Candidate::PidTuned,
-        Variant::PidScenario => Candidate::PidScenario,
-        Variant::PiNotch => Candidate::PiNotch,
-    }
-}
+/// The controllers designed for the simulated stage, their margins and robustness.
+type Designed = (
+    Designs,
+    Vec<MarginRow>,
+    Option<MonteCarlo>,
+    Option<ScanFrequency>,
+);
 
-/// On the twin: tunes the PI + notch and the PID on its sampled frequency response with the
-/// rig's delay and sensor chain (`flexstage_control::tuning`, sets [`Setup::pi_notch`] and
-/// [`Setup::pid_tuned`]), measures every selected controller's margins and runs the
-/// Monte-Carlo study (`flexstage_assess::montecarlo`, default settings, on the scenario's
-/// first trajectory), whose pass rates go into the margin rows, and the error against scan
-/// frequency ([`crate::scan`]). On the lumped plant nothing
-/// is tuned: the PI + notch is skipped with a warning and `pid-ff` runs the scenario's gains.
+/// On the twin: designs every controller of the registry on its sampled frequency response
+/// with the rig's delay and sensor chain (`flexstage_assess::Bench`: the loop-shaping ones
+/// tuned by `flexstage_control::tuning`, the backstepping fitted to the response and sized by
+/// its margins; the controllers' model in `setup` becomes the one fitted to the response),
+/// measures every selected controller's margins and runs the Monte-Carlo study
+/// (`flexstage_assess::montecarlo`, default settings, on the scenario's first trajectory),
+/// whose pass rates go into the margin rows, and the error against scan frequency
+/// ([`crate::scan`]). On the lumped plant the controllers are designed from the scenario's
+/// settings alone: one that needs the twin's response is skipped with a warning, and
+/// `pid-ff` runs the scenario's gains.
 fn tune_and_margins(
     setup: &mut Setup,
     identified: Option<ResponseFit>,
     sim: &Simulated,
-    controllers: &[Variant],
+    controllers: &[&'static Controller],
     scenario: &flexstage_scenario::Scenario,
     progress: &dyn Progress,
     warnings: &mut Vec<String>,
-) -> Result<(Vec<MarginRow>, Option<MonteCarlo>, Option<ScanFrequency>)> {
+) -> Result<Designed> {
     let Simulated::Twin(twin) = sim else {
-        if controllers.contains(&Variant::PiNotch) {
-            warnings.push(
-                "pi-notch-ff is tuned on the twin's frequency response and is not run on the \
-                 lumped plant"
-                    .into(),
-            );
+        let designs = Designs::for_stage(&Stage::scenario(setup))?;
+        for c in controllers.iter().filter(|c| designs.get(c).is_none()) {
+            warnings.push(format!(
+                "{} is tuned on the twin's frequency response and is not run on the lumped \
+                 plant",
+                c.name
+            ));
         }
-        return Ok((Vec::new(), None, None));
+        return Ok((designs, Vec::new(), None, None));
     };
     let bench = Bench::with_identified(
         setup.clone(),
@@ -357,44 +361,41 @@ fn tune_and_margins(
         TuningParams::default(),
         identified,
     )?;
-    setup.pi_notch = Some(bench.pi_notch.params);
-    setup.pid_tuned = Some(bench.pid.params);
     setup.controller = bench.setup.controller.clone();
-    let candidates: Vec<Candidate> = controllers.iter().map(|&v| candidate(v)).collect();
     let mut rows = margins_table(
         &bench,
-        &candidates,
+        controllers,
         setup.rig.delay,
         MarginTargets::default(),
         &InjectionParams::default(),
     )?;
     let Some(first) = scenario.trajectories.first() else {
-        return Ok((rows, None, None));
+        return Ok((bench.designs, rows, None, None));
     };
     let (reference, _) = Reference::from_scenario(first);
     let t0 = std::time::Instant::now();
     let mp = MonteCarloParams::default();
-    let mc = monte_carlo(&bench, &candidates, reference, &mp)?;
+    let mc = monte_carlo(&bench, controllers, reference, &mp)?;
     progress.note(&format!(
         "Monte-Carlo: {} perturbed twins × {} controller(s) in {:.1} s",
         mp.plants,
-        candidates.len(),
+        controllers.len(),
         t0.elapsed().as_secs_f64()
     ));
     for (j, r) in rows.iter_mut().enumerate() {
         r.montecarlo_pass = Some(mc.pass_rate(j));
     }
     let t0 = std::time::Instant::now();
-    let scan = scan_frequency(&bench, scenario, &candidates)?;
+    let scan = scan_frequency(&bench, scenario, controllers)?;
     if let Some(sc) = &scan {
         progress.note(&format!(
             "error against scan frequency: {} frequencies × {} controller(s) in {:.1} s",
             sc.points.len(),
-            candidates.len(),
+            controllers.len(),
             t0.elapsed().as_secs_f64()
         ));
     }
-    Ok((rows, Some(mc), scan))
+    Ok((bench.designs, rows, Some(mc), scan))
 }
 
 /// One planned run.
@@ -402,7 +403,7 @@ struct Job<'a> {
     trajectory: &'a str,
     reference: Reference,
     duration: f64,
-    controller: Variant,
+    controller: &'static Controller,
 }
 
 /// The stage a `track` call simulates.
@@ -466,9 +467,9 @@ fn identified_peas(folder: &RunFolder, setup: &mut Setup) -> Result<[String; 2]>
     for n in [1u8, 2] {
         let rel = layout::PeaIdentification { pea: n }.estimates();
         let i = usize::from(n - 1);
-        used[i] = match folder.dir().read_to_string(&rel) {
-            Some(text) => {
-                setup.controller.actuator.hysteresis[i] = read_estimates(&rel, &text)?;
+        used[i] = match folder.dir().load::<PeaEstimates>(&rel)? {
+            Some(e) => {
+                setup.controller.actuator.hysteresis[i] = recommended(&e)?;
                 format!("identified ({rel})")
             }
             None => "scenario [hysteresis]".into(),
@@ -477,18 +478,11 @@ fn identified_peas(folder: &RunFolder, setup: &mut Setup) -> Result<[String; 2]>
     Ok(used)
 }
 
-/// The `recommended_params` of an `estimates.toml`.
-fn read_estimates(rel: &str, text: &str) -> Result<BoucWenParams> {
-    #[derive(serde::Deserialize)]
-    struct Recommended {
-        recommended_params: BoucWenParams,
-    }
-    let r: Recommended = toml::from_str(text).map_err(|e| PipelineError::Format {
-        path: rel.into(),
-        reason: format!("no valid recommended_params table: {e}"),
-    })?;
-    r.recommended_params.validate()?;
-    Ok(r.recommended_params)
+/// The recommended parameters of a PEA's estimates, checked.
+fn recommended(e: &PeaEstimates) -> Result<BoucWenParams> {
+    let p = BoucWenParams::from(&e.recommended_params);
+    p.validate()?;
+    Ok(p)
 }
 
 /// The outcome of building the twin of the run's design: the twin, or why the twin could not
@@ -535,8 +529,16 @@ pub fn track_on(
     }
     let mut setup = Setup::from_scenario(&plant.scenario);
     let model = model_source(folder, options)?;
-    if let ModelSource::File(p) | ModelSource::Identified(p) = &model {
-        let m = read_model_params(p)?;
+    let params = match &model {
+        ModelSource::File(p) => Some(read_model_params(p)?),
+        // The parameters this run identified: from memory when the stage ran in this process.
+        ModelSource::Identified(_) => folder
+            .dir()
+            .load::<StageParamsFile>(layout::stage::PARAMS)?
+            .map(|f| ModelParams::from(&*f)),
+        ModelSource::Guess => None,
+    };
+    if let Some(m) = params {
         (setup.controller.model, setup.controller.coupling) = (m.params, m.coupling);
     }
     let compensator = identified_peas(folder, &mut setup)?;
@@ -547,12 +549,15 @@ pub fn track_on(
         Simulated::Lumped => PlantKind::Lumped,
     };
     // The response fit identified on the twin (else the fit of its exact modes).
-    let identified = if folder.dir().exists(layout::stage::RESPONSE_FIT) {
-        Some(crate::stage_id::read_response_fit(
+    let identified = match folder
+        .dir()
+        .load::<ResponseFitFile>(layout::stage::RESPONSE_FIT)?
+    {
+        Some(f) => Some(crate::stage_id::response_fit_of(
+            &f,
             &folder.dir().path(layout::stage::RESPONSE_FIT),
-        )?)
-    } else {
-        None
+        )?),
+        None => None,
     };
     if identified.is_some() {
         progress.note(&format!(
@@ -560,7 +565,7 @@ pub fn track_on(
             layout::stage::RESPONSE_FIT
         ));
     }
-    let (margins, montecarlo, scan) = tune_and_margins(
+    let (designs, margins, montecarlo, scan) = tune_and_margins(
         &mut setup,
         identified,
         &sim,
@@ -569,7 +574,14 @@ pub fn track_on(
         progress,
         &mut warnings,
     )?;
-    let jobs = plan(&plant.scenario, &setup, &sim, options, &mut warnings)?;
+    let jobs = plan(
+        &plant.scenario,
+        &setup,
+        &designs,
+        &sim,
+        options,
+        &mut warnings,
+    )?;
     for w in &warnings {
         progress.note(&format!("warning: {w}"));
     }
@@ -578,7 +590,7 @@ pub fn track_on(
     progress.start("track", samples.round() as u64);
     let records: Vec<Result<Record>> = jobs
         .par_iter()
-        .map(|(j, _)| run_job(&setup, &sim, options.compensation, j, progress))
+        .map(|(j, _)| run_job(&setup, &designs, &sim, options.compensation, j, progress))
         .collect();
     progress.finish();
     let out = Tracking::variant(&options.conditions(folder));
@@ -591,17 +603,17 @@ pub fn track_on(
         crate::names::compensation(options.compensation),
         &model.label(),
         kind.name(),
+        &mut warnings,
     )?;
     let trajectories = jobs_by_trajectory(&jobs);
     crate::track_files::write_paths(folder.dir(), &out, &trajectories, &merged, &paths)?;
     if !margins.is_empty() {
-        folder.dir().write(
-            out.margins(),
-            flexstage_assess::margins::csv(&margins, dt).as_bytes(),
-        )?;
+        let rows = crate::convert::margin_rows(&margins, dt);
+        folder.dir().store(&out.margins(), Rows(rows))?;
     }
     if let Some(mc) = &montecarlo {
-        folder.dir().write(out.montecarlo(), mc.csv().as_bytes())?;
+        let rows = crate::convert::montecarlo_rows(mc);
+        folder.dir().store(&out.montecarlo(), Rows(rows))?;
     }
     if let Some(sc) = &scan {
         sc.write(folder.dir(), &out)?;
@@ -625,18 +637,22 @@ pub fn track_on(
 /// One (trajectory, controller) run on the simulated stage.
 fn run_job(
     setup: &Setup,
+    designs: &Designs,
     sim: &Simulated,
     compensation: Compensation,
     j: &Job,
     progress: &dyn Progress,
 ) -> Result<Record> {
     let advance = |n: usize| progress.advance(n as u64);
+    let design = &**designs
+        .get(j.controller)
+        .expect("planned jobs are designed");
     Ok(match sim {
         Simulated::Twin(twin) => {
             let mut p = twin.plant(&setup.rig)?;
             experiment_on(
                 setup,
-                j.controller,
+                design,
                 compensation,
                 j.reference,
                 j.duration,
@@ -646,7 +662,7 @@ fn run_job(
         }
         Simulated::Lumped => experiment_with_progress(
             setup,
-            j.controller,
+            design,
             compensation,
             j.reference,
             j.duration,
@@ -660,6 +676,7 @@ fn run_job(
 fn plan<'a>(
     s: &'a flexstage_scenario::Scenario,
     setup: &Setup,
+    designs: &Designs,
     sim: &Simulated,
     options: &TrackOptions,
     warnings: &mut Vec<String>,
@@ -703,7 +720,7 @@ fn plan<'a>(
             ));
         }
         for &controller in &options.controllers {
-            if controller == Variant::PiNotch && setup.pi_notch.is_none() {
+            if designs.get(controller).is_none() {
                 continue;
             }
             jobs.push((
@@ -771,9 +788,11 @@ fn write_results(
     let mut paths = Vec::with_capacity(jobs.len());
     for ((job, usage), rec) in jobs.iter().zip(records) {
         let rec = rec?;
-        let (t, v) = (job.trajectory, job.controller.name());
-        let csv = csv_columns(&Record::header(), &rec.columns());
-        run.write(out.record(t, v), csv.as_bytes())?;
+        let (t, v) = (job.trajectory, job.controller.name);
+        // Written, not stored: the series is large, and its paths stay in memory for
+        // Figure 11.
+        let table = Table::of(&Record::header(), &rec.columns());
+        run.write(&out.record(t, v), &table.to_csv())?;
         // Every sample: the figure draws the M4 envelope of each pixel column, which keeps
         // the peaks that taking every k-th sample would hide.
         let err = |i: usize| -> Vec<(f64, f64)> {
@@ -788,7 +807,7 @@ fn write_results(
         )
         .with(Series::line("q1 (horizontal)", err(0)))
         .with(Series::line("q2 (vertical)", err(1)));
-        run.write(out.error_svg(t, v), fig.to_svg()?.as_bytes())?;
+        run.write(&out.error_svg(t, v), fig.to_svg()?.as_bytes())?;
         let key = (t.to_string(), v.to_string());
         paths.push((key, crate::track_files::scaled(&rec.truth, 1e6)));
         let half = job.reference.half_range(job.duration, dt);
@@ -802,12 +821,10 @@ fn write_results(
     Ok((rows, paths))
 }
 
-/// The true output paths of a record CSV \[m\] (columns `true1_m`, `true2_m`).
-pub(crate) fn read_paths(text: &str) -> Option<[Vec<f64>; 2]> {
-    let mut c = read_csv_columns(text, &["true1_m", "true2_m"])?;
-    let y = c.pop()?;
-    let x = c.pop()?;
-    Some([x, y])
+/// The true output paths of a record \[m\] (columns `true1_m`, `true2_m`).
+pub(crate) fn record_paths(t: &Table) -> Option<[Vec<f64>; 2]> {
+    let c = t.columns(&["true1_m", "true2_m"]).ok()?;
+    Some([c[0].to_vec(), c[1].to_vec()])
 }
 
 #[cfg(test)]
@@ -875,14 +892,22 @@ mod tests {
             amplitude[0] *= 5.0;
         }
         let setup = Setup::from_scenario(&s);
+        let designs = Designs::for_stage(&Stage::scenario(&setup)).unwrap();
         let options = TrackOptions {
             trajectory: Some(name.clone()),
             ..TrackOptions::default()
         };
         let mut warnings = Vec::new();
-        let e = plan(&s, &setup, &Simulated::Lumped, &options, &mut warnings)
-            .err()
-            .expect("refused");
+        let e = plan(
+            &s,
+            &setup,
+            &designs,
+            &Simulated::Lumped,
+            &options,
+            &mut warnings,
+        )
+        .err()
+        .expect("refused");
         let m = e.to_string();
         assert!(
             m.contains(&name) && m.contains("stroke") && m.contains("µm"),
@@ -892,19 +917,18 @@ mod tests {
         let all = TrackOptions::default();
         let s = crate::folder::preset("quick").unwrap();
         let setup = Setup::from_scenario(&s);
-        assert!(plan(&s, &setup, &Simulated::Lumped, &all, &mut warnings).is_ok());
-    }
-
-    #[test]
-    fn identified_pea_parameters_are_read_from_the_estimates() {
-        // Goal: the compensator takes `recommended_params`; a damaged file is an error.
-        let text = "data = \"x\"\n[recommended_params]\nd_p = 0.06\na_bw = 0.012\n\
-                    b_bw = 0.0019\ngamma_bw = 0.0016\ndelta_bw = 0.0005\n";
-        let p = read_estimates("identify/pea1/estimates.toml", text).unwrap();
-        assert_eq!(p.d_p, 0.06);
-        assert_eq!(p.delta_bw, 0.0005);
-        let e = read_estimates("identify/pea1/estimates.toml", "d_p = 1").unwrap_err();
-        assert!(e.to_string().contains("recommended_params"), "{e}");
+        let designs = Designs::for_stage(&Stage::scenario(&setup)).unwrap();
+        assert!(
+            plan(
+                &s,
+                &setup,
+                &designs,
+                &Simulated::Lumped,
+                &all,
+                &mut warnings
+            )
+            .is_ok()
+        );
     }
 
     #[test]

@@ -8,6 +8,9 @@
 //! `(i·dx, j·dy)`, nearest node by rounding, boxes inclusive with a tolerance of 1e-9 element
 //! sizes; elements by centroid), so `flexstage check` refuses what `run` would refuse later.
 
+// `!(x <= bound)` on purpose: a NaN fails every bound.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::design::{Edge, Fix, Selector};
 use crate::error::{RangeError, Result, ScenarioError};
 use crate::{ObjectiveKind, Scenario, Trajectory};
@@ -86,12 +89,12 @@ pub const LIMITS: [(&str, &str); 11] = [
 /// resident (pages allocated zeroed and never written are not resident). Everything that grows
 /// is counted: each realization's FE workspace keeps, per load case, a tangent matrix, the
 /// Anderson history, the equilibrium and adjoint solve blocks (five responses), the block-PCG
-/// buffers and the warm starts, [`VECTORS_PER_CASE`] vectors of the DOFs in all, and the
+/// buffers and the warm starts, `VECTORS_PER_CASE` vectors of the DOFs in all, and the
 /// element forces (64 bytes an element); per workspace a preconditioner and one fallback
-/// factor per group ([`FACTORS_PER_SET`], 12 bytes a non-zero of L) with their element
+/// factor per group (`FACTORS_PER_SET`, 12 bytes a non-zero of L) with their element
 /// buffers; the final analysis keeps as many sets again while the optimizer's are alive
 /// ([`DesignEstimate::sets`]); the density filter holds 12 bytes per pair of elements within
-/// its radius; and the process itself ([`RUNTIME_BYTES`]: threads, allocator arenas, code).
+/// its radius; and the process itself (`RUNTIME_BYTES`: threads, allocator arenas, code).
 /// Measured against `VmPeak` (allocated) and `VmHWM` (resident) of `flexstage design
 /// --max-iterations 2` for 16–800 samples on 48 × 24 and 96 × 48 meshes, robust and not:
 /// within +3 % to +15 % of the allocated peak, and above the resident one

@@ -85,7 +85,7 @@ pub fn key(x: f64) -> i64 {
 }
 
 pub fn from_key(k: i64) -> f64 {
-    f64::from_bits(key(f64::from_bits(k as u64)).cast_unsigned())
+    f64::from_bits(key(f64::from_bits(k as u64)) as u64)
 }
 
 /// The last key accepted going from `from` (accepted) towards `to` (refused), and the first
