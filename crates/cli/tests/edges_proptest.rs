@@ -12,9 +12,12 @@
 //! option-mutation tests'). Each case runs the real command: a design field `flexstage design
 //! --max-iterations 2`, any other field a `flexstage track --plant lumped` (the trajectory's
 //! own for its fields), an option its subcommand on a run folder holding a 2-iteration design
-//! and a PEA record. Required: exit 0 with no NaN or ∞ printed, or exit 1/2 with an error
-//! message in the scenario's words (no internal type name, no number of more than 24 digits);
-//! never a panic (101), a signal (an abort) or more than `BOUND` (a run past its bound).
+//! and a PEA record; and the tracking options that are words (every trajectory under every
+//! `--compensation`). Required: exit 0 with no NaN or ∞ printed and, for `track`, every row
+//! of `metrics.csv` with a status that does not refuse it (`ok` or the flag `saturated`), or
+//! exit 1/2 with an error message in the scenario's words (no internal type name, no number of
+//! more than 24 digits); never a panic (101), a signal (an abort) or more than `BOUND` (a run
+//! past its bound).
 //!
 //! proptest samples `CASES` of them per run with a fixed seed (CI time stays bounded and
 //! repeatable; `PROPTEST_RNG_SEED=<n>` draws another sample); `every_edge_case` (ignored,
@@ -112,17 +115,9 @@ const DESIGN_GROUPS: [&str; 8] = [
     "regions",
 ];
 
-/// Fields left out, with the reason: what they find is known and belongs to other work.
-/// `stage.coupling` within 1e-15 of ±1 makes `track` write NaN series and then run without
-/// end (the review's "Hang", fixed with the tracking's divergence detection, not here).
-const KNOWN: [&str; 1] = ["stage.coupling"];
-
 fn field_cases(base: &Value) -> Vec<Case> {
     let mut out = Vec::new();
     for leaf in numeric_leaves(base) {
-        if KNOWN.contains(&name(&leaf).as_str()) {
-            continue;
-        }
         for (edge, x) in edges(base, &leaf) {
             if !accepts(base, &leaf, x) {
                 continue;
@@ -564,6 +559,69 @@ fn option_cases(scenario: &str) -> Vec<Case> {
     out
 }
 
+/// The tracking options that are words, not numbers: every trajectory of the scenario under
+/// every hysteresis compensation, all default controllers, on the lumped plant.
+fn tracking_cases(base: &Value, scenario: &str) -> Vec<Case> {
+    let mut out = Vec::new();
+    for t in base["trajectories"].as_array().unwrap() {
+        let name = t["name"].as_str().unwrap();
+        for compensation in ["inverse", "off", "ideal"] {
+            out.push(Case {
+                what: format!("track --trajectory {name} --compensation {compensation}"),
+                scenario: scenario.to_string(),
+                args: [
+                    "track",
+                    "--plant",
+                    "lumped",
+                    "--trajectory",
+                    name,
+                    "--compensation",
+                    compensation,
+                ]
+                .map(String::from)
+                .to_vec(),
+                prepared: false,
+                heavy: false,
+            });
+        }
+    }
+    out
+}
+
+/// `Err` naming a `metrics.csv` under `out` whose rows lack a status, or have one that
+/// refuses the result (`diverged`, `error-above-bound`) although the command exited 0.
+fn statuses_agree_with_exit_0(out: &Path) -> Result<(), String> {
+    let mut folders = vec![out.join("track")];
+    while let Some(dir) = folders.pop() {
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let path = e.path();
+            if path.is_dir() {
+                folders.push(path);
+            } else if path.file_name().is_some_and(|n| n == "metrics.csv") {
+                let text = std::fs::read_to_string(&path).unwrap_or_default();
+                let mut lines = text.lines();
+                let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+                let Some(col) = header.iter().position(|h| *h == "status") else {
+                    return Err(format!("{}: no status column", path.display()));
+                };
+                for line in lines {
+                    let status = line.split(',').nth(col).unwrap_or("");
+                    if !matches!(status, "ok" | "saturated") {
+                        return Err(format!(
+                            "{}: exit 0 with status {status:?}: {line}",
+                            path.display()
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 struct Setup {
     dir: PathBuf,
     prepared: PathBuf,
@@ -599,6 +657,7 @@ fn setup() -> &'static Setup {
         }
         let mut cases = field_cases(&base);
         cases.extend(option_cases(&text));
+        cases.extend(tracking_cases(&base, &text));
         Setup {
             dir,
             prepared,
@@ -666,7 +725,13 @@ fn run(case: &Case, k: usize) -> Result<(), String> {
         std::thread::sleep(Duration::from_millis(20));
     };
     let (stdout, stderr) = (reader.join().unwrap(), ereader.join().unwrap());
+    let flagged = if status.code() == Some(0) && case.args[0] == "track" {
+        statuses_agree_with_exit_0(&out)
+    } else {
+        Ok(())
+    };
     let _ = std::fs::remove_dir_all(&work);
+    flagged.map_err(|e| format!("{}: {e}", case.what))?;
     let tail = |t: &str| t.lines().rev().take(6).collect::<Vec<_>>().join(" | ");
     match status.code() {
         _ if stderr.contains("panicked") => {

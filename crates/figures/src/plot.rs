@@ -175,6 +175,12 @@ fn font(size: f64) -> TextStyle<'static> {
 }
 
 /// Pads a data interval by 5 % (a point by 5 % of its magnitude, at least 0.05).
+/// The largest magnitude of a coordinate that sets an axis range. A span that overflows to ∞
+/// (a diverged simulation's 1e300 nm error, padded) would never end plotters' tick search
+/// (`compute_f64_key_points` steps the tick spacing until a count that is NaN for an infinite
+/// span exceeds its limit), so larger values are left out of the range.
+pub const AXIS_LIMIT: f64 = 1e100;
+
 fn pad(a: f64, b: f64) -> (f64, f64) {
     let d = if b > a {
         0.05 * (b - a)
@@ -233,13 +239,14 @@ impl Figure {
         self
     }
 
-    /// The finite data range (x0, x1, y0, y1), unpadded.
+    /// The range (x0, x1, y0, y1), unpadded, of the points whose coordinates are finite and
+    /// at most [`AXIS_LIMIT`] in magnitude (the others are drawn clipped at the plot's edge).
     pub fn data_range(&self) -> Option<(f64, f64, f64, f64)> {
         let finite = self
             .series
             .iter()
             .flat_map(|s| s.points.iter())
-            .filter(|(x, y)| x.is_finite() && y.is_finite());
+            .filter(|(x, y)| x.abs() <= AXIS_LIMIT && y.abs() <= AXIS_LIMIT);
         let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
         let mut any = false;
         for &(x, y) in finite {
@@ -273,7 +280,10 @@ impl Figure {
             y0 = cy - 0.5 * scale * h;
             y1 = cy + 0.5 * scale * h;
         }
-        Some((x0, x1, y0, y1))
+        // A fixed range is the caller's: one that is not finite, or whose span is not, has no
+        // ticks (see [`AXIS_LIMIT`]).
+        let finite = |a: f64, b: f64| a.is_finite() && b.is_finite() && (b - a).is_finite();
+        (finite(x0, x1) && finite(y0, y1)).then_some((x0, x1, y0, y1))
     }
 
     /// Renders the figure as an SVG document of [`Figure::size`].
@@ -510,6 +520,35 @@ mod tests {
             Multiples::new("m", 2, (400, 300)).to_svg(),
             Err(PlotError::Empty { .. })
         ));
+    }
+
+    /// Reference: the second hardening review, "Hang": a diverged tracking run (its error
+    /// growing to 1e300 nm, then ∞) made the error figure's tick search run without end. Goal:
+    /// the figure of such a series, and one with an infinite fixed range, ends (within 60 s,
+    /// on a thread) with an SVG or an error.
+    #[test]
+    fn a_series_growing_to_the_largest_float_is_drawn_in_bounded_time() {
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            let points: Vec<(f64, f64)> = (0..700)
+                .map(|k| (k as f64 * 1e-4, -(1.0f64.exp().powi(k))))
+                .chain([
+                    (0.07, f64::MAX),
+                    (0.0701, f64::INFINITY),
+                    (0.0702, f64::NAN),
+                ])
+                .collect();
+            let grown = Figure::new("diverged", "t", "e").with(Series::line("e", points));
+            let fixed = Figure::new("fixed", "t", "e")
+                .with(Series::line("e", vec![(0.0, 0.0), (1.0, 1.0)]))
+                .with_range((0.0, 1.0), (-f64::MAX, f64::MAX));
+            tx.send((grown.to_svg().is_ok(), fixed.to_svg().is_err()))
+                .unwrap();
+        });
+        let (grown, fixed) = rx
+            .recv_timeout(std::time::Duration::from_secs(60))
+            .expect("the figures end");
+        assert!(grown && fixed);
     }
 
     /// Every `font-size` of an SVG document.

@@ -246,17 +246,26 @@ pub(crate) fn require_area(what: &str, area: f64) -> Result<()> {
     })
 }
 
-/// `Ok` when no tracking row diverged, else [`PipelineError::Unphysical`] naming the first
-/// (trajectory, controller) pair whose series hold NaN or ∞. Called after every record and
-/// the metrics table are written, so the diverged series can be inspected.
+/// `Ok` when no tracking row is refused ([`flexstage_sim::experiment::Status::refused`]:
+/// diverged, or an error above that of a stage at rest), else [`PipelineError::Unphysical`]
+/// naming the first (trajectory, controller) pair with its status and cause, and every other.
+/// Called after every record and the metrics table are written, so the refused series can be
+/// inspected.
 pub(crate) fn require_converged_tracking(rows: &[crate::track::TrackRow]) -> Result<()> {
-    let mut diverged = rows.iter().filter(|r| r.metrics.diverged());
-    let Some(first) = diverged.next() else {
+    let mut refused = rows.iter().filter(|r| r.metrics.status().refused());
+    let Some(first) = refused.next() else {
         return Ok(());
     };
     let names = std::iter::once(first)
-        .chain(diverged)
-        .map(|r| format!("{}/{}", r.trajectory, r.controller.name))
+        .chain(refused)
+        .map(|r| {
+            format!(
+                "{}/{} ({})",
+                r.trajectory,
+                r.controller.name,
+                r.metrics.status().name()
+            )
+        })
         .collect::<Vec<_>>()
         .join(", ");
     let m = &first.metrics;
@@ -266,13 +275,15 @@ pub(crate) fn require_converged_tracking(rows: &[crate::track::TrackRow]) -> Res
             first.trajectory, first.controller.name
         ),
         value: format!(
-            "[{:e}, {:e}] m ({} non-finite samples)",
-            m.max[0], m.max[1], m.non_finite
+            "[{:.3e}, {:.3e}] m, {}",
+            m.max[0],
+            m.max[1],
+            m.status_detail()
         ),
-        expected: "finite errors",
+        expected: "a finished run, finite, with an RMS error below that of a stage at rest",
         hint: format!(
-            "the simulation diverged in {names} (their series and metrics.csv are written, \
-             marked NaN/inf); check the controller gains, the sample time and the trajectory"
+            "refused: {names}. Their series and metrics.csv (column status) are written; check \
+             the controller's model and gains, the rig, the sample time and the trajectory"
         ),
     })
 }

@@ -448,7 +448,7 @@ impl Summary for TwinSummary {
 
 /// The head of the tracking table of [`TrackSummary`]'s `Display`.
 const TRACK_HEADER: &str = "trajectory     variant       RMS q1/q2 [nm]   RMS [% range]    \
-max q1/q2 [nm]   max [% range] settle[s] peak [V]   sat";
+max q1/q2 [nm]   max [% range] settle[s] peak [V]   sat  status";
 
 impl fmt::Display for TrackSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
@@ -482,8 +482,11 @@ impl fmt::Display for TrackSummary {
                 f,
                 "{:<14} {:<10} {rms1:>8.1}/{rms2:<8.1} {rms1_pct:>7.3}/{rms2_pct:<7.3} \
                  {max1:>8.1}/{max2:<8.1} {max1_pct:>7.3}/{max2_pct:<7.3} {settling:>9.4} \
-                 {peak:>8.0} {:>5}",
-                r.trajectory, r.controller.name, r.metrics.saturated
+                 {peak:>8.0} {:>5}  {}",
+                r.trajectory,
+                r.controller.name,
+                r.metrics.saturated,
+                r.metrics.status().name()
             )?;
         }
         writeln!(

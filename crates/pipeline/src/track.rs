@@ -36,7 +36,7 @@ use flexstage_assess::inject::InjectionParams;
 use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, monte_carlo};
 use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::{Setup, experiment_on, experiment_with_progress};
+use flexstage_control::experiment::Setup;
 use flexstage_control::registry::{Controller, Designs, Stage};
 use flexstage_control::tuning::TuningParams;
 use flexstage_figures::plot::{Figure, Series};
@@ -47,7 +47,7 @@ use flexstage_run::files::stage::{ResponseFitFile, StageParamsFile};
 use flexstage_run::format::Rows;
 use flexstage_run::layout::{self, Tracking};
 use flexstage_run::{RunDir, Table};
-use flexstage_sim::experiment::{Metrics, Record};
+use flexstage_sim::experiment::{Metrics, Record, Status, WatchParams, run_watched};
 use flexstage_sim::trajectory::Reference;
 use rayon::prelude::*;
 
@@ -618,6 +618,17 @@ pub fn track_on(
     if let Some(sc) = &scan {
         sc.write(folder.dir(), &out)?;
     }
+    for r in rows
+        .iter()
+        .filter(|r| r.metrics.status() == Status::Saturated)
+    {
+        warnings.push(format!(
+            "{}/{}: {} (metrics.csv, status)",
+            r.trajectory,
+            r.controller.name,
+            r.metrics.status_detail()
+        ));
+    }
     crate::error::require_converged_tracking(&rows)?;
     Ok(TrackSummary {
         simulated: kind,
@@ -647,28 +658,46 @@ fn run_job(
     let design = &**designs
         .get(j.controller)
         .expect("planned jobs are designed");
+    let dt = setup.controller.observer.sample_time;
+    let watch = watch(&j.reference, j.duration, dt);
+    let actuator = setup.actuator(compensation);
+    // As `flexstage_control::experiment::{experiment_on, experiment_with_progress}`, watched.
     Ok(match sim {
         Simulated::Twin(twin) => {
             let mut p = twin.plant(&setup.rig)?;
-            experiment_on(
-                setup,
-                design,
-                compensation,
-                j.reference,
-                j.duration,
-                &mut p,
-                advance,
-            )?
+            let mut c = design.build(actuator, setup.controller.delay, j.reference)?;
+            run_watched(c.as_mut(), &mut p, j.duration, dt, &watch, advance)
         }
-        Simulated::Lumped => experiment_with_progress(
-            setup,
-            design,
-            compensation,
-            j.reference,
-            j.duration,
-            advance,
-        )?,
+        Simulated::Lumped => {
+            // The minimal loop has no delay: the controller predicts over none.
+            let mut c = design.build(actuator, 0, j.reference)?;
+            let mut p = flexstage_sim::plant::Plant::new(setup.plant.clone())?;
+            run_watched(c.as_mut(), &mut p, j.duration, dt, &watch, advance)
+        }
     })
+}
+
+/// An error beyond this many times the reference's range (peak to peak, the larger axis)
+/// stops a run as diverged ([`watch`]).
+pub const ERROR_BOUND_RANGES: f64 = 10.0;
+
+/// The least error bound \[m\] ([`watch`]): a reference of zero or a few nm range still
+/// allows the noise-level errors of a stage at rest.
+pub const ERROR_BOUND_FLOOR: f64 = 1e-6;
+
+/// The longest saturation without a break \[s\] before a run is stopped ([`watch`]).
+pub const MAX_SATURATED: f64 = 0.2;
+
+/// The bounds that stop a tracking run while it runs: an error beyond
+/// [`ERROR_BOUND_RANGES`] × the reference's range (at least [`ERROR_BOUND_FLOOR`]), which
+/// no stage that follows its reference reaches, or a command saturated for more than
+/// [`MAX_SATURATED`] on end, during which the loop is open.
+pub fn watch(reference: &Reference, duration: f64, dt: f64) -> WatchParams {
+    let half = reference.half_range(duration, dt);
+    WatchParams {
+        max_error: (ERROR_BOUND_RANGES * 2.0 * half[0].max(half[1])).max(ERROR_BOUND_FLOOR),
+        max_saturated: MAX_SATURATED,
+    }
 }
 
 /// The jobs of the selected trajectories and controllers, each trajectory checked against the

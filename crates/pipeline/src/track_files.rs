@@ -33,6 +33,8 @@ fn row(r: &TrackRow, compensation: &str, model: &str, plant: &str) -> MetricsRow
         saturated_samples: m.saturated,
         dropouts: m.dropouts,
         workspace_usage: r.usage,
+        status: m.status().name().to_string(),
+        status_detail: m.status_detail(),
     }
 }
 

@@ -133,13 +133,15 @@ impl StageParams {
             self.alpha != 0.0 && self.alpha.abs() <= 100.0,
             "a non-zero number with |alpha| ≤ 100",
         )?;
+        // A structure without damping is not physical, and a model without it puts the
+        // observer's poles on the unit circle.
         for (name, v) in [
             ("c_qo1", self.c_qo1),
             ("c_qo2", self.c_qo2),
             ("c_in1", self.c_in1),
             ("c_in2", self.c_in2),
         ] {
-            non_negative(&format!("{group}.{name}"), v)?;
+            positive(&format!("{group}.{name}"), v)?;
         }
         Ok(())
     }

@@ -68,6 +68,75 @@ pub struct Record {
     pub saturated: usize,
     /// Samples with a sensor dropout.
     pub dropouts: usize,
+    /// Why the run stopped before its end ([`run_watched`]), if it did.
+    pub stopped: Option<Stopped>,
+}
+
+/// Bounds that stop a run while it runs ([`run_watched`]): a diverged or open loop is
+/// stopped at once instead of being simulated to its end (and its NaN or 1e300 series drawn).
+/// A non-finite state always stops a run, whatever the bounds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WatchParams {
+    /// Largest |q_o − q_d| on either axis \[m\]; beyond it the loop has diverged.
+    pub max_error: f64,
+    /// Longest time the command may stay saturated without a break \[s\]; beyond it the
+    /// loop is open (the controller's output no longer acts).
+    pub max_saturated: f64,
+}
+
+impl Default for WatchParams {
+    /// Only the non-finite check: both bounds infinite.
+    fn default() -> Self {
+        WatchParams {
+            max_error: f64::INFINITY,
+            max_saturated: f64::INFINITY,
+        }
+    }
+}
+
+/// Why [`run_watched`] stopped a run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum StopCause {
+    /// The measurement, the true output or the command was NaN or ∞.
+    NonFinite,
+    /// The error left [`WatchParams::max_error`].
+    Error {
+        /// |error| at the stop \[m\].
+        error: f64,
+        /// The bound \[m\].
+        bound: f64,
+    },
+    /// The command stayed saturated longer than [`WatchParams::max_saturated`].
+    Saturated {
+        /// The bound \[s\].
+        bound: f64,
+    },
+}
+
+/// A run stopped before its end: when, and why.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Stopped {
+    /// Time of the last recorded sample \[s\].
+    pub t: f64,
+    /// The cause.
+    pub cause: StopCause,
+}
+
+impl std::fmt::Display for Stopped {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let t = self.t;
+        match self.cause {
+            StopCause::NonFinite => write!(f, "stopped at t = {t:.4} s: a non-finite state"),
+            StopCause::Error { error, bound } => write!(
+                f,
+                "stopped at t = {t:.4} s: |error| {error:.3e} m beyond the bound {bound:.3e} m"
+            ),
+            StopCause::Saturated { bound } => write!(
+                f,
+                "stopped at t = {t:.4} s: the command saturated for more than {bound} s on end"
+            ),
+        }
+    }
 }
 
 impl Record {
@@ -157,6 +226,10 @@ impl Record {
         );
         m.saturated = self.saturated;
         m.dropouts = self.dropouts;
+        m.samples = n;
+        let rms = |v: &[f64]| (v.iter().map(|x| x * x).sum::<f64>() / n as f64).sqrt();
+        m.at_rest_rms = [rms(&self.reference[0]), rms(&self.reference[1])];
+        m.stopped = self.stopped;
         m
     }
 }
@@ -203,12 +276,57 @@ pub struct Metrics {
     /// Non-finite samples (NaN or ∞) in the error, true output and voltage series: a
     /// diverged run. Its metrics are NaN or ∞, never a finite-looking number.
     pub non_finite: usize,
+    /// Samples recorded.
+    pub samples: usize,
+    /// RMS of the reference per axis \[m\]: the RMS error of a stage that stays at rest.
+    pub at_rest_rms: [f64; 2],
+    /// Why the run stopped before its end, if it did ([`run_watched`]).
+    pub stopped: Option<Stopped>,
+}
+
+/// What a run's result is worth ([`Metrics::status`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Status {
+    /// Finished, finite, within the bounds.
+    Ok,
+    /// Finished, but the command saturated in more than [`SATURATED_SHARE`] of the samples:
+    /// the errors include the amplifier's or the stroke's limits, not only the controller.
+    Saturated,
+    /// Finished, but the RMS error over both axes exceeds that of a stage at rest
+    /// ([`Metrics::at_rest_rms`]): the loop made the tracking worse than doing nothing.
+    ErrorAboveBound,
+    /// Non-finite, or stopped by [`run_watched`]: the loop diverged or opened.
+    Diverged,
+}
+
+/// The share of saturated samples above which a finished run is flagged
+/// [`Status::Saturated`].
+pub const SATURATED_SHARE: f64 = 0.01;
+
+impl Status {
+    /// The name in `metrics.csv`, the terminal and the report.
+    pub fn name(self) -> &'static str {
+        match self {
+            Status::Ok => "ok",
+            Status::Saturated => "saturated",
+            Status::ErrorAboveBound => "error-above-bound",
+            Status::Diverged => "diverged",
+        }
+    }
+
+    /// Whether the result is refused (the command fails after writing it): a diverged run,
+    /// or one worse than a stage at rest.
+    pub fn refused(self) -> bool {
+        matches!(self, Status::ErrorAboveBound | Status::Diverged)
+    }
 }
 
 impl Metrics {
-    /// Whether the run diverged: a non-finite sample, or a non-finite RMS or maximum.
+    /// Whether the run diverged: stopped while it ran ([`run_watched`]), a non-finite
+    /// sample, or a non-finite RMS or maximum.
     pub fn diverged(&self) -> bool {
-        self.non_finite > 0
+        self.stopped.is_some()
+            || self.non_finite > 0
             || self
                 .rms
                 .iter()
@@ -221,15 +339,76 @@ impl Metrics {
     pub fn rms_total(&self) -> f64 {
         ((self.rms[0].powi(2) + self.rms[1].powi(2)) / 2.0).sqrt()
     }
+
+    /// The run's [`Status`]: diverged (non-finite, or stopped while it ran), else error above
+    /// the bound (RMS error over both axes above that of a stage at rest), else saturated
+    /// (more than [`SATURATED_SHARE`] of the samples), else ok.
+    pub fn status(&self) -> Status {
+        let at_rest = ((self.at_rest_rms[0].powi(2) + self.at_rest_rms[1].powi(2)) / 2.0).sqrt();
+        if self.diverged() {
+            Status::Diverged
+        } else if self.rms_total() > at_rest {
+            Status::ErrorAboveBound
+        } else if self.saturated as f64 > SATURATED_SHARE * self.samples as f64 {
+            Status::Saturated
+        } else {
+            Status::Ok
+        }
+    }
+
+    /// The status with its reason, for people: `ok`, or e.g. `diverged: stopped at
+    /// t = 0.0541 s: a non-finite state`.
+    pub fn status_detail(&self) -> String {
+        let status = self.status();
+        let why = match status {
+            Status::Ok => return status.name().into(),
+            Status::Diverged => match self.stopped {
+                Some(s) => s.to_string(),
+                None => format!("{} non-finite samples", self.non_finite),
+            },
+            Status::ErrorAboveBound => format!(
+                "RMS error {:.3e} m above {:.3e} m, that of a stage at rest",
+                self.rms_total(),
+                ((self.at_rest_rms[0].powi(2) + self.at_rest_rms[1].powi(2)) / 2.0).sqrt()
+            ),
+            Status::Saturated => {
+                format!("{} of {} samples saturated", self.saturated, self.samples)
+            }
+        };
+        format!("{}: {why}", status.name())
+    }
 }
 
-/// Runs `controller` on `plant` for `duration` seconds and records everything. Allocates only
-/// the record (once, up front).
+/// Runs `controller` on `plant` for `duration` seconds and records everything
+/// ([`run_watched`] with the default [`WatchParams`]: a non-finite state stops the run).
 pub fn run(
     controller: &mut dyn StageControl,
     plant: &mut dyn StagePlant,
     duration: f64,
     sample_time: f64,
+    progress: impl FnMut(usize),
+) -> Record {
+    run_watched(
+        controller,
+        plant,
+        duration,
+        sample_time,
+        &WatchParams::default(),
+        progress,
+    )
+}
+
+/// Runs `controller` on `plant` for `duration` seconds and records everything, stopping at the
+/// first sample whose measurement, true output or command is not finite, whose error leaves
+/// `watch.max_error`, or that ends a saturation longer than `watch.max_saturated`: that sample
+/// is the last one recorded, [`Record::stopped`] says why, and `progress` is told the samples
+/// skipped (so a progress bar ends). Allocates only the record (once, up front).
+pub fn run_watched(
+    controller: &mut dyn StageControl,
+    plant: &mut dyn StagePlant,
+    duration: f64,
+    sample_time: f64,
+    watch: &WatchParams,
     mut progress: impl FnMut(usize),
 ) -> Record {
     let n = (duration / sample_time).round() as usize;
@@ -249,6 +428,7 @@ pub fn run(
     {
         v.reserve_exact(n);
     }
+    let mut saturated_run = 0usize;
     for k in 0..n {
         let y = plant.measure();
         let q = plant.output();
@@ -268,10 +448,55 @@ pub fn run(
         }
         rec.saturated += cmd.saturated as usize;
         rec.dropouts += cmd.dropout as usize;
+        saturated_run = if cmd.saturated { saturated_run + 1 } else { 0 };
+        if let Some(cause) = watch_sample(y, q, &cmd, saturated_run, sample_time, watch) {
+            rec.stopped = Some(Stopped {
+                t: k as f64 * sample_time,
+                cause,
+            });
+            progress(n - k / 1000 * 1000);
+            return rec;
+        }
         plant.apply(&cmd);
         if k % 1000 == 999 {
             progress(1000);
         }
     }
     rec
+}
+
+/// Why a run must stop at this sample, if it must ([`run_watched`]).
+fn watch_sample(
+    y: [f64; 2],
+    q: [f64; 2],
+    cmd: &Command,
+    saturated_run: usize,
+    sample_time: f64,
+    watch: &WatchParams,
+) -> Option<StopCause> {
+    let finite = y
+        .iter()
+        .chain(&q)
+        .chain(&cmd.voltage)
+        .chain(&cmd.x_nom)
+        .chain(&cmd.reference)
+        .all(|x| x.is_finite());
+    if !finite {
+        return Some(StopCause::NonFinite);
+    }
+    let error = (q[0] - cmd.reference[0])
+        .abs()
+        .max((q[1] - cmd.reference[1]).abs());
+    if error > watch.max_error {
+        return Some(StopCause::Error {
+            error,
+            bound: watch.max_error,
+        });
+    }
+    if saturated_run as f64 * sample_time > watch.max_saturated {
+        return Some(StopCause::Saturated {
+            bound: watch.max_saturated,
+        });
+    }
+    None
 }

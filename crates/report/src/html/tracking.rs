@@ -17,7 +17,7 @@ use super::{Builder, Width, cell, fmt_num};
 type MetricCell = fn(&MetricsRow) -> String;
 
 /// The columns of `metrics.csv` the report shows, in the file's order.
-const METRICS_SHOWN: [(&str, MetricCell); 10] = [
+const METRICS_SHOWN: [(&str, MetricCell); 11] = [
     ("trajectory", |r| r.trajectory.clone()),
     ("variant", |r| r.variant.clone()),
     ("rms1_nm", |r| cell(r.rms1_nm)),
@@ -28,6 +28,7 @@ const METRICS_SHOWN: [(&str, MetricCell); 10] = [
     ("max2_nm", |r| cell(r.max2_nm)),
     ("peak_voltage_V", |r| cell(r.peak_voltage_v)),
     ("saturated_samples", |r| r.saturated_samples.to_string()),
+    ("status", |r| r.status.clone()),
 ];
 
 /// A margin cell: the value to the file's precision, shortened; empty when there is none.
@@ -148,7 +149,7 @@ pub(super) fn verdict(rows: &[MetricsRow], margins: Option<&[MarginRow]>) -> Vec
     for t in &order {
         let mut ranked: Vec<(f64, &MetricsRow, [f64; 2])> = rows
             .iter()
-            .filter(|r| &r.trajectory == t && !flagged.contains(&r.variant))
+            .filter(|r| &r.trajectory == t && !flagged.contains(&r.variant) && !refused(r))
             .filter_map(|r| {
                 let (a, b) = (r.rms1_nm, r.rms2_nm);
                 let planar = a.hypot(b);
@@ -183,6 +184,18 @@ pub(super) fn verdict(rows: &[MetricsRow], margins: Option<&[MarginRow]>) -> Vec
             }
         ));
     }
+    let statuses: Vec<String> = rows
+        .iter()
+        .filter(|r| !r.status.is_empty() && r.status != "ok")
+        .map(|r| format!("{}/{}: {}", r.trajectory, r.variant, r.status_detail))
+        .collect();
+    if !statuses.is_empty() {
+        out.push(format!(
+            "Flagged (status in metrics.csv; diverged or error-above-bound rows are refused and \
+             not ranked): {}.",
+            statuses.join("; ")
+        ));
+    }
     if !flagged.is_empty() {
         out.push(format!(
             "Below the 6 dB / 40° margins on this plant, so not ranked whatever their error: {}.",
@@ -190,6 +203,11 @@ pub(super) fn verdict(rows: &[MetricsRow], margins: Option<&[MarginRow]>) -> Vec
         ));
     }
     out
+}
+
+/// Whether a row's status refuses its result (`flexstage-sim`'s `Status::refused`).
+fn refused(r: &MetricsRow) -> bool {
+    r.status == "diverged" || r.status == "error-above-bound"
 }
 
 /// Figure 11's error view: per controller a panel of the error e = q − q_ref in the plane
@@ -284,6 +302,8 @@ mod tests {
             settling_s: 0.0,
             peak_voltage_v: 0.0,
             saturated_samples: 0,
+            status: "ok".into(),
+            status_detail: "ok".into(),
             dropouts: 0,
             workspace_usage: 0.5,
         }

@@ -58,6 +58,15 @@ pub struct MetricsRow {
     /// Largest fraction of the designed workspace the reference uses.
     #[serde(serialize_with = "num::display")]
     pub workspace_usage: f64,
+    /// What the result is worth: `ok`, `saturated` (flagged), `error-above-bound` or
+    /// `diverged` (refused: the command failed after writing it). Empty in a file written
+    /// before the column existed.
+    #[serde(default)]
+    pub status: String,
+    /// The status with its reason, e.g. `diverged: stopped at t = 0.0541 s: a non-finite
+    /// state`.
+    #[serde(default)]
+    pub status_detail: String,
 }
 
 impl Row for MetricsRow {
@@ -80,6 +89,8 @@ impl Row for MetricsRow {
         "saturated_samples",
         "dropouts",
         "workspace_usage",
+        "status",
+        "status_detail",
     ];
 }
 
