@@ -156,7 +156,7 @@ same command again resumes after the last finished stage (run_state.json). Ends 
 summary and the path of <run>/report.html (self-contained, opens offline).
 
 Examples:
-  flexstage run                      # quick preset, runs/quick, a few seconds
+  flexstage run                      # quick preset, runs/quick, about half a minute
   flexstage run --preset paper       # the paper's settings (Tables 1, 3, 4, A1)
   flexstage run my.toml --out runs/mine --restart"
     )]

@@ -530,7 +530,7 @@ pub struct Identification {
     /// (`flexstage_sim::model::StageModel::with_coupling(&params, coupling)`): the mean of
     /// the q_o1 and q_o2 rows' estimates ([`Physical::coupling`]), 0 when
     /// [`IdentifyParams::coupling`] is off. Keeping it in the model cuts the tracking error
-    /// 3–5× at ten times the default scan speed (issue #18).
+    /// 3–5× at ten times the default scan speed.
     pub coupling: f64,
     /// Condition numbers of the four rows ([`StageIdentifier::conditioning`]).
     pub conditioning: [f64; 4],

@@ -1,7 +1,7 @@
 //! Reference: recursive least squares (Ljung, *System Identification*, 2nd ed., §11.2): with
 //! an initial covariance P₀ → 0 the gain P φ/(1 + φᵀPφ) vanishes and θ never leaves θ₀; a
 //! record in the wrong unit (µm read as m) scales every stiffness estimate by the unit factor.
-//! Goal (issue #16): an identification stuck at its guess, non-finite or outside physical
+//! Goal: an identification stuck at its guess, non-finite or outside physical
 //! bounds (a stiffness more than `PLAUSIBLE_FACTOR` from its guess) is refused with a message,
 //! never written; the same record identified normally passes (so the guards can fail).
 

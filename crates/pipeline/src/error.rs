@@ -302,8 +302,8 @@ mod tests {
     use flexstage_sim::experiment::Metrics;
 
     #[test]
-    fn issue16_area_refused_when_nan_infinite_or_negative() {
-        // Reference: issue #16 ("`analyze` on it exits 0 with a negative area", "a 1 × 1 mesh
+    fn area_refused_when_nan_infinite_or_negative() {
+        // Reference: the input-bounds and fault-handling requirements ("`analyze` on it exits 0 with a negative area", "a 1 × 1 mesh
         // gives a NaN area with exit 0"). Goal: only a finite area ≥ 0 passes.
         for ok in [0.0, 1e-12, 3.5e-9] {
             require_area("analyze", ok).unwrap();
@@ -318,8 +318,8 @@ mod tests {
     }
 
     #[test]
-    fn issue16_diverged_tracking_rows_are_named() {
-        // Reference: issue #16 ("metrics show a maximum error of 0 when the series is NaN").
+    fn diverged_tracking_rows_are_named() {
+        // Reference: the input-bounds and fault-handling requirements ("metrics show a maximum error of 0 when the series is NaN").
         // Goal: a row whose metrics diverged fails the command, naming it; finite rows pass.
         let row =
             |t: &str, v: &'static Controller, non_finite: usize, max: f64| crate::track::TrackRow {

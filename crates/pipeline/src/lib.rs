@@ -5,7 +5,7 @@
 //!
 //! ```text
 //! design ─► export ─► reduce ─► twin ─► pea (simulate + identify, ─► identify stage ─► track ─► report
-//! (Alg. 1)  (§4.1)    (§3.2.1)   (#15)    both PEAs; App. B, Eq. 21)   (Eq. 54–56)       (§4)
+//! (Alg. 1)  (§4.1)    (§3.2.1)   (twin)     both PEAs; App. B, Eq. 21)   (Eq. 54–56)       (§4)
 //! ```
 //!
 //! * **One scenario per run, in memory.** [`RunFolder`] opens `runs/<scenario name>/` (or a

@@ -39,7 +39,7 @@ pub mod limit {
     pub const MAX_AMPLITUDE: f64 = 1e-3;
     /// Modal work of one record on the digital twin (`samples × substeps × modes`, modes at
     /// least `twin.min_modes`): about five minutes at the twin's measured 3·10⁷ mode-steps a
-    /// second (16 modes, 20 substeps, 10 kHz: 98 ms per simulated second, README).
+    /// second (16 modes, 20 substeps, 10 kHz: 98 ms per simulated second, docs/performance.md).
     pub const TWIN_MODE_STEPS: f64 = 1e10;
     /// Estimated memory of one simulated record (its columns, 8 bytes a value) \[bytes\]
     /// (2 GiB).

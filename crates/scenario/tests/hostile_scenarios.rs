@@ -1,4 +1,4 @@
-//! Reference: issue #16, "Accepted absurd values" and "Unbounded work" — the scenario mutants
+//! Reference: the input-bounds and fault-handling requirements, "Accepted absurd values" and "Unbounded work" — the scenario mutants
 //! that passed `flexstage check` and failed, hung or gave garbage later. Goal: each is refused
 //! by `Scenario::validate` (so by `check`, before any work) with a message that names the
 //! field, the value and the accepted range; the built-in presets still pass.
