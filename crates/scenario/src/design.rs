@@ -140,8 +140,9 @@ impl Selector {
                     field: format!("{field}.{what}"),
                     value: format!("[{:e}, {:e}]", p[0], p[1]),
                     expected: format!(
-                        "a point inside the domain [0, {:e}] x [0, {:e}] m",
-                        mesh.length, mesh.width
+                        "a point inside the domain [0, mesh.length = {}] x [0, mesh.width = {}] m",
+                        crate::compact(mesh.length),
+                        crate::compact(mesh.width)
                     ),
                 }))
             }

@@ -173,13 +173,54 @@ fn trajectories_beyond_nyquist_stroke_or_record_limits_are_refused() {
         }
     };
     let e = refused(|s| set(s, 1e6, 8e-6, 1.0));
-    has(&e, &["trajectories[2].frequency", "Nyquist", "5e3 Hz"]);
+    has(&e, &["trajectories[2].frequency", "Nyquist", "500 Hz"]);
     let e = refused(|s| set(s, 2.0, 1e308, 1.0));
     has(&e, &["trajectories[2].radius = 1e308", "stroke"]);
     let e = refused(|s| set(s, 2.0, 8e-6, 1e9));
     has(&e, &["trajectories[2].duration", "samples"]);
     let e = refused(|s| s.simulation.sample_time = 1e-308);
     has(&e, &["simulation.sample_time = 1e-308", "[1e-7, 0.1]"]);
+}
+
+/// Reference: the second hardening review, "Absurd results with exit 0": a circle at 4,999 Hz
+/// (10 kHz sampling) tracked at 670 % of range, 1 mm of sensor noise at 559 %, a controller
+/// model with zero damping. Goal: each is refused before the run naming the field, the value
+/// and the range; the largest frequency the bound allows (1/(20 T_s) = 500 Hz) and a noise
+/// just below the output stroke pass.
+#[test]
+fn a_reference_too_fast_sensor_noise_beyond_the_stroke_or_zero_damping_are_refused() {
+    let circle = |s: &mut Scenario, f: f64| {
+        if let Trajectory::Circle { frequency, .. } = &mut s.trajectories[2] {
+            *frequency = f;
+        }
+    };
+    let e = refused(|s| circle(s, 4999.0));
+    has(
+        &e,
+        &[
+            "trajectories[2].frequency = 4.999e3",
+            "at most 1/(20 T_s) = 500 Hz",
+        ],
+    );
+    let mut s = quick();
+    circle(&mut s, 500.0);
+    s.validate().unwrap();
+    let e = refused(|s| s.sensors.noise_std = [1e-3, 1e-8]);
+    has(
+        &e,
+        &["sensors.noise_std[0] = 1e-3", "below the output stroke"],
+    );
+    let e = refused(|s| s.sensors.resolution[1] = 1.0);
+    has(
+        &e,
+        &["sensors.resolution[1] = 1", "below the output stroke"],
+    );
+    let mut s = quick();
+    let stroke = s.stage.truth.alpha.abs() * s.actuators.max_stroke;
+    s.sensors.noise_std[0] = 0.99 * stroke;
+    s.validate().unwrap();
+    let e = refused(|s| s.stage.guess.c_qo2 = 0.0);
+    has(&e, &["stage.guess.c_qo2 = 0", "> 0"]);
 }
 
 /// Reference: the second hardening review, "Lenient parsing" (`pid = [1, 2, 3, 4]`, a 3-element
