@@ -35,6 +35,7 @@ use flexstage_pipeline::{
     AnalyzeOptions, DesignOptions, ExportOptions, LimitOverrides, PeaIdOptions, PeaOptions,
     ReduceOptions, StageData, StageIdOptions, TrackOptions,
 };
+use flexstage_run::layout::Tracking;
 use flexstage_scenario::{Preset, Scenario};
 use leaves::{accepts, boundary, edges, from_key, key, name, numeric_leaves, unclear, with};
 use proptest::prelude::*;
@@ -600,7 +601,7 @@ fn statuses_agree_with_exit_0(out: &Path) -> Result<(), String> {
             let path = e.path();
             if path.is_dir() {
                 folders.push(path);
-            } else if path.file_name().is_some_and(|n| n == "metrics.csv") {
+            } else if path.file_name() == Path::new(&Tracking::main().metrics()).file_name() {
                 let text = std::fs::read_to_string(&path).unwrap_or_default();
                 let mut lines = text.lines();
                 let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
@@ -685,7 +686,7 @@ fn run(case: &Case, k: usize) -> Result<(), String> {
     let work = s.dir.join(format!("case-{k}"));
     let _ = std::fs::remove_dir_all(&work);
     std::fs::create_dir_all(&work).unwrap();
-    let file = work.join("scenario.toml");
+    let file = work.join("case.toml");
     std::fs::write(&file, &case.scenario).unwrap();
     let out = work.join("run");
     if case.prepared {
