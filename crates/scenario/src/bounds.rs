@@ -104,14 +104,21 @@ impl DesignEstimate {
         let factor_nonzeros = 8.0 * dofs * dofs.log2().max(1.0);
         let o = &s.optimization;
         let per_case = match o.objective {
-            ObjectiveKind::Workspace => o.samples as f64,
+            ObjectiveKind::Workspace | ObjectiveKind::Resonance => o.samples as f64,
             ObjectiveKind::Displacement => 1.0,
         };
         let load_cases = per_case * if o.robust { 3.0 } else { 1.0 };
+        // The stage's eigen-analysis: up to the Lanczos limit of 400 solves per iteration.
+        let eigen_solves = if o.min_frequency > 0.0 || o.objective == ObjectiveKind::Resonance {
+            400.0
+        } else {
+            0.0
+        };
         let bytes = 12.0 * factor_nonzeros + 128.0 * dofs * load_cases + 100.0 * nl * nw;
         let factor = factor_nonzeros.powf(1.5) / dofs;
-        let flops =
-            (o.max_iterations.max(1) as f64) * load_cases * 3.0 * (factor + 4.0 * factor_nonzeros);
+        let flops = (o.max_iterations.max(1) as f64)
+            * (load_cases * 3.0 * (factor + 4.0 * factor_nonzeros)
+                + eigen_solves * 4.0 * factor_nonzeros);
         DesignEstimate {
             dofs,
             factor_nonzeros,

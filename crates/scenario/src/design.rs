@@ -245,6 +245,11 @@ pub struct Output {
     /// (negated in the reversed configuration). Required with `[[ports]]`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub direction: Option<[f64; 2]>,
+    /// Payload carried by the output port \[kg\], in [0, 10]: the sample holder or mirror the
+    /// stage moves, a point mass on the output node. It enters the stage's eigenproblem in the
+    /// design, the reduced model, the body-fitted verification and the twin. Default 0.
+    #[serde(default)]
+    pub payload: f64,
 }
 
 impl Output {
@@ -252,6 +257,7 @@ impl Output {
     pub fn validate(&self, mesh: &Mesh) -> Result<()> {
         self.at.validate("output.at", mesh)?;
         within("output.tilt_deg", self.tilt_deg, -89.0, 89.0)?;
+        within("output.payload", self.payload, 0.0, 10.0)?;
         if let Some(d) = self.direction {
             direction("output.direction", d, false)?;
         }
@@ -469,6 +475,16 @@ pub struct Optimization {
     /// (DECISIONS.md, "Stress constraint"). Default true.
     #[serde(default = "default_true")]
     pub stress_constraint: bool,
+    /// Lower bound on the stage's first natural frequency \[Hz\], in [0, 1e6]; 0 = none. With
+    /// `objective = "workspace"` the design maximizes the workspace subject to it (the stage's
+    /// eigenproblem: design, PEA springs and plates, rollers, `output.payload`; DECISIONS.md,
+    /// "Design for bandwidth"). Default 0.
+    #[serde(default)]
+    pub min_frequency: f64,
+    /// Lower bound on the workspace area \[m²\] with `objective = "resonance"`, in (0, 1]
+    /// (the worst of the robust realizations must reach it); unused otherwise (0). Default 0.
+    #[serde(default)]
+    pub min_workspace: f64,
     /// Heaviside projection with β continuation (DECISIONS.md filtering).
     pub projection: Projection,
     /// Additive Yeoh hyperelasticity in low-density elements (Appendix A, Eq. A2–A4).
@@ -495,6 +511,9 @@ pub enum ObjectiveKind {
     /// axis): for the two PEAs under the compressive input (PEA1 +a, PEA2 −a), for
     /// `[[ports]]` under their loads; with the output spring.
     Displacement,
+    /// Maximize the stage's first natural frequency subject to the workspace area bound
+    /// `min_workspace` (DECISIONS.md, "Design for bandwidth").
+    Resonance,
 }
 
 /// Smoothed Heaviside projection `ρ̄ = (tanh βη + tanh β(ρ̃−η)) / (tanh βη + tanh β(1−η))`
@@ -571,6 +590,25 @@ impl Optimization {
             "a number in (0, 1)",
         )?;
         non_negative("optimization.output_spring", self.output_spring)?;
+        within("optimization.min_frequency", self.min_frequency, 0.0, 1e6)?;
+        within("optimization.min_workspace", self.min_workspace, 0.0, 1.0)?;
+        if self.objective == ObjectiveKind::Resonance && self.min_workspace <= 0.0 {
+            return Err(ScenarioError::Inconsistent {
+                fields: "optimization.objective, optimization.min_workspace".into(),
+                reason: "objective = \"resonance\" maximizes the first natural frequency \
+                         subject to a workspace bound: set min_workspace > 0 [m²] (e.g. 2e-9 \
+                         = 2000 µm²)"
+                    .into(),
+            });
+        }
+        if self.min_frequency > 0.0 && self.objective != ObjectiveKind::Workspace {
+            return Err(ScenarioError::Inconsistent {
+                fields: "optimization.min_frequency, optimization.objective".into(),
+                reason: "a first-frequency bound goes with objective = \"workspace\" (with \
+                         \"resonance\" the frequency is maximized): set min_frequency = 0"
+                    .into(),
+            });
+        }
         non_negative("optimization.strain_energy_limit", self.strain_energy_limit)?;
         check(
             "optimization.tilt_tolerance_deg",

@@ -52,6 +52,8 @@ pub fn inverter(nl: usize, nw: usize) -> Result<Problem> {
         mirror_symmetry: false,
         rho_min: 1e-3,
         initial_density: 0.3,
+        dynamics: None,
+        resonance: None,
     };
     p.validate()?;
     Ok(p)

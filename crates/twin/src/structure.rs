@@ -13,9 +13,11 @@
 //!   hundreds of µm and Newton stalls on them), and they are no part of the machined stage.
 //!   Kept elements follow SIMP, `E = ρ^p E0` (E_min = 0): for a crisp design the statics and
 //!   modes differ from `flexstage reduce`'s by about E_min/E0 = 1e-8.
-//! * **Mass**: consistent Q4 element masses `m_e = m(ρ_e)·ρ0·V_e` with the void interpolation of
-//!   `flexstage_reduce::MassInterpolation` (`m = ρ` above ρ_c = 0.1, `ρ_c(ρ/ρ_c)⁶` below): void
-//!   and faint grey material carry no mass, so they cannot resonate (Du & Olhoff 2007).
+//! * **Mass**: consistent Q4 element masses `m_e = m(ρ_e)·ρ0·V_e` with Du & Olhoff's (2007)
+//!   interpolation `flexstage_fem::MassInterpolation` (`m = ρ` above ρ_c = 0.1, a C¹ polynomial
+//!   `c₁ρ⁶ + c₂ρ⁷` below), the one the design's eigenproblem uses: void and faint grey material
+//!   carry no mass, so they cannot resonate. The payload (`output.payload`) is a point mass on
+//!   the output node.
 //! * **PEA sets** (Eq. 1–3): at each input DOF a grounded spring K_pea (the PEA, Table 1) and a
 //!   grounded spring K_in (the input plate's flexure, Table 4 estimate), a point mass m_in (the
 //!   output blocking plate, Table 4) and the force K_pea·x_nom(t). The input ports stay on their
@@ -56,6 +58,8 @@ pub struct StageFe {
     pub k_in: [f64; 2],
     /// Input-plate masses m_in \[kg\].
     pub m_in: [f64; 2],
+    /// Payload on the output node \[kg\] (`output.payload`).
+    pub payload: f64,
     /// Material density ρ0 [kg/m³].
     pub density: f64,
     /// The void mass interpolation.
@@ -71,8 +75,9 @@ pub const VOID_THRESHOLD: f64 = 0.01;
 
 impl StageFe {
     /// The stage of `problem` (two inputs with their PEA springs, rollers, output node) with
-    /// densities `rho`, material density `density`, the plates `m_in` and `k_in`; elements
-    /// below [`VOID_THRESHOLD`] are removed.
+    /// densities `rho`, material density `density`, the plates `m_in` and `k_in` and the
+    /// payload on the output; elements below [`VOID_THRESHOLD`] are removed.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         problem: &Problem,
         rho: &[f64],
@@ -80,6 +85,7 @@ impl StageFe {
         interpolation: MassInterpolation,
         m_in: [f64; 2],
         k_in: [f64; 2],
+        payload: f64,
     ) -> Result<StageFe> {
         let base = &problem.model;
         let n = base.mesh().n_elements();
@@ -101,6 +107,7 @@ impl StageFe {
                 )));
             }
         };
+        check("output.payload", payload, payload >= 0.0, "≥ 0 kg")?;
         for i in 0..2 {
             check(&format!("m_in{}", i + 1), m_in[i], m_in[i] > 0.0, "> 0 kg")?;
             check(
@@ -149,22 +156,30 @@ impl StageFe {
             .iter()
             .map(|&r| interpolation.relative_mass(r) * density * v)
             .collect();
+        let mut point_masses = vec![
+            DofMass {
+                dof: a.dof,
+                mass: m_in[0],
+            },
+            DofMass {
+                dof: b.dof,
+                mass: m_in[1],
+            },
+        ];
+        if payload > 0.0 {
+            point_masses.extend((0..2).map(|c| DofMass {
+                dof: 2 * out + c,
+                mass: payload,
+            }));
+        }
         Ok(StageFe {
-            point_masses: vec![
-                DofMass {
-                    dof: a.dof,
-                    mass: m_in[0],
-                },
-                DofMass {
-                    dof: b.dof,
-                    mass: m_in[1],
-                },
-            ],
+            point_masses,
             interface: [a.dof, b.dof, 2 * out, 2 * out + 1],
             output_node: out,
             k_pea: [a.stiffness, b.stiffness],
             k_in,
             m_in,
+            payload,
             density,
             interpolation,
             void_threshold: VOID_THRESHOLD,
@@ -176,8 +191,8 @@ impl StageFe {
     }
 
     /// The stage of a scenario and a design: the final-analysis problem without the output
-    /// spring, `stage.truth`'s input plates (Table 4 estimates) and the default void mass
-    /// interpolation.
+    /// spring, `stage.truth`'s input plates (Table 4 estimates), the payload and the default
+    /// void mass interpolation.
     pub fn from_scenario(scenario: &Scenario, rho: &[f64]) -> Result<StageFe> {
         let problem = flexstage_reduce::reduction_problem(scenario, false)?;
         let t = &scenario.stage.truth;
@@ -188,6 +203,7 @@ impl StageFe {
             MassInterpolation::default(),
             [t.m_in1, t.m_in2],
             [t.k_in1, t.k_in2],
+            scenario.output.payload,
         )
     }
 
@@ -240,8 +256,8 @@ impl StageFe {
         p
     }
 
-    /// The structure's mass (element masses + plates) \[kg\].
+    /// The structure's mass (element masses + plates + payload) \[kg\].
     pub fn total_mass(&self) -> f64 {
-        self.element_mass.iter().sum::<f64>() + self.m_in[0] + self.m_in[1]
+        self.element_mass.iter().sum::<f64>() + self.m_in[0] + self.m_in[1] + self.payload
     }
 }
