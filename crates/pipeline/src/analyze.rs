@@ -12,7 +12,7 @@ use std::time::Instant;
 
 use flexstage_fem::Kinematics;
 use flexstage_report::layout::Analysis;
-use flexstage_topopt::{AnalysisParams, Evaluator, Problem, shoelace};
+use flexstage_topopt::{AnalysisParams, Evaluator, Problem};
 
 use crate::error::{Result, require, to_json};
 use crate::figures::{cases_csv, polygon_svg, write_vtu};
@@ -131,9 +131,6 @@ pub fn analyze(folder: &RunFolder, options: &AnalyzeOptions) -> Result<AnalyzeSu
     let t = Instant::now();
     let mut ev = Evaluator::new(&problem, AnalysisParams::default())?;
     let r = ev.solve_cases(&rho, None)?;
-    if workspace {
-        crate::error::require_area("analyze", shoelace(&r.outputs))?;
-    }
     let seconds = t.elapsed().as_secs_f64();
     run.write(out.cases(), cases_csv(&problem, &r).as_bytes())?;
     // The deformed mesh at the compressive corner (workspace) or the first given case.
@@ -151,7 +148,7 @@ pub fn analyze(folder: &RunFolder, options: &AnalyzeOptions) -> Result<AnalyzeSu
         "seconds": seconds,
     });
     let workspace = if workspace {
-        let area = shoelace(&r.outputs);
+        let area = problem.workspace_area(&r.outputs);
         json["area_m2"] = serde_json::json!(area);
         let svg = polygon_svg("Output workspace", &[("design".into(), &r.outputs)])?;
         run.write(out.workspace_svg(), svg.as_bytes())?;
@@ -161,6 +158,9 @@ pub fn analyze(folder: &RunFolder, options: &AnalyzeOptions) -> Result<AnalyzeSu
         None
     };
     run.write(out.summary(), to_json(&json).as_bytes())?;
+    if let Some((area, _)) = workspace {
+        crate::error::require_area("analyze", area)?;
+    }
     Ok(AnalyzeSummary {
         design,
         cases: problem

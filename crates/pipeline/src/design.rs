@@ -18,7 +18,7 @@ use flexstage_topopt::check::{CheckSetup, check_gradients};
 use flexstage_topopt::summary::{FinalAnalysis, final_analysis};
 use flexstage_topopt::{
     AnalysisParams, CaseResults, DesignFile, DesignSpace, Evaluator, IterationRecord, Optimizer,
-    OptimizerParams, Problem, StopReason, density_csv, perimeter_walk, shoelace,
+    OptimizerParams, Problem, StopReason, density_csv, perimeter_walk,
 };
 
 use crate::error::{PipelineError, Result, require, to_json};
@@ -284,20 +284,19 @@ fn iteration_message(names: &[&str], rec: &IterationRecord, input_square: f64) -
     )
 }
 
-/// The final analyses: the design's (every realization; flexstage-topopt's
-/// [`final_analysis`], with the first natural frequency added) and the uniform start design's
+/// The final analyses: the design's (every realization and the stage's natural frequencies;
+/// flexstage-topopt's [`final_analysis`]) and the uniform start design's
 /// (nonlinear, no additive material, the p_m workspace samples). Returns the final-analysis
 /// problem, the start design's response and the design's analysis.
 /// A general mechanism (`[[ports]]`) has its one load case with its own kinematics and no
 /// PEA-held modal analysis.
 fn final_analyses(s: &Scenario, opt: &Optimizer) -> Result<(Problem, CaseResults, FinalAnalysis)> {
     let (dens, _) = opt.last().expect("at least one iteration");
-    let mut fin = final_analysis(s, dens, opt.params().robust)?;
+    let fin = final_analysis(s, dens, opt.params().robust)?;
     let mechanism = Problem::is_mechanism(s);
     let mut problem = if mechanism {
         Problem::from_scenario(s, None)?
     } else {
-        fin.summary.first_frequency_hz = Some(first_frequency(s, &dens.physical)?);
         Problem::from_scenario(s, Some(Kinematics::TotalLagrangian))?
     };
     if !mechanism {
@@ -307,19 +306,6 @@ fn final_analyses(s: &Scenario, opt: &Optimizer) -> Result<(Problem, CaseResults
     problem.mesh().apply_passive(&mut rho0, problem.rho_min);
     let r0 = Evaluator::new(&problem, AnalysisParams::default())?.solve_cases(&rho0, None)?;
     Ok((problem, r0, fin))
-}
-
-/// The lowest natural frequency of the design: the mechanism held by the PEA springs, without
-/// the optimizer's output load or plate masses (flexstage-reduce's modal analysis).
-fn first_frequency(s: &Scenario, rho: &[f64]) -> Result<f64> {
-    let problem = flexstage_reduce::reduction_problem(s, false)?;
-    let params = flexstage_reduce::ModalParams {
-        modes: 1,
-        ..flexstage_reduce::ModalParams::default()
-    };
-    let modes =
-        flexstage_reduce::modal_analysis(&problem.model, rho, s.material.density, &[], &params)?;
-    Ok(modes.frequencies[0])
 }
 
 /// The final analysis and every result file of the design folder.
@@ -337,7 +323,6 @@ fn finish(
     let last = h.last().expect("at least one iteration");
     let rho = &opt.last().expect("at least one iteration").0.physical;
     let (fin, r0, analysis) = final_analyses(s, opt)?;
-    crate::error::require_area("design", analysis.summary.area)?;
     let (r, u) = (&analysis.response, &analysis.corner_displacement);
     let mesh = problem.mesh();
     let summary = DesignSummary {
@@ -346,7 +331,7 @@ fn finish(
         resumed_at,
         seconds,
         seconds_per_iteration: h.iter().map(|r| r.time).sum::<f64>() / h.len() as f64,
-        area_initial: shoelace(&r0.outputs),
+        area_initial: fin.workspace_area(&r0.outputs),
         area: analysis.summary.area,
         design: Box::new(analysis.summary.clone()),
         // The optimizer's own measure of the design it analysed last (= `rho`).
@@ -396,6 +381,12 @@ fn finish(
         write_figures(run, h.len(), &r0.outputs, &r.outputs)?;
     }
     run.write(files::SUMMARY, summary_json(&summary).as_bytes())?;
+    // A design whose workspace is not a workspace keeps everything it computed, under a name
+    // no later stage reads, and the run stops saying why.
+    if let Err(e) = crate::error::require_area("design", summary.area) {
+        run.write(files::REJECTED, file.to_json().as_bytes())?;
+        return Err(e);
+    }
     // Last: the finished design marks the stage as done for the other commands.
     run.write(files::DESIGN, file.to_json().as_bytes())?;
     // The checkpoint served only to resume; a finished design is refused as a resume point.

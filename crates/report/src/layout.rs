@@ -49,6 +49,9 @@ pub mod design {
     pub const DIR: &str = "design";
     /// The finished design (`flexstage_topopt::DesignFile`).
     pub const DESIGN: &str = "design/design.json";
+    /// A finished design refused by the final checks (e.g. a workspace running the wrong
+    /// way), kept for inspection: no later stage reads it.
+    pub const REJECTED: &str = "design/rejected.json";
     /// The optimizer checkpoint of an unfinished design.
     pub const CHECKPOINT: &str = "design/checkpoint.bin";
     /// Densities as CSV (`i,j,x,y,rho`).

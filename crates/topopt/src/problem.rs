@@ -649,6 +649,17 @@ impl Problem {
         p
     }
 
+    /// The workspace area of an output polygon (Eq. 4) in the configuration's orientation,
+    /// `sign · J` \[m²\]: positive when the polygon runs the way Table 2 asks (counter-clockwise
+    /// in the regular configuration, clockwise in the reversed one, whose compressive inputs
+    /// drive the output along −y). 0 for the displacement objective.
+    pub fn workspace_area(&self, outputs: &[[f64; 2]]) -> f64 {
+        match self.objective {
+            Objective::Workspace { sign } => sign * shoelace(outputs),
+            Objective::Displacement { .. } => 0.0,
+        }
+    }
+
     /// Index of the compressive corner `(+a, −a)` and of the tensile corner `(−a, +a)` of the
     /// perimeter walk.
     pub fn differential_corners(&self) -> (usize, usize) {

@@ -87,7 +87,7 @@ pub use params::{AdditiveParams, OptimizerParams, ProjectionSchedule};
 
 use crate::error::{Result, TopoptError};
 use crate::filter::Projection;
-use crate::problem::Problem;
+use crate::problem::{Problem, Resonance};
 use crate::realization::{Densities, DesignEvaluator, Evaluation, Realization};
 use crate::responses::{PerResponse, ResponseKind};
 
@@ -100,8 +100,8 @@ pub const INACTIVE_BELOW: f64 = -0.5;
 pub struct IterationRecord {
     /// Design iteration k (0 = initial design).
     pub iteration: usize,
-    /// Shoelace area J of the blueprint's output polygon \[m²\] (workspace objective; 0
-    /// otherwise).
+    /// Workspace area `sign · J` of the blueprint's output polygon in the configuration's
+    /// orientation \[m²\] (workspace objective; 0 otherwise).
     pub area: f64,
     /// Maximized objective Φ (signed area \[m²\] or output displacement \[m\]); with the robust
     /// formulation the worst case over the realizations.
@@ -146,6 +146,10 @@ pub struct IterationRecord {
     /// constraint).
     #[serde(default)]
     pub stress: Option<f64>,
+    /// The stage's lowest natural frequencies of the blueprint \[Hz\] (resonance requirement;
+    /// empty otherwise).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub frequencies: Vec<f64>,
 }
 
 /// Why the loop stopped.
@@ -173,6 +177,10 @@ pub struct Scales {
     /// Range T of the bound τ = T·ξ of the robust formulation (units of |Φ⁰|; 0 without it).
     #[serde(default)]
     pub bound: f64,
+    /// The blueprint's resonance aggregate Λ⁰ [rad²/s²] at the initial design (0 without a
+    /// resonance requirement).
+    #[serde(default)]
+    pub resonance: f64,
 }
 
 /// A constraint of the MMA problem.
@@ -190,6 +198,10 @@ pub enum Constraint {
     Stress,
     /// Volume `V/V* − 1 ≤ 0` (the dilated design's with the robust formulation).
     Volume,
+    /// Workspace bound `1 − Φ_r/A_min ≤ 0` of a realization (resonance maximized).
+    Workspace(Realization),
+    /// First-frequency bound `1 − Λ/λ_min ≤ 0`, `λ_min = (2π f_min)²` (workspace maximized).
+    Resonance,
 }
 
 impl Constraint {
@@ -204,6 +216,10 @@ impl Constraint {
             Constraint::Tilt => "tilt",
             Constraint::Stress => "stress",
             Constraint::Volume => "volume",
+            Constraint::Workspace(Realization::Eroded) => "workspace_eroded",
+            Constraint::Workspace(Realization::Blueprint) => "workspace_blueprint",
+            Constraint::Workspace(Realization::Dilated) => "workspace_dilated",
+            Constraint::Resonance => "resonance",
         }
     }
 }
@@ -256,7 +272,9 @@ impl<'p> Optimizer<'p> {
         )?;
         let n = evaluator.n();
         let constraints = Self::constraint_list(problem, params.robust.is_some());
-        let robust = params.robust.is_some() as usize;
+        // The bound variable ξ of the robust formulation (not when the resonance is
+        // maximized: the realizations' workspaces are then constraints).
+        let robust = (params.robust.is_some() && !maximizes_resonance(problem)) as usize;
         let (mut xmin, mut xmax) = (vec![problem.rho_min; n], vec![1.0; n]);
         xmin.resize(n + robust, 0.0);
         xmax.resize(n + robust, 1.0);
@@ -311,15 +329,16 @@ impl<'p> Optimizer<'p> {
     /// The constraints of a problem, in MMA order.
     pub fn constraint_list(p: &Problem, robust: bool) -> Vec<Constraint> {
         let mut v = Vec::new();
-        if robust {
-            v.extend(
-                [
-                    Realization::Eroded,
-                    Realization::Blueprint,
-                    Realization::Dilated,
-                ]
-                .map(Constraint::Worst),
-            );
+        let all = [
+            Realization::Eroded,
+            Realization::Blueprint,
+            Realization::Dilated,
+        ];
+        match (maximizes_resonance(p), robust) {
+            (false, true) => v.extend(all.map(Constraint::Worst)),
+            (true, true) => v.extend(all.map(Constraint::Workspace)),
+            (true, false) => v.push(Constraint::Workspace(Realization::Blueprint)),
+            (false, false) => {}
         }
         if p.energy_limit.is_some() {
             v.push(Constraint::Energy);
@@ -332,6 +351,9 @@ impl<'p> Optimizer<'p> {
         }
         if p.stress.is_some() {
             v.push(Constraint::Stress);
+        }
+        if matches!(p.resonance, Some(Resonance::Bound { .. })) {
+            v.push(Constraint::Resonance);
         }
         if p.volume_fraction.is_some() {
             v.push(Constraint::Volume);
@@ -469,9 +491,8 @@ impl<'p> Optimizer<'p> {
                 .abs()
                 .max(f64::MIN_POSITIVE);
             // The bound starts at the worst case with ξ = ½ (a feasible start).
-            let worst = (self.worst(ev) / phi0).max(f64::MIN_POSITIVE);
-            let bound = if self.params.robust.is_some() {
-                2.0 * worst
+            let bound = if self.has_bound_variable() {
+                bound_unit(self.worst(ev) / phi0)
             } else {
                 0.0
             };
@@ -480,8 +501,9 @@ impl<'p> Optimizer<'p> {
                 energy_limit: problem.energy_limit.unwrap_or(1.0).max(f64::MIN_POSITIVE),
                 tilt: d2.max(f64::MIN_POSITIVE),
                 bound,
+                resonance: bp.values[ResponseKind::Resonance].max(0.0),
             });
-            if bound > 0.0 {
+            if bound != 0.0 {
                 let n = self.evaluator.n();
                 self.x[n] = 0.5;
             }
@@ -501,15 +523,20 @@ impl<'p> Optimizer<'p> {
         }
     }
 
+    /// Whether the MMA problem has the bound variable ξ of the robust formulation.
+    fn has_bound_variable(&self) -> bool {
+        self.x.len() > self.evaluator.n()
+    }
+
     /// Sets the bound to the worst case of the current design, τ = min_r Φ_r/|Φ⁰| (its optimum
     /// for the current densities), in the unit `T = 2τ` that puts ξ = ½, and expresses MMA's
     /// history of ξ in the new unit (module docs).
     fn reset_bound(&mut self, worst: f64) {
         let n = self.evaluator.n();
-        let Some(sc) = self.scales.as_mut().filter(|s| s.bound > 0.0) else {
+        let Some(sc) = self.scales.as_mut().filter(|s| s.bound != 0.0) else {
             return;
         };
-        let t_new = 2.0 * worst.max(f64::MIN_POSITIVE);
+        let t_new = bound_unit(worst);
         // Old ξ values in the new unit: ξ' = ξ·T/T'.
         let f = sc.bound / t_new;
         sc.bound = t_new;
@@ -518,11 +545,17 @@ impl<'p> Optimizer<'p> {
             return;
         }
         let mut st = self.mma.state();
-        for v in [&mut st.xold1, &mut st.xold2, &mut st.low, &mut st.upp] {
-            v[n] *= f;
+        if f > 0.0 {
+            for v in [&mut st.xold1, &mut st.xold2, &mut st.low, &mut st.upp] {
+                v[n] *= f;
+            }
+            st.xsi[n] /= f;
+            st.eta[n] /= f;
+        } else {
+            // The worst case changed sign (a reversed configuration starts with a negative
+            // workspace): the old unit has no meaning in the new one.
+            (st.xsi[n], st.eta[n]) = (0.0, 0.0);
         }
-        st.xsi[n] /= f;
-        st.eta[n] /= f;
         // The reset value must lie between the asymptotes; otherwise restart them there.
         if !(st.low[n] < 0.5 && 0.5 < st.upp[n]) {
             let d = self.params.mma.asyinit;
@@ -542,6 +575,19 @@ impl<'p> Optimizer<'p> {
             .fold(f64::INFINITY, f64::min)
     }
 
+    /// What the design maximizes, as recorded: the worst workspace (or output displacement),
+    /// or the aggregate first frequency `√Λ/2π` \[Hz\] of the blueprint.
+    fn objective_value(&self, ev: &Evaluation) -> f64 {
+        if maximizes_resonance(self.evaluator.problem) {
+            ev.blueprint()
+                .modes
+                .as_ref()
+                .map_or(0.0, |m| m.aggregate_frequency())
+        } else {
+            self.worst(ev)
+        }
+    }
+
     /// The scaled MMA problem (module docs, "Objective and constraints").
     fn scaled(&self, ev: &Evaluation) -> Scaled {
         let problem = self.evaluator.problem;
@@ -558,7 +604,13 @@ impl<'p> Optimizer<'p> {
             g.resize(nx, 0.0);
             g
         };
-        let (f0, df0) = if sc.bound > 0.0 {
+        let (f0, df0) = if maximizes_resonance(problem) {
+            let l0 = sc.resonance.max(f64::MIN_POSITIVE);
+            (
+                -s * bp.values[ResponseKind::Resonance] / l0,
+                grad(bp, ResponseKind::Resonance, -s / l0),
+            )
+        } else if sc.bound != 0.0 {
             let mut d = vec![0.0; nx];
             d[n] = -s * sc.bound;
             (-s * sc.bound * self.x[n], d)
@@ -612,6 +664,28 @@ impl<'p> Optimizer<'p> {
                         grad(r, ResponseKind::Volume, 1.0 / target),
                     )
                 }
+                Constraint::Workspace(kind) => {
+                    let r = ev.get(kind).expect("an evaluated realization");
+                    let a = match problem.resonance {
+                        Some(Resonance::Maximize { min_area }) => min_area,
+                        _ => 1.0,
+                    };
+                    (
+                        1.0 - r.values[ResponseKind::Objective] / a,
+                        grad(r, ResponseKind::Objective, -1.0 / a),
+                    )
+                }
+                Constraint::Resonance => {
+                    let f = match problem.resonance {
+                        Some(Resonance::Bound { min_hz }) => min_hz,
+                        _ => 1.0,
+                    };
+                    let l_min = (2.0 * std::f64::consts::PI * f).powi(2);
+                    (
+                        1.0 - bp.values[ResponseKind::Resonance] / l_min,
+                        grad(bp, ResponseKind::Resonance, -1.0 / l_min),
+                    )
+                }
             };
             g.push(value);
             dg.extend(row);
@@ -645,7 +719,7 @@ impl<'p> Optimizer<'p> {
         IterationRecord {
             iteration: k,
             area: bp.area,
-            objective: self.worst(ev),
+            objective: self.objective_value(ev),
             f0: sc.f0,
             constraints: sc.g.clone(),
             energy: bp.values[ResponseKind::Energy],
@@ -665,6 +739,10 @@ impl<'p> Optimizer<'p> {
             area_eroded: ev.get(Realization::Eroded).map(|r| r.area),
             area_dilated: ev.get(Realization::Dilated).map(|r| r.area),
             stress: stress_real.stress_max.zip(allowable).map(|(s, a)| s * a),
+            frequencies: bp
+                .modes
+                .as_ref()
+                .map_or_else(Vec::new, |m| m.frequencies.clone()),
         }
     }
 
@@ -787,6 +865,18 @@ impl<'p> Optimizer<'p> {
             }
         }
     }
+}
+
+/// Whether the problem maximizes the stage's first natural frequency.
+fn maximizes_resonance(p: &Problem) -> bool {
+    matches!(p.resonance, Some(Resonance::Maximize { .. }))
+}
+
+/// The unit `T = 2τ` of the bound variable that puts ξ = ½ at `τ` (either sign: a reversed
+/// configuration starts with a negative workspace; never zero).
+fn bound_unit(tau: f64) -> f64 {
+    let t = 2.0 * tau;
+    if t == 0.0 { f64::MIN_POSITIVE } else { t }
 }
 
 /// `max s / Σ_S` of a realization's stress response (1 when there is no stress).
