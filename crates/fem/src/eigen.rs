@@ -64,6 +64,9 @@ pub struct LanczosParams {
     pub max_steps: usize,
     /// Seed of the start vector.
     pub seed: u64,
+    /// Test for convergence every this many steps, in [1, 100] (each test is an eigen-solve of
+    /// the small tridiagonal matrix). Default 5; 1 stops at the first step that converges.
+    pub check_every: usize,
 }
 
 impl Default for LanczosParams {
@@ -73,6 +76,7 @@ impl Default for LanczosParams {
             tolerance: 1e-10,
             max_steps: 400,
             seed: 7,
+            check_every: 5,
         }
     }
 }
@@ -94,6 +98,13 @@ impl LanczosParams {
             10.0,
             5000.0,
             "[10, 5000]",
+        )?;
+        check_range(
+            "LanczosParams::check_every",
+            self.check_every as f64,
+            1.0,
+            100.0,
+            "[1, 100]",
         )
     }
 }
@@ -242,8 +253,8 @@ impl Lanczos {
     }
 
     /// Lanczos steps until the `nev` largest Ritz values pass the residual bound
-    /// `|β_j s_ji| ≤ tol·θ_i` (checked every 5 steps), the Krylov space is exhausted or
-    /// `max_steps` is reached.
+    /// `|β_j s_ji| ≤ tol·θ_i` (checked every `check_every` steps), the Krylov space is
+    /// exhausted or `max_steps` is reached.
     fn run(
         &mut self,
         op: &mut impl EigenOperators,
@@ -256,7 +267,7 @@ impl Lanczos {
             let (a, b) = self.step(j, op)?;
             let m = j + 1;
             let exhausted = b <= 1e-14 * a.abs();
-            if m >= nev && (m % 5 == 0 || m == max_steps || exhausted) {
+            if m >= nev && (m % params.check_every == 0 || m == max_steps || exhausted) {
                 let ritz = self.ritz(m);
                 n_conv = ritz.order()[..nev]
                     .iter()

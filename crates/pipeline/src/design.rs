@@ -274,8 +274,12 @@ fn iteration_message(names: &[&str], rec: &IterationRecord, input_square: f64) -
             rec.beta
         );
     }
+    let f1 = rec
+        .frequencies
+        .first()
+        .map_or(String::new(), |f| format!("  f1 {f:.0} Hz"));
     format!(
-        "J {:.0} µm² ({:.2} × input square)  {}  grey {:.2}  β {}",
+        "J {:.0} µm² ({:.2} × input square){f1}  {}  grey {:.2}  β {}",
         rec.area * 1e12,
         rec.area / input_square,
         g.join(" "),
@@ -470,7 +474,8 @@ type Column<'a> = (&'a str, &'a dyn Fn(&IterationRecord) -> f64);
 /// e.g. `g_volume` = V/V* − 1 of the volume constraint), `energy_J`, `stroke_ratio`,
 /// `volume_fraction` (the blueprint's material fraction of the design elements), `grey`
 /// (fraction with 0.1 < ρ < 0.9), `change`, `mean_change`, `kkt`, `beta`, `newton_total`,
-/// `newton_max`, `retried_cases`, `time_s`, `area_rel` (A / A at iteration 0).
+/// `newton_max`, `retried_cases`, `time_s`, `area_rel` (A / A at iteration 0), and with a
+/// resonance requirement `f1_hz`, `f2_hz`, … (the stage's lowest natural frequencies).
 fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
     let col = |f: &dyn Fn(&IterationRecord) -> f64| h.iter().map(f).collect::<Vec<f64>>();
     let mut header = vec!["iteration", "area_m2", "objective", "f0"];
@@ -503,6 +508,12 @@ fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
     for (n, f) in rest {
         header.push(n);
         cols.push(col(f));
+    }
+    let modes = h.iter().map(|r| r.frequencies.len()).max().unwrap_or(0);
+    let mode_headers: Vec<String> = (1..=modes).map(|k| format!("f{k}_hz")).collect();
+    for (k, n) in mode_headers.iter().enumerate() {
+        header.push(n);
+        cols.push(col(&|r| r.frequencies.get(k).copied().unwrap_or(f64::NAN)));
     }
     let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
     csv_columns(&header, &refs)

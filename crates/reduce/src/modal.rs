@@ -104,6 +104,7 @@ pub fn modal_analysis(
                 tolerance: params.tolerance,
                 max_steps: params.max_steps,
                 seed: params.seed,
+                ..LanczosParams::default()
             },
         )
         .map_err(|e| match e {

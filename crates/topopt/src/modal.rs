@@ -116,10 +116,13 @@ impl ModalParams {
         )
     }
 
+    /// The solver's parameters: converged pairs are tested after every step (the design loop
+    /// pays for every solve; the small tridiagonal eigen-solve is negligible beside one).
     fn lanczos(&self) -> LanczosParams {
         LanczosParams {
             modes: self.modes,
             tolerance: self.tolerance,
+            check_every: 1,
             ..LanczosParams::default()
         }
     }
