@@ -84,7 +84,13 @@ impl Default for LanczosParams {
 impl LanczosParams {
     /// Checks every field.
     pub fn validate(&self) -> Result<(), ParamError> {
-        check_range("LanczosParams::modes", self.modes as f64, 1.0, 50.0, "[1, 50]")?;
+        check_range(
+            "LanczosParams::modes",
+            self.modes as f64,
+            1.0,
+            50.0,
+            "[1, 50]",
+        )?;
         check_range(
             "LanczosParams::tolerance",
             self.tolerance,

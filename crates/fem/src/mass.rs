@@ -169,7 +169,11 @@ pub fn consistent_mass_into(
         check_range("DofMass::mass", p.mass, 0.0, f64::MAX, "[0, ∞) kg")?;
     }
     if !std::sync::Arc::ptr_eq(m.pattern(), model.pattern()) {
-        check_len("mass matrix pattern", m.pattern().nnz(), model.pattern().nnz())?;
+        check_len(
+            "mass matrix pattern",
+            m.pattern().nnz(),
+            model.pattern().nnz(),
+        )?;
     }
     let dofs = model.dofs();
     let pattern = model.pattern().clone();

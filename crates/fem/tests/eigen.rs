@@ -96,7 +96,11 @@ fn spring_mass_chain_matches_the_closed_form() {
     for (j, &l) in pairs.values.iter().enumerate() {
         let s = ((2 * j + 1) as f64 * std::f64::consts::PI / (2.0 * (2 * n + 1) as f64)).sin();
         let exact = 4.0 * k / m * s * s;
-        assert!((l - exact).abs() <= 1e-12 * exact, "λ{} = {l} vs {exact}", j + 1);
+        assert!(
+            (l - exact).abs() <= 1e-12 * exact,
+            "λ{} = {l} vs {exact}",
+            j + 1
+        );
         assert!(pairs.residuals[j] < 1e-9, "residual {}", pairs.residuals[j]);
     }
     let mut mphi = vec![0.0; n];
@@ -127,7 +131,11 @@ fn massless_nodes_give_the_condensed_chain() {
     for (j, &l) in pairs.values.iter().enumerate() {
         let s = ((2 * j + 1) as f64 * std::f64::consts::PI / (2.0 * (2 * nc + 1) as f64)).sin();
         let exact = 4.0 * (0.5 * k) / m * s * s;
-        assert!((l - exact).abs() <= 1e-11 * exact, "λ{} = {l} vs {exact}", j + 1);
+        assert!(
+            (l - exact).abs() <= 1e-11 * exact,
+            "λ{} = {l} vs {exact}",
+            j + 1
+        );
     }
 }
 
@@ -189,7 +197,11 @@ fn cantilever_beam_matches_euler_bernoulli() {
     {
         let exact = bl * bl * scale;
         let omega = pairs.values[j].sqrt();
-        assert!((omega - exact).abs() <= 1e-6 * exact, "ω{} = {omega} vs {exact}", j + 1);
+        assert!(
+            (omega - exact).abs() <= 1e-6 * exact,
+            "ω{} = {omega} vs {exact}",
+            j + 1
+        );
     }
 }
 

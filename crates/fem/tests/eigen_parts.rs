@@ -93,7 +93,12 @@ fn spring_update_matches_the_factorization_of_the_updated_model() {
     fs.solve_in_place(&mut y, &mut SolveWorkspace::new(&ssym))
         .unwrap();
     let norm = y.iter().map(|v| v * v).sum::<f64>().sqrt();
-    let err = x.iter().zip(&y).map(|(p, q)| (p - q).powi(2)).sum::<f64>().sqrt();
+    let err = x
+        .iter()
+        .zip(&y)
+        .map(|(p, q)| (p - q).powi(2))
+        .sum::<f64>()
+        .sqrt();
     assert!(err <= 1e-10 * norm, "K_s⁻¹b off by {:e}", err / norm);
     // K_s x = K_d x + V C Vᵀ x.
     let (mut kx, mut ksx) = (vec![0.0; n], vec![0.0; n]);
@@ -101,7 +106,12 @@ fn spring_update_matches_the_factorization_of_the_updated_model() {
     update.add_product(&rhs, &mut kx);
     ks.matvec(&rhs, &mut ksx);
     let norm = ksx.iter().map(|v| v * v).sum::<f64>().sqrt();
-    let err = kx.iter().zip(&ksx).map(|(p, q)| (p - q).powi(2)).sum::<f64>().sqrt();
+    let err = kx
+        .iter()
+        .zip(&ksx)
+        .map(|(p, q)| (p - q).powi(2))
+        .sum::<f64>()
+        .sqrt();
     assert!(err <= 1e-12 * norm, "K_s x off by {:e}", err / norm);
 }
 
@@ -144,10 +154,17 @@ fn derivative_forms_match_central_differences() {
         p[e] += h;
         m[e] -= h;
         let fd_k = (quad(&stiffness(model, &p)) - quad(&stiffness(model, &m))) / (2.0 * h);
-        assert!((fd_k - kf[e]).abs() <= 1e-7 * fd_k.abs(), "K, element {e}: {fd_k} vs {}", kf[e]);
+        assert!(
+            (fd_k - kf[e]).abs() <= 1e-7 * fd_k.abs(),
+            "K, element {e}: {fd_k} vs {}",
+            kf[e]
+        );
         let fd_m = (quad(&mass_of(&p)) - quad(&mass_of(&m))) / (2.0 * h);
         let an = interp.derivative(rho[e]) * density * volume * mf[e];
-        assert!((fd_m - an).abs() <= 1e-7 * fd_m.abs(), "M, element {e}: {fd_m} vs {an}");
+        assert!(
+            (fd_m - an).abs() <= 1e-7 * fd_m.abs(),
+            "M, element {e}: {fd_m} vs {an}"
+        );
     }
 }
 
@@ -170,9 +187,6 @@ fn mass_interpolation_is_du_olhoff_and_c1() {
     assert!((m.derivative(c - 1e-12) - 1.0).abs() < 1e-9);
     assert_eq!(m.derivative(0.5), 1.0);
     assert!(m.validate().is_ok());
-    let bad = MassInterpolation {
-        exponent: 0.5,
-        ..m
-    };
+    let bad = MassInterpolation { exponent: 0.5, ..m };
     assert!(bad.validate().unwrap_err().to_string().contains("exponent"));
 }

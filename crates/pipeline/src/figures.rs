@@ -47,6 +47,45 @@ pub(crate) fn write_vtu(
     Ok(())
 }
 
+/// Mode shapes as VTU for ParaView and the report: one `mode_<k>_<f>Hz` point array per mode
+/// (full-length shapes, scaled to a largest component of 1) and the cell densities.
+pub(crate) fn modes_vtu(
+    mesh: &flexstage_fem::Mesh,
+    rho: &[f64],
+    shapes: &[Vec<f64>],
+    frequencies: &[f64],
+) -> Result<String> {
+    let points: Vec<[f64; 2]> = (0..mesh.n_nodes()).map(|n| mesh.node_coords(n)).collect();
+    let cells: Vec<[usize; 4]> = (0..mesh.n_elements())
+        .map(|e| mesh.element_nodes(e))
+        .collect();
+    let shapes: Vec<Vec<[f64; 2]>> = shapes
+        .iter()
+        .map(|phi| {
+            let mx = phi.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(1e-300);
+            (0..mesh.n_nodes())
+                .map(|n| [phi[2 * n] / mx, phi[2 * n + 1] / mx])
+                .collect()
+        })
+        .collect();
+    let names: Vec<String> = frequencies
+        .iter()
+        .enumerate()
+        .map(|(k, f)| format!("mode_{}_{:.0}Hz", k + 1, f))
+        .collect();
+    Ok(QuadMesh {
+        points: &points,
+        cells: &cells,
+        point_data: names
+            .iter()
+            .zip(&shapes)
+            .map(|(n, s)| (n.as_str(), PointField::Vector2(s)))
+            .collect(),
+        cell_data: vec![("density", rho)],
+    }
+    .to_vtu()?)
+}
+
 /// Per-case table: nominal strokes, input displacements, output (µm) and strain energy (J).
 pub(crate) fn cases_csv(problem: &Problem, r: &Response) -> String {
     let col = |f: &dyn Fn(usize) -> f64| (0..r.outputs.len()).map(f).collect::<Vec<f64>>();

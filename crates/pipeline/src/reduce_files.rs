@@ -6,7 +6,6 @@ use flexstage_reduce::{
 };
 use flexstage_report::layout::reduce as files;
 use flexstage_report::plot::{Figure, Series};
-use flexstage_report::vtk::{PointField, QuadMesh};
 use flexstage_report::{RunDir, csv_columns};
 use flexstage_topopt::Problem;
 use serde::Serialize;
@@ -195,38 +194,8 @@ impl Outputs<'_> {
         let Some(m) = &self.reduction.modes else {
             return Ok(());
         };
-        let mesh = self.problem.mesh();
-        let points: Vec<[f64; 2]> = (0..mesh.n_nodes()).map(|n| mesh.node_coords(n)).collect();
-        let cells: Vec<[usize; 4]> = (0..mesh.n_elements())
-            .map(|e| mesh.element_nodes(e))
-            .collect();
-        let shapes: Vec<Vec<[f64; 2]>> = m
-            .shapes
-            .iter()
-            .map(|phi| {
-                let mx = phi.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(1e-300);
-                (0..mesh.n_nodes())
-                    .map(|n| [phi[2 * n] / mx, phi[2 * n + 1] / mx])
-                    .collect()
-            })
-            .collect();
-        let names: Vec<String> = m
-            .frequencies
-            .iter()
-            .enumerate()
-            .map(|(k, f)| format!("mode_{}_{:.0}Hz", k + 1, f))
-            .collect();
-        let vtu = QuadMesh {
-            points: &points,
-            cells: &cells,
-            point_data: names
-                .iter()
-                .zip(&shapes)
-                .map(|(n, s)| (n.as_str(), PointField::Vector2(s)))
-                .collect(),
-            cell_data: vec![("density", self.rho)],
-        }
-        .to_vtu()?;
+        let vtu =
+            crate::figures::modes_vtu(self.problem.mesh(), self.rho, &m.shapes, &m.frequencies)?;
         self.run.write(files::MODES_VTU, vtu.as_bytes())?;
         let k: Vec<f64> = (1..=m.frequencies.len()).map(|k| k as f64).collect();
         let csv = csv_columns(

@@ -127,6 +127,43 @@ impl Summary for ExportSummary {
     }
 }
 
+impl fmt::Display for crate::front::FrontSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        writeln!(
+            f,
+            "workspace–first-resonance front: {} designs in {:.0} s",
+            self.designs.len(),
+            self.seconds
+        )?;
+        for d in &self.designs {
+            writeln!(f, "{}", crate::front::line(d, self.scan_hz))?;
+        }
+        match self.pick() {
+            Some(d) => writeln!(
+                f,
+                "pick d{}: the largest workspace ({:.0} µm²) verified safe that tracks a {:.0} Hz \
+                 scan within {} % of range",
+                d.index,
+                d.design.area * 1e12,
+                self.scan_hz,
+                self.max_error_pct
+            ),
+            None => writeln!(
+                f,
+                "no design is verified safe and tracks a {:.0} Hz scan within {} % of range: \
+                 raise --max-ratio, lower the scan speed or accept a larger error",
+                self.scan_hz, self.max_error_pct
+            ),
+        }
+    }
+}
+
+impl Summary for crate::front::FrontSummary {
+    fn written(&self) -> (Vec<&Path>, bool) {
+        (vec![self.dir.as_path()], false)
+    }
+}
+
 impl fmt::Display for ReduceSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let r = &self.reduction;

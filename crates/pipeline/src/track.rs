@@ -315,7 +315,7 @@ impl TrackSummary {
 }
 
 /// The assessment candidate of a variant.
-fn candidate(v: Variant) -> Candidate {
+pub(crate) fn candidate(v: Variant) -> Candidate {
     match v {
         Variant::Robust => Candidate::Robust,
         Variant::NonRobust => Candidate::NonRobust,

@@ -94,6 +94,33 @@ pub mod design {
     }
 }
 
+/// `front/`: the workspace–first-resonance front of the scenario (`flexstage front`).
+pub mod front {
+    /// The stage folder.
+    pub const DIR: &str = "front";
+    /// Every design with its checks (`flexstage_pipeline::front::FrontSummary`).
+    pub const JSON: &str = "front/front.json";
+    /// One row per design.
+    pub const CSV: &str = "front/front.csv";
+    /// Figure: workspace against first resonance, the tracking error at the scan speed.
+    pub const SVG: &str = "front/front.svg";
+
+    /// The design file of design `k` (a design source for the other commands).
+    pub fn design(k: usize) -> String {
+        format!("{DIR}/d{k}/design.json")
+    }
+
+    /// The exported outline of design `k` (SVG, millimetres).
+    pub fn outline(k: usize) -> String {
+        format!("{DIR}/d{k}/outline.svg")
+    }
+
+    /// The stage's mode shapes of design `k` (VTU).
+    pub fn modes(k: usize) -> String {
+        format!("{DIR}/d{k}/modes.vtu")
+    }
+}
+
 /// `export/`: the manufacturing outline (Section 4.1).
 pub mod export {
     /// The stage folder.

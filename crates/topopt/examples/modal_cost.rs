@@ -1,17 +1,36 @@
-//! Cost of the stage's eigen-analysis on the paper mesh (Lanczos steps, time): a scratch probe.
+//! Scratch probe: the stage's first frequency of a design file, as designed and thresholded.
 use flexstage_scenario::{Preset, Scenario};
-use flexstage_topopt::{ModalParams, Problem, stage_modes};
-use std::time::Instant;
+use flexstage_topopt::{DesignFile, ModalParams, Problem, stage_modes};
 
 fn main() {
-    let s = Scenario::preset(Preset::Paper);
+    let args: Vec<String> = std::env::args().collect();
+    let preset = if args[1] == "paper" {
+        Preset::Paper
+    } else {
+        Preset::Quick
+    };
+    let s = Scenario::preset(preset);
     let problem = Problem::from_scenario(&s, None).unwrap();
-    let ne = problem.mesh().n_elements();
-    let rho: Vec<f64> = (0..ne).map(|e| 0.5 + 0.45 * ((e as f64 * 0.37).sin())).collect();
-    for tol in [1e-10, 1e-8, 1e-6] {
-        let p = ModalParams { tolerance: tol, ..ModalParams::default() };
-        let t = Instant::now();
-        let m = stage_modes(&problem, &rho, &p, true).unwrap();
-        println!("tol {tol:e}: {} steps, {:.1} ms, f {:?}", m.steps, t.elapsed().as_secs_f64() * 1e3, m.frequencies);
+    let file = DesignFile::from_json(&std::fs::read(&args[2]).unwrap()).unwrap();
+    let p = ModalParams::default();
+    let m = stage_modes(&problem, &file.rho, &p, false).unwrap();
+    println!("as designed: {:?}", m.frequencies);
+    for t in [0.5] {
+        let r: Vec<f64> = file
+            .rho
+            .iter()
+            .map(|&v| if v >= t { 1.0 } else { 1e-6 })
+            .collect();
+        let m = stage_modes(&problem, &r, &p, false).unwrap();
+        let mass: f64 = r.iter().sum::<f64>() / file.rho.iter().sum::<f64>();
+        println!(
+            "thresholded at {t}: {:?} (mass ratio {mass:.4})",
+            m.frequencies
+        );
     }
+    let grey = file.rho.iter().filter(|&&v| v > 0.05 && v < 0.95).count();
+    println!(
+        "elements with 0.05 < rho < 0.95: {grey} of {}",
+        file.rho.len()
+    );
 }

@@ -42,11 +42,11 @@ pub use design_space::DesignSpace;
 pub use error::{Result, TopoptError};
 pub use filter::{DensityFilter, Projection};
 pub use length_scale::{LengthScale, LengthScaleParams};
+pub use modal::{ModalParams, ModalWorkspace, StageDynamics, StageModes, stage_modes};
 pub use optimize::{
     AdditiveParams, Constraint, IterationRecord, Optimizer, OptimizerParams, ProjectionSchedule,
     Scales, StopReason,
 };
-pub use modal::{ModalParams, ModalWorkspace, StageDynamics, StageModes, stage_modes};
 pub use problem::{Objective, Port, Problem, Resonance, Tilt, perimeter_walk, shoelace};
 pub use realization::{
     Densities, DesignEvaluator, Evaluation, Realization, RealizationEvaluation, RobustThresholds,

@@ -332,9 +332,7 @@ pub fn stage_modes(
     factor.allow_indefinite = false;
     factor.factorize(&k)?;
     let mut sws = SolveWorkspace::new(&symbolic);
-    ModalWorkspace::new(problem)?.solve(
-        problem, &design, &k, &factor, &mut sws, params, gradient,
-    )
+    ModalWorkspace::new(problem)?.solve(problem, &design, &k, &factor, &mut sws, params, gradient)
 }
 
 #[cfg(test)]

@@ -366,7 +366,17 @@ impl<'p> DesignEvaluator<'p> {
                     skip,
                 )?;
                 if let Some(mw) = modal.as_mut() {
-                    maps.resonance(mw, ev, ws, &dens.realizations[i].1, &dens, spec, beta, yeoh, &mut r)?;
+                    maps.resonance(
+                        mw,
+                        ev,
+                        ws,
+                        &dens.realizations[i].1,
+                        &dens,
+                        spec,
+                        beta,
+                        yeoh,
+                        &mut r,
+                    )?;
                 }
                 Ok(r)
             })

@@ -56,14 +56,14 @@ fn stage_eigenvalue_gradients_match_central_differences() {
             stage_modes(&problem, r, &params, false).unwrap().aggregate
         });
         let err = (fd - g[e]).abs() / fd.abs();
-        println!("element {e}: adjoint {:.9e}, central {fd:.9e}, relative {err:.1e}", g[e]);
+        println!(
+            "element {e}: adjoint {:.9e}, central {fd:.9e}, relative {err:.1e}",
+            g[e]
+        );
         assert!(err <= 1e-6, "Λ, element {e}: {err:e}");
     }
     // The lowest eigenvalue on its own (simple here): one mode, n = 1.
-    let one = ModalParams {
-        modes: 1,
-        ..params
-    };
+    let one = ModalParams { modes: 1, ..params };
     let first = stage_modes(&problem, &rho, &one, true).unwrap();
     assert_eq!(first.aggregate, first.eigenvalues[0]);
     let g1 = first.gradient.as_ref().unwrap();
@@ -130,12 +130,19 @@ fn aggregate_is_differentiable_where_the_lowest_two_coincide() {
     let g = base.gradient.as_ref().unwrap();
     let h = 1e-5;
     let agg = |r: &[f64]| stage_modes(&problem, r, &params, false).unwrap().aggregate;
-    let first = |r: &[f64]| stage_modes(&problem, r, &params, false).unwrap().eigenvalues[0];
+    let first = |r: &[f64]| {
+        stage_modes(&problem, r, &params, false)
+            .unwrap()
+            .eigenvalues[0]
+    };
     let mut kinks = 0;
     for e in largest(g, &problem, 8) {
         let fd = central(&rho, e, h, agg);
         let err = (fd - g[e]).abs() / fd.abs();
-        println!("element {e}: adjoint {:.9e}, central {fd:.9e}, relative {err:.1e}", g[e]);
+        println!(
+            "element {e}: adjoint {:.9e}, central {fd:.9e}, relative {err:.1e}",
+            g[e]
+        );
         assert!(err <= 1e-6, "Λ, element {e}: {err:e}");
         // λ1 alone has a kink: its one-sided slopes differ (the two modes split either way).
         let right = (first(&{
@@ -144,18 +151,20 @@ fn aggregate_is_differentiable_where_the_lowest_two_coincide() {
             p
         }) - l1)
             / h;
-        let left = (l1
-            - first(&{
+        let left =
+            (l1 - first(&{
                 let mut m = rho.clone();
                 m[e] -= h;
                 m
-            }))
-            / h;
+            })) / h;
         if (right - left).abs() > 1e-3 * right.abs().max(left.abs()) {
             kinks += 1;
         }
     }
-    assert!(kinks > 0, "λ1 should not be differentiable at the double eigenvalue");
+    assert!(
+        kinks > 0,
+        "λ1 should not be differentiable at the double eigenvalue"
+    );
 }
 
 /// No spurious low-density modes: a solid frame in a faint grey field (ρ = 0.02, as in early
@@ -203,10 +212,18 @@ fn lowest_modes_move_the_solid_not_the_grey() {
     let (f, shares) = grey_share(&problem);
     println!("Du & Olhoff: {f:.0?} Hz, grey shares {shares:?}");
     for (k, share) in shares.iter().enumerate() {
-        assert!(*share <= 1e-2, "mode {} ({:.0} Hz) lives in the grey field", k + 1, f[k]);
+        assert!(
+            *share <= 1e-2,
+            "mode {} ({:.0} Hz) lives in the grey field",
+            k + 1,
+            f[k]
+        );
     }
     problem.dynamics.as_mut().unwrap().interpolation = MassInterpolation::linear();
     let (f, shares) = grey_share(&problem);
     println!("m = ρ: {f:.0?} Hz, grey shares {shares:?}");
-    assert!(shares[0] > 0.5, "the proportional mass should give a spurious grey mode");
+    assert!(
+        shares[0] > 0.5,
+        "the proportional mass should give a spurious grey mode"
+    );
 }

@@ -7,7 +7,9 @@
 //!   optimizer's output spring (`optimization.output_spring`) is a design device, not a part of
 //!   the stage, and is left out: the output point is free, as on the rig.
 //! * **Void is air**: elements below [`StageFe::void_threshold`] (default 0.01) are removed
-//!   (zero stiffness and mass) and nodes left without any element are fixed. The optimizer's
+//!   (zero stiffness and mass), so are islands and fragments that hang on the structure by a
+//!   single node (kept: the elements joined to a port through shared edges), and nodes left
+//!   without any element are fixed. The optimizer's
 //!   E_min = 1 kPa keeps its equations regular, but in a *dynamic* Total Lagrangian model
 //!   massless void nodes with 1e-8 of the solid's stiffness are ill-posed (they drift by
 //!   hundreds of µm and Newton stalls on them), and they are no part of the machined stage.
@@ -73,6 +75,42 @@ pub struct StageFe {
 /// Default density below which an element is void and removed.
 pub const VOID_THRESHOLD: f64 = 0.01;
 
+/// `rho` with every element removed (set to 0) that is not joined to an element at one of
+/// the `ports` through a chain of kept elements sharing edges: an island, or a fragment hanging
+/// on a single node, is a mechanism once void is air (a singular stiffness), and no part of a
+/// wire-cut stage.
+fn edge_connected(mesh: &flexstage_fem::Mesh, mut rho: Vec<f64>, ports: &[usize]) -> Vec<f64> {
+    let (nl, nw) = (mesh.nl, mesh.nw);
+    let mut seen = vec![false; rho.len()];
+    let mut stack: Vec<usize> = (0..rho.len())
+        .filter(|&e| rho[e] > 0.0 && mesh.element_nodes(e).iter().any(|n| ports.contains(n)))
+        .collect();
+    for &e in &stack {
+        seen[e] = true;
+    }
+    while let Some(e) = stack.pop() {
+        let (i, j) = (e / nw, e % nw);
+        let neighbours = [
+            (i > 0).then(|| mesh.element(i - 1, j)),
+            (i + 1 < nl).then(|| mesh.element(i + 1, j)),
+            (j > 0).then(|| mesh.element(i, j - 1)),
+            (j + 1 < nw).then(|| mesh.element(i, j + 1)),
+        ];
+        for f in neighbours.into_iter().flatten() {
+            if !seen[f] && rho[f] > 0.0 {
+                seen[f] = true;
+                stack.push(f);
+            }
+        }
+    }
+    for (r, keep) in rho.iter_mut().zip(&seen) {
+        if !keep {
+            *r = 0.0;
+        }
+    }
+    rho
+}
+
 impl StageFe {
     /// The stage of `problem` (two inputs with their PEA springs, rollers, output node) with
     /// densities `rho`, material density `density`, the plates `m_in` and `k_in` and the
@@ -122,6 +160,7 @@ impl StageFe {
             .iter()
             .map(|&r| if r < VOID_THRESHOLD { 0.0 } else { r })
             .collect();
+        let rho = edge_connected(mesh, rho, &[a.node, b.node, problem.output]);
         let mut attached = vec![0usize; mesh.n_nodes()];
         for (e, &r) in rho.iter().enumerate() {
             if r > 0.0 {

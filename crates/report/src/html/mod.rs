@@ -22,6 +22,7 @@
 
 mod design;
 mod design_summary;
+mod front;
 mod page;
 mod pea;
 mod reduce;
@@ -109,6 +110,11 @@ pub const SECTIONS: &[Section] = &[
         id: "twin",
         title: "Digital twin",
         render: twin::twin,
+    },
+    Section {
+        id: "front",
+        title: "Workspace–first-resonance front",
+        render: front::front,
     },
 ];
 

@@ -307,6 +307,41 @@ impl<'p> Optimizer<'p> {
         })
     }
 
+    /// Starts at the design variables `x` of an earlier design (warm-started continuation,
+    /// e.g. a tighter resonance bound from the design of a looser one) with the projection at
+    /// sharpness `beta` (clamped to the schedule's β_max; the continuation of β resumes from
+    /// it). The scales, the stress normalization and the volume target are those of this
+    /// design; MMA starts afresh.
+    pub fn continue_from(
+        problem: &'p Problem,
+        params: OptimizerParams,
+        x: &[f64],
+        beta: f64,
+    ) -> Result<Self> {
+        let mut o = Self::new(problem, params)?;
+        let n = o.evaluator.n();
+        if x.len() != n {
+            return Err(TopoptError::Problem(format!(
+                "{} design variables given, the problem has {n}",
+                x.len()
+            )));
+        }
+        if let Some(j) = x
+            .iter()
+            .position(|v| !(v.is_finite() && (problem.rho_min..=1.0).contains(v)))
+        {
+            return Err(TopoptError::Problem(format!(
+                "design variable {j} = {} is outside [rho_min, 1]",
+                x[j]
+            )));
+        }
+        o.x[..n].copy_from_slice(x);
+        if let Some(p) = o.params.projection {
+            o.beta = beta.clamp(1.0, p.beta_max);
+        }
+        Ok(o)
+    }
+
     fn additive(
         problem: &Problem,
         params: &OptimizerParams,
