@@ -127,9 +127,9 @@ fn derivative_forms_match_central_differences() {
     let interp = MassInterpolation::default();
     let (density, volume) = (2710.0, model.mesh().dx() * model.mesh().dy() * 0.01);
     let mut a = random_vector(model.n_dofs(), -1e-3, 1e-3, 11);
-    for d in 0..model.n_dofs() {
+    for (d, v) in a.iter_mut().enumerate() {
         if model.dofs().is_fixed(d) {
-            a[d] = 0.0;
+            *v = 0.0;
         }
     }
     let mut ar = vec![0.0; model.dofs().n_free()];

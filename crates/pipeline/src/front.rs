@@ -16,7 +16,7 @@
 //!   `track` designs them on that twin (`flexstage_assess::Bench`: the PI + notch and PID
 //!   tuned on the twin's sampled response, the backstepping from the exact modes' response
 //!   fit), including the scan speed the user names.
-//! * **Files** in `front/` ([`layout::front`]): `front.csv`, `front.json`, the figure
+//! * **Files** in `front/` ([`flexstage_report::layout::front`]): `front.csv`, `front.json`, the figure
 //!   `front.svg` (workspace against first resonance, each design's tracking error at the named
 //!   scan speed in the legend), and per design `d<k>/`: `design.json` (a design source for the
 //!   other commands), `outline.svg`, `modes.vtu`.
@@ -235,7 +235,7 @@ pub fn front(
         let (d, xk) = design_one(folder, &s, k, x.as_deref(), options.scan_hz, progress)?;
         if k == 0 {
             f0 = d.design.first_frequency_hz.unwrap_or(0.0);
-            if !(f0 > 0.0) {
+            if f0.is_nan() || f0 <= 0.0 {
                 return Err(PipelineError::Unphysical {
                     what: "front: d0's first natural frequency".into(),
                     value: format!("{f0}"),
@@ -538,7 +538,7 @@ fn front_csv(f: &FrontSummary) -> String {
 /// the scan speed in the legend.
 fn front_svg(f: &FrontSummary) -> Result<String> {
     let mut fig = Figure::new(
-        &format!(
+        format!(
             "Workspace–first-resonance front (tracking error at a {:.0} Hz scan)",
             f.scan_hz
         ),

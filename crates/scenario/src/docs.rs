@@ -219,6 +219,10 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
         "Lower bound on the stage's first natural frequency [Hz], in [0, 1e6]; 0 = none. The stage: the design with the PEA springs and input plates (stage.guess), the rollers and output.payload, linearized at rest (DECISIONS.md, Design for bandwidth). Default 0.",
     ),
     (
+        "optimization.min_volume_fraction",
+        "Lower bound on the volume fraction the made design keeps, in [0, volume_fraction); 0 = none. A design for a higher resonance tends to shed material; 0.215 keeps it within 10 % of the paper's 46 g. Default 0.",
+    ),
+    (
         "optimization.min_workspace",
         "Lower bound on the workspace area [m²] when objective = \"resonance\", in (0, 1] (the worst robust realization must reach it; the paper preset's default design has about 4.1e-9); 0 otherwise.",
     ),

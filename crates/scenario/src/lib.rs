@@ -278,6 +278,7 @@ impl Scenario {
                 output_spring: 4e6,
                 min_frequency: 0.0,
                 min_workspace: 0.0,
+                min_volume_fraction: 0.0,
                 strain_energy_limit: 0.0,
                 tilt_tolerance_deg: 1.0,
                 kkt_tolerance: 1e-3,

@@ -13,7 +13,9 @@
 //!   modes), the input plates `m_in` on the input nodes and the payload on the output node.
 //!
 //! The plates are the scenario's model guess (`stage.guess`), what the designer knows; the
-//! simulated stage's truth never enters a design decision.
+//! simulated stage's truth never enters a design decision. The design loop evaluates it on
+//! the blueprint and the eroded design of the robust formulation (each on its own
+//! factorization, concurrently).
 //!
 //! # Reusing the design's factorization
 //! Every design iteration factors `K(ρ)` at `u = 0` of the design model as the preconditioner
@@ -193,6 +195,15 @@ impl EigenOperators for Operators<'_> {
     }
 }
 
+/// The design model's stiffness at `u = 0` and its factorization.
+#[derive(Clone, Copy)]
+pub struct Factored<'a> {
+    /// `K(ρ)` at `u = 0` (springs included).
+    pub k: &'a SparseMatrix,
+    /// Its factorization.
+    pub factor: &'a Factor,
+}
+
 /// What the stage's eigen-analysis keeps between design iterations: the Lanczos basis, the
 /// spring update, the mass matrix and the element buffers.
 #[derive(Debug, Clone)]
@@ -219,18 +230,18 @@ impl ModalWorkspace {
     }
 
     /// The stage modes of the design with physical densities in `design`, given the design
-    /// model's stiffness `k` at `u = 0` and its factor (module docs, "Reusing the design's
+    /// model's stiffness at `u = 0` and its factor (module docs, "Reusing the design's
     /// factorization"); with `gradient`, `∂Λ/∂ρ_e`.
     pub fn solve(
         &mut self,
         problem: &Problem,
         design: &Design,
-        k: &SparseMatrix,
-        factor: &Factor,
+        at_rest: Factored,
         sws: &mut SolveWorkspace,
         params: &ModalParams,
         gradient: bool,
     ) -> Result<StageModes> {
+        let Factored { k, factor } = at_rest;
         params.validate()?;
         let dynamics = stage_dynamics(problem)?;
         let model = &problem.model;
@@ -332,7 +343,11 @@ pub fn stage_modes(
     factor.allow_indefinite = false;
     factor.factorize(&k)?;
     let mut sws = SolveWorkspace::new(&symbolic);
-    ModalWorkspace::new(problem)?.solve(problem, &design, &k, &factor, &mut sws, params, gradient)
+    let at_rest = Factored {
+        k: &k,
+        factor: &factor,
+    };
+    ModalWorkspace::new(problem)?.solve(problem, &design, at_rest, &mut sws, params, gradient)
 }
 
 #[cfg(test)]

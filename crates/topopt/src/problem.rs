@@ -128,6 +128,8 @@ pub struct Problem {
     pub max_stroke: Option<f64>,
     /// Volume-fraction bound (None = no constraint).
     pub volume_fraction: Option<f64>,
+    /// Lower volume-fraction bound of the blueprint (None = no constraint).
+    pub min_volume_fraction: Option<f64>,
     /// Tilted-output requirement (workspace objective only).
     pub tilt: Option<Tilt>,
     /// Fatigue stress constraint (None = no constraint).
@@ -439,6 +441,7 @@ impl Problem {
             energy_limit,
             max_stroke: Some(a.max_stroke),
             volume_fraction: (o.volume_fraction < 1.0).then_some(o.volume_fraction),
+            min_volume_fraction: (o.min_volume_fraction > 0.0).then_some(o.min_volume_fraction),
             tilt,
             stress,
             mirror_symmetry: o.mirror_symmetry,
@@ -504,6 +507,7 @@ impl Problem {
             energy_limit: energy_limit(s),
             max_stroke: None,
             volume_fraction: (o.volume_fraction < 1.0).then_some(o.volume_fraction),
+            min_volume_fraction: None,
             tilt: None,
             stress: None,
             mirror_symmetry: o.mirror_symmetry,

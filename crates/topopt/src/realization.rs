@@ -165,7 +165,7 @@ fn problem_responses(p: &Problem) -> PerResponse<bool> {
         ResponseKind::Stroke => p.max_stroke.is_some(),
         ResponseKind::Tilt => p.tilt.is_some(),
         ResponseKind::Stress => p.stress.is_some(),
-        ResponseKind::Volume => p.volume_fraction.is_some(),
+        ResponseKind::Volume => p.volume_fraction.is_some() || p.min_volume_fraction.is_some(),
         ResponseKind::Resonance => p.resonance.is_some(),
     })
 }
@@ -190,12 +190,19 @@ pub fn realization_specs(
         RealizationSpec {
             kind: Realization::Eroded,
             eta: t.eroded,
-            responses: only(&[Objective, Stress]),
+            responses: only(&[Objective, Stress, Resonance]),
         },
         RealizationSpec {
             kind: Realization::Blueprint,
             eta,
-            responses: only(&[Objective, Energy, Stroke, Tilt, Resonance]),
+            responses: PerResponse::from_fn(|q| {
+                has[q]
+                    && match q {
+                        Volume => p.min_volume_fraction.is_some(),
+                        Stress => false,
+                        _ => true,
+                    }
+            }),
         },
         RealizationSpec {
             kind: Realization::Dilated,
@@ -504,8 +511,7 @@ impl Maps<'_> {
         let modes = mw.solve(
             self.problem,
             &design,
-            k,
-            factor,
+            crate::modal::Factored { k, factor },
             &mut ws.groups[0].sws,
             &ev.params.modal,
             true,

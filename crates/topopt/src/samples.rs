@@ -47,6 +47,7 @@ pub fn inverter(nl: usize, nw: usize) -> Result<Problem> {
         energy_limit: None,
         max_stroke: None,
         volume_fraction: Some(0.3),
+        min_volume_fraction: None,
         tilt: None,
         stress: None,
         mirror_symmetry: false,

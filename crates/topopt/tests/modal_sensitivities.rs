@@ -98,6 +98,7 @@ fn square(n: usize) -> (Problem, Vec<f64>) {
         energy_limit: None,
         max_stroke: None,
         volume_fraction: None,
+        min_volume_fraction: None,
         tilt: None,
         stress: None,
         mirror_symmetry: false,

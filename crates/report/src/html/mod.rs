@@ -439,13 +439,19 @@ pub fn summary_rows(root: &Path) -> Vec<(String, String)> {
     if let Some(d) = b.json(layout::design::SUMMARY) {
         if let (Some(a0), Some(a1)) = (num(&d, &["area_initial_m2"]), num(&d, &["area_final_m2"])) {
             let g = num(&d, &["area_growth"]).unwrap_or(a1 / a0);
+            // A growth factor needs a positive start (the uniform start of the reversed
+            // configuration traces its polygon the other way: a negative area).
+            let growth = if a0 > 0.0 {
+                format!(" (×{})", fmt_num(g))
+            } else {
+                String::new()
+            };
             rows.push((
                 "workspace area (initial → final)".into(),
                 format!(
-                    "{} µm² → {} µm² (×{})",
+                    "{} µm² → {} µm²{growth}",
                     fmt_num(a0 * 1e12),
-                    fmt_num(a1 * 1e12),
-                    fmt_num(g)
+                    fmt_num(a1 * 1e12)
                 ),
             ));
         }

@@ -29,7 +29,17 @@
 //! uniform start) would leave them without any objective gradient. The volume bound acts on the dilated design, with
 //! its target `V*_d = V*·V_d/V_b` refreshed every `update_interval` iterations so that the
 //! blueprint meets `V*`; the fatigue stress acts on the eroded design, the strain energy, input
-//! strokes and tilt on the blueprint.
+//! strokes and tilt on the blueprint. The unit `T` takes either sign (never zero): the
+//! uniform start of the reversed configuration has a negative workspace.
+//!
+//! **The stage's resonance** ([`crate::modal`], DECISIONS.md "Design for bandwidth"). A
+//! first-frequency bound is one constraint `1 − Λ_r/λ_min ≤ 0` for the eroded design and the
+//! blueprint (the aggregate `Λ` of the lowest eigenvalues; a bound on the blueprint alone let
+//! the optimizer stiffen it modally through one-node joints that erosion removes; the dilated
+//! design's grey fill carried spurious low modes). With `objective = "resonance"` the
+//! maximized quantity is `Λ` instead of `Φ`, in the same bound formulation over those two
+//! realizations, and each realization's workspace is bounded by `min_workspace`. An optional
+//! lower volume bound acts on the blueprint.
 //!
 //! **Inactive constraints.** A constraint whose scaled value was below `INACTIVE_BELOW = −0.5`
 //! at the last design enters MMA with a zero gradient (its linearization is the constant it
@@ -167,7 +177,8 @@ pub enum StopReason {
 /// Fixed normalization constants, set at the initial design.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Scales {
-    /// |Φ⁰| of the blueprint.
+    /// |Φ⁰| of the blueprint: the maximized response at the initial design (the workspace, or
+    /// the resonance aggregate Λ when it is maximized).
     pub objective: f64,
     /// Σ0 \[J\].
     pub energy_limit: f64,
@@ -177,10 +188,6 @@ pub struct Scales {
     /// Range T of the bound τ = T·ξ of the robust formulation (units of |Φ⁰|; 0 without it).
     #[serde(default)]
     pub bound: f64,
-    /// The blueprint's resonance aggregate Λ⁰ [rad²/s²] at the initial design (0 without a
-    /// resonance requirement).
-    #[serde(default)]
-    pub resonance: f64,
 }
 
 /// A constraint of the MMA problem.
@@ -200,8 +207,12 @@ pub enum Constraint {
     Volume,
     /// Workspace bound `1 − Φ_r/A_min ≤ 0` of a realization (resonance maximized).
     Workspace(Realization),
-    /// First-frequency bound `1 − Λ/λ_min ≤ 0`, `λ_min = (2π f_min)²` (workspace maximized).
-    Resonance,
+    /// Lower volume bound `1 − V_b/V_min ≤ 0` of the blueprint.
+    MinVolume,
+    /// First-frequency bound `1 − Λ_r/λ_min ≤ 0`, `λ_min = (2π f_min)²`, of a realization
+    /// (workspace maximized; the eroded design and the blueprint with the robust
+    /// formulation).
+    Resonance(Realization),
 }
 
 impl Constraint {
@@ -219,7 +230,10 @@ impl Constraint {
             Constraint::Workspace(Realization::Eroded) => "workspace_eroded",
             Constraint::Workspace(Realization::Blueprint) => "workspace_blueprint",
             Constraint::Workspace(Realization::Dilated) => "workspace_dilated",
-            Constraint::Resonance => "resonance",
+            Constraint::Resonance(Realization::Eroded) => "resonance_eroded",
+            Constraint::Resonance(Realization::Blueprint) => "resonance",
+            Constraint::Resonance(Realization::Dilated) => "resonance_dilated",
+            Constraint::MinVolume => "min_volume",
         }
     }
 }
@@ -272,9 +286,9 @@ impl<'p> Optimizer<'p> {
         )?;
         let n = evaluator.n();
         let constraints = Self::constraint_list(problem, params.robust.is_some());
-        // The bound variable ξ of the robust formulation (not when the resonance is
-        // maximized: the realizations' workspaces are then constraints).
-        let robust = (params.robust.is_some() && !maximizes_resonance(problem)) as usize;
+        // The bound variable ξ of the robust formulation (of the worst workspace, or of the
+        // worst resonance when it is maximized).
+        let robust = params.robust.is_some() as usize;
         let (mut xmin, mut xmax) = (vec![problem.rho_min; n], vec![1.0; n]);
         xmin.resize(n + robust, 0.0);
         xmax.resize(n + robust, 1.0);
@@ -369,11 +383,23 @@ impl<'p> Optimizer<'p> {
             Realization::Blueprint,
             Realization::Dilated,
         ];
-        match (maximizes_resonance(p), robust) {
-            (false, true) => v.extend(all.map(Constraint::Worst)),
-            (true, true) => v.extend(all.map(Constraint::Workspace)),
-            (true, false) => v.push(Constraint::Workspace(Realization::Blueprint)),
-            (false, false) => {}
+        // The resonance is evaluated on the eroded design and the blueprint (the dilated one
+        // adds material everywhere, and its grey fill carried spurious low modes).
+        let (realizations, resonant): (&[Realization], &[Realization]) = if robust {
+            (&all, &all[..2])
+        } else {
+            (&all[1..2], &all[1..2])
+        };
+        if robust {
+            let worst = if maximizes_resonance(p) {
+                resonant
+            } else {
+                realizations
+            };
+            v.extend(worst.iter().map(|&r| Constraint::Worst(r)));
+        }
+        if maximizes_resonance(p) {
+            v.extend(realizations.iter().map(|&r| Constraint::Workspace(r)));
         }
         if p.energy_limit.is_some() {
             v.push(Constraint::Energy);
@@ -388,10 +414,13 @@ impl<'p> Optimizer<'p> {
             v.push(Constraint::Stress);
         }
         if matches!(p.resonance, Some(Resonance::Bound { .. })) {
-            v.push(Constraint::Resonance);
+            v.extend(resonant.iter().map(|&r| Constraint::Resonance(r)));
         }
         if p.volume_fraction.is_some() {
             v.push(Constraint::Volume);
+        }
+        if p.min_volume_fraction.is_some() {
+            v.push(Constraint::MinVolume);
         }
         v
     }
@@ -522,9 +551,7 @@ impl<'p> Optimizer<'p> {
             } else {
                 1.0
             };
-            let phi0 = bp.values[ResponseKind::Objective]
-                .abs()
-                .max(f64::MIN_POSITIVE);
+            let phi0 = bp.values[self.maximized()].abs().max(f64::MIN_POSITIVE);
             // The bound starts at the worst case with ξ = ½ (a feasible start).
             let bound = if self.has_bound_variable() {
                 bound_unit(self.worst(ev) / phi0)
@@ -536,7 +563,6 @@ impl<'p> Optimizer<'p> {
                 energy_limit: problem.energy_limit.unwrap_or(1.0).max(f64::MIN_POSITIVE),
                 tilt: d2.max(f64::MIN_POSITIVE),
                 bound,
-                resonance: bp.values[ResponseKind::Resonance].max(0.0),
             });
             if bound != 0.0 {
                 let n = self.evaluator.n();
@@ -602,24 +628,35 @@ impl<'p> Optimizer<'p> {
             .expect("a rescaled state of the same dimensions");
     }
 
-    /// The worst objective over the realizations (the blueprint's without robustness).
+    /// The response the design maximizes: the workspace (or output displacement), or the
+    /// resonance aggregate Λ.
+    fn maximized(&self) -> ResponseKind {
+        if maximizes_resonance(self.evaluator.problem) {
+            ResponseKind::Resonance
+        } else {
+            ResponseKind::Objective
+        }
+    }
+
+    /// The worst maximized response over the realizations (the blueprint's without
+    /// robustness).
     fn worst(&self, ev: &Evaluation) -> f64 {
+        let q = self.maximized();
         ev.realizations
             .iter()
-            .map(|r| r.values[ResponseKind::Objective])
+            .filter(|r| r.gradients[q].is_some() || q == ResponseKind::Objective)
+            .map(|r| r.values[q])
             .fold(f64::INFINITY, f64::min)
     }
 
     /// What the design maximizes, as recorded: the worst workspace (or output displacement),
-    /// or the aggregate first frequency `√Λ/2π` \[Hz\] of the blueprint.
+    /// or the worst realization's aggregate first frequency `√Λ/2π` \[Hz\].
     fn objective_value(&self, ev: &Evaluation) -> f64 {
+        let w = self.worst(ev);
         if maximizes_resonance(self.evaluator.problem) {
-            ev.blueprint()
-                .modes
-                .as_ref()
-                .map_or(0.0, |m| m.aggregate_frequency())
+            w.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
         } else {
-            self.worst(ev)
+            w
         }
     }
 
@@ -639,31 +676,23 @@ impl<'p> Optimizer<'p> {
             g.resize(nx, 0.0);
             g
         };
-        let (f0, df0) = if maximizes_resonance(problem) {
-            let l0 = sc.resonance.max(f64::MIN_POSITIVE);
-            (
-                -s * bp.values[ResponseKind::Resonance] / l0,
-                grad(bp, ResponseKind::Resonance, -s / l0),
-            )
-        } else if sc.bound != 0.0 {
+        let q = self.maximized();
+        let (f0, df0) = if sc.bound != 0.0 {
             let mut d = vec![0.0; nx];
             d[n] = -s * sc.bound;
             (-s * sc.bound * self.x[n], d)
         } else {
-            let phi = bp.values[ResponseKind::Objective];
-            (
-                -s * phi / sc.objective,
-                grad(bp, ResponseKind::Objective, -s / sc.objective),
-            )
+            let phi = bp.values[q];
+            (-s * phi / sc.objective, grad(bp, q, -s / sc.objective))
         };
         let (mut g, mut dg) = (Vec::new(), Vec::new());
         for c in &self.constraints {
             let (value, row) = match *c {
                 Constraint::Worst(kind) => {
                     let r = ev.get(kind).expect("robust realization");
-                    let mut row = grad(r, ResponseKind::Objective, -1.0 / sc.objective);
+                    let mut row = grad(r, q, -1.0 / sc.objective);
                     row[n] = sc.bound;
-                    let phi = r.values[ResponseKind::Objective] / sc.objective;
+                    let phi = r.values[q] / sc.objective;
                     (sc.bound * self.x[n] - phi, row)
                 }
                 Constraint::Energy => {
@@ -710,15 +739,23 @@ impl<'p> Optimizer<'p> {
                         grad(r, ResponseKind::Objective, -1.0 / a),
                     )
                 }
-                Constraint::Resonance => {
+                Constraint::MinVolume => {
+                    let v = problem.min_volume_fraction.unwrap_or(1.0);
+                    (
+                        1.0 - bp.values[ResponseKind::Volume] / v,
+                        grad(bp, ResponseKind::Volume, -1.0 / v),
+                    )
+                }
+                Constraint::Resonance(kind) => {
+                    let r = ev.get(kind).expect("an evaluated realization");
                     let f = match problem.resonance {
                         Some(Resonance::Bound { min_hz }) => min_hz,
                         _ => 1.0,
                     };
                     let l_min = (2.0 * std::f64::consts::PI * f).powi(2);
                     (
-                        1.0 - bp.values[ResponseKind::Resonance] / l_min,
-                        grad(bp, ResponseKind::Resonance, -1.0 / l_min),
+                        1.0 - r.values[ResponseKind::Resonance] / l_min,
+                        grad(r, ResponseKind::Resonance, -1.0 / l_min),
                     )
                 }
             };
