@@ -13,9 +13,10 @@
 //!
 //! Each realization evaluates the responses it is needed for: with the robust formulation the
 //! objective on all three (the worst case is maximized), the fatigue stress on the eroded design
-//! (the thinnest hinges), the volume on the dilated design (the most material), and the strain
-//! energy, input strokes and tilt on the blueprint; without it everything on the blueprint.
-//! Gradients flow back through the adjoint of each map.
+//! (the thinnest hinges), the volume on the dilated design (the most material), the strain
+//! energy, input strokes and tilt on the blueprint, the stage's resonance ([`crate::modal`]) on
+//! the eroded design and the blueprint, and a lower volume bound on the blueprint; without it
+//! everything on the blueprint. Gradients flow back through the adjoint of each map.
 
 use flexstage_fem::{AdditiveYeoh, Design, Passive};
 use rayon::prelude::*;
