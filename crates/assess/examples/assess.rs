@@ -4,7 +4,7 @@
 //! `flexstage-twin`'s `track` example.
 //!
 //! ```text
-//! cargo run --release -p flexstage-assess --example assess -- quick runs/quick/design/design.json [OUT_DIR] [SENSOR_HZ] [ANTI_ALIAS_HZ]
+//! cargo run --release -p flexstage-assess --example assess -- quick runs/quick/design/design.json [SENSOR_HZ] [ANTI_ALIAS_HZ]
 //! ```
 //!
 //! `SENSOR_HZ` replaces the rig's sensor bandwidth (its first-order low-pass) and
@@ -12,8 +12,9 @@
 //! 0 = none); every controller is tuned with them in the loop.
 
 use flexstage_assess::{AssessParams, Assessment, Bench};
+use flexstage_run::Format;
+use flexstage_run::files::design::DesignFile;
 use flexstage_scenario::{Preset, Scenario};
-use flexstage_topopt::DesignFile;
 use flexstage_twin::DesignedStage;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -21,19 +22,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let preset = args
         .get(1)
         .and_then(|p| Preset::from_name(p))
-        .ok_or("usage: assess quick|paper DESIGN.json [OUT_DIR]")?;
-    let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
-    let out = args.get(3).cloned();
+        .ok_or("usage: assess quick|paper DESIGN.json [SENSOR_HZ] [ANTI_ALIAS_HZ]")?;
+    let design = DesignFile::decode(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let DesignedStage {
         scenario: s,
         mut setup,
         twin,
         ..
     } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
-    if let Some(bw) = args.get(4) {
+    if let Some(bw) = args.get(3) {
         setup.rig.sensor.bandwidth = bw.parse()?;
     }
-    if let Some(aa) = args.get(5) {
+    if let Some(aa) = args.get(4) {
         setup.rig.sensor.anti_alias = aa.parse()?;
     }
     let t0 = std::time::Instant::now();
@@ -41,12 +41,5 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let a = Assessment::run(&bench, &s, &AssessParams::default())?;
     print!("{}", a.summary());
     println!("assessed in {:.1} s", t0.elapsed().as_secs_f64());
-    if let Some(dir) = out {
-        std::fs::create_dir_all(&dir)?;
-        for (name, text) in a.files()? {
-            std::fs::write(format!("{dir}/{name}"), text)?;
-        }
-        println!("wrote {dir}");
-    }
     Ok(())
 }

@@ -29,8 +29,9 @@ use flexstage_control::margins::Margins;
 use flexstage_control::model::{ResponseFit, StageModel, fit_to_response};
 use flexstage_control::rig::StagePlant;
 use flexstage_control::trajectory::Reference;
+use flexstage_run::Format;
+use flexstage_run::files::design::DesignFile;
 use flexstage_scenario::{Preset, Scenario, StageParams};
-use flexstage_topopt::DesignFile;
 use flexstage_twin::DesignedStage;
 
 /// Margins of a backstepping variant (None: unstable).
@@ -335,7 +336,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .and_then(|p| Preset::from_name(p))
         .ok_or("usage: diagnose quick|paper DESIGN.json")?;
     let scenario = Scenario::preset(preset);
-    let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
+    let design = DesignFile::decode(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let DesignedStage { setup, twin, .. } = DesignedStage::new(&scenario, &design.rho)?;
     // The scenario's backstepping settings (design guess, scenario gains, no notches);
     // `Bench::new` sets the shipped ones up from the twin's response.

@@ -22,8 +22,9 @@ use flexstage_control::learning::{
 };
 use flexstage_control::rig::StagePlant;
 use flexstage_control::trajectory::Reference;
+use flexstage_run::Format;
+use flexstage_run::files::design::DesignFile;
 use flexstage_scenario::{Preset, Scenario, Trajectory};
-use flexstage_topopt::DesignFile;
 use flexstage_twin::DesignedStage;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -32,7 +33,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .get(1)
         .and_then(|p| Preset::from_name(p))
         .ok_or("usage: learn quick|paper DESIGN.json [PERIODS]")?;
-    let design_file = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
+    let design_file = DesignFile::decode(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let periods: usize = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(20);
     let DesignedStage {
         scenario: s,

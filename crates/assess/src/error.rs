@@ -11,7 +11,7 @@ pub enum AssessError {
     Twin(#[from] flexstage_twin::TwinError),
     /// Drawing a figure.
     #[error(transparent)]
-    Plot(#[from] flexstage_report::plot::PlotError),
+    Plot(#[from] flexstage_figures::plot::PlotError),
     /// A setting of the assessment itself out of range.
     #[error(transparent)]
     OutOfRange(#[from] flexstage_numerics::RangeError),

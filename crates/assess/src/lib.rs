@@ -14,10 +14,10 @@
 //! * [`montecarlo`]: pass rate over ≥ 100 perturbed twins (K, M, α ± 20 %, damping 0.5–3 %,
 //!   coupling 0–15 %, compensator Bouc–Wen ± 20 %, delay 0–2 samples), in parallel.
 //! * [`sweep`]: RMS error of each candidate on the Lissajous 3:1 from 1 % to 30 % of the
-//!   first resonance, CSV and SVG.
+//!   first resonance, and its figure.
 //!
-//! [`Assessment::run`] does all of it; [`Assessment::files`] gives `margins.csv`,
-//! `montecarlo.csv`, `scan_frequency.csv` and `scan_frequency.svg`.
+//! [`Assessment::run`] does all of it and returns the values; the pipeline's `track` stores
+//! them in the run folder.
 
 // Loops over the two axes index several arrays at once.
 #![allow(clippy::needless_range_loop)]
@@ -164,17 +164,5 @@ impl Assessment {
             }
         }
         s
-    }
-
-    /// The files (name, content): `margins.csv`, `montecarlo.csv`, `scan_frequency.csv`,
-    /// `scan_frequency.svg`.
-    pub fn files(&self) -> Result<Vec<(&'static str, String)>> {
-        let cands = self.montecarlo.candidates.clone();
-        Ok(vec![
-            ("margins.csv", margins::csv(&self.margins, self.sample_time)),
-            ("montecarlo.csv", self.montecarlo.csv()),
-            ("scan_frequency.csv", sweep::csv(&self.sweep)),
-            ("scan_frequency.svg", sweep::figure(&self.sweep, &cands)?),
-        ])
     }
 }

@@ -144,33 +144,6 @@ impl MonteCarlo {
         let n = self.plants.iter().filter(|p| p.results[j].2).count();
         n as f64 / self.plants.len().max(1) as f64
     }
-
-    /// CSV: one row per plant and candidate.
-    pub fn csv(&self) -> String {
-        let mut s = String::from(
-            "plant,stiffness,mass,alpha,damping,coupling1,coupling2,delay,controller,rms1_nm,rms2_nm,pass\n",
-        );
-        for p in &self.plants {
-            for (c, rms, pass) in &p.results {
-                s.push_str(&format!(
-                    "{},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{},{},{:.2},{:.2},{}\n",
-                    p.index,
-                    p.stiffness,
-                    p.mass,
-                    p.alpha,
-                    p.damping,
-                    p.coupling[0],
-                    p.coupling[1],
-                    p.delay,
-                    c.name(),
-                    rms[0] * 1e9,
-                    rms[1] * 1e9,
-                    pass
-                ));
-            }
-        }
-        s
-    }
 }
 
 /// Runs the study on `reference` for the `candidates`, plants in parallel.

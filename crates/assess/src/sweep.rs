@@ -5,7 +5,7 @@
 //! taken over the second half of the run (after the smooth start), also in % of the range.
 
 use flexstage_control::trajectory::{Reference, Shape};
-use flexstage_report::plot::{Figure, Series};
+use flexstage_figures::plot::{Figure, Series};
 
 use crate::bench::{Bench, Candidate};
 use crate::error::{Result, check};
@@ -105,30 +105,6 @@ pub fn sweep(
         });
     }
     Ok(out)
-}
-
-/// CSV of the sweep: one row per point and candidate.
-pub fn csv(points: &[SweepPoint]) -> String {
-    let mut s = String::from(
-        "fraction_of_f1,fast_frequency_Hz,amplitude1_m,amplitude2_m,controller,rms1_nm,rms2_nm,rms1_pct_range,rms2_pct_range\n",
-    );
-    for p in points {
-        for (c, rms, pct) in &p.results {
-            s.push_str(&format!(
-                "{},{:.2},{:e},{:e},{},{:.3},{:.3},{:.5},{:.5}\n",
-                p.fraction,
-                p.frequency,
-                p.amplitude[0],
-                p.amplitude[1],
-                c.name(),
-                rms[0] * 1e9,
-                rms[1] * 1e9,
-                pct[0],
-                pct[1]
-            ));
-        }
-    }
-    s
 }
 
 /// The figure: RMS error (mean of both axes, % of range, log10) against the fast

@@ -72,6 +72,11 @@ impl Progress for Bars {
             RunEvent::Skipped(s) => {
                 errln!("[{}/{n}] {}: done earlier, skipped", s.number(), s.name())
             }
+            RunEvent::Redoing { stage, why } => errln!(
+                "[{}/{n}] {}: done earlier, but {why}: doing it again (and every later stage)",
+                stage.number(),
+                stage.name()
+            ),
             RunEvent::Started(s) => errln!("[{}/{n}] {} ...", s.number(), s.name()),
             RunEvent::Finished {
                 stage,

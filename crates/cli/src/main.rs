@@ -47,7 +47,7 @@ enum Command {
   flexstage init -                        # print to standard output")]
     Init {
         /// Where to write ("-" for standard output).
-        #[arg(default_value = "scenario.toml")]
+        #[arg(default_value = flexstage_run::layout::SCENARIO)]
         path: PathBuf,
         /// Built-in scenario: "quick" (coarse and fast) or "paper" (Tables 1, 3, 4, A1).
         #[arg(long, default_value = DEFAULT_PRESET, value_parser = PRESETS)]
@@ -258,9 +258,9 @@ fn init(path: &std::path::Path, name: &str, force: bool) -> anyhow::Result<()> {
     }
     if path.exists() && !force {
         let path = path.to_path_buf();
-        return Err(flexstage_report::ReportError::Exists { path }.into());
+        return Err(flexstage_run::RunError::Exists { path }.into());
     }
-    flexstage_report::write_atomic(path, text.as_bytes())?;
+    flexstage_run::write_atomic(path, text.as_bytes())?;
     errln!("wrote {}", path.display());
     Ok(())
 }

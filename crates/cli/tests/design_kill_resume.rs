@@ -8,6 +8,7 @@
 //! alignment here; the tolerance only guards against a last-bit difference from a platform
 //! whose SIMD kernels round differently with alignment.
 
+use flexstage_run::layout;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -32,7 +33,7 @@ fn design(args: &[&str]) -> Command {
 }
 
 fn density(dir: &Path) -> Vec<f64> {
-    let text = std::fs::read_to_string(dir.join("design/design.json")).expect("design.json");
+    let text = std::fs::read_to_string(dir.join(layout::design::DESIGN)).expect("the design file");
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
     v["rho"]
         .as_array()
@@ -52,7 +53,7 @@ fn kill_9_then_resume_reaches_the_uninterrupted_result() {
     assert!(st.success(), "reference run failed");
 
     // Interrupted run: SIGKILL as soon as the first checkpoint (iteration 3) is on disk.
-    let ck = b.join("design/checkpoint.bin");
+    let ck = b.join(layout::design::CHECKPOINT);
     let mut child = design(&[
         "--preset",
         "quick",
@@ -77,7 +78,7 @@ fn kill_9_then_resume_reaches_the_uninterrupted_result() {
     child.wait().unwrap();
     assert!(running, "the run finished before it could be killed");
     assert!(
-        !b.join("design/design.json").exists(),
+        !b.join(layout::design::DESIGN).exists(),
         "the killed run must not have finished"
     );
 

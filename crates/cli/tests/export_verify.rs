@@ -2,6 +2,7 @@
 //! exported outline and its verdict as the last line; it writes the files either way; with
 //! `--require-safe` a design that is not verified safe exits with status 2, a safe one with 0.
 
+use flexstage_run::layout;
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -44,12 +45,12 @@ fn export_prints_the_verdict_and_require_safe_sets_the_exit_status() {
         "{text}"
     );
     for f in [
-        "outline.dxf",
-        "verification.json",
-        "verification.txt",
-        "body_fitted.vtu",
+        layout::export::DXF,
+        layout::export::VERIFICATION_JSON,
+        layout::export::VERIFICATION_TXT,
+        layout::export::BODY_FITTED_VTU,
     ] {
-        assert!(dir.join("export").join(f).is_file(), "{f} missing");
+        assert!(dir.join(f).is_file(), "{f} missing");
     }
     // Without --require-safe the verdict is printed and the command succeeds.
     let (out, text) = export(&dir, &["--fatigue-strength-mpa", "1"]);

@@ -4,6 +4,7 @@
 //! variants their own folders, refuses to replace a finished design without `--force`, refuses
 //! a parameter file of another run, and prints each error (and each cause) exactly once.
 
+use flexstage_run::layout::{self, Analysis, Tracking};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -65,7 +66,7 @@ fn the_subcommands_share_one_run_folder_and_never_overwrite_silently() {
     let run = dir.join("runs/quick");
     ok(&dir, &["design", "--max-iterations", "6"]);
     assert!(
-        run.join("design/design.json").is_file(),
+        run.join(layout::design::DESIGN).is_file(),
         "design in runs/quick"
     );
     // A finished design is not replaced without --force.
@@ -81,12 +82,13 @@ fn the_subcommands_share_one_run_folder_and_never_overwrite_silently() {
     // analyze: the run's design by default, each analysis in its own folder.
     let out = ok(&dir, &["analyze"]);
     assert!(out.contains("the run's design"), "{out}");
-    assert!(run.join("analyze/workspace/deformed.vtu").is_file());
+    assert!(run.join(Analysis::variant("workspace").vtu()).is_file());
     let out = ok(&dir, &["analyze", "--inputs", "30,-30"]);
     assert!(out.contains("the run's design"), "{out}");
-    assert!(run.join("analyze/inputs_30_-30/deformed.vtu").is_file());
+    assert!(run.join(Analysis::variant("inputs_30_-30").vtu()).is_file());
     assert!(
-        run.join("analyze/workspace/workspace.svg").is_file(),
+        run.join(Analysis::variant("workspace").workspace_svg())
+            .is_file(),
         "kept"
     );
 
@@ -102,8 +104,9 @@ fn the_subcommands_share_one_run_folder_and_never_overwrite_silently() {
         &[&["track", "--compensation", "off"][..], &quick].concat(),
     );
     assert!(off.contains("compensation: off"), "{off}");
-    let main = std::fs::read_to_string(run.join("track/metrics.csv")).unwrap();
-    let other = std::fs::read_to_string(run.join("track/compensation-off/metrics.csv")).unwrap();
+    let main = std::fs::read_to_string(run.join(Tracking::main().metrics())).unwrap();
+    let other =
+        std::fs::read_to_string(run.join(Tracking::variant("compensation-off").metrics())).unwrap();
     assert!(
         main.contains(",inverse,") && !main.contains(",off,"),
         "{main}"
@@ -113,14 +116,24 @@ fn the_subcommands_share_one_run_folder_and_never_overwrite_silently() {
     // A parameter file of another run folder is refused (no silent jump between runs).
     let foreign = dir.join("elsewhere");
     std::fs::create_dir_all(foreign.join("reduce")).unwrap();
-    std::fs::write(foreign.join("scenario.toml"), "").unwrap();
-    std::fs::write(foreign.join("reduce/params.toml"), "").unwrap();
-    let e = fails(&dir, &["track", "--params", "elsewhere/reduce/params.toml"]);
+    std::fs::write(foreign.join(layout::SCENARIO), "").unwrap();
+    std::fs::write(foreign.join(layout::reduce::PARAMS), "").unwrap();
+    let e = fails(
+        &dir,
+        &[
+            "track",
+            "--params",
+            &format!("elsewhere/{}", layout::reduce::PARAMS),
+        ],
+    );
     assert!(e.contains("belongs to the run folder"), "{e}");
 
     // report: the default run folder.
     let out = ok(&dir, &["report"]);
-    assert!(out.contains("runs/quick/report.html"), "{out}");
+    assert!(
+        out.contains(&format!("runs/quick/{}", layout::REPORT)),
+        "{out}"
+    );
     // Nothing went anywhere else.
     let runs: Vec<_> = std::fs::read_dir(dir.join("runs")).unwrap().collect();
     assert_eq!(runs.len(), 1, "one run folder");

@@ -7,6 +7,8 @@
 use std::path::PathBuf;
 use std::process::Command;
 
+use flexstage_run::layout;
+
 const BIN: &str = env!("CARGO_BIN_EXE_flexstage");
 
 /// Section ids of the report, in order (flexstage_report::html::SECTIONS).
@@ -80,7 +82,7 @@ fn run_writes_a_self_contained_report_with_every_section_and_resumes() {
     assert!(stdout.contains("workspace area"), "prints the summary");
     assert!(stdout.contains("tracking RMS"), "prints the tracking RMS");
 
-    let html = std::fs::read_to_string(dir.join("report.html")).unwrap();
+    let html = std::fs::read_to_string(dir.join(layout::REPORT)).unwrap();
     // Every section present, in order, and none reported as not run.
     let mut at = 0;
     for id in SECTIONS {
@@ -148,20 +150,21 @@ fn run_writes_a_self_contained_report_with_every_section_and_resumes() {
     }
 
     // Outline export: DXF with LWPOLYLINE entities, STL with its declared triangle count.
-    let dxf = std::fs::read_to_string(dir.join("export/outline.dxf")).unwrap();
+    let dxf = std::fs::read_to_string(dir.join(layout::export::DXF)).unwrap();
     assert!(
         dxf.contains("LWPOLYLINE") && dxf.contains("AC1015"),
         "R2000 DXF outline"
     );
-    let stl = std::fs::read(dir.join("export/outline.stl")).unwrap();
+    let stl = std::fs::read(dir.join(layout::export::STL)).unwrap();
     let n = u32::from_le_bytes(stl[80..84].try_into().unwrap()) as usize;
     assert!(n > 0 && stl.len() == 84 + 50 * n);
 
     // The simulated stage is the designed one: the plant's truth is the reduced model.
     let reduced: flexstage_scenario::StageParams =
-        toml::from_str(&std::fs::read_to_string(dir.join("reduce/params.toml")).unwrap()).unwrap();
+        toml::from_str(&std::fs::read_to_string(dir.join(layout::reduce::PARAMS)).unwrap())
+            .unwrap();
     let plant =
-        flexstage_scenario::Scenario::load(&dir.join("plant.toml")).expect("plant.toml is valid");
+        flexstage_scenario::Scenario::load(&dir.join(layout::PLANT)).expect("plant.toml is valid");
     assert_eq!(plant.stage.truth, reduced);
     assert_eq!(plant.stage.guess.mass, reduced.mass);
 

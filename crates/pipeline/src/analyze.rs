@@ -11,11 +11,12 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use flexstage_fem::Kinematics;
-use flexstage_report::layout::Analysis;
+use flexstage_run::files::analyze::{AnalysisSummary, VERSION};
+use flexstage_run::layout::Analysis;
 use flexstage_topopt::{AnalysisParams, Evaluator, Problem};
 
-use crate::error::{Result, require, to_json};
-use crate::figures::{cases_csv, polygon_svg, write_vtu};
+use crate::error::{Result, require};
+use crate::figures::{cases_table, polygon_svg, write_vtu};
 use crate::folder::RunFolder;
 use crate::source::{DesignSource, load_design};
 
@@ -132,7 +133,7 @@ pub fn analyze(folder: &RunFolder, options: &AnalyzeOptions) -> Result<AnalyzeSu
     let mut ev = Evaluator::new(&problem, AnalysisParams::default())?;
     let r = ev.solve_cases(&rho, None)?;
     let seconds = t.elapsed().as_secs_f64();
-    run.write(out.cases(), cases_csv(&problem, &r).as_bytes())?;
+    run.store(&out.cases(), cases_table(&problem, &r))?;
     // The deformed mesh at the compressive corner (workspace) or the first given case.
     let k_vtk = if workspace {
         problem.differential_corners().0
@@ -141,23 +142,25 @@ pub fn analyze(folder: &RunFolder, options: &AnalyzeOptions) -> Result<AnalyzeSu
     };
     write_vtu(run, &out.vtu(), &problem, &rho, &ev.cases[k_vtk].u)?;
     let newton_iterations = r.newton_iterations.iter().sum::<usize>();
-    let mut json = serde_json::json!({
-        "design": design.to_string(),
-        "cases": r.outputs.len(),
-        "newton_iterations": newton_iterations,
-        "seconds": seconds,
-    });
     let workspace = if workspace {
         let area = problem.workspace_area(&r.outputs);
-        json["area_m2"] = serde_json::json!(area);
         let svg = polygon_svg("Output workspace", &[("design".into(), &r.outputs)])?;
-        run.write(out.workspace_svg(), svg.as_bytes())?;
+        run.write(&out.workspace_svg(), svg.as_bytes())?;
         let corners = [r.outputs[0], r.outputs[problem.cases.len() / 4]];
         Some((area, corners))
     } else {
         None
     };
-    run.write(out.summary(), to_json(&json).as_bytes())?;
+    let summary = AnalysisSummary {
+        version: VERSION,
+        design: design.to_string(),
+        cases: r.outputs.len(),
+        newton_iterations,
+        seconds,
+        area_m2: workspace.map(|(a, _)| a),
+    };
+    run.store(&out.summary(), summary)?;
+    // What was computed is written; an area that is not a workspace is refused after it.
     if let Some((area, _)) = workspace {
         crate::error::require_area("analyze", area)?;
     }
@@ -216,7 +219,7 @@ mod tests {
             other.variant(&DesignSource::Run),
         );
         assert!(
-            a.len() <= 100 && flexstage_report::layout::is_plain_name(&a),
+            a.len() <= 100 && flexstage_run::layout::is_plain_name(&a),
             "{a}"
         );
         assert_ne!(a, b, "long lists differ by their hash");

@@ -12,17 +12,21 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use flexstage_fem::{AdditiveYeoh, Kinematics};
-use flexstage_report::{RunDir, csv_columns, layout::design as files};
+use flexstage_run::files::design::{
+    DESIGN_VERSION, DesignFile, DesignSummaryFile, SUMMARY_VERSION,
+};
+use flexstage_run::{RunDir, Table, layout::design as files};
 use flexstage_scenario::Scenario;
 use flexstage_topopt::check::{CheckSetup, check_gradients};
 use flexstage_topopt::summary::{FinalAnalysis, final_analysis};
 use flexstage_topopt::{
-    AnalysisParams, CaseResults, DesignFile, DesignSpace, Evaluator, IterationRecord, Optimizer,
+    AnalysisParams, CaseResults, DesignSpace, Evaluator, IterationRecord, Optimizer,
     OptimizerParams, Problem, StopReason, density_csv, perimeter_walk,
 };
 
+use crate::convert::design_record;
 use crate::error::{PipelineError, Result, require, to_json};
-use crate::figures::{cases_csv, polygon_csv, polygon_svg, read_polygon_csv, write_vtu};
+use crate::figures::{cases_table, polygon_svg, polygon_table, table_polygon, write_vtu};
 use crate::folder::RunFolder;
 use crate::progress::Progress;
 
@@ -202,11 +206,7 @@ fn prepare_fresh(folder: &RunFolder, force: bool) -> Result<()> {
             });
         }
     }
-    let dir = run.path(files::DIR);
-    if dir.is_dir() {
-        std::fs::remove_dir_all(&dir)
-            .map_err(|source| flexstage_report::ReportError::Write { path: dir, source })?;
-    }
+    run.remove_dir(files::DIR)?;
     Ok(())
 }
 
@@ -236,9 +236,9 @@ fn optimize(
         let stopped = opt.stopped();
         if rec.iteration % options.snapshot_every == 0 || stopped.is_some() {
             let (_, ev) = opt.last().expect("an iteration was evaluated");
-            run.write(
-                files::snapshot(rec.iteration),
-                polygon_csv(&ev.blueprint().response.outputs).as_bytes(),
+            run.store(
+                &files::snapshot(rec.iteration),
+                polygon_table(&ev.blueprint().response.outputs),
             )?;
         }
         if let Some(stop) = stopped {
@@ -248,10 +248,7 @@ fn optimize(
             // Sealed with the scenario's hash and a CRC (crate::envelope).
             let sealed = crate::envelope::seal(folder.scenario(), &opt.checkpoint());
             run.write(files::CHECKPOINT, &sealed)?;
-            run.write(
-                files::HISTORY_CSV,
-                history_csv(&names, opt.history()).as_bytes(),
-            )?;
+            run.store(files::HISTORY_CSV, history_table(&names, opt.history()))?;
         }
     };
     progress.finish();
@@ -350,7 +347,7 @@ fn finish(
         dir: run.path(files::DIR),
     };
     let file = DesignFile {
-        version: 1,
+        version: DESIGN_VERSION,
         scenario: s.name.clone(),
         nl: mesh.nl,
         nw: mesh.nw,
@@ -359,7 +356,7 @@ fn finish(
         area_initial: summary.area_initial,
         area: summary.area,
         grey_fraction: summary.grey_fraction,
-        summary: Some(analysis.summary.clone()),
+        summary: Some(design_record(&analysis.summary)),
     };
     let (nl, nw) = (mesh.nl, mesh.nw);
     run.write(
@@ -368,43 +365,30 @@ fn finish(
     )?;
     run.write(
         files::DENSITY_PNG,
-        &flexstage_report::image::density_png(nl, nw, 4, |i, j| rho[i * nw + j])?,
+        &flexstage_figures::image::density_png(nl, nw, 4, |i, j| rho[i * nw + j])?,
     )?;
     write_vtu(run, files::VTU, &fin, rho, u)?;
-    run.write(files::CASES, cases_csv(&fin, r).as_bytes())?;
-    run.write(files::WORKSPACE_FINAL, polygon_csv(&r.outputs).as_bytes())?;
-    run.write(
-        files::WORKSPACE_INITIAL,
-        polygon_csv(&r0.outputs).as_bytes(),
-    )?;
+    run.store(files::CASES, cases_table(&fin, r))?;
+    run.store(files::WORKSPACE_FINAL, polygon_table(&r.outputs))?;
+    run.store(files::WORKSPACE_INITIAL, polygon_table(&r0.outputs))?;
     let names = opt.constraint_names();
-    run.write(files::HISTORY_CSV, history_csv(&names, h).as_bytes())?;
+    run.store(files::HISTORY_CSV, history_table(&names, h))?;
     run.write(files::HISTORY_JSON, to_json(&h).as_bytes())?;
     if !Problem::is_mechanism(s) {
         // Figure 4's workspace polygons (a mechanism has one output point, no polygon).
         write_figures(run, h.len(), &r0.outputs, &r.outputs)?;
     }
-    run.write(files::SUMMARY, summary_json(&summary).as_bytes())?;
+    run.store(files::SUMMARY, summary_file(&summary))?;
     // A design whose workspace is not a workspace keeps everything it computed, under a name
     // no later stage reads, and the run stops saying why.
     if let Err(e) = crate::error::require_area("design", summary.area) {
-        run.write(files::REJECTED, file.to_json().as_bytes())?;
+        run.store(files::REJECTED, file)?;
         return Err(e);
     }
     // Last: the finished design marks the stage as done for the other commands.
-    run.write(files::DESIGN, file.to_json().as_bytes())?;
+    run.store(files::DESIGN, file)?;
     // The checkpoint served only to resume; a finished design is refused as a resume point.
-    let ck = run.path(files::CHECKPOINT);
-    match std::fs::remove_file(&ck) {
-        Err(e) if e.kind() != std::io::ErrorKind::NotFound => {
-            return Err(flexstage_report::ReportError::Write {
-                path: ck,
-                source: e,
-            }
-            .into());
-        }
-        _ => {}
-    }
+    run.remove_file(files::CHECKPOINT)?;
     Ok(summary)
 }
 
@@ -416,17 +400,16 @@ fn write_figures(
     initial: &[[f64; 2]],
     last: &[[f64; 2]],
 ) -> Result<()> {
-    let mut snaps: Vec<(usize, Vec<[f64; 2]>)> = std::fs::read_dir(run.path(files::DIR))
-        .map(|rd| {
-            rd.flatten()
-                .filter_map(|e| {
-                    let k = files::snapshot_iteration(&e.file_name().to_string_lossy())?;
-                    let text = std::fs::read_to_string(e.path()).ok()?;
-                    (k < iterations).then(|| (k, read_polygon_csv(&text)))
-                })
-                .collect()
-        })
-        .unwrap_or_default();
+    // This session's snapshots are in memory; an earlier session's are read.
+    let mut snaps: Vec<(usize, Vec<[f64; 2]>)> = Vec::new();
+    for name in run.files_in(files::DIR) {
+        let Some(k) = files::snapshot_iteration(&name).filter(|&k| k < iterations) else {
+            continue;
+        };
+        if let Some(t) = run.load::<Table>(&files::snapshot(k))? {
+            snaps.push((k, table_polygon(&t)));
+        }
+    }
     snaps.sort_by_key(|(k, _)| *k);
     let polys: Vec<(String, &[[f64; 2]])> = snaps
         .iter()
@@ -447,21 +430,25 @@ fn write_figures(
     Ok(())
 }
 
-fn summary_json(s: &DesignSummary) -> String {
-    let constraints: BTreeMap<&str, f64> = s.constraints.iter().copied().collect();
-    to_json(&serde_json::json!({
-        "stop": format!("{:?}", s.stop),
-        "iterations": s.iterations,
-        "seconds": s.seconds,
-        "seconds_per_iteration": s.seconds_per_iteration,
-        "design": s.design,
-        "area_initial_m2": s.area_initial,
-        "area_final_m2": s.area,
-        "grey_fraction": s.grey_fraction,
-        "volume": s.volume,
-        "constraints": constraints,
-        "retried_load_cases": s.retried_load_cases,
-    }))
+fn summary_file(s: &DesignSummary) -> DesignSummaryFile {
+    DesignSummaryFile {
+        version: SUMMARY_VERSION,
+        stop: format!("{:?}", s.stop),
+        iterations: s.iterations,
+        seconds: s.seconds,
+        seconds_per_iteration: s.seconds_per_iteration,
+        design: design_record(&s.design),
+        area_initial_m2: s.area_initial,
+        area_final_m2: s.area,
+        grey_fraction: s.grey_fraction,
+        volume: s.volume,
+        constraints: s
+            .constraints
+            .iter()
+            .map(|(n, v)| (n.to_string(), *v))
+            .collect::<BTreeMap<String, f64>>(),
+        retried_load_cases: s.retried_load_cases,
+    }
 }
 
 /// A named history column.
@@ -476,7 +463,7 @@ type Column<'a> = (&'a str, &'a dyn Fn(&IterationRecord) -> f64);
 /// (fraction with 0.1 < ρ < 0.9), `change`, `mean_change`, `kkt`, `beta`, `newton_total`,
 /// `newton_max`, `retried_cases`, `time_s`, `area_rel` (A / A at iteration 0), and with a
 /// resonance requirement `f1_hz`, `f2_hz`, … (the stage's lowest natural frequencies).
-fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
+fn history_table(names: &[&str], h: &[IterationRecord]) -> Table {
     let col = |f: &dyn Fn(&IterationRecord) -> f64| h.iter().map(f).collect::<Vec<f64>>();
     let mut header = vec!["iteration", "area_m2", "objective", "f0"];
     let mut cols = vec![
@@ -515,8 +502,7 @@ fn history_csv(names: &[&str], h: &[IterationRecord]) -> String {
         header.push(n);
         cols.push(col(&|r| r.frequencies.get(k).copied().unwrap_or(f64::NAN)));
     }
-    let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-    csv_columns(&header, &refs)
+    Table::new(&header, cols)
 }
 
 /// The gradient check's accepted relative error.

@@ -8,7 +8,7 @@
 //!      0     8  magic "FXSCKPT\n"
 //!      8     4  envelope format version (1)
 //!     12     4  CRC-32 (IEEE 802.3, as zlib's crc32) of every byte from offset 16 to the end
-//!     16     8  scenario hash (FNV-1a 64 of the scenario's TOML, [`crate::state::scenario_hash`])
+//!     16     8  scenario hash (FNV-1a 64 of the scenario's TOML, [`flexstage_run::state::scenario_hash`])
 //!     24     8  length S of the scenario TOML
 //!     32     8  length P of the payload
 //!     40     S  the scenario's TOML (for the message that says what changed)
@@ -162,7 +162,7 @@ mod tests {
     fn every_single_bit_flip_is_refused() {
         // Goal: a bit flip anywhere (header, scenario, payload) is detected, never resumed.
         let (s, bytes) = sample();
-        let path = Path::new("design/checkpoint.bin");
+        let path = Path::new(flexstage_run::layout::design::CHECKPOINT);
         for bit in 0..bytes.len() * 8 {
             let mut b = bytes.clone();
             b[bit / 8] ^= 1 << (bit % 8);

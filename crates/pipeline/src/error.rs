@@ -150,21 +150,29 @@ pub enum PipelineError {
 
     #[error(transparent)]
     Twin(#[from] flexstage_twin::TwinError),
-    /// Writing results.
+    /// Reading and writing the run folder.
     #[error(transparent)]
-    Write(#[from] flexstage_report::ReportError),
+    Run(#[from] flexstage_run::RunError),
+    /// The report could not read files that exist (it was written, showing the errors).
+    #[error("{report} was written, but {} file(s) of the run could not be read: {}", errors.len(), errors.join("; "))]
+    Report {
+        /// The report.
+        report: PathBuf,
+        /// What could not be read, and why.
+        errors: Vec<String>,
+    },
     /// Figures.
     #[error(transparent)]
-    Plot(#[from] flexstage_report::plot::PlotError),
+    Plot(#[from] flexstage_figures::plot::PlotError),
     /// VTK files.
     #[error(transparent)]
-    Vtk(#[from] flexstage_report::vtk::VtkError),
+    Vtk(#[from] flexstage_figures::vtk::VtkError),
     /// Outline export.
     #[error(transparent)]
-    Outline(#[from] flexstage_report::outline::OutlineError),
+    Outline(#[from] flexstage_verify::outline::OutlineError),
     /// Density images.
     #[error(transparent)]
-    Image(#[from] flexstage_report::image::ImageError),
+    Image(#[from] flexstage_figures::image::ImageError),
     /// Verification of the exported outline.
     #[error(transparent)]
     Verify(#[from] flexstage_verify::VerifyError),
@@ -173,8 +181,6 @@ pub enum PipelineError {
 /// Result alias of this crate.
 pub type Result<T> = std::result::Result<T, PipelineError>;
 
-/// `Ok` when `ok`, else [`PipelineError::Option`] naming the option, the value and the
-/// accepted range. Non-finite floats never pass (callers include `value.is_finite()`).
 /// The bytes of `path`, or [`PipelineError::Read`] naming it.
 pub(crate) fn read_bytes(path: &std::path::Path) -> Result<Vec<u8>> {
     std::fs::read(path).map_err(|source| PipelineError::Read {
@@ -183,14 +189,8 @@ pub(crate) fn read_bytes(path: &std::path::Path) -> Result<Vec<u8>> {
     })
 }
 
-/// The text of `path`, or [`PipelineError::Read`] naming it.
-pub(crate) fn read_text(path: &std::path::Path) -> Result<String> {
-    std::fs::read_to_string(path).map_err(|source| PipelineError::Read {
-        path: path.to_path_buf(),
-        source,
-    })
-}
-
+/// `Ok` when `ok`, else [`PipelineError::Option`] naming the option, the value and the
+/// accepted range. Non-finite floats never pass (callers include `value.is_finite()`).
 pub(crate) fn require(
     ok: bool,
     option: &'static str,

@@ -7,9 +7,9 @@
 use std::path::PathBuf;
 
 use flexstage_fem::Kinematics;
-use flexstage_report::layout::export as files;
-use flexstage_report::outline::{Outline, Unit};
+use flexstage_run::layout::export as files;
 use flexstage_topopt::Problem;
+use flexstage_verify::outline::{Outline, Unit};
 use flexstage_verify::{Verification, VerifyParams};
 
 use crate::error::{Result, require};
@@ -165,7 +165,12 @@ pub fn export(folder: &RunFolder, options: &ExportOptions) -> Result<ExportSumma
         p.validate()?;
         match flexstage_verify::verify(s, &rho, &outline.loops, &p) {
             Ok(v) => {
-                files.extend(flexstage_verify::write_files(&v, run)?);
+                let mut text = v.summary_lines().join("\n");
+                text.push('\n');
+                run.store(files::VERIFICATION_JSON, crate::convert::verification(&v))?;
+                files.push(run.path(files::VERIFICATION_JSON));
+                files.push(run.write(files::VERIFICATION_TXT, text.as_bytes())?);
+                files.push(run.write(files::BODY_FITTED_VTU, v.to_vtu().as_bytes())?);
                 verification = Some(Box::new(v));
             }
             Err(e) => verify_error = Some(e.to_string()),

@@ -2,9 +2,11 @@
 //! workspace polygons.
 
 use flexstage_fem::Design;
-use flexstage_report::plot::{Figure, Series};
-use flexstage_report::vtk::{PointField, QuadMesh};
-use flexstage_report::{RunDir, csv_columns, read_csv_columns};
+use flexstage_figures::mode_shape;
+use flexstage_figures::plot::{Figure, Series};
+use flexstage_figures::vtk::{PointField, QuadMesh};
+use flexstage_run::files::design::POLYGON;
+use flexstage_run::{RunDir, Table};
 use flexstage_topopt::{CaseResults as Response, Problem};
 
 use crate::error::Result;
@@ -47,14 +49,21 @@ pub(crate) fn write_vtu(
     Ok(())
 }
 
-/// Mode shapes as VTU for ParaView and the report: one `mode_<k>_<f>Hz` point array per mode
-/// (full-length shapes, scaled to a largest component of 1) and the cell densities.
-pub(crate) fn modes_vtu(
+/// Width of the mode-shape pictures \[px\] (two per row of the report).
+const MODE_PNG_WIDTH: u32 = 640;
+
+/// Mode shapes of a design: a VTU for ParaView at `vtu` (one `mode_<k>_<f>Hz` point array per
+/// mode, scaled to a largest nodal displacement of 1, and the cell densities) and the lowest
+/// `pngs` as pictures at `png(k)` (k from 1; the solid cells drawn deformed).
+pub(crate) fn write_modes(
+    run: &RunDir,
+    vtu: &str,
+    png: impl Fn(usize) -> String,
+    pngs: usize,
     mesh: &flexstage_fem::Mesh,
     rho: &[f64],
-    shapes: &[Vec<f64>],
-    frequencies: &[f64],
-) -> Result<String> {
+    (shapes, frequencies): (&[Vec<f64>], &[f64]),
+) -> Result<()> {
     let points: Vec<[f64; 2]> = (0..mesh.n_nodes()).map(|n| mesh.node_coords(n)).collect();
     let cells: Vec<[usize; 4]> = (0..mesh.n_elements())
         .map(|e| mesh.element_nodes(e))
@@ -73,7 +82,7 @@ pub(crate) fn modes_vtu(
         .enumerate()
         .map(|(k, f)| format!("mode_{}_{:.0}Hz", k + 1, f))
         .collect();
-    Ok(QuadMesh {
+    let text = QuadMesh {
         points: &points,
         cells: &cells,
         point_data: names
@@ -83,11 +92,23 @@ pub(crate) fn modes_vtu(
             .collect(),
         cell_data: vec![("density", rho)],
     }
-    .to_vtu()?)
+    .to_vtu()?;
+    run.write(vtu, text.as_bytes())?;
+    let picture = mode_shape::Mesh {
+        points: &points,
+        cells: &cells,
+        density: Some(rho),
+    };
+    for (k, shape) in shapes.iter().take(pngs).enumerate() {
+        if let Some(bytes) = mode_shape::png(&picture, shape, MODE_PNG_WIDTH) {
+            run.write(&png(k + 1), &bytes)?;
+        }
+    }
+    Ok(())
 }
 
 /// Per-case table: nominal strokes, input displacements, output (µm) and strain energy (J).
-pub(crate) fn cases_csv(problem: &Problem, r: &Response) -> String {
+pub(crate) fn cases_table(problem: &Problem, r: &Response) -> Table {
     let col = |f: &dyn Fn(usize) -> f64| (0..r.outputs.len()).map(f).collect::<Vec<f64>>();
     let second = |v: &[f64]| v.get(1).copied().unwrap_or(0.0) * 1e6;
     let x1 = col(&|k| problem.cases[k][0] * 1e6);
@@ -96,7 +117,7 @@ pub(crate) fn cases_csv(problem: &Problem, r: &Response) -> String {
     let u2 = col(&|k| second(&r.inputs[k]));
     let xo = col(&|k| r.outputs[k][0] * 1e6);
     let yo = col(&|k| r.outputs[k][1] * 1e6);
-    csv_columns(
+    Table::new(
         &[
             "x_nom1_um",
             "x_nom2_um",
@@ -106,7 +127,7 @@ pub(crate) fn cases_csv(problem: &Problem, r: &Response) -> String {
             "y_out_um",
             "strain_energy_J",
         ],
-        &[&x1, &x2, &u1, &u2, &xo, &yo, &r.energies],
+        vec![x1, x2, u1, u2, xo, yo, r.energies.clone()],
     )
 }
 
@@ -122,22 +143,20 @@ pub(crate) fn polygon_svg(title: &str, polys: &[(String, &[[f64; 2]])]) -> Resul
     Ok(fig.to_svg()?)
 }
 
-const POLYGON_HEADER: [&str; 2] = ["x_out_um", "y_out_um"];
-
-/// An output polygon \[m\] as CSV in µm.
-pub(crate) fn polygon_csv(p: &[[f64; 2]]) -> String {
+/// An output polygon \[m\] as a table in µm.
+pub(crate) fn polygon_table(p: &[[f64; 2]]) -> Table {
     let x: Vec<f64> = p.iter().map(|q| q[0] * 1e6).collect();
     let y: Vec<f64> = p.iter().map(|q| q[1] * 1e6).collect();
-    csv_columns(&POLYGON_HEADER, &[&x, &y])
+    Table::new(&POLYGON, vec![x, y])
 }
 
-/// Reads back [`polygon_csv`] (metres); rows with a missing value are skipped.
-pub(crate) fn read_polygon_csv(text: &str) -> Vec<[f64; 2]> {
-    let Some(c) = read_csv_columns(text, &POLYGON_HEADER) else {
+/// Reads back [`polygon_table`] (metres); rows with a missing value are skipped.
+pub(crate) fn table_polygon(t: &Table) -> Vec<[f64; 2]> {
+    let Ok(c) = t.columns(&POLYGON) else {
         return Vec::new();
     };
     c[0].iter()
-        .zip(&c[1])
+        .zip(c[1])
         .filter(|(x, y)| x.is_finite() && y.is_finite())
         .map(|(x, y)| [x * 1e-6, y * 1e-6])
         .collect()
@@ -146,15 +165,16 @@ pub(crate) fn read_polygon_csv(text: &str) -> Vec<[f64; 2]> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flexstage_run::Format;
 
     #[test]
     fn polygons_round_trip_through_csv() {
         let p = [[1e-6, -2.5e-6], [3.25e-6, 4e-7]];
-        let back = read_polygon_csv(&polygon_csv(&p));
+        let back = table_polygon(&Table::decode(&polygon_table(&p).encode().unwrap()).unwrap());
         assert_eq!(back.len(), 2);
         for (a, b) in p.iter().zip(&back) {
             assert!((a[0] - b[0]).abs() < 1e-18 && (a[1] - b[1]).abs() < 1e-18);
         }
-        assert!(read_polygon_csv("a,b\n1,2\n").is_empty());
+        assert!(table_polygon(&Table::decode(b"a,b\n1,2\n").unwrap()).is_empty());
     }
 }

@@ -2,7 +2,7 @@
 //!
 //! A run is one folder, `runs/<scenario name>/` unless the caller picks another. It records
 //! the scenario exactly as used ([`layout::SCENARIO`]) and holds one sub-folder per stage
-//! ([`flexstage_report::layout`]). Every stage receives the scenario *in memory* from
+//! ([`flexstage_run::layout`]). Every stage receives the scenario *in memory* from
 //! [`RunFolder`]; none re-reads the recorded copy. A folder that records another scenario is
 //! refused (saying which fields changed) unless the caller asks to replace it. An open
 //! `RunFolder` holds the folder's lock ([`crate::lock`]), so two processes never work in one
@@ -11,7 +11,7 @@
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-use flexstage_report::{RunDir, layout};
+use flexstage_run::{RunDir, layout};
 use flexstage_scenario::{Preset, Scenario};
 
 use crate::diff::scenario_changes;
@@ -163,20 +163,9 @@ impl RunFolder {
                     hint: hint.into(),
                 });
             }
-            let state = self.dir.path(layout::RUN_STATE);
-            if state.exists() {
-                std::fs::remove_file(&state).map_err(|source| {
-                    flexstage_report::ReportError::Write {
-                        path: state,
-                        source,
-                    }
-                })?;
-            }
+            self.dir.remove_file(layout::RUN_STATE)?;
         }
-        self.dir.write(
-            layout::SCENARIO,
-            self.scenario.to_commented_toml().as_bytes(),
-        )?;
+        self.dir.store(layout::SCENARIO, self.scenario.clone())?;
         Ok(())
     }
 
@@ -208,9 +197,7 @@ impl RunFolder {
 
     /// Whether the stage folder `rel` already holds files (a re-run replaces them).
     pub(crate) fn has_results(&self, rel: &str) -> bool {
-        std::fs::read_dir(self.dir.path(rel))
-            .map(|mut d| d.any(|e| e.is_ok_and(|e| e.path().is_file())))
-            .unwrap_or(false)
+        self.dir.has_files(rel)
     }
 }
 
@@ -284,9 +271,10 @@ mod tests {
         let mut child = std::process::Command::new("true").spawn().unwrap();
         let dead = child.id();
         child.wait().unwrap();
-        let tmp = root
-            .join("design")
-            .join(flexstage_report::temporary_name("design.json", dead));
+        let tmp = root.join("design").join(flexstage_run::temporary_name(
+            layout::design::DESIGN.rsplit('/').next().unwrap(),
+            dead,
+        ));
         std::fs::create_dir_all(tmp.parent().unwrap()).unwrap();
         std::fs::write(&tmp, "half").unwrap();
         let f = RunFolder::existing(&root).unwrap();

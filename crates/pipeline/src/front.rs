@@ -19,7 +19,7 @@
 //! * **Files** in `front/` ([`flexstage_report::layout::front`]): `front.csv`, `front.json`, the figure
 //!   `front.svg` (workspace against first resonance, each design's tracking error at the named
 //!   scan speed in the legend), and per design `d<k>/`: `design.json` (a design source for the
-//!   other commands), `outline.svg`, `modes.vtu`.
+//!   other commands), `outline.svg`, `modes.vtu` and the lowest mode shapes as pictures.
 
 use std::time::Instant;
 
@@ -27,13 +27,16 @@ use flexstage_assess::sweep::{self, SweepParams};
 use flexstage_assess::{Bench, Candidate};
 use flexstage_control::experiment::{Setup, Variant};
 use flexstage_control::tuning::TuningParams;
-use flexstage_report::layout::front as files;
-use flexstage_report::outline::{Outline, Unit};
-use flexstage_report::plot::{Figure, Legend, Series};
+use flexstage_figures::plot::{Figure, Legend, Series};
+use flexstage_run::Table;
+use flexstage_run::files::design::{DESIGN_VERSION, DesignFile};
+use flexstage_run::files::front::VERSION;
+pub use flexstage_run::files::front::{FrontDesign, FrontFile, ScanError};
+use flexstage_run::layout::front as files;
 use flexstage_scenario::{ObjectiveKind, Scenario};
 use flexstage_topopt::summary::final_analysis;
-use flexstage_topopt::{DesignFile, ModalParams, Optimizer, OptimizerParams, Problem, stage_modes};
-use serde::{Deserialize, Serialize};
+use flexstage_topopt::{ModalParams, Optimizer, OptimizerParams, Problem, stage_modes};
+use flexstage_verify::outline::{Outline, Unit};
 
 use crate::error::{PipelineError, Result, require};
 use crate::folder::RunFolder;
@@ -117,88 +120,13 @@ impl FrontOptions {
     }
 }
 
-/// One controller's steady RMS tracking error at the named scan speed.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ScanError {
-    /// The controller (`track`'s name).
-    pub controller: String,
-    /// RMS error per axis \[m\] (∞: diverged).
-    pub rms: [f64; 2],
-    /// The same in % of each axis's range.
-    pub percent: [f64; 2],
-    /// Lissajous amplitudes the rig could deliver at that speed \[m\].
-    pub amplitude: [f64; 2],
-}
-
-/// One design of the front and its checks.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FrontDesign {
-    /// Its index k (0: the workspace design).
-    pub index: usize,
-    /// The first-frequency bound it was designed for \[Hz\] (0: none).
-    pub min_frequency_hz: f64,
-    /// Why its optimization stopped.
-    pub stop: String,
-    /// Design iterations.
-    pub iterations: usize,
-    /// Wall-clock time of its optimization \[s\].
-    pub seconds: f64,
-    /// The final analysis (area, α, mass, stresses, sizes, symmetry, frequencies).
-    pub design: flexstage_topopt::DesignSummary,
-    /// The body-fitted verification's first frequency \[Hz\] (None: not verified).
-    pub body_fitted_hz: Option<f64>,
-    /// The body-fitted peak von Mises stress (the larger of the two meshes) \[Pa\].
-    pub body_fitted_stress: Option<f64>,
-    /// The verification's verdict and its reasons (why not when it could not run).
-    pub safe: bool,
-    /// Reasons for an unsafe verdict.
-    pub reasons: Vec<String>,
-    /// The twin's first resonance \[Hz\] (None: no twin).
-    pub twin_hz: Option<f64>,
-    /// Each controller's error at the named scan speed (empty: beyond the sweep's reach,
-    /// 0.45 of the twin's first resonance, or no twin).
-    pub scan: Vec<ScanError>,
-}
-
-impl FrontDesign {
-    /// The controller with the smallest worse-axis error at the scan speed.
-    pub fn best(&self) -> Option<&ScanError> {
-        self.scan
-            .iter()
-            .filter(|e| e.percent.iter().all(|p| p.is_finite()))
-            .min_by(|a, b| worst(a).total_cmp(&worst(b)))
-    }
-}
-
-fn worst(e: &ScanError) -> f64 {
-    e.percent[0].max(e.percent[1])
-}
-
-/// What `front` computed.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// What `front` computed: the front as `front/front.json` holds it, and the folder.
+#[derive(Debug, Clone, PartialEq)]
 pub struct FrontSummary {
-    /// The scan speed named \[Hz\].
-    pub scan_hz: f64,
-    /// The accepted tracking error at that speed \[% of range\].
-    pub max_error_pct: f64,
-    /// The designs, lowest bound first.
-    pub designs: Vec<FrontDesign>,
-    /// Wall-clock time \[s\].
-    pub seconds: f64,
+    /// The front.
+    pub front: FrontFile,
     /// The folder written.
-    #[serde(skip)]
     pub dir: std::path::PathBuf,
-}
-
-impl FrontSummary {
-    /// The design the scan speed and the accepted error pick: the largest workspace among the
-    /// verified-safe designs whose best controller tracks within `max_error_pct` on both axes.
-    pub fn pick(&self) -> Option<&FrontDesign> {
-        self.designs
-            .iter()
-            .filter(|d| d.safe && d.best().is_some_and(|b| worst(b) <= self.max_error_pct))
-            .max_by(|a, b| a.design.area.total_cmp(&b.design.area))
-    }
 }
 
 /// Builds the front (module docs) and writes its files.
@@ -248,15 +176,18 @@ pub fn front(
         designs.push(d);
         x = Some(xk);
     }
-    let summary = FrontSummary {
+    let front = FrontFile {
+        version: VERSION,
         scan_hz: options.scan_hz,
         max_error_pct: options.max_error_pct,
         designs,
         seconds: t0.elapsed().as_secs_f64(),
-        dir: folder.dir().path(files::DIR),
     };
-    write_front(folder, &summary)?;
-    Ok(summary)
+    write_front(folder, &front)?;
+    Ok(FrontSummary {
+        front,
+        dir: folder.dir().path(files::DIR),
+    })
 }
 
 /// The scenario of the front: the run's, with its resonance bound removed (d0 is the workspace
@@ -342,8 +273,9 @@ fn design_one(
     let fin = final_analysis(s, dens, opt.params().robust)?;
     let run = folder.dir();
     let mesh = problem.mesh();
+    let record = crate::convert::design_record(&fin.summary);
     let file = DesignFile {
-        version: 1,
+        version: DESIGN_VERSION,
         scenario: s.name.clone(),
         nl: mesh.nl,
         nw: mesh.nw,
@@ -352,13 +284,18 @@ fn design_one(
         area_initial: opt.history()[0].area,
         area: fin.summary.area,
         grey_fraction: opt.history().last().map_or(0.0, |r| r.grey),
-        summary: Some(fin.summary.clone()),
+        summary: Some(record.clone()),
     };
-    run.write(files::design(k), file.to_json().as_bytes())?;
+    run.store(&files::design(k), file)?;
     let modes = stage_modes(&problem, &rho, &ModalParams::default(), false)?;
-    run.write(
-        files::modes(k),
-        crate::figures::modes_vtu(mesh, &rho, &modes.shapes, &modes.frequencies)?.as_bytes(),
+    crate::figures::write_modes(
+        run,
+        &files::modes(k),
+        |m| files::mode_png(k, m),
+        files::MODE_PNGS,
+        mesh,
+        &rho,
+        (&modes.shapes, &modes.frequencies),
     )?;
     let mut d = FrontDesign {
         index: k,
@@ -366,7 +303,7 @@ fn design_one(
         stop: format!("{stop:?}"),
         iterations: opt.history().len(),
         seconds,
-        design: fin.summary,
+        design: record,
         body_fitted_hz: None,
         body_fitted_stress: None,
         safe: false,
@@ -393,7 +330,7 @@ fn verify_one(
     let outline =
         Outline::from_fem_order(nl, nw, dx, dy, o.level, o.smoothing, rho)?.refined(o.max_chord);
     folder.dir().write(
-        files::outline(k),
+        &files::outline(k),
         outline.to_svg(Unit::Millimetres).as_bytes(),
     )?;
     let p = flexstage_verify::VerifyParams::from_limits(&s.limits);
@@ -486,35 +423,19 @@ fn assess_one(
 }
 
 /// `front.json`, `front.csv` and the figure `front.svg`.
-fn write_front(folder: &RunFolder, f: &FrontSummary) -> Result<()> {
+fn write_front(folder: &RunFolder, f: &FrontFile) -> Result<()> {
     let run = folder.dir();
-    run.write(files::JSON, crate::error::to_json(f).as_bytes())?;
-    run.write(files::CSV, front_csv(f).as_bytes())?;
+    run.store(files::JSON, f.clone())?;
+    run.store(files::CSV, front_table(f))?;
     run.write(files::SVG, front_svg(f)?.as_bytes())?;
     Ok(())
 }
 
-fn front_csv(f: &FrontSummary) -> String {
+fn front_table(f: &FrontFile) -> Table {
     let col = |g: &dyn Fn(&FrontDesign) -> f64| f.designs.iter().map(g).collect::<Vec<f64>>();
     let opt = |v: Option<f64>| v.unwrap_or(f64::NAN);
     let best = |d: &FrontDesign, a: usize| d.best().map_or(f64::NAN, |b| b.percent[a]);
-    let cols = [
-        col(&|d| d.index as f64),
-        col(&|d| d.min_frequency_hz),
-        col(&|d| d.design.area),
-        col(&|d| opt(d.design.first_frequency_hz)),
-        col(&|d| opt(d.body_fitted_hz)),
-        col(&|d| opt(d.twin_hz)),
-        col(&|d| d.design.mass),
-        col(&|d| d.design.peak_stress),
-        col(&|d| opt(d.body_fitted_stress)),
-        col(&|d| f64::from(u8::from(d.safe))),
-        col(&|d| best(d, 0)),
-        col(&|d| best(d, 1)),
-        col(&|d| d.iterations as f64),
-    ];
-    let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-    flexstage_report::csv_columns(
+    Table::new(
         &[
             "design",
             "min_frequency_hz",
@@ -530,13 +451,27 @@ fn front_csv(f: &FrontSummary) -> String {
             "best_scan_error_q2_pct",
             "iterations",
         ],
-        &refs,
+        vec![
+            col(&|d| d.index as f64),
+            col(&|d| d.min_frequency_hz),
+            col(&|d| d.design.area),
+            col(&|d| opt(d.design.first_frequency_hz)),
+            col(&|d| opt(d.body_fitted_hz)),
+            col(&|d| opt(d.twin_hz)),
+            col(&|d| d.design.mass),
+            col(&|d| d.design.peak_stress),
+            col(&|d| opt(d.body_fitted_stress)),
+            col(&|d| f64::from(u8::from(d.safe))),
+            col(&|d| best(d, 0)),
+            col(&|d| best(d, 1)),
+            col(&|d| d.iterations as f64),
+        ],
     )
 }
 
-/// Workspace against first resonance, one point per design, its best controller's error at
+/// Workspace against first resonance, one marker per design, its best controller's error at
 /// the scan speed in the legend.
-fn front_svg(f: &FrontSummary) -> Result<String> {
+fn front_svg(f: &FrontFile) -> Result<String> {
     let mut fig = Figure::new(
         format!(
             "Workspace–first-resonance front (tracking error at a {:.0} Hz scan)",

@@ -26,8 +26,11 @@
 //!   is the only place its defaults live, and whose `validate()` names the option, the value
 //!   and the accepted range. The CLI takes its defaults from these. The default scenario of
 //!   every command is [`DEFAULT_PRESET`].
-//! * **One layout.** Every file of a run folder is named in [`flexstage_report::layout`]; the
-//!   stages write and the HTML report reads through it.
+//! * **One typed run folder.** Every file of a run folder is named in
+//!   [`flexstage_run::layout`] and has its type in [`flexstage_run::files`]; the stages store
+//!   their results through it (the private `convert` module turns the stage crates' values into the file
+//!   types), and a value a stage holds is passed on in memory (the folder's session keeps
+//!   what was stored or loaded, so no file is parsed twice in one process).
 //! * **Nothing overwritten silently.** `design` refuses to replace a finished or interrupted
 //!   design unless forced; analyses and tracking conditions get their own folders
 //!   (`analyze/inputs_30_-30/`, `track/compensation-off/`); every other stage reports in its
@@ -35,7 +38,8 @@
 //! * **No printing.** Progress goes to a [`Progress`] (the CLI draws bars), results come back
 //!   as typed summaries.
 //! * **Resumable, bitwise.** [`run::run`] records finished stages in `run_state.json`
-//!   ([`RunState`], the one place that reads and writes it) and resumes after them; an
+//!   ([`RunState`]), each with the files it wrote and their SHA-256, and resumes after them
+//!   once their files are checked (a stage whose files are gone or changed is done again); an
 //!   interrupted design continues from its checkpoint to the same bits as an uninterrupted
 //!   one (floats in checkpoint headers round-trip exactly: serde_json's `float_roundtrip`).
 //!
@@ -45,6 +49,7 @@
 //! lumped model, also the fallback before a design exists).
 
 pub mod analyze;
+mod convert;
 pub mod design;
 pub mod diff;
 pub mod envelope;
@@ -97,6 +102,6 @@ pub use twin::{TwinOptions, TwinSummary, TwinValidation, write_twin};
 /// The stage crates' types that appear in options and summaries.
 pub use flexstage_control::{actuator::Compensation, experiment::Variant};
 pub use flexstage_piezo::WaveShape;
-pub use flexstage_report::outline::Unit;
 pub use flexstage_scenario::Scenario;
+pub use flexstage_verify::outline::Unit;
 pub use flexstage_verify::{Verification, VerifyParams};

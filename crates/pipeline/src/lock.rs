@@ -24,7 +24,7 @@ use std::io::{ErrorKind, Write};
 use std::path::{Path, PathBuf};
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
-use flexstage_report::layout;
+use flexstage_run::layout;
 use serde::{Deserialize, Serialize};
 
 use crate::error::{PipelineError, Result};
@@ -119,7 +119,7 @@ impl RunLock {
     /// Takes the lock of the run folder `root` (creating the folder if needed): refuses with
     /// [`PipelineError::Locked`] while another live process holds it, takes over a stale one.
     pub fn acquire(root: &Path) -> Result<RunLock> {
-        fs::create_dir_all(root).map_err(|source| flexstage_report::ReportError::Write {
+        fs::create_dir_all(root).map_err(|source| flexstage_run::RunError::Write {
             path: root.to_path_buf(),
             source,
         })?;
@@ -208,7 +208,7 @@ impl Drop for RunLock {
 
 /// Creates `path` holding `text` if it does not exist; `false` if it does.
 fn create_with(path: &Path, text: &str) -> Result<bool> {
-    let err = |source| flexstage_report::ReportError::Write {
+    let err = |source| flexstage_run::RunError::Write {
         path: path.to_path_buf(),
         source,
     };
@@ -270,7 +270,7 @@ fn take_over(path: &Path, stale: &str, ours: &str) -> Result<bool> {
         if read(path)?.as_deref() != Some(stale) {
             return Ok(false);
         }
-        fs::remove_file(path).map_err(|source| flexstage_report::ReportError::Write {
+        fs::remove_file(path).map_err(|source| flexstage_run::RunError::Write {
             path: path.to_path_buf(),
             source,
         })?;
@@ -380,7 +380,7 @@ mod tests {
         let msg = e.to_string();
         assert!(matches!(e, PipelineError::Locked { .. }), "{msg}");
         assert!(
-            msg.contains(&format!("PID {}", std::process::id())) && msg.contains("run.lock"),
+            msg.contains(&format!("PID {}", std::process::id())) && msg.contains(layout::LOCK),
             "{msg}"
         );
         drop(lock);

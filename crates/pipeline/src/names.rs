@@ -4,7 +4,7 @@
 use flexstage_control::actuator::Compensation;
 use flexstage_identify::regression::Scheme;
 use flexstage_piezo::WaveShape;
-use flexstage_report::outline::Unit;
+use flexstage_verify::outline::Unit;
 
 /// Length units of exported drawings.
 pub const UNITS: [(&str, Unit); 2] = [("mm", Unit::Millimetres), ("m", Unit::Metres)];

@@ -4,13 +4,13 @@
 
 use std::path::{Path, PathBuf};
 
+use flexstage_figures::plot::{Figure, Series};
 use flexstage_piezo::{
     BoucWenParams, CompensatorParams, LoopMetrics, LoopParams, PeaData, WaveShape, Waveform,
     compensated_loop, loop_metrics, steady_state_loop, synthesize,
 };
-use flexstage_report::layout::{self, PeaIdentification};
-use flexstage_report::plot::{Figure, Series};
-use flexstage_report::{ReportError, csv_columns, write_atomic};
+use flexstage_run::layout::{self, PeaIdentification};
+use flexstage_run::{RunError, Table, write_atomic};
 use flexstage_scenario::Scenario;
 
 use crate::error::{PipelineError, Result, require};
@@ -179,7 +179,7 @@ pub fn write_pea_record(folder: &RunFolder, rec: &PeaRecord) -> Result<(Vec<Path
     let n = rec.options.pea;
     let run = folder.dir();
     let replaced = run.exists(layout::pea::record(n));
-    let csv = run.write(layout::pea::record(n), rec.data.to_csv().as_bytes())?;
+    let csv = run.write(&layout::pea::record(n), rec.data.to_csv().as_bytes())?;
     let points = rec
         .data
         .u()
@@ -196,14 +196,14 @@ pub fn write_pea_record(folder: &RunFolder, rec: &PeaRecord) -> Result<(Vec<Path
         "x [µm]",
     )
     .with(Series::line("x(U)", points));
-    let svg = run.write(layout::pea::loop_svg(n), fig.to_svg()?.as_bytes())?;
+    let svg = run.write(&layout::pea::loop_svg(n), fig.to_svg()?.as_bytes())?;
     Ok((vec![csv, svg], replaced))
 }
 
 /// Writes only the record's CSV to `path`; an existing file is kept unless `force`.
 pub fn write_pea_csv(path: &Path, rec: &PeaRecord, force: bool) -> Result<()> {
     if path.exists() && !force {
-        return Err(ReportError::Exists {
+        return Err(RunError::Exists {
             path: path.to_path_buf(),
         }
         .into());
@@ -326,6 +326,18 @@ pub fn identify_pea(folder: &RunFolder, options: &PeaIdOptions) -> Result<PeaIdS
         source,
     })?;
     let data = PeaData::from_csv(std::io::BufReader::new(file), &path.display().to_string())?;
+    identify_pea_data(folder, options, &path, &data)
+}
+
+/// [`identify_pea`] on a record in memory, read from (or written to) `path`.
+fn identify_pea_data(
+    folder: &RunFolder,
+    options: &PeaIdOptions,
+    path: &Path,
+    data: &PeaData,
+) -> Result<PeaIdSummary> {
+    let run = folder.dir();
+    let path = path.to_path_buf();
     let params = flexstage_piezo::IdentifyParams {
         forgetting: options.forgetting,
         passes: options.passes,
@@ -337,8 +349,8 @@ pub fn identify_pea(folder: &RunFolder, options: &PeaIdOptions) -> Result<PeaIdS
         path: path.display().to_string(),
         reason: e.to_string(),
     };
-    let online = flexstage_piezo::identify(&data, &params).map_err(of_record)?;
-    let batch = flexstage_piezo::fit_batch(&data).map_err(of_record)?;
+    let online = flexstage_piezo::identify(data, &params).map_err(of_record)?;
+    let batch = flexstage_piezo::fit_batch(data).map_err(of_record)?;
     let (recommended, best) =
         if batch.rms_error <= online.rms_error || !online.rms_error.is_finite() {
             ("batch", batch.estimate)
@@ -382,7 +394,7 @@ pub fn identify_pea(folder: &RunFolder, options: &PeaIdOptions) -> Result<PeaIdS
     let files = crate::pea_files::Outputs {
         run,
         out,
-        data: &data,
+        data,
         summary: &summary,
         reference,
         best,
@@ -420,7 +432,10 @@ pub fn simulate_and_identify_each(
             data: None,
             ..id.clone()
         };
-        identify_pea(folder, &options)
+        // The record just written is identified from memory, not read back.
+        let path = folder.dir().path(layout::pea::record(n));
+        options.validate()?;
+        identify_pea_data(folder, &options, &path, &rec.data)
     };
     let (a, b) = rayon::join(|| one(PEAS[0]), || one(PEAS[1]));
     Ok(vec![a?, b?])
@@ -514,8 +529,8 @@ fn compensation(
         pairs(&after.x_desired, &after.x),
     ));
     let run = folder.dir();
-    run.write(out.compensation_svg(), fig.to_svg()?.as_bytes())?;
-    let csv = csv_columns(
+    run.write(&out.compensation_svg(), fig.to_svg()?.as_bytes())?;
+    let table = Table::of(
         &[
             "nominal_um",
             "x_uncompensated_um",
@@ -524,7 +539,7 @@ fn compensation(
         ],
         &[&nominal, &before.output, &after.x_desired, &after.x],
     );
-    run.write(out.compensation_csv(), csv.as_bytes())?;
+    run.store(&out.compensation_csv(), table)?;
     Ok(CompensationSummary {
         width_before_pct: loop_metrics(&nominal, &before.output)
             .map(|m| m.width_pct)
@@ -609,9 +624,9 @@ mod tests {
             let out = PeaIdentification { pea: sum.pea };
             assert!(folder.dir().exists(out.estimates()), "PEA{}", sum.pea);
         }
-        let records: Vec<String> = PEAS
+        let records: Vec<Vec<u8>> = PEAS
             .iter()
-            .map(|&n| folder.dir().read_to_string(layout::pea::record(n)).unwrap())
+            .map(|&n| folder.dir().read(&layout::pea::record(n)).unwrap().unwrap())
             .collect();
         assert_ne!(records[0], records[1]);
         std::fs::remove_dir_all(&root).unwrap();

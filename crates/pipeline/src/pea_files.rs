@@ -1,13 +1,14 @@
 //! The result files of the PEA identification ([`PeaIdentification`]): the estimates, the
 //! convergence history (Figure A2) and the record against the identified model.
 
+use flexstage_figures::plot::{Figure, Series};
 use flexstage_piezo::{BoucWenParams, HistoryPoint, LoopMetrics, PeaData, simulate};
-use flexstage_report::layout::PeaIdentification;
-use flexstage_report::plot::{Figure, Series};
-use flexstage_report::{RunDir, csv_columns};
-use serde::Serialize;
+use flexstage_run::files::pea::{Method, PeaEstimates, VERSION};
+use flexstage_run::layout::PeaIdentification;
+use flexstage_run::{RunDir, Table};
+use flexstage_scenario::BoucWen;
 
-use crate::error::{PipelineError, Result};
+use crate::error::Result;
 use crate::pea::{PeaEstimate, PeaIdSummary};
 
 /// Everything the files are made from.
@@ -24,42 +25,6 @@ pub(crate) struct Outputs<'a> {
     pub record: LoopMetrics,
     /// Convergence of the parallel RLS.
     pub history: &'a [HistoryPoint],
-}
-
-#[derive(Serialize)]
-struct Estimates {
-    /// Record identified.
-    data: String,
-    samples: usize,
-    /// Which estimate is recommended and used for loop.svg: the one with the lower RMS error
-    /// of the simulated model along the record.
-    recommended: &'static str,
-    recommended_params: BoucWenParams,
-    parallel_rls: Method,
-    batch: Method,
-    /// The scenario's parameters of this PEA, for comparison.
-    scenario: BoucWenParams,
-    /// Hysteresis of the record: width and maximum deviation from linear, % of range.
-    record_width_pct: f64,
-    record_max_deviation_pct: f64,
-}
-
-#[derive(Serialize)]
-struct Method {
-    params: BoucWenParams,
-    /// RMS of x − x_model along the record \[µm\].
-    rms_error_um: f64,
-    /// Relative difference to the scenario's parameters \[%\].
-    difference_to_scenario_pct: Diff,
-}
-
-#[derive(Serialize)]
-struct Diff {
-    d_p: f64,
-    a_bw: f64,
-    b_bw: f64,
-    gamma_bw: f64,
-    delta_bw: f64,
 }
 
 /// One parameter of [`BoucWenParams`].
@@ -84,9 +49,9 @@ fn method(e: &PeaEstimate, reference: &BoucWenParams) -> Method {
         }
     };
     Method {
-        params: e.params,
+        params: BoucWen::from(&e.params),
         rms_error_um: e.rms_error,
-        difference_to_scenario_pct: Diff {
+        difference_to_scenario_pct: BoucWen {
             d_p: r(PARAMETERS[0].2),
             a_bw: r(PARAMETERS[1].2),
             b_bw: r(PARAMETERS[2].2),
@@ -106,26 +71,19 @@ impl Outputs<'_> {
 
     fn write_estimates(&self) -> Result<()> {
         let s = self.summary;
-        let estimates = Estimates {
+        let estimates = PeaEstimates {
+            version: VERSION,
             data: s.data.display().to_string(),
             samples: s.samples,
-            recommended: s.recommended,
-            recommended_params: self.best,
-            parallel_rls: method(&s.online, &self.reference),
-            batch: method(&s.batch, &self.reference),
-            scenario: self.reference,
+            recommended: s.recommended.to_string(),
             record_width_pct: self.record.width_pct,
             record_max_deviation_pct: self.record.max_deviation_pct,
+            recommended_params: BoucWen::from(&self.best),
+            parallel_rls: method(&s.online, &self.reference),
+            batch: method(&s.batch, &self.reference),
+            scenario: BoucWen::from(&self.reference),
         };
-        let body = toml::to_string_pretty(&estimates).map_err(|e| PipelineError::Format {
-            path: self.out.estimates(),
-            reason: e.to_string(),
-        })?;
-        let text = format!(
-            "# Bouc–Wen estimates, Eq. (18) with n = 1: x, h in µm, U in V, t in s\n\
-             # (d_p, a_bw in µm/V; b_bw, gamma_bw in 1/V; delta_bw in µm/(V·s)).\n{body}"
-        );
-        self.run.write(self.out.estimates(), text.as_bytes())?;
+        self.run.store(&self.out.estimates(), estimates)?;
         Ok(())
     }
 
@@ -140,12 +98,10 @@ impl Outputs<'_> {
             .collect();
         let mut header = vec!["t"];
         header.extend(PARAMETERS.iter().map(|c| c.0));
-        let mut columns: Vec<&[f64]> = vec![&t];
-        columns.extend(values.iter().map(Vec::as_slice));
-        self.run.write(
-            self.out.convergence_csv(),
-            csv_columns(&header, &columns).as_bytes(),
-        )?;
+        let mut columns = vec![t.clone()];
+        columns.extend(values.iter().cloned());
+        self.run
+            .store(&self.out.convergence_csv(), Table::new(&header, columns))?;
         let mut fig = Figure::new(
             "Parallel RLS convergence (estimate / batch estimate)",
             "t [s]",
@@ -161,18 +117,18 @@ impl Outputs<'_> {
             fig = fig.with(Series::line(c.1, points));
         }
         self.run
-            .write(self.out.convergence_svg(), fig.to_svg()?.as_bytes())?;
+            .write(&self.out.convergence_svg(), fig.to_svg()?.as_bytes())?;
         Ok(())
     }
 
     fn write_loop(&self) -> Result<()> {
         let d = self.data;
         let x_model = simulate(&self.best, d.t(), d.u(), 0.0);
-        let csv = csv_columns(
+        let table = Table::of(
             &["t", "U", "x", "x_model"],
             &[d.t(), d.u(), d.x(), &x_model],
         );
-        self.run.write(self.out.loop_csv(), csv.as_bytes())?;
+        self.run.store(&self.out.loop_csv(), table)?;
         let pairs = |x: &[f64], y: &[f64]| x.iter().copied().zip(y.iter().copied()).collect();
         let fig = Figure::new(
             format!(
@@ -185,7 +141,7 @@ impl Outputs<'_> {
         .with(Series::line("measured", pairs(d.u(), d.x())))
         .with(Series::line("model", pairs(d.u(), &x_model)));
         self.run
-            .write(self.out.loop_svg(), fig.to_svg()?.as_bytes())?;
+            .write(&self.out.loop_svg(), fig.to_svg()?.as_bytes())?;
         Ok(())
     }
 }

@@ -5,14 +5,17 @@
 //! has a reduced model of its design ([`layout::reduce::PARAMS`]), the plant is that design:
 //! `stage.truth` becomes the reduced model, and the guess takes from it what the paper treats
 //! as known (Section 4.2: the mass is weighed and α follows from Eq. 27); the stiffnesses and
-//! dampings of the guess stay Table 4's. The derived scenario is recorded in
-//! [`layout::PLANT`]. Without a reduced model the plant is the scenario's own `stage.truth`.
+//! dampings of the guess stay Table 4's. `reduce` records the derived scenario in
+//! [`layout::PLANT`] once. Without a reduced model the plant is the scenario's own
+//! `stage.truth`.
 //!
 //! [`Setup::from_scenario`]: flexstage_control::experiment::Setup::from_scenario
 
 use std::path::{Path, PathBuf};
 
-use flexstage_report::layout;
+use flexstage_run::Format;
+use flexstage_run::files::stage::StageParamsFile;
+use flexstage_run::layout;
 use flexstage_scenario::{Scenario, StageParams};
 
 use crate::error::{PipelineError, Result};
@@ -47,25 +50,30 @@ pub struct Plant {
 
 impl Plant {
     /// The plant of a run folder: the designed stage if the run has a reduced model, else the
-    /// scenario's truth. Writes [`layout::PLANT`] for the designed stage.
+    /// scenario's truth. The reduced model `reduce` stored in this process is not read again.
     pub fn of_run(folder: &RunFolder) -> Result<Plant> {
         let path = folder.dir().path(layout::reduce::PARAMS);
-        if !path.is_file() {
+        let Some(file) = folder
+            .dir()
+            .load::<StageParamsFile>(layout::reduce::PARAMS)?
+        else {
             return Ok(Plant {
                 scenario: folder.scenario().clone(),
                 source: PlantSource::Scenario,
             });
-        }
-        let truth = read_stage_params(&path)?;
-        let scenario = designed(folder.scenario(), truth)?;
-        folder
-            .dir()
-            .write(layout::PLANT, scenario.to_commented_toml().as_bytes())?;
+        };
         Ok(Plant {
-            scenario,
+            scenario: designed(folder.scenario(), file.params.clone())?,
             source: PlantSource::Designed(path),
         })
     }
+}
+
+/// Records the run's simulated stage once it is the reduced model `reduced` ([`layout::PLANT`]).
+pub(crate) fn store_designed(folder: &RunFolder, reduced: &StageParams) -> Result<()> {
+    let plant = designed(folder.scenario(), reduced.clone())?;
+    folder.dir().store(layout::PLANT, plant)?;
+    Ok(())
 }
 
 /// `scenario` with `stage.truth = reduced` and the guess's mass and α from it.
@@ -85,9 +93,6 @@ pub fn read_stage_params(path: &Path) -> Result<StageParams> {
     Ok(read_model_params(path)?.params)
 }
 
-/// The key of the identified cross-axis coupling stiffness k_c \[N/m\] in a parameter file.
-pub const COUPLING_KEY: &str = "coupling";
-
 /// A controller's model read from a parameter file: the stage parameters and the cross-axis
 /// coupling stiffness k_c of Eq. (30) (`flexstage_control::model::StageModel::with_coupling`).
 #[derive(Debug, Clone, PartialEq)]
@@ -99,37 +104,23 @@ pub struct ModelParams {
     pub coupling: f64,
 }
 
-/// Reads a stage parameter file with its optional `coupling` key (a finite stiffness in N/m).
-pub fn read_model_params(path: &Path) -> Result<ModelParams> {
-    let text = crate::error::read_text(path)?;
-    parse_model_params(&text, &path.display().to_string())
+impl From<&StageParamsFile> for ModelParams {
+    fn from(f: &StageParamsFile) -> Self {
+        ModelParams {
+            params: f.params.clone(),
+            coupling: f.coupling.unwrap_or(0.0),
+        }
+    }
 }
 
-/// [`read_model_params`] on the text of a file named `path` (for messages).
-pub fn parse_model_params(text: &str, path: &str) -> Result<ModelParams> {
-    let format = |reason: String| PipelineError::Format {
-        path: path.to_string(),
+/// Reads a stage parameter file with its optional `coupling` key (a finite stiffness in N/m).
+pub fn read_model_params(path: &Path) -> Result<ModelParams> {
+    let bytes = crate::error::read_bytes(path)?;
+    let file = StageParamsFile::decode(&bytes).map_err(|reason| PipelineError::Format {
+        path: path.display().to_string(),
         reason,
-    };
-    let mut table: toml::Table =
-        toml::from_str(text).map_err(|e| format(format!("not a stage parameter table: {e}")))?;
-    let coupling = match table.remove(COUPLING_KEY) {
-        None => 0.0,
-        Some(v) => match v.as_float().or_else(|| v.as_integer().map(|i| i as f64)) {
-            Some(k) if k.is_finite() => k,
-            _ => {
-                return Err(format(format!(
-                    "{COUPLING_KEY} = {v} is not a finite stiffness [N/m] (the cross-axis \
-                     coupling k_c of Eq. 30)"
-                )));
-            }
-        },
-    };
-    let params: StageParams = toml::Value::Table(table)
-        .try_into()
-        .map_err(|e| format(format!("not a stage parameter table: {e}")))?;
-    params.validate("params")?;
-    Ok(ModelParams { params, coupling })
+    })?;
+    Ok(ModelParams::from(&file))
 }
 
 #[cfg(test)]
@@ -155,25 +146,5 @@ mod tests {
         let mut bad = reduced;
         bad.mass = -1.0;
         assert!(designed(&s, bad).is_err());
-    }
-
-    #[test]
-    fn a_parameter_file_keeps_its_coupling() {
-        // Goal: the identified k_c is a real field of params.toml and reads back; a file
-        // without it (reduce) has none; a bad value is refused with the key and the value.
-        let p = crate::folder::preset("quick").unwrap().stage.truth;
-        let body = toml::to_string(&p).unwrap();
-        let with = format!("{COUPLING_KEY} = 1234.5\n{body}");
-        let m = parse_model_params(&with, "params.toml").unwrap();
-        assert_eq!((m.params.clone(), m.coupling), (p.clone(), 1234.5));
-        assert_eq!(parse_model_params(&body, "p").unwrap().coupling, 0.0);
-        let e = parse_model_params(&format!("{COUPLING_KEY} = \"x\"\n{body}"), "p")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("coupling") && e.contains("\"x\""), "{e}");
-        let e = parse_model_params(&format!("typo = 1\n{body}"), "p")
-            .unwrap_err()
-            .to_string();
-        assert!(e.contains("typo"), "unknown keys stay refused: {e}");
     }
 }

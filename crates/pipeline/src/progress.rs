@@ -45,8 +45,16 @@ pub enum RunEvent<'a> {
     StartingOver(StartOver),
     /// Resuming after these finished stages.
     Resuming(&'a [Stage]),
-    /// A stage finished earlier is skipped.
+    /// A stage finished earlier is skipped (its files are present and unchanged).
     Skipped(Stage),
+    /// A stage finished earlier is done again (with every later one) because one of its
+    /// files is missing or changed.
+    Redoing {
+        /// The stage.
+        stage: Stage,
+        /// The file and what is wrong with it.
+        why: String,
+    },
     /// A stage begins.
     Started(Stage),
     /// A stage ended.

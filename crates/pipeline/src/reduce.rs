@@ -8,7 +8,7 @@ use std::path::PathBuf;
 use flexstage_reduce::{
     MassLumping, ModalParams, ReduceParams, Reduction, ValidityParams, reduction_problem,
 };
-use flexstage_report::layout::reduce as files;
+use flexstage_run::layout::reduce as files;
 
 use crate::error::{Result, require};
 use crate::folder::RunFolder;
@@ -148,6 +148,8 @@ pub fn reduce(
         params: &params,
     };
     out.write()?;
+    // From now on the run's simulated stage is the designed one (`plant.toml`).
+    crate::plant::store_designed(folder, &reduction.params)?;
     Ok(ReduceSummary {
         design,
         reduction,

@@ -1,16 +1,17 @@
-//! The result files of `reduce` ([`flexstage_report::layout::reduce`]): the stage parameter
-//! file, the summary (TOML and JSON), the mode shapes and the validity map.
+//! The result files of `reduce` ([`flexstage_run::layout::reduce`]): the stage parameter
+//! file, the summary (TOML and JSON), the mode shapes (VTU and pictures) and the validity map.
 
-use flexstage_reduce::{
-    MassLumping, ReduceParams, Reduction, ValidityMap, ValiditySample, stage_params_toml,
+use flexstage_figures::plot::{Figure, Series};
+use flexstage_reduce::{MassLumping, ReduceParams, Reduction, ValidityMap, ValiditySample};
+use flexstage_run::files::reduce::{
+    ModalSummary, ReduceSummaryFile, ReduceSummaryJson, ReduceSummaryToml, VERSION, ValiditySummary,
 };
-use flexstage_report::layout::reduce as files;
-use flexstage_report::plot::{Figure, Series};
-use flexstage_report::{RunDir, csv_columns};
+use flexstage_run::files::stage::StageParamsFile;
+use flexstage_run::layout::reduce as files;
+use flexstage_run::{RunDir, Table};
 use flexstage_topopt::Problem;
-use serde::Serialize;
 
-use crate::error::{PipelineError, Result, to_json};
+use crate::error::Result;
 use crate::source::DesignSource;
 
 /// Everything the files are made from.
@@ -21,62 +22,6 @@ pub(crate) struct Outputs<'a> {
     pub rho: &'a [f64],
     pub reduction: &'a Reduction,
     pub params: &'a ReduceParams,
-}
-
-#[derive(Debug, Serialize)]
-struct Summary {
-    design: String,
-    mesh: [usize; 2],
-    state: String,
-    /// ∂q/∂x_in, global frame (FE output, rigid translation included).
-    alpha_global: [[f64; 2]; 2],
-    /// Paper's α (Eq. 24): moving frame u_o = q − [½(x_in1 + x_in2), 0].
-    alpha_moving_frame: [[f64; 2]; 2],
-    eq26_residuals: [f64; 2],
-    tan_theta: f64,
-    theta_deg: f64,
-    alpha_scalar: f64,
-    a_theta: [[f64; 2]; 2],
-    a_theta_residual: f64,
-    output_compliance_m_per_n: [[f64; 2]; 2],
-    output_stiffness_n_per_m: [[f64; 2]; 2],
-    k_qo1: f64,
-    k_qo2: f64,
-    mass_kg: f64,
-    volume_fraction: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    operating_output_um: Option<[f64; 2]>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    modal: Option<ModalSummary>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    validity: Option<ValiditySummary>,
-}
-
-#[derive(Debug, Serialize)]
-struct ModalSummary {
-    mass: String,
-    plate_masses: bool,
-    frequencies_hz: Vec<f64>,
-    residuals: Vec<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    input_frequency_hz: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    assumption2_ratio: Option<f64>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    assumption2_holds: Option<bool>,
-    assumption2: String,
-}
-
-#[derive(Debug, Serialize)]
-struct ValiditySummary {
-    metric: String,
-    scales: Vec<f64>,
-    amplitude_um: Vec<f64>,
-    max_error: Vec<f64>,
-    rms_error: Vec<f64>,
-    max_error_linear_fe: Vec<f64>,
-    max_error_within_stroke: f64,
-    largest_scale_within_2_percent: f64,
 }
 
 impl Outputs<'_> {
@@ -121,15 +66,21 @@ impl Outputs<'_> {
              track --params FILE` uses it as the controller's model."
                 .into(),
         ];
-        let text = stage_params_toml(&self.reduction.params, &header);
-        self.run.write(files::PARAMS, text.as_bytes())?;
+        let file = StageParamsFile {
+            header,
+            documented: true,
+            coupling: None,
+            params: self.reduction.params.clone(),
+        };
+        self.run.store(files::PARAMS, file)?;
         Ok(())
     }
 
     fn write_summary(&self) -> Result<()> {
         let r = self.reduction;
         let c = &r.condensation;
-        let summary = Summary {
+        let summary = ReduceSummaryFile {
+            version: VERSION,
             design: self.design.to_string(),
             mesh: [self.problem.mesh().nl, self.problem.mesh().nw],
             state: self.state(),
@@ -153,13 +104,10 @@ impl Outputs<'_> {
             modal: self.modal_summary(),
             validity: r.validity.as_ref().map(validity_summary),
         };
-        let toml = toml::to_string(&summary).map_err(|e| PipelineError::Format {
-            path: files::SUMMARY_TOML.into(),
-            reason: e.to_string(),
-        })?;
-        self.run.write(files::SUMMARY_TOML, toml.as_bytes())?;
         self.run
-            .write(files::SUMMARY_JSON, to_json(&summary).as_bytes())?;
+            .store(files::SUMMARY_TOML, ReduceSummaryToml(summary.clone()))?;
+        self.run
+            .store(files::SUMMARY_JSON, ReduceSummaryJson(summary))?;
         Ok(())
     }
 
@@ -194,15 +142,21 @@ impl Outputs<'_> {
         let Some(m) = &self.reduction.modes else {
             return Ok(());
         };
-        let vtu =
-            crate::figures::modes_vtu(self.problem.mesh(), self.rho, &m.shapes, &m.frequencies)?;
-        self.run.write(files::MODES_VTU, vtu.as_bytes())?;
+        crate::figures::write_modes(
+            self.run,
+            files::MODES_VTU,
+            files::mode_png,
+            files::MODE_PNGS,
+            self.problem.mesh(),
+            self.rho,
+            (&m.shapes, &m.frequencies),
+        )?;
         let k: Vec<f64> = (1..=m.frequencies.len()).map(|k| k as f64).collect();
-        let csv = csv_columns(
+        let table = Table::new(
             &["mode", "frequency_hz", "residual"],
-            &[&k, &m.frequencies, &m.residuals],
+            vec![k, m.frequencies.clone(), m.residuals.clone()],
         );
-        self.run.write(files::MODES_CSV, csv.as_bytes())?;
+        self.run.store(files::MODES_CSV, table)?;
         Ok(())
     }
 }
@@ -260,11 +214,10 @@ fn write_validity_tables(run: &RunDir, v: &ValidityMap) -> Result<()> {
         .map(|(_, f)| v.samples.iter().map(f).collect())
         .collect();
     let header: Vec<&str> = SAMPLE_COLUMNS.iter().map(|(n, _)| *n).collect();
-    let refs: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-    run.write(files::VALIDITY_CSV, csv_columns(&header, &refs).as_bytes())?;
+    run.store(files::VALIDITY_CSV, Table::new(&header, cols))?;
     let sc: Vec<f64> = v.scales.iter().map(|s| s.scale).collect();
     let [amp, me, re, ml] = scale_errors(v);
-    let csv = csv_columns(
+    let table = Table::new(
         &[
             "scale",
             "amplitude_um",
@@ -272,9 +225,9 @@ fn write_validity_tables(run: &RunDir, v: &ValidityMap) -> Result<()> {
             "rms_error_percent",
             "max_error_linear_fe_percent",
         ],
-        &[&sc, &amp, &me, &re, &ml],
+        vec![sc, amp, me, re, ml],
     );
-    run.write(files::VALIDITY_SCALE_CSV, csv.as_bytes())?;
+    run.store(files::VALIDITY_SCALE_CSV, table)?;
     Ok(())
 }
 

@@ -2,10 +2,13 @@
 //! identification (both PEAs) → stage identification → tracking → report, in one run folder.
 //!
 //! Every stage gets the scenario in memory (never the recorded `scenario.toml`) and reads
-//! what earlier stages wrote through [`flexstage_report::layout`]. Finished stages are
-//! recorded in `run_state.json` ([`RunState`]) with hashes of the scenario and the options, so
-//! calling `run` again resumes after the last finished stage (an interrupted design continues
-//! from its checkpoint, which carries the scenario's hash and a CRC). A folder of another
+//! what earlier stages stored through `flexstage-run` (from memory when they ran in this
+//! call). Finished stages are recorded in `run_state.json` ([`RunState`]) with hashes of the
+//! scenario and the options and every file they wrote with its SHA-256, so calling `run` again
+//! resumes after the last finished stage whose files are all present and unchanged; a stage
+//! with a missing or changed file is done again, with every later stage, and `run` says so
+//! ([`RunEvent::Redoing`]). An interrupted design continues from its checkpoint, which carries
+//! the scenario's hash and a CRC. A folder of another
 //! scenario is refused with the list of changed fields; [`RunOptions::restart`] starts over,
 //! and says so through [`Progress::event`]. The folder is locked while `run` works in it.
 //!
@@ -16,7 +19,13 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use flexstage_report::{html, layout};
+use flexstage_report::{Headline, headline_rows};
+use flexstage_run::files::design::DesignSummaryFile;
+use flexstage_run::files::reduce::ReduceSummaryJson;
+use flexstage_run::files::stage::ParameterRow as TableRow;
+use flexstage_run::files::track::MetricsRow;
+use flexstage_run::format::Rows;
+use flexstage_run::layout::{self, Tracking};
 use flexstage_scenario::Scenario;
 
 use crate::design::{DesignOptions, DesignStart, DesignSummary, design};
@@ -28,9 +37,9 @@ use crate::progress::{Progress, RunEvent, StartOver};
 use crate::reduce::{ReduceOptions, ReduceSummary, reduce};
 use crate::stage_id::{
     MIN_TWIN_DURATION, ParameterRow, Simulation, StageData, StageIdOptions, StageIdSummary,
-    identify_stage_on, read_table,
+    identify_stage_on, table_rows,
 };
-use crate::state::{Mismatch, RunState, fnv1a};
+use crate::state::{Mismatch, RunState, fnv1a, scenario_hash};
 use crate::track::{PlantKind, TrackOptions, TrackSummary, TwinBuild, track_on, try_build};
 use crate::twin::{TwinOptions, TwinSummary, write_twin_of};
 
@@ -193,34 +202,62 @@ pub fn run(
     // track (a run resumed after the twin stage builds it in identify-stage or track).
     let mut twin: Option<TwinBuild> = None;
     for stage in Stage::ALL {
-        if state.finished(stage) {
-            progress.event(&RunEvent::Skipped(stage));
-            continue;
+        if state.finished(stage.name()) {
+            match state.check_files(folder.dir(), stage.name())? {
+                None => {
+                    progress.event(&RunEvent::Skipped(stage));
+                    continue;
+                }
+                Some(problem) => {
+                    progress.event(&RunEvent::Redoing {
+                        stage,
+                        why: problem.to_string(),
+                    });
+                    // This stage and every later one are done again.
+                    state.forget_from(stage.name());
+                }
+            }
         }
         progress.event(&RunEvent::Started(stage));
         let ts = Instant::now();
+        folder.dir().begin_journal();
         let summary = run_stage(stage, &folder, options, resume, &mut twin, progress)?;
+        let files = folder.dir().end_journal();
         let seconds = ts.elapsed().as_secs_f64();
         progress.event(&RunEvent::Finished {
             stage,
             seconds,
             summary: &summary,
         });
-        state.finish(stage, seconds);
+        state.finish(stage.name(), seconds, files);
         state.save(folder.dir())?;
     }
     let dir = folder.dir();
     let report = dir.path(layout::REPORT);
+    let table = dir.load::<Rows<TableRow>>(layout::stage::TABLE)?;
     Ok(RunSummary {
         root: root.to_path_buf(),
         seconds: t0.elapsed().as_secs_f64(),
-        headline: html::summary_rows(root),
-        identified: dir
-            .read_to_string(layout::stage::TABLE)
-            .map(|t| read_table(&t))
-            .unwrap_or_default(),
+        headline: headline(&folder)?,
+        identified: table.map(|t| table_rows(&t)).unwrap_or_default(),
         report: std::fs::canonicalize(&report).unwrap_or(report),
     })
+}
+
+/// The headline numbers of the run from its typed results: the stage summaries this call
+/// stored, or those an earlier call did (read once).
+fn headline(folder: &RunFolder) -> Result<Vec<(String, String)>> {
+    let dir = folder.dir();
+    let design = dir.load::<DesignSummaryFile>(layout::design::SUMMARY)?;
+    let reduce = dir.load::<ReduceSummaryJson>(layout::reduce::SUMMARY_JSON)?;
+    let table = dir.load::<Rows<TableRow>>(layout::stage::TABLE)?;
+    let metrics = dir.load::<Rows<MetricsRow>>(&Tracking::main().metrics())?;
+    Ok(headline_rows(&Headline {
+        design: design.as_deref(),
+        reduce: reduce.as_ref().map(|r| &r.0),
+        identified: table.as_ref().map(|t| t.0.as_slice()),
+        tracking: metrics.as_ref().map(|t| t.0.as_slice()),
+    }))
 }
 
 /// The state `run` starts from, and whether it resumes: records the scenario in the locked
@@ -243,7 +280,7 @@ fn start_state(
         folder.record(true, RESTART_HINT)?;
         return Ok((RunState::new(s, &opts), false));
     }
-    let Some(state) = RunState::load(folder.dir())? else {
+    let Some(state) = RunState::load(folder.dir(), &Stage::ALL.map(Stage::name))? else {
         folder.record(false, RESTART_HINT)?;
         return Ok((RunState::new(s, &opts), false));
     };
@@ -251,7 +288,11 @@ fn start_state(
         None => {
             folder.record(false, RESTART_HINT)?;
             if !state.stages.is_empty() {
-                progress.event(&RunEvent::Resuming(&state.finished_stages()));
+                let done: Vec<Stage> = Stage::ALL
+                    .into_iter()
+                    .filter(|s| state.finished(s.name()))
+                    .collect();
+                progress.event(&RunEvent::Resuming(&done));
             }
             Ok((state, true))
         }
@@ -368,10 +409,37 @@ fn run_stage(
     })
 }
 
-/// Builds the HTML report of a run folder and writes it ([`layout::REPORT`]).
+/// Builds the HTML report of a run folder and writes it ([`layout::REPORT`]). A folder whose
+/// `scenario.toml` is not the scenario its `run` stages ran with (edited since) is refused, as
+/// `run` refuses it; files that exist but cannot be read are errors on the page and
+/// [`PipelineError::Report`] after the page is written.
 pub fn write_report(folder: &RunFolder) -> Result<PathBuf> {
-    let html = html::build_report(folder.root());
-    Ok(folder.dir().write(layout::REPORT, html.as_bytes())?)
+    let dir = folder.dir();
+    if let Some(state) = RunState::load(dir, &Stage::ALL.map(Stage::name))?
+        && state.scenario_hash != scenario_hash(folder.scenario())
+    {
+        return Err(PipelineError::OtherScenario {
+            root: folder.root().to_path_buf(),
+            what: "results of `flexstage run`",
+            changes: format!(
+                "its {} is not the scenario the run's stages ran with (recorded in {}): it \
+                 was edited since",
+                layout::SCENARIO,
+                layout::RUN_STATE
+            ),
+            hint: "restore it, or run the stages again with it (`flexstage run --restart`)".into(),
+        });
+    }
+    let report = flexstage_report::build_report(dir);
+    let path = dir.write(layout::REPORT, report.html.as_bytes())?;
+    if report.errors.is_empty() {
+        Ok(path)
+    } else {
+        Err(PipelineError::Report {
+            report: path,
+            errors: report.errors,
+        })
+    }
 }
 
 #[cfg(test)]

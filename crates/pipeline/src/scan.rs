@@ -6,8 +6,9 @@
 
 use flexstage_assess::sweep::{self, SweepParams, SweepPoint};
 use flexstage_assess::{Bench, Candidate};
-use flexstage_report::RunDir;
-use flexstage_report::layout::Tracking;
+use flexstage_run::RunDir;
+use flexstage_run::format::Rows;
+use flexstage_run::layout::Tracking;
 use flexstage_scenario::{Scenario, Trajectory};
 
 use crate::error::Result;
@@ -50,12 +51,10 @@ pub fn scan_frequency(
 impl ScanFrequency {
     /// Writes `scan_frequency.csv` and `scan_frequency.svg` into `out`.
     pub fn write(&self, run: &RunDir, out: &Tracking) -> Result<()> {
+        let rows = crate::convert::scan_rows(&self.points);
+        run.store(&out.scan_frequency_csv(), Rows(rows))?;
         run.write(
-            out.scan_frequency_csv(),
-            sweep::csv(&self.points).as_bytes(),
-        )?;
-        run.write(
-            out.scan_frequency_svg(),
+            &out.scan_frequency_svg(),
             sweep::figure(&self.points, &self.candidates)?.as_bytes(),
         )?;
         Ok(())

@@ -4,8 +4,9 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
-use flexstage_report::layout;
-use flexstage_topopt::{DesignFile, Problem, read_density_csv};
+use flexstage_run::files::design::DesignFile;
+use flexstage_run::{Format, layout};
+use flexstage_topopt::{Problem, read_density_csv};
 
 use crate::error::{PipelineError, Result};
 use crate::folder::RunFolder;
@@ -121,14 +122,16 @@ pub fn load_design(
         DesignSource::Uniform(v) => vec![v.unwrap_or(problem.initial_density); nl * nw],
         DesignSource::Run => {
             let path = folder.dir().path(layout::design::DESIGN);
-            if !path.is_file() {
+            // The design this process stored or loaded is not parsed again.
+            let Some(d) = folder.dir().load::<DesignFile>(layout::design::DESIGN)? else {
                 return Err(PipelineError::Missing {
                     what: "finished design",
                     path,
                     hint: "run `flexstage design` first, or choose a design".into(),
                 });
-            }
-            read_file(&path, nl, nw)?
+            };
+            check_mesh(&path, &d, nl, nw)?;
+            d.rho.clone()
         }
         DesignSource::File(path) if path.is_dir() => {
             read_file(&path.join(layout::design::DESIGN), nl, nw)?
@@ -152,18 +155,13 @@ fn read_file(path: &Path, nl: usize, nw: usize) -> Result<Vec<f64>> {
         .unwrap_or_default();
     match ext.as_str() {
         "json" => {
-            let d = DesignFile::from_json(&bytes)?;
-            if (d.nl, d.nw) != (nl, nw) {
-                return Err(format(format!(
-                    "a {} x {} design; the scenario's mesh is {nl} x {nw}",
-                    d.nl, d.nw
-                )));
-            }
+            let d = DesignFile::decode(&bytes).map_err(|r| format(format!("design file: {r}")))?;
+            check_mesh(path, &d, nl, nw)?;
             Ok(d.rho)
         }
         "csv" => Ok(read_density_csv(&String::from_utf8_lossy(&bytes), nl, nw)?),
         "png" => {
-            let r = flexstage_report::image::read_density_png(&bytes, nl, nw)?;
+            let r = flexstage_figures::image::read_density_png(&bytes, nl, nw)?;
             // image order r[j·nl + i] → fem order e = i·nw + j
             Ok((0..nl * nw).map(|e| r[(e % nw) * nl + e / nw]).collect())
         }
@@ -171,6 +169,20 @@ fn read_file(path: &Path, nl: usize, nw: usize) -> Result<Vec<f64>> {
             "unknown design file type {other:?}: expected .json, .csv, .png or a run folder"
         ))),
     }
+}
+
+/// Refuses a design of another mesh than the scenario's.
+fn check_mesh(path: &Path, d: &DesignFile, nl: usize, nw: usize) -> Result<()> {
+    if (d.nl, d.nw) != (nl, nw) {
+        return Err(PipelineError::Format {
+            path: path.display().to_string(),
+            reason: format!(
+                "a {} x {} design; the scenario's mesh is {nl} x {nw}",
+                d.nl, d.nw
+            ),
+        });
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -197,8 +209,8 @@ mod tests {
             e.contains("design") && e.contains("1.5") && e.contains("[0, 1]"),
             "{e}"
         );
-        let f = "runs/a b/density.png".parse::<DesignSource>().unwrap();
-        assert_eq!(f.tag().as_deref(), Some("density"));
+        let f = "runs/a b/picture.png".parse::<DesignSource>().unwrap();
+        assert_eq!(f.tag().as_deref(), Some("picture"));
         assert_eq!(DesignSource::Run.tag(), None);
         assert_eq!(plain("a b/c"), "a-b-c");
     }
@@ -221,9 +233,9 @@ mod tests {
         let folder = RunFolder::open(s.clone(), &root, true).unwrap();
         let dir = folder.dir();
         let csv = flexstage_topopt::density_csv(nl, nw, mesh.dx(), mesh.dy(), &rho);
-        let png = flexstage_report::image::density_png(nl, nw, 1, |i, j| rho[i * nw + j]).unwrap();
+        let png = flexstage_figures::image::density_png(nl, nw, 1, |i, j| rho[i * nw + j]).unwrap();
         let file = DesignFile {
-            version: 1,
+            version: flexstage_run::files::design::DESIGN_VERSION,
             scenario: s.name.clone(),
             nl,
             nw,
@@ -234,9 +246,11 @@ mod tests {
             grey_fraction: 0.0,
             summary: None,
         };
-        let csv_path = dir.write("d.csv", csv.as_bytes()).unwrap();
-        let png_path = dir.write("d.png", &png).unwrap();
-        dir.write(layout::design::DESIGN, file.to_json().as_bytes())
+        let csv_path = dir.path("d.csv");
+        std::fs::write(&csv_path, csv).unwrap();
+        let png_path = dir.path("d.png");
+        std::fs::write(&png_path, png).unwrap();
+        dir.write(layout::design::DESIGN, &file.encode().unwrap())
             .unwrap();
         let load = |src: DesignSource| load_design(&folder, &src, &problem).unwrap();
         let worst = |rho: Vec<f64>| {
@@ -246,13 +260,14 @@ mod tests {
                 .map(|(a, b)| (a - b).abs())
                 .fold(0.0, f64::max)
         };
-        // JSON: serde_json's default float parser may be off by one unit in the last place.
-        assert!(worst(load(DesignSource::Run)) <= 1e-15);
-        assert!(worst(load(DesignSource::File(root.clone()))) <= 1e-15);
+        // JSON: exact (serde_json's float_roundtrip).
+        assert_eq!(worst(load(DesignSource::Run)), 0.0);
+        assert_eq!(worst(load(DesignSource::File(root.clone()))), 0.0);
         assert_eq!(load(DesignSource::File(csv_path)), expected, "CSV is exact");
         let png = worst(load(DesignSource::File(png_path)));
         assert!(png <= 0.5 / 255.0 + 1e-12, "PNG differs by {png}");
-        let bad = dir.write("d.txt", b"").unwrap();
+        let bad = dir.path("d.txt");
+        std::fs::write(&bad, b"").unwrap();
         let e = load_design(&folder, &DesignSource::File(bad), &problem).unwrap_err();
         assert!(e.to_string().contains("unknown design file type"), "{e}");
         std::fs::remove_dir_all(&root).unwrap();

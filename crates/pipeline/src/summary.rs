@@ -7,7 +7,7 @@
 use std::fmt;
 use std::path::Path;
 
-use flexstage_report::html::fmt_num;
+use flexstage_report::fmt_num;
 
 use crate::pea::PeaRecord;
 use crate::{
@@ -129,30 +129,31 @@ impl Summary for ExportSummary {
 
 impl fmt::Display for crate::front::FrontSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let front = &self.front;
         writeln!(
             f,
             "workspace–first-resonance front: {} designs in {:.0} s",
-            self.designs.len(),
-            self.seconds
+            front.designs.len(),
+            front.seconds
         )?;
-        for d in &self.designs {
-            writeln!(f, "{}", crate::front::line(d, self.scan_hz))?;
+        for d in &front.designs {
+            writeln!(f, "{}", crate::front::line(d, front.scan_hz))?;
         }
-        match self.pick() {
+        match front.pick() {
             Some(d) => writeln!(
                 f,
                 "pick d{}: the largest workspace ({:.0} µm²) verified safe that tracks a {:.0} Hz \
                  scan within {} % of range",
                 d.index,
                 d.design.area * 1e12,
-                self.scan_hz,
-                self.max_error_pct
+                front.scan_hz,
+                front.max_error_pct
             ),
             None => writeln!(
                 f,
                 "no design is verified safe and tracks a {:.0} Hz scan within {} % of range: \
                  raise --max-ratio, lower the scan speed or accept a larger error",
-                self.scan_hz, self.max_error_pct
+                front.scan_hz, front.max_error_pct
             ),
         }
     }

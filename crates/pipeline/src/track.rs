@@ -42,15 +42,18 @@ use flexstage_control::experiment::{
 use flexstage_control::model::ResponseFit;
 use flexstage_control::trajectory::Reference;
 use flexstage_control::tuning::TuningParams;
+use flexstage_figures::plot::{Figure, Series};
 use flexstage_piezo::BoucWenParams;
-use flexstage_report::layout::{self, Tracking};
-use flexstage_report::plot::{Figure, Series};
-use flexstage_report::{RunDir, csv_columns, read_csv_columns};
+use flexstage_run::files::pea::PeaEstimates;
+use flexstage_run::files::stage::{ResponseFitFile, StageParamsFile};
+use flexstage_run::format::Rows;
+use flexstage_run::layout::{self, Tracking};
+use flexstage_run::{RunDir, Table};
 use rayon::prelude::*;
 
 use crate::error::{PipelineError, Result, require};
 use crate::folder::RunFolder;
-use crate::plant::{Plant, PlantSource, read_model_params};
+use crate::plant::{ModelParams, Plant, PlantSource, read_model_params};
 use crate::progress::Progress;
 use crate::source::plain;
 use crate::twin::Built;
@@ -466,9 +469,9 @@ fn identified_peas(folder: &RunFolder, setup: &mut Setup) -> Result<[String; 2]>
     for n in [1u8, 2] {
         let rel = layout::PeaIdentification { pea: n }.estimates();
         let i = usize::from(n - 1);
-        used[i] = match folder.dir().read_to_string(&rel) {
-            Some(text) => {
-                setup.controller.actuator.hysteresis[i] = read_estimates(&rel, &text)?;
+        used[i] = match folder.dir().load::<PeaEstimates>(&rel)? {
+            Some(e) => {
+                setup.controller.actuator.hysteresis[i] = recommended(&e)?;
                 format!("identified ({rel})")
             }
             None => "scenario [hysteresis]".into(),
@@ -477,18 +480,11 @@ fn identified_peas(folder: &RunFolder, setup: &mut Setup) -> Result<[String; 2]>
     Ok(used)
 }
 
-/// The `recommended_params` of an `estimates.toml`.
-fn read_estimates(rel: &str, text: &str) -> Result<BoucWenParams> {
-    #[derive(serde::Deserialize)]
-    struct Recommended {
-        recommended_params: BoucWenParams,
-    }
-    let r: Recommended = toml::from_str(text).map_err(|e| PipelineError::Format {
-        path: rel.into(),
-        reason: format!("no valid recommended_params table: {e}"),
-    })?;
-    r.recommended_params.validate()?;
-    Ok(r.recommended_params)
+/// The recommended parameters of a PEA's estimates, checked.
+fn recommended(e: &PeaEstimates) -> Result<BoucWenParams> {
+    let p = BoucWenParams::from(&e.recommended_params);
+    p.validate()?;
+    Ok(p)
 }
 
 /// The outcome of building the twin of the run's design: the twin, or why the twin could not
@@ -535,8 +531,16 @@ pub fn track_on(
     }
     let mut setup = Setup::from_scenario(&plant.scenario);
     let model = model_source(folder, options)?;
-    if let ModelSource::File(p) | ModelSource::Identified(p) = &model {
-        let m = read_model_params(p)?;
+    let params = match &model {
+        ModelSource::File(p) => Some(read_model_params(p)?),
+        // The parameters this run identified: from memory when the stage ran in this process.
+        ModelSource::Identified(_) => folder
+            .dir()
+            .load::<StageParamsFile>(layout::stage::PARAMS)?
+            .map(|f| ModelParams::from(&*f)),
+        ModelSource::Guess => None,
+    };
+    if let Some(m) = params {
         (setup.controller.model, setup.controller.coupling) = (m.params, m.coupling);
     }
     let compensator = identified_peas(folder, &mut setup)?;
@@ -547,12 +551,15 @@ pub fn track_on(
         Simulated::Lumped => PlantKind::Lumped,
     };
     // The response fit identified on the twin (else the fit of its exact modes).
-    let identified = if folder.dir().exists(layout::stage::RESPONSE_FIT) {
-        Some(crate::stage_id::read_response_fit(
+    let identified = match folder
+        .dir()
+        .load::<ResponseFitFile>(layout::stage::RESPONSE_FIT)?
+    {
+        Some(f) => Some(crate::stage_id::response_fit_of(
+            &f,
             &folder.dir().path(layout::stage::RESPONSE_FIT),
-        )?)
-    } else {
-        None
+        )?),
+        None => None,
     };
     if identified.is_some() {
         progress.note(&format!(
@@ -591,17 +598,17 @@ pub fn track_on(
         crate::names::compensation(options.compensation),
         &model.label(),
         kind.name(),
+        &mut warnings,
     )?;
     let trajectories = jobs_by_trajectory(&jobs);
     crate::track_files::write_paths(folder.dir(), &out, &trajectories, &merged, &paths)?;
     if !margins.is_empty() {
-        folder.dir().write(
-            out.margins(),
-            flexstage_assess::margins::csv(&margins, dt).as_bytes(),
-        )?;
+        let rows = crate::convert::margin_rows(&margins, dt);
+        folder.dir().store(&out.margins(), Rows(rows))?;
     }
     if let Some(mc) = &montecarlo {
-        folder.dir().write(out.montecarlo(), mc.csv().as_bytes())?;
+        let rows = crate::convert::montecarlo_rows(mc);
+        folder.dir().store(&out.montecarlo(), Rows(rows))?;
     }
     if let Some(sc) = &scan {
         sc.write(folder.dir(), &out)?;
@@ -772,8 +779,10 @@ fn write_results(
     for ((job, usage), rec) in jobs.iter().zip(records) {
         let rec = rec?;
         let (t, v) = (job.trajectory, job.controller.name());
-        let csv = csv_columns(&Record::header(), &rec.columns());
-        run.write(out.record(t, v), csv.as_bytes())?;
+        // Written, not stored: the series is large, and its paths stay in memory for
+        // Figure 11.
+        let table = Table::of(&Record::header(), &rec.columns());
+        run.write(&out.record(t, v), &table.to_csv())?;
         // Every sample: the figure draws the M4 envelope of each pixel column, which keeps
         // the peaks that taking every k-th sample would hide.
         let err = |i: usize| -> Vec<(f64, f64)> {
@@ -788,7 +797,7 @@ fn write_results(
         )
         .with(Series::line("q1 (horizontal)", err(0)))
         .with(Series::line("q2 (vertical)", err(1)));
-        run.write(out.error_svg(t, v), fig.to_svg()?.as_bytes())?;
+        run.write(&out.error_svg(t, v), fig.to_svg()?.as_bytes())?;
         let key = (t.to_string(), v.to_string());
         paths.push((key, crate::track_files::scaled(&rec.truth, 1e6)));
         let half = job.reference.half_range(job.duration, dt);
@@ -802,12 +811,10 @@ fn write_results(
     Ok((rows, paths))
 }
 
-/// The true output paths of a record CSV \[m\] (columns `true1_m`, `true2_m`).
-pub(crate) fn read_paths(text: &str) -> Option<[Vec<f64>; 2]> {
-    let mut c = read_csv_columns(text, &["true1_m", "true2_m"])?;
-    let y = c.pop()?;
-    let x = c.pop()?;
-    Some([x, y])
+/// The true output paths of a record \[m\] (columns `true1_m`, `true2_m`).
+pub(crate) fn record_paths(t: &Table) -> Option<[Vec<f64>; 2]> {
+    let c = t.columns(&["true1_m", "true2_m"]).ok()?;
+    Some([c[0].to_vec(), c[1].to_vec()])
 }
 
 #[cfg(test)]
@@ -893,18 +900,6 @@ mod tests {
         let s = crate::folder::preset("quick").unwrap();
         let setup = Setup::from_scenario(&s);
         assert!(plan(&s, &setup, &Simulated::Lumped, &all, &mut warnings).is_ok());
-    }
-
-    #[test]
-    fn identified_pea_parameters_are_read_from_the_estimates() {
-        // Goal: the compensator takes `recommended_params`; a damaged file is an error.
-        let text = "data = \"x\"\n[recommended_params]\nd_p = 0.06\na_bw = 0.012\n\
-                    b_bw = 0.0019\ngamma_bw = 0.0016\ndelta_bw = 0.0005\n";
-        let p = read_estimates("identify/pea1/estimates.toml", text).unwrap();
-        assert_eq!(p.d_p, 0.06);
-        assert_eq!(p.delta_bw, 0.0005);
-        let e = read_estimates("identify/pea1/estimates.toml", "d_p = 1").unwrap_err();
-        assert!(e.to_string().contains("recommended_params"), "{e}");
     }
 
     #[test]

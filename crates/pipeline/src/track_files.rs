@@ -2,35 +2,44 @@
 //! by trajectory and controller) and the 2D paths of Figure 11.
 
 use flexstage_control::trajectory::Reference;
-use flexstage_report::RunDir;
-use flexstage_report::layout::Tracking;
-use flexstage_report::plot::{Figure, Series};
+use flexstage_figures::plot::{Figure, Series};
+use flexstage_run::files::track::MetricsRow;
+use flexstage_run::format::Rows;
+use flexstage_run::layout::Tracking;
+use flexstage_run::{RunDir, RunError, Table};
 
 use crate::error::Result;
-use crate::track::{Path2D, TrackRow, read_paths};
+use crate::track::{Path2D, TrackRow, record_paths};
 
-/// The header of `metrics.csv`.
-const HEADER: &str = "trajectory,variant,compensation,model,plant,rms1_nm,rms2_nm,rms1_pct,rms2_pct,\
-max1_nm,max2_nm,max1_pct,max2_pct,settling_s,peak_voltage_V,saturated_samples,dropouts,\
-workspace_usage";
-
-fn line(r: &TrackRow, compensation: &str, model: &str, plant: &str) -> String {
-    let errors: Vec<String> = r.error_columns().iter().map(f64::to_string).collect();
+fn row(r: &TrackRow, compensation: &str, model: &str, plant: &str) -> MetricsRow {
+    let e = r.error_columns();
     let m = &r.metrics;
-    format!(
-        "{},{},{compensation},{model},{plant},{},{},{},{}",
-        r.trajectory,
-        r.controller.name(),
-        errors.join(","),
-        m.saturated,
-        m.dropouts,
-        r.usage
-    )
+    MetricsRow {
+        trajectory: r.trajectory.clone(),
+        variant: r.controller.name().to_string(),
+        compensation: compensation.to_string(),
+        model: model.to_string(),
+        plant: plant.to_string(),
+        rms1_nm: e[0],
+        rms2_nm: e[1],
+        rms1_pct: e[2],
+        rms2_pct: e[3],
+        max1_nm: e[4],
+        max2_nm: e[5],
+        max1_pct: e[6],
+        max2_pct: e[7],
+        settling_s: e[8],
+        peak_voltage_v: e[9],
+        saturated_samples: m.saturated,
+        dropouts: m.dropouts,
+        workspace_usage: r.usage,
+    }
 }
 
 /// Writes `metrics.csv` with the rows of this call. Rows of other (trajectory, controller)
 /// pairs already in the file are kept when they were made under the same compensation,
-/// model and plant (`twin` or `lumped`); the rows of this call replace theirs in place, new ones are appended. Returns the
+/// model and plant (`twin` or `lumped`); the rows of this call replace theirs in place, new
+/// ones are appended. A table that cannot be read is replaced (with a warning). Returns the
 /// (trajectory, controller) pairs of the file, in order.
 pub(crate) fn write_metrics(
     run: &RunDir,
@@ -39,42 +48,36 @@ pub(crate) fn write_metrics(
     compensation: &str,
     model: &str,
     plant: &str,
+    warnings: &mut Vec<String>,
 ) -> Result<Vec<(String, String)>> {
-    let key = |l: &str| -> Option<(String, String)> {
-        let mut c = l.split(',');
-        Some((c.next()?.to_string(), c.next()?.to_string()))
-    };
-    let mut lines: Vec<String> = Vec::new();
-    if let Some(text) = run.read_to_string(out.metrics()) {
-        let mut it = text.lines();
-        if it.next() == Some(HEADER) {
-            // Same conditions only: a changed model or compensation replaces the table.
-            lines = it
-                .filter(|l| {
-                    let c: Vec<&str> = l.split(',').collect();
-                    c.get(2) == Some(&compensation)
-                        && c.get(3) == Some(&model)
-                        && c.get(4) == Some(&plant)
-                })
-                .map(str::to_string)
-                .collect();
+    let key = |r: &MetricsRow| (r.trajectory.clone(), r.variant.clone());
+    let earlier = match run.load::<Rows<MetricsRow>>(&out.metrics()) {
+        Ok(t) => t.map(|t| t.0.clone()).unwrap_or_default(),
+        Err(e @ RunError::Damaged { .. }) => {
+            warnings.push(format!("{e}; it is replaced by the rows of this call"));
+            Vec::new()
         }
-    }
+        Err(e) => return Err(e.into()),
+    };
+    // Same conditions only: a changed model or compensation replaces the table.
+    let mut lines: Vec<MetricsRow> = earlier
+        .into_iter()
+        .filter(|r| r.compensation == compensation && r.model == model && r.plant == plant)
+        .collect();
     for r in rows {
-        let new = line(r, compensation, model, plant);
-        let k = key(&new);
-        match lines.iter_mut().find(|l| key(l) == k) {
+        let new = row(r, compensation, model, plant);
+        match lines.iter_mut().find(|l| key(l) == key(&new)) {
             Some(l) => *l = new,
             None => lines.push(new),
         }
     }
-    let text = format!("{HEADER}\n{}\n", lines.join("\n"));
-    run.write(out.metrics(), text.as_bytes())?;
-    Ok(lines.iter().filter_map(|l| key(l)).collect())
+    let keys = lines.iter().map(key).collect();
+    run.store(&out.metrics(), Rows(lines))?;
+    Ok(keys)
 }
 
 /// (x, y) points of a pair of series scaled by `scale`, every sample (the figure reduces
-/// them for display without dropping extremes, [`flexstage_report::simplify`]).
+/// them for display without dropping extremes, [`flexstage_figures::simplify`]).
 pub(crate) fn scaled(xy: &[Vec<f64>; 2], scale: f64) -> Vec<(f64, f64)> {
     xy[0]
         .iter()
@@ -115,15 +118,15 @@ pub(crate) fn write_paths(
             let points = match fresh.iter().find(|(k, _)| k == key) {
                 Some((_, p)) => Some(p.clone()),
                 None => run
-                    .read_to_string(out.record(name, &key.1))
-                    .and_then(|text| read_paths(&text))
+                    .load::<Table>(&out.record(name, &key.1))?
+                    .and_then(|t| record_paths(&t))
                     .map(|p| scaled(&p, 1e6)),
             };
             if let Some(points) = points {
                 fig = fig.with(Series::line(key.1.clone(), points));
             }
         }
-        run.write(out.paths_svg(name), fig.to_svg()?.as_bytes())?;
+        run.write(&out.paths_svg(name), fig.to_svg()?.as_bytes())?;
     }
     Ok(())
 }
@@ -153,7 +156,8 @@ mod tests {
         let run = RunDir::create(&root).unwrap();
         let out = Tracking::main();
         let all = [row(Variant::Robust, 1e-9), row(Variant::NonRobust, 2e-9)];
-        write_metrics(&run, &out, &all, "inverse", "guess", "twin").unwrap();
+        let w = &mut Vec::new();
+        write_metrics(&run, &out, &all, "inverse", "guess", "twin", w).unwrap();
         let keys = write_metrics(
             &run,
             &out,
@@ -161,6 +165,7 @@ mod tests {
             "inverse",
             "guess",
             "twin",
+            w,
         )
         .unwrap();
         assert_eq!(
@@ -170,13 +175,13 @@ mod tests {
                 ("circle".to_string(), "nonrobust".to_string())
             ]
         );
-        let text = run.read_to_string(out.metrics()).unwrap();
-        let rms = flexstage_report::read_csv_columns(&text, &["rms1_nm"]).unwrap();
-        assert_eq!(
-            rms[0],
-            [3.0, 2.0],
-            "robust updated in place, nonrobust kept"
-        );
+        let back = RunDir::create(&root).unwrap();
+        let table = back
+            .load::<Rows<MetricsRow>>(&out.metrics())
+            .unwrap()
+            .unwrap();
+        let rms: Vec<f64> = table.0.iter().map(|r| r.rms1_nm).collect();
+        assert_eq!(rms, [3.0, 2.0], "robust updated in place, nonrobust kept");
         let keys = write_metrics(
             &run,
             &out,
@@ -184,6 +189,7 @@ mod tests {
             "inverse",
             "x.toml",
             "twin",
+            w,
         )
         .unwrap();
         assert_eq!(keys.len(), 1, "another model starts a new table");
@@ -194,11 +200,21 @@ mod tests {
             "inverse",
             "x.toml",
             "lumped",
+            w,
         )
         .unwrap();
         assert_eq!(keys.len(), 1, "another plant starts a new table");
-        let text = run.read_to_string(out.metrics()).unwrap();
+        let text = std::fs::read_to_string(run.path(out.metrics())).unwrap();
         assert!(text.contains(",x.toml,lumped,"), "the plant column: {text}");
+        // A damaged table is replaced, with a warning.
+        std::fs::write(run.path(out.metrics()), "trajectory,variant\ncircle\n").unwrap();
+        let fresh = RunDir::create(&root).unwrap();
+        let keys = write_metrics(&fresh, &out, &all, "inverse", "guess", "twin", w).unwrap();
+        assert_eq!(keys.len(), 2);
+        assert!(
+            w.iter().any(|m| m.contains("metrics.csv is damaged")),
+            "{w:?}"
+        );
         std::fs::remove_dir_all(&root).unwrap();
     }
 }

@@ -1,10 +1,10 @@
-//! `twin`: the digital twin of the run's designed stage (`flexstage-twin`, issue #15) and its
-//! report data in `twin/` ([`layout::twin`]).
+//! `twin`: the digital twin of the run's designed stage (`flexstage-twin`) and its report data
+//! in `twin/` ([`layout::twin`]).
 //!
 //! * [`build`] makes the twin of the run's finished design with the scenario's `[twin]` group
 //!   (Craig–Bampton reduction of the design's FE model with the PEA sets of Eq. 1–3, Rayleigh
 //!   damping, the geometric-nonlinearity fit). `track` simulates on it ([`crate::plant`]).
-//! * [`write_twin`] writes what the report shows (`flexstage_twin::report_data`): the twin's modes against the FE modal
+//! * [`write_twin`] writes what the report shows: the twin's modes against the FE modal
 //!   analysis of the same assembled stage (`modes.csv`), its frequency response x_nom → q
 //!   beside the lumped 8-state model of the run (`bode.csv`, `bode_magnitude.svg`,
 //!   `bode_phase.svg`), and its validity (`validity.json`): the mode errors and, when the
@@ -19,8 +19,14 @@
 
 use std::time::Instant;
 
-use flexstage_report::layout;
-use flexstage_twin::{Twin, TwinValidity, ValidationParams, report_data};
+use flexstage_run::files::twin::{
+    CaseRow, ModeCheck, ModeRow, TransientCheck, TwinValidity, VERSION,
+};
+use flexstage_run::format::Rows;
+use flexstage_run::{Table, layout};
+use flexstage_twin::reference::{mode_check, validate};
+use flexstage_twin::report::bode_for;
+use flexstage_twin::{Twin, ValidationParams, Validity};
 
 use crate::error::Result;
 use crate::folder::RunFolder;
@@ -148,14 +154,88 @@ pub fn write_twin_of(
     } else {
         Err(reason)
     };
-    let data = report_data(twin, &lumped, build_seconds, transient)?;
+    let validity = validity(twin, build_seconds, transient)?;
+    let bode = bode_for(twin, &lumped)?;
     let replaced = folder.has_results(layout::twin::DIR);
-    for (rel, text) in data.files()? {
-        folder.dir().write(rel, text.as_bytes())?;
-    }
+    let run = folder.dir();
+    let modes = validity.modes.iter().map(|m| ModeRow {
+        mode: m.index,
+        frequency_hz: m.twin,
+        fe_frequency_hz: m.fe,
+        relative_difference: m.relative,
+    });
+    run.store(layout::twin::MODES, Rows(modes.collect()))?;
+    let (header, columns) = bode.columns();
+    let header: Vec<&str> = header.iter().map(String::as_str).collect();
+    run.store(layout::twin::BODE, Table::new(&header, columns))?;
+    let [mag, phase] = bode.svg()?;
+    run.write(layout::twin::BODE_MAGNITUDE_SVG, mag.as_bytes())?;
+    run.write(layout::twin::BODE_PHASE_SVG, phase.as_bytes())?;
+    let validity = run.store(layout::twin::VALIDITY, validity)?;
     Ok(TwinSummary {
-        validity: data.validity,
+        validity: (*validity).clone(),
         dir: folder.dir().path(layout::twin::DIR),
         replaced,
     })
+}
+
+/// The twin's validity: its modes against the FE modal analysis and, with `transient` =
+/// `Ok(params)`, the check against the full nonlinear transient (recorded as not run, with
+/// the reason, for `Err(reason)`).
+fn validity(
+    twin: &Twin,
+    build_seconds: f64,
+    transient: std::result::Result<(ValidationParams, String), String>,
+) -> Result<TwinValidity> {
+    let t0 = Instant::now();
+    let (ran, reason, modes, full) = match transient {
+        Ok((p, reason)) => {
+            let v = validate(twin, &p)?;
+            (true, reason, v.modes.clone(), Some(v))
+        }
+        Err(reason) => (false, reason, mode_check(twin)?, None),
+    };
+    let modes: Vec<ModeCheck> = modes
+        .iter()
+        .map(|m| ModeCheck {
+            index: m.index,
+            twin: m.twin,
+            fe: m.fe,
+            relative: m.relative,
+            damping: m.damping,
+        })
+        .collect();
+    Ok(TwinValidity {
+        version: VERSION,
+        order: twin.modal.modes.len(),
+        fixed_interface_modes: twin.reduction.modes(),
+        frequencies_hz: twin.frequencies(),
+        damping_ratios: twin.modal.modes.iter().map(|m| m.damping).collect(),
+        covered_frequency_hz: twin.covered_frequency(),
+        nonlinear: twin.nonlinear.is_some(),
+        build_seconds,
+        max_mode_error_pct: 100.0 * modes.iter().map(|m| m.relative.abs()).fold(0.0, f64::max),
+        modes,
+        transient: TransientCheck {
+            ran,
+            reason,
+            cases: full.as_ref().map(case_rows).unwrap_or_default(),
+            seconds: t0.elapsed().as_secs_f64(),
+        },
+    })
+}
+
+fn case_rows(v: &Validity) -> Vec<CaseRow> {
+    v.cases
+        .iter()
+        .map(|c| CaseRow {
+            name: c.name.clone(),
+            error_pct: c.twin.relative().map(|r| 100.0 * r),
+            linear_error_pct: c.linear_twin.relative().map(|r| 100.0 * r),
+            range_m: c.twin.range,
+            reference_seconds: c.cost.seconds,
+            dofs: c.cost.dofs,
+            steps: c.cost.steps,
+        })
+        .collect()
 }

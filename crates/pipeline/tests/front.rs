@@ -26,9 +26,9 @@ fn a_small_front_is_designed_verified_and_reported() {
     };
     let f = front(&folder, &options, &Silent).unwrap();
     print!("{f}");
-    assert_eq!(f.designs.len(), 3);
-    let f0 = f.designs[0].design.first_frequency_hz.unwrap();
-    for (k, d) in f.designs.iter().enumerate() {
+    assert_eq!(f.front.designs.len(), 3);
+    let f0 = f.front.designs[0].design.first_frequency_hz.unwrap();
+    for (k, d) in f.front.designs.iter().enumerate() {
         let f1 = d.design.first_frequency_hz.unwrap();
         if k > 0 {
             assert!(
@@ -36,7 +36,7 @@ fn a_small_front_is_designed_verified_and_reported() {
                 "d{k}: {f1} Hz < {}",
                 d.min_frequency_hz
             );
-            assert!(d.min_frequency_hz > f.designs[k - 1].min_frequency_hz.max(f0));
+            assert!(d.min_frequency_hz > f.front.designs[k - 1].min_frequency_hz.max(f0));
         }
         let twin = d.twin_hz.unwrap();
         assert!(
@@ -50,18 +50,23 @@ fn a_small_front_is_designed_verified_and_reported() {
         );
         assert!(!d.scan.is_empty(), "d{k} has no scan errors");
         for file in [
-            flexstage_report::layout::front::design(k),
-            flexstage_report::layout::front::outline(k),
-            flexstage_report::layout::front::modes(k),
+            flexstage_run::layout::front::design(k),
+            flexstage_run::layout::front::outline(k),
+            flexstage_run::layout::front::modes(k),
         ] {
             assert!(dir.join(&file).is_file(), "{file} missing");
         }
     }
-    for file in ["front/front.json", "front/front.csv", "front/front.svg"] {
+    use flexstage_run::layout::front::{CSV, JSON, SVG};
+    for file in [JSON, CSV, SVG] {
         assert!(dir.join(file).is_file(), "{file} missing");
     }
+    for k in 0..3 {
+        let png = flexstage_run::layout::front::mode_png(k, 1);
+        assert!(dir.join(&png).is_file(), "{png} missing");
+    }
     let html = std::fs::read_to_string(flexstage_pipeline::write_report(&folder).unwrap()).unwrap();
-    assert!(html.contains("id=\"front\"") && html.contains("front/front.svg"));
+    assert!(html.contains("id=\"front\"") && html.contains(SVG));
     drop(folder);
     let _ = std::fs::remove_dir_all(&dir);
 }

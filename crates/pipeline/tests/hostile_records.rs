@@ -37,7 +37,7 @@ fn record_lines() -> Vec<String> {
         "source{}",
         N.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
     ));
-    let p = d.join("pea1.csv");
+    let p = d.join("lab-pea.csv");
     write_pea_csv(&p, &rec, true).unwrap();
     let text = std::fs::read_to_string(&p).unwrap();
     let _ = std::fs::remove_dir_all(&d);
@@ -45,7 +45,7 @@ fn record_lines() -> Vec<String> {
 }
 
 fn identify(root: &Path, csv: &str) -> Result<flexstage_pipeline::PeaIdSummary, String> {
-    let data = root.join("record.csv");
+    let data = root.join("lab-record.csv");
     std::fs::write(&data, csv).unwrap();
     let folder = RunFolder::open(preset("quick").unwrap(), root.join("run"), true).unwrap();
     identify_pea(
@@ -66,7 +66,7 @@ fn a_record_too_short_to_show_hysteresis_is_refused() {
     assert!(full.compensation.width_after_pct < full.compensation.width_before_pct);
     // The first 200 rows of a simulated record: the reproducer.
     let e = identify(&root, &lines[..201].join("\n")).unwrap_err();
-    assert!(e.contains("record.csv"), "{e}");
+    assert!(e.contains("lab-record.csv"), "{e}");
     let _ = std::fs::remove_dir_all(&root);
 }
 
@@ -113,7 +113,7 @@ proptest! {
                 prop_assert!(p.d_p > 0.0 && p.b_bw >= 0.0 && p.b_bw + p.gamma_bw > 0.0, "{p:?}");
                 prop_assert!(s.compensation.width_after_pct <= s.compensation.width_before_pct);
             }
-            Err(e) => prop_assert!(e.contains("record.csv"), "{e}"),
+            Err(e) => prop_assert!(e.contains("lab-record.csv"), "{e}"),
         }
         let _ = std::fs::remove_dir_all(&root);
     }

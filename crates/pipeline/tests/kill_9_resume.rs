@@ -25,6 +25,7 @@ use std::sync::mpsc::{Receiver, channel};
 use std::time::{Duration, Instant};
 
 use flexstage_pipeline::{Progress, RunEvent, Stage, run::run};
+use flexstage_run::layout::{self, Tracking};
 
 const CHILD: &str = "FLEXSTAGE_KILL_CHILD";
 /// Chains of kills, each with its own fractions.
@@ -169,11 +170,11 @@ fn results(root: &Path) -> BTreeMap<String, Vec<u8>> {
 fn comparable(rel: &str, path: &Path, root: &Path) -> Option<Vec<u8>> {
     let bytes = std::fs::read(path).unwrap();
     match rel {
-        "run_state.json"
-        | "design/checkpoint.bin"
-        | "design/history.json"
-        | "report.html"
-        | "export/outline.dxf" => return None,
+        layout::RUN_STATE
+        | layout::design::CHECKPOINT
+        | layout::design::HISTORY_JSON
+        | layout::REPORT
+        | layout::export::DXF => return None,
         _ => {}
     }
     let Ok(text) = String::from_utf8(bytes.clone()) else {
@@ -181,15 +182,15 @@ fn comparable(rel: &str, path: &Path, root: &Path) -> Option<Vec<u8>> {
     };
     let text = text.replace(&root.display().to_string(), "<run>");
     let text = match rel {
-        "design/summary.json" => {
+        layout::design::SUMMARY => {
             let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
             let m = v.as_object_mut().unwrap();
             m.remove("seconds");
             m.remove("seconds_per_iteration");
             v.to_string()
         }
-        "design/history.csv" => drop_column(&text, "time_s"),
-        "twin/validity.json" => {
+        layout::design::HISTORY_CSV => drop_column(&text, "time_s"),
+        layout::twin::VALIDITY => {
             let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
             drop_seconds(&mut v);
             v.to_string()
@@ -245,8 +246,8 @@ fn kill_9_at_random_points_then_rerun_gives_the_uninterrupted_results() {
     let seconds = complete(&reference);
     let expected = results(&reference);
     assert!(
-        expected.contains_key("design/design.json")
-            && expected.contains_key("track/duration-0.05s/metrics.csv")
+        expected.contains_key(layout::design::DESIGN)
+            && expected.contains_key(&Tracking::variant("duration-0.05s").metrics())
     );
     let mut killed = 0;
     for seed in 0..SEEDS {
@@ -274,7 +275,7 @@ fn kill_9_at_random_points_then_rerun_gives_the_uninterrupted_results() {
                 "seed {seed}: {rel} differs from the uninterrupted run"
             );
         }
-        assert!(!root.join("run.lock").exists(), "seed {seed}: lock left");
+        assert!(!root.join(layout::LOCK).exists(), "seed {seed}: lock left");
         let _ = std::fs::remove_dir_all(&root);
     }
     // Most kills hit a running stage (a kill can come after a short stage has ended).

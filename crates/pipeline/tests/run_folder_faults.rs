@@ -15,6 +15,7 @@ use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
 use flexstage_pipeline::{PipelineError, RunOptions, Silent, run::run};
+use flexstage_run::layout;
 
 mod common;
 
@@ -25,7 +26,7 @@ fn options() -> RunOptions {
 }
 
 const CHILD: &str = "FLEXSTAGE_FAULT_CHILD";
-const CHECKPOINT: &str = "design/checkpoint.bin";
+const CHECKPOINT: &str = layout::design::CHECKPOINT;
 
 #[test]
 fn child() {
@@ -124,12 +125,9 @@ fn a_second_run_is_refused_and_damaged_or_foreign_checkpoints_are_never_resumed(
         let e = run(common::tiny(), &r, &options(), &Silent).unwrap_err();
         let m = e.to_string();
         assert!(matches!(e, PipelineError::Damaged { .. }), "{name}: {m}");
+        assert!(m.contains(CHECKPOINT) && m.contains(reason), "{name}: {m}");
         assert!(
-            m.contains("checkpoint.bin") && m.contains(reason),
-            "{name}: {m}"
-        );
-        assert!(
-            !r.join("design/design.json").exists(),
+            !r.join(layout::design::DESIGN).exists(),
             "{name}: a design was made"
         );
         let _ = std::fs::remove_dir_all(&r);
@@ -159,7 +157,7 @@ fn a_second_run_is_refused_and_damaged_or_foreign_checkpoints_are_never_resumed(
 
     // (3) The intact checkpoint resumes to the end; the killed holder's lock is taken over.
     run(common::tiny(), &root, &options(), &Silent).unwrap();
-    assert!(root.join("design/design.json").is_file());
-    assert!(!root.join("run.lock").exists());
+    assert!(root.join(layout::design::DESIGN).is_file());
+    assert!(!root.join(layout::LOCK).exists());
     let _ = std::fs::remove_dir_all(&root);
 }

@@ -12,7 +12,8 @@ use flexstage_pipeline::{
 };
 
 mod common;
-use flexstage_report::RunDir;
+use flexstage_run::RunDir;
+use flexstage_run::layout::{self, Tracking};
 
 /// Records the run events as short strings.
 #[derive(Default)]
@@ -24,6 +25,7 @@ impl Progress for Recorder {
             RunEvent::StartingOver(StartOver::Requested) => "restart".to_string(),
             RunEvent::Resuming(done) => format!("resuming {}", done.len()),
             RunEvent::Skipped(s) => format!("skip {}", s.name()),
+            RunEvent::Redoing { stage, why } => format!("redo {}: {why}", stage.name()),
             RunEvent::Started(s) => format!("start {}", s.name()),
             RunEvent::Finished { stage, .. } => format!("done {}", stage.name()),
         };
@@ -60,13 +62,14 @@ fn run_resumes_and_refuses_another_scenario_until_restarted() {
     assert_eq!(started(&ev), Stage::ALL.len(), "{ev:?}");
     assert!(s.report.is_file(), "report written");
     // Checkpoints were written (every 2 of 4 iterations) and removed with the finished design.
-    assert!(root.join("design/design.json").is_file());
-    assert!(!root.join("design/checkpoint.bin").exists());
+    assert!(root.join(layout::design::DESIGN).is_file());
+    assert!(!root.join(layout::design::CHECKPOINT).exists());
     assert!(!s.headline.is_empty(), "headline numbers");
-    let state = RunState::load(&RunDir::create(&root).unwrap())
+    let names = Stage::ALL.map(Stage::name);
+    let state = RunState::load(&RunDir::create(&root).unwrap(), &names)
         .unwrap()
         .unwrap();
-    assert_eq!(state.finished_stages(), Stage::ALL.to_vec());
+    assert!(names.iter().all(|n| state.finished(n)));
 
     run(quick.clone(), &root, &options, &rec).unwrap();
     let ev = rec.take();
@@ -87,7 +90,7 @@ fn run_resumes_and_refuses_another_scenario_until_restarted() {
         "{e}"
     );
     assert!(rec.take().is_empty(), "nothing ran");
-    let recorded = Scenario::load(&root.join("scenario.toml")).unwrap();
+    let recorded = Scenario::load(&root.join(layout::SCENARIO)).unwrap();
     assert_eq!(recorded, quick, "the refused call changed nothing");
 
     let mut other_options = short();
@@ -105,10 +108,108 @@ fn run_resumes_and_refuses_another_scenario_until_restarted() {
     let ev = rec.take();
     assert_eq!(ev[0], "restart", "{ev:?}");
     assert_eq!(started(&ev), Stage::ALL.len(), "{ev:?}");
-    let recorded = Scenario::load(&root.join("scenario.toml")).unwrap();
+    let recorded = Scenario::load(&root.join(layout::SCENARIO)).unwrap();
     assert_eq!(
         recorded, changed,
         "the folder records the scenario the stages ran with"
     );
+    std::fs::remove_dir_all(&root).unwrap();
+}
+
+/// Reference: issue #32 ("`run` trusts its state file, not its files"). Goal: after a
+/// finished run, each damage the issue names makes the next `run` redo the stage that wrote
+/// the file (saying so, with every later stage) and skip the ones before, and the redone
+/// files equal the first run's byte for byte; `report` refuses a folder whose scenario.toml
+/// was edited since the run.
+#[test]
+fn run_redoes_a_stage_whose_files_are_gone_or_damaged() {
+    let root = std::env::temp_dir().join(format!("flexstage-run-damage-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let quick: Scenario = common::tiny();
+    let rec = Recorder::default();
+    let options = short();
+    run(quick.clone(), &root, &options, &rec).unwrap();
+    rec.take();
+    let read = |rel: &str| std::fs::read(root.join(rel)).unwrap();
+    let metrics = Tracking::variant("duration-0.05s").metrics();
+    let kept = [
+        layout::design::DESIGN,
+        layout::reduce::PARAMS,
+        layout::stage::TABLE,
+        layout::stage::PARAMS,
+        metrics.as_str(),
+    ]
+    .map(|rel| (rel, read(rel)));
+    let first_redone = |ev: &[String]| {
+        ev.iter()
+            .find(|e| e.starts_with("redo "))
+            .cloned()
+            .unwrap_or_default()
+    };
+    // (the stage redone, the file it names, the damage)
+    type Case<'a> = (&'a str, &'a str, Box<dyn Fn() + 'a>);
+    let cases: [Case; 3] = [
+        (
+            "pea",
+            "identify/pea1/",
+            Box::new(|| {
+                std::fs::remove_dir_all(root.join(layout::stage::DIR).parent().unwrap()).unwrap();
+                std::fs::remove_dir_all(root.join(Tracking::DIR)).unwrap();
+            }),
+        ),
+        (
+            "reduce",
+            layout::reduce::PARAMS,
+            Box::new(|| {
+                let p = root.join(layout::reduce::PARAMS);
+                let text = std::fs::read_to_string(&p).unwrap();
+                let line = text.lines().find(|l| l.starts_with("mass = ")).unwrap();
+                std::fs::write(&p, text.replace(line, "mass = nan")).unwrap();
+            }),
+        ),
+        (
+            "design",
+            layout::design::DESIGN,
+            Box::new(|| {
+                let p = root.join(layout::design::DESIGN);
+                let bytes = std::fs::read(&p).unwrap();
+                std::fs::write(&p, &bytes[..bytes.len() / 2]).unwrap();
+            }),
+        ),
+    ];
+    for (stage, file, damage) in cases {
+        damage();
+        run(quick.clone(), &root, &options, &rec).unwrap();
+        let ev = rec.take();
+        let redo = first_redone(&ev);
+        assert!(
+            redo.starts_with(&format!("redo {stage}: ")) && redo.contains(file),
+            "{stage}: {ev:?}"
+        );
+        let at = Stage::ALL.iter().position(|s| s.name() == stage).unwrap();
+        assert_eq!(
+            ev.iter().filter(|e| e.starts_with("skip ")).count(),
+            at,
+            "the stages before {stage} are kept: {ev:?}"
+        );
+        assert_eq!(started(&ev), Stage::ALL.len() - at, "{ev:?}");
+        for (rel, bytes) in &kept {
+            assert!(
+                read(rel) == *bytes,
+                "{stage}: {rel} differs from the first run"
+            );
+        }
+    }
+    // The report refuses a scenario.toml edited after the run, naming it.
+    let p = root.join(layout::SCENARIO);
+    let mut edited = quick.clone();
+    edited.simulation.seed += 1;
+    std::fs::write(&p, edited.to_commented_toml()).unwrap();
+    let folder = flexstage_pipeline::RunFolder::existing(&root).unwrap();
+    let e = flexstage_pipeline::write_report(&folder)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains(layout::SCENARIO) && e.contains("edited"), "{e}");
+    drop(folder);
     std::fs::remove_dir_all(&root).unwrap();
 }

@@ -46,7 +46,7 @@ pub mod validity;
 
 pub use condense::{Condensation, Condenser, Ports, condense};
 pub use error::{ReduceError, Result};
-pub use lumped::{stage_params, stage_params_toml};
+pub use lumped::stage_params;
 pub use mass::{MassInterpolation, MassLumping, MassMatrix, PointMass, design_mass};
 pub use modal::{ModalParams, Modes, modal_analysis};
 pub use reduction::{

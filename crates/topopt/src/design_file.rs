@@ -1,68 +1,8 @@
-//! The final design file (`design/design.json`) that `flexstage analyze` and `reduce` read, and
-//! density CSV input/output.
-//!
-//! To rebuild the model of a design: load the run's `scenario.toml`, call
-//! [`crate::Problem::from_scenario`] with `Some(Kinematics::TotalLagrangian)` (the final analysis
-//! has no additive material), and use [`DesignFile::rho`] as the physical densities
-//! (`Design::new(&file.rho)`), in fem element order `e = i·n_w + j`.
-
-use serde::{Deserialize, Serialize};
+//! Density CSV input and output: the densities of a design as one row per element
+//! (`i,j,x,y,rho`), what `flexstage design` writes beside the finished design and what
+//! `--design FILE.csv` reads.
 
 use crate::error::{Result, TopoptError};
-use crate::summary::DesignSummary;
-
-/// A finished (or in-progress) design.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct DesignFile {
-    /// Format version (1).
-    pub version: u32,
-    /// Scenario name.
-    pub scenario: String,
-    /// Elements along x.
-    pub nl: usize,
-    /// Elements along y.
-    pub nw: usize,
-    /// Physical densities ρ (after filter, projection and passive overrides), fem order
-    /// `e = i·n_w + j` (column i from the left, row j from the bottom).
-    pub rho: Vec<f64>,
-    /// Design iterations performed.
-    pub iterations: usize,
-    /// Workspace area of the initial design, final nonlinear analysis \[m²\].
-    pub area_initial: f64,
-    /// Workspace area of this design, final nonlinear analysis \[m²\].
-    pub area: f64,
-    /// Fraction of design elements with 0.1 < ρ < 0.9.
-    pub grey_fraction: f64,
-    /// What the design delivers: α, θ, area, mass, stress, minimum sizes (absent in files of
-    /// older versions).
-    #[serde(default)]
-    pub summary: Option<DesignSummary>,
-}
-
-impl DesignFile {
-    /// Parses and checks a design file.
-    pub fn from_json(bytes: &[u8]) -> Result<Self> {
-        let d: DesignFile = serde_json::from_slice(bytes).map_err(|e| TopoptError::Format {
-            what: "design file".into(),
-            reason: e.to_string(),
-        })?;
-        if d.rho.len() != d.nl * d.nw || d.rho.iter().any(|r| !(0.0..=1.0).contains(r)) {
-            return Err(TopoptError::Format {
-                what: "design file".into(),
-                reason: format!(
-                    "rho must have nl·nw = {} entries in [0, 1], it has {}",
-                    d.nl * d.nw,
-                    d.rho.len()
-                ),
-            });
-        }
-        Ok(d)
-    }
-    /// As pretty JSON.
-    pub fn to_json(&self) -> String {
-        serde_json::to_string_pretty(self).expect("design file serializes")
-    }
-}
 
 /// Density CSV with header `i,j,x,y,rho` (element column/row from the bottom-left, centroid
 /// \[m\], density), one row per element in fem order.

@@ -17,7 +17,7 @@
 //!   factorization.
 //! * [`optimize`]: Algorithm 1 with MMA (bound formulation of the worst case), checkpoints.
 //! * [`summary`] and [`geometry`]: what a design delivers (α, θ, area, mass, stress, minimum
-//!   sizes, one-node hinges); [`design_file`]: the design file.
+//!   sizes, one-node hinges); [`design_file`]: density CSV input and output.
 
 pub mod analysis;
 pub mod check;
@@ -37,7 +37,7 @@ pub mod stress;
 pub mod summary;
 
 pub use analysis::{AnalysisParams, CaseResults, CaseState, Evaluator, Timing, Workspace};
-pub use design_file::{DesignFile, density_csv, read_density_csv};
+pub use design_file::{density_csv, read_density_csv};
 pub use design_space::DesignSpace;
 pub use error::{Result, TopoptError};
 pub use filter::{DensityFilter, Projection};

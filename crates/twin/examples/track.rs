@@ -16,8 +16,9 @@ use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::{Setup, Variant, experiment, experiment_on};
 use flexstage_control::rig::StagePlant;
 use flexstage_control::trajectory::Reference;
+use flexstage_run::Format;
+use flexstage_run::files::design::DesignFile;
 use flexstage_scenario::{Preset, Scenario};
-use flexstage_topopt::DesignFile;
 use flexstage_twin::{DesignedStage, Twin};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -26,7 +27,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .get(1)
         .and_then(|p| Preset::from_name(p))
         .ok_or("usage: track quick|paper DESIGN.json [SECONDS]")?;
-    let design = DesignFile::from_json(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
+    let design = DesignFile::decode(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let seconds: Option<f64> = args.get(3).map(|s| s.parse()).transpose()?;
     let t0 = std::time::Instant::now();
     let DesignedStage {

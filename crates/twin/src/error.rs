@@ -58,7 +58,7 @@ pub enum TwinError {
     Reduced(String),
     /// A figure could not be drawn.
     #[error("figure: {0}")]
-    Plot(#[from] flexstage_report::plot::PlotError),
+    Plot(#[from] flexstage_figures::plot::PlotError),
 }
 
 /// Result alias.

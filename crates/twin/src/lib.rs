@@ -119,12 +119,12 @@
 //! # let _ = record; Ok(()) }
 //! ```
 //!
-//! The report's data: [`report_data`] collects the modes against the FE modal analysis, the
-//! Bode data beside the lumped model and the validity against the full transient (optional:
-//! it is expensive on fine meshes) as the files of `flexstage_report::layout::twin`; the
-//! pipeline's `twin` stage (`flexstage run`, `flexstage track --write-twin`) writes them.
-//! The parts: [`report::modes_table`], [`report::Bode`] (CSV, SVG via
-//! `flexstage_report::plot`) and [`reference::validate`] / [`report::validity_lines`].
+//! The report's data: the modes against the FE modal analysis ([`reference::mode_check`]),
+//! the Bode data beside the lumped model ([`report::Bode`]: named columns and SVG figures via
+//! `flexstage_figures::plot`) and the validity against the full transient
+//! ([`reference::validate`], optional: it is expensive on fine meshes;
+//! [`report::validity_lines`]). The pipeline's `twin` stage (`flexstage run`, `flexstage
+//! track --write-twin`) stores them in the run folder.
 
 // Loops over the two axes and the two inputs index several arrays at once, as the equations do.
 #![allow(clippy::needless_range_loop)]
@@ -139,7 +139,6 @@ pub mod report;
 pub mod samples;
 pub mod stage;
 pub mod structure;
-pub mod summary;
 pub mod twin;
 
 pub use designed::DesignedStage;
@@ -147,5 +146,4 @@ pub use error::{Result, TwinError};
 pub use reference::{Agreement, ModeCheck, ReferenceParams, ValidationParams, Validity, validate};
 pub use stage::TwinStage;
 pub use structure::StageFe;
-pub use summary::{ReportData, TwinValidity, report_data};
 pub use twin::{Twin, TwinParams, plant};

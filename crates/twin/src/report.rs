@@ -1,6 +1,6 @@
 //! The twin's data for the report: its modes, its frequency response from x_nom to q beside
 //! the lumped model's (Bode magnitude and phase, both axes), as data, CSV and SVG figures
-//! (`flexstage_report::plot`).
+//! (`flexstage_figures::plot`).
 //!
 //! The two axes of the stage are the combinations the mechanism separates: the **common**
 //! input `x_nom1 = x_nom2 = x` moves the output along q1 (the moving frame of Eq. 22), the
@@ -10,7 +10,7 @@
 //! four entries of both 2 × 2 matrices.
 
 use flexstage_control::model::StageModel;
-use flexstage_report::plot::{Figure, Series};
+use flexstage_figures::plot::{Figure, Series};
 use nalgebra::{Complex, DMatrix};
 use serde::Serialize;
 
@@ -138,26 +138,21 @@ impl Bode {
         })
     }
 
-    /// CSV: f, then magnitude \[dB\] and phase \[deg\] of the eight entries.
-    pub fn csv(&self) -> String {
-        let mut out = String::from("f_Hz");
-        for who in ["twin", "lumped"] {
-            for (i, j) in [(1, 1), (1, 2), (2, 1), (2, 2)] {
-                out.push_str(&format!(",{who}_q{i}_x{j}_dB,{who}_q{i}_x{j}_deg"));
+    /// The data as named columns: `f_Hz`, then magnitude \[dB\] and phase \[deg\] of the eight
+    /// entries (`twin_q1_x1_dB`, `twin_q1_x1_deg`, …, `lumped_q2_x2_deg`).
+    pub fn columns(&self) -> (Vec<String>, Vec<Vec<f64>>) {
+        let mut header = vec!["f_Hz".to_string()];
+        let mut columns = vec![self.frequency.clone()];
+        for (who, g) in [("twin", &self.twin), ("lumped", &self.lumped)] {
+            for (i, j) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
+                let (m, p): (Vec<f64>, Vec<f64>) = g.iter().map(|g| mag_phase(g[i][j])).unzip();
+                header.push(format!("{who}_q{}_x{}_dB", i + 1, j + 1));
+                header.push(format!("{who}_q{}_x{}_deg", i + 1, j + 1));
+                columns.push(m);
+                columns.push(p);
             }
         }
-        out.push('\n');
-        for (k, f) in self.frequency.iter().enumerate() {
-            out.push_str(&format!("{f}"));
-            for g in [&self.twin[k], &self.lumped[k]] {
-                for (i, j) in [(0, 0), (0, 1), (1, 0), (1, 1)] {
-                    let (m, p) = mag_phase(g[i][j]);
-                    out.push_str(&format!(",{m},{p}"));
-                }
-            }
-            out.push('\n');
-        }
-        out
+        (header, columns)
     }
 
     /// The magnitude and phase figures (SVG) of the two axes, twin beside lumped.

@@ -1,5 +1,5 @@
 //! The outline as a planar region: closed loops with the solid on their left (outer
-//! boundaries counter-clockwise, holes clockwise, as `flexstage_report::outline` writes them),
+//! boundaries counter-clockwise, holes clockwise, as [`crate::outline`] writes them),
 //! grouped into connected solid parts.
 
 use crate::error::{Result, VerifyError};

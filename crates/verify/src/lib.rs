@@ -4,6 +4,9 @@
 //! 11(7), 179, Section 4.1: the stage is wire-cut from a plate), independent of the
 //! optimizer's density pixels:
 //!
+//! 0. **Outline** ([`outline`]): the ρ = 0.5 iso-contour of the density field by marching
+//!    squares, smoothed and refined, written as DXF, SVG and STL (what `flexstage export`
+//!    stores); the verification below checks this outline, so it lives beside it.
 //! 1. **Outline → parts.** The exported outline (the ρ = 0.5 contour, smoothed and refined,
 //!    exactly the DXF's polylines) is grouped into connected solid parts ([`geometry`]); parts
 //!    that no port or support holds are *islands*.
@@ -48,6 +51,7 @@ pub mod geometry;
 pub mod manufacture;
 pub mod mesh;
 pub mod modal;
+pub mod outline;
 pub mod params;
 pub mod samples;
 pub mod t6;
@@ -59,4 +63,4 @@ pub use manufacture::{Finding, FindingKind, Manufacturability, Severity};
 pub use params::{
     AL6061_T6_FATIGUE_STRENGTH, AL6061_T6_YIELD_STRENGTH, DEFAULT_SAFETY_FACTOR, VerifyParams,
 };
-pub use verify::{BodyFitted, StressPeak, Transfer, Verdict, Verification, verify, write_files};
+pub use verify::{BodyFitted, StressPeak, Transfer, Verdict, Verification, verify};

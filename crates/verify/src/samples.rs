@@ -1,6 +1,6 @@
 //! Problems with known answers, used by the tests, the benches and the docs.
 
-use flexstage_report::outline::Outline;
+use crate::outline::Outline;
 use flexstage_scenario::{Preset, Scenario};
 
 /// Young's modulus, Poisson ratio and density of the scenario's aluminium (Table 3).

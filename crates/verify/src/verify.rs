@@ -821,20 +821,3 @@ impl Verification {
         crate::vtu::to_vtu(&self.mesh, &self.displacement, &self.nodal_von_mises)
     }
 }
-
-/// Writes `export/verification.json` (every value, SI units), `export/verification.txt` (the
-/// summary lines) and `export/body_fitted.vtu` (mesh, displacement and von Mises stress at
-/// the worst stroke corner) into the run folder, atomically.
-pub fn write_files(
-    v: &Verification,
-    run: &flexstage_report::RunDir,
-) -> flexstage_report::Result<Vec<std::path::PathBuf>> {
-    let json = serde_json::to_string_pretty(v).expect("the verification serializes");
-    let mut text = v.summary_lines().join("\n");
-    text.push('\n');
-    Ok(vec![
-        run.write("export/verification.json", json.as_bytes())?,
-        run.write("export/verification.txt", text.as_bytes())?,
-        run.write("export/body_fitted.vtu", v.to_vtu().as_bytes())?,
-    ])
-}

@@ -2,10 +2,13 @@
 //! configuration, and their workspace polygons against the uniform start design), the
 //! workspace evolution during the optimization, and the convergence history.
 
-use super::{Builder, Width, fmt_num, num, toml_num};
-use crate::layout::{self, design as files};
-use crate::plot::{Figure, Legend, Series};
-use crate::read_csv_columns as csv_cols;
+use flexstage_figures::plot::{Figure, Legend, Series};
+use flexstage_run::Table;
+use flexstage_run::files::design::{DesignSummaryFile, POLYGON};
+use flexstage_run::layout::{self, design as files};
+use flexstage_run::scenario::Scenario;
+
+use super::{Builder, Width, fmt_num};
 
 /// One design shown in Figure 4: the run's own, or the nested tilted run.
 struct Shown {
@@ -35,16 +38,15 @@ impl Shown {
 }
 
 /// The designs of the run folder: its own and a nested tilted one, normal first.
-fn designs(b: &Builder) -> Vec<Shown> {
+fn designs(b: &mut Builder) -> Vec<Shown> {
     let mut out = Vec::new();
     for prefix in [String::new(), format!("{}/", layout::TILTED)] {
         if !b.exists(&format!("{prefix}{}", files::DENSITY_PNG)) {
             continue;
         }
         let tilt = b
-            .toml(&format!("{prefix}{}", layout::SCENARIO))
-            .and_then(|t| toml_num(&t, &["output", "tilt_deg"]))
-            .unwrap_or(0.0);
+            .load::<Scenario>(&format!("{prefix}{}", layout::SCENARIO))
+            .map_or(0.0, |s| s.output.tilt_deg);
         out.push(Shown { prefix, tilt });
     }
     out.sort_by_key(|d| d.tilt != 0.0);
@@ -68,9 +70,8 @@ pub(super) fn design(b: &mut Builder) {
     b.grid_open();
     for d in &shown {
         let area = b
-            .json(&d.rel(files::SUMMARY))
-            .and_then(|s| num(&s, &["area_final_m2"]))
-            .map(|a| format!(", workspace {} µm²", fmt_num(a * 1e12)))
+            .load::<DesignSummaryFile>(&d.rel(files::SUMMARY))
+            .map(|s| format!(", workspace {} µm²", fmt_num(s.area_final_m2 * 1e12)))
             .unwrap_or_default();
         let caption = format!("{}: density ρ{area}", d.label());
         b.file_figure(&d.rel(files::DENSITY_PNG), &caption, Width::Half);
@@ -92,9 +93,15 @@ pub(super) fn design(b: &mut Builder) {
 
 /// The workspace polygons of every design against the start design, in one figure.
 fn workspace(b: &mut Builder, shown: &[Shown]) {
-    let read = |b: &Builder, rel: &str| -> Option<Vec<(f64, f64)>> {
-        let c = csv_cols(&b.text(rel)?, &["x_out_um", "y_out_um"])?;
-        Some(c[0].iter().copied().zip(c[1].iter().copied()).collect())
+    let read = |b: &mut Builder, rel: &str| -> Option<Vec<(f64, f64)>> {
+        let t = b.load::<Table>(rel)?;
+        match t.pairs(POLYGON[0], POLYGON[1]) {
+            Ok(p) => Some(p),
+            Err(reason) => {
+                b.damaged(rel, reason);
+                None
+            }
+        }
     };
     let mut fig = Figure::new(
         "Workspace of the output point (Figure 4)",
@@ -130,30 +137,17 @@ fn workspace(b: &mut Builder, shown: &[Shown]) {
 
 /// Section "convergence": area growth, volume and grey fraction over the iterations.
 pub(super) fn convergence(b: &mut Builder) {
-    let Some(text) = b.text(files::HISTORY_CSV) else {
-        b.not_run(&format!("{} missing", files::HISTORY_CSV));
+    let Some(history) = b.load::<Table>(files::HISTORY_CSV) else {
+        b.missing(files::HISTORY_CSV);
         return;
     };
-    // Histories written before the columns had distinct names carry two "volume" columns
-    // (constraint first, fraction last): the plot wants the fraction.
-    let text = match text.split_once('\n') {
-        Some((head, body)) if head.split(',').filter(|h| *h == "volume").count() > 1 => {
-            let head = head.replacen(",volume,", ",g_volume,", 1).replacen(
-                ",volume,",
-                ",volume_fraction,",
-                1,
-            );
-            format!("{head}\n{body}")
-        }
-        _ => text,
-    };
-    let Some(c) = csv_cols(&text, &["iteration", "area_rel", "volume_fraction", "grey"]) else {
-        b.not_run(&format!("{} has no history columns", files::HISTORY_CSV));
-        return;
+    let c = match history.columns(&["iteration", "area_rel", "volume_fraction", "grey"]) {
+        Ok(c) => c,
+        Err(reason) => return b.damaged(files::HISTORY_CSV, reason),
     };
     let pts = |k: usize| -> Vec<(f64, f64)> {
         c[0].iter()
-            .zip(&c[k])
+            .zip(c[k])
             .filter(|(a, b)| a.is_finite() && b.is_finite())
             .map(|(a, b)| (*a, *b))
             .collect()

@@ -7,20 +7,17 @@
 //! asymmetry and the first natural frequency; with the robust formulation also the
 //! workspaces of the eroded and dilated designs.
 
-use serde_json::Value;
+use flexstage_run::files::design::{DesignRecord, DesignSummaryFile};
+use flexstage_run::layout::design as files;
 
-use super::{Builder, fmt_num, num, toml_num};
-use crate::layout::{self, design as files};
+use super::{Builder, fmt_num};
 
 /// A length \[m\] in mm with its location, e.g. "0.512 mm at (12.0, 3.1) mm".
-fn length_at(d: &Value, key: &str) -> Option<String> {
-    let v = num(d, &[key])?;
-    let at = match (
-        num(d, &[&format!("{key}_at"), "0"]),
-        num(d, &[&format!("{key}_at"), "1"]),
-    ) {
-        (Some(x), Some(y)) => format!(" at ({:.1}, {:.1}) mm", x * 1e3, y * 1e3),
-        _ => String::new(),
+fn length_at(v: Option<f64>, at: Option<[f64; 2]>) -> Option<String> {
+    let v = v?;
+    let at = match at {
+        Some([x, y]) => format!(" at ({:.1}, {:.1}) mm", x * 1e3, y * 1e3),
+        None => String::new(),
     };
     Some(format!("{} mm{at}", fmt_num(v * 1e3)))
 }
@@ -35,52 +32,57 @@ fn size_verdict(size: Option<f64>, limit: Option<f64>) -> String {
 }
 
 /// The rows of the design summary table: (quantity, value, reference or verdict).
-pub(super) fn rows(d: &Value, limits: &dyn Fn(&str) -> Option<f64>) -> Vec<Vec<String>> {
+/// The scenario's minimum member and gap \[m\], when known.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct SizeLimits {
+    /// `limits.min_hinge_thickness`.
+    pub member: Option<f64>,
+    /// `limits.min_slot_width`.
+    pub gap: Option<f64>,
+}
+
+pub(super) fn rows(d: &DesignRecord, limits: SizeLimits) -> Vec<Vec<String>> {
     let mut out: Vec<Vec<String>> = Vec::new();
     let mut row = |q: &str, v: Option<String>, r: String| {
         if let Some(v) = v {
             out.push(vec![q.to_string(), v, r]);
         }
     };
-    let mpa = |k: &str| num(d, &[k]).map(|s| format!("{} MPa", fmt_num(s * 1e-6)));
-    let um2 = |k: &str| num(d, &[k]).map(|a| format!("{} µm²", fmt_num(a * 1e12)));
-    row("α (Eq. 27)", num(d, &["alpha"]).map(fmt_num), String::new());
+    let mpa = |s: Option<f64>| s.map(|s| format!("{} MPa", fmt_num(s * 1e-6)));
+    let um2 = |a: Option<f64>| a.map(|a| format!("{} µm²", fmt_num(a * 1e12)));
+    row("α (Eq. 27)", Some(fmt_num(d.alpha)), String::new());
+    // Rounding noise of a symmetric design (1e-16°) reads as 0°.
+    let theta = if d.theta_deg.abs() < 1e-9 {
+        0.0
+    } else {
+        d.theta_deg
+    };
     row(
         "θ of the differential output",
-        num(d, &["theta_deg"]).map(|t| {
-            // Rounding noise of a symmetric design (1e-16°) reads as 0°.
-            let t = if t.abs() < 1e-9 { 0.0 } else { t };
-            format!("{}°", fmt_num(t))
-        }),
-        num(d, &["theta_target_deg"])
-            .map(|t| format!("target {}°", fmt_num(t)))
-            .unwrap_or_default(),
+        Some(format!("{}°", fmt_num(theta))),
+        format!("target {}°", fmt_num(d.theta_target_deg)),
     );
     row(
         "workspace area J (Eq. 4)",
-        um2("area"),
-        num(d, &["area_ratio"])
-            .map(|r| format!("{} × the input stroke square", fmt_num(r)))
-            .unwrap_or_default(),
+        um2(Some(d.area)),
+        format!("{} × the input stroke square", fmt_num(d.area_ratio)),
     );
     row(
         "workspace of the eroded design",
-        um2("area_eroded"),
+        um2(d.area_eroded),
         "robust".into(),
     );
     row(
         "workspace of the dilated design",
-        um2("area_dilated"),
+        um2(d.area_dilated),
         "robust".into(),
     );
     row(
         "mass",
-        num(d, &["mass"]).map(|m| format!("{} g", fmt_num(m * 1e3))),
-        num(d, &["volume_fraction"])
-            .map(|v| format!("volume fraction {}", fmt_num(v)))
-            .unwrap_or_default(),
+        Some(format!("{} g", fmt_num(d.mass * 1e3))),
+        format!("volume fraction {}", fmt_num(d.volume_fraction)),
     );
-    let allowable = num(d, &["allowable_stress"]);
+    let allowable = Some(d.allowable_stress);
     let vs = |s: Option<f64>, bound: Option<f64>, name: &str| match (s, bound) {
         (Some(s), Some(a)) => format!(
             "{} {name} {} MPa{}",
@@ -92,45 +94,44 @@ pub(super) fn rows(d: &Value, limits: &dyn Fn(&str) -> Option<f64>) -> Vec<Vec<S
     };
     row(
         "peak von Mises (solid elements, stroke corners)",
-        mpa("peak_stress"),
-        vs(num(d, &["peak_stress"]), allowable, "allowable"),
+        mpa(Some(d.peak_stress)),
+        vs(Some(d.peak_stress), allowable, "allowable"),
     );
     row(
         "constrained stress (relaxed, eroded design)",
-        mpa("constrained_stress"),
+        mpa(d.constrained_stress),
         vs(
-            num(d, &["constrained_stress"]),
-            num(d, &["design_allowable"]),
+            d.constrained_stress,
+            Some(d.design_allowable),
             "design-mesh bound",
         ),
     );
     row(
         "thinnest member (ρ = ½)",
-        length_at(d, "thinnest_member"),
-        size_verdict(num(d, &["thinnest_member"]), limits("min_hinge_thickness")),
+        length_at(d.thinnest_member, d.thinnest_member_at),
+        size_verdict(d.thinnest_member, limits.member),
     );
     row(
         "narrowest gap (ρ = ½)",
-        length_at(d, "narrowest_gap"),
-        size_verdict(num(d, &["narrowest_gap"]), limits("min_slot_width")),
+        length_at(d.narrowest_gap, d.narrowest_gap_at),
+        size_verdict(d.narrowest_gap, limits.gap),
     );
     row(
         "one-node hinges",
-        num(d, &["one_node_hinges"]).map(fmt_num),
-        match num(d, &["one_node_hinges"]) {
-            Some(0.0) => "none: ok".into(),
-            Some(_) => "a one-node hinge cannot be manufactured".into(),
-            None => String::new(),
+        Some(fmt_num(d.one_node_hinges as f64)),
+        match d.one_node_hinges {
+            0 => "none: ok".into(),
+            _ => "a one-node hinge cannot be manufactured".into(),
         },
     );
     row(
         "mirror asymmetry max |ρ − ρ_mirror|",
-        num(d, &["mirror_asymmetry"]).map(fmt_num),
+        Some(fmt_num(d.mirror_asymmetry)),
         String::new(),
     );
     row(
         "first natural frequency",
-        num(d, &["first_frequency_hz"]).map(|f| format!("{} Hz", fmt_num(f))),
+        d.first_frequency_hz.map(|f| format!("{} Hz", fmt_num(f))),
         String::new(),
     );
     out
@@ -138,23 +139,15 @@ pub(super) fn rows(d: &Value, limits: &dyn Fn(&str) -> Option<f64>) -> Vec<Vec<S
 
 /// Section "design summary".
 pub(super) fn design_summary(b: &mut Builder) {
-    let Some(d) = b
-        .json(files::SUMMARY)
-        .and_then(|s| s.get("design").cloned())
-    else {
-        b.not_run(&format!(
-            "{} missing or without a design summary",
-            files::SUMMARY
-        ));
+    let Some(summary) = b.load::<DesignSummaryFile>(files::SUMMARY) else {
+        b.missing(files::SUMMARY);
         return;
     };
-    let scenario = b.toml(layout::SCENARIO);
-    let limits = |k: &str| scenario.as_ref().and_then(|t| toml_num(t, &["limits", k]));
-    let rows = rows(&d, &limits);
-    if rows.is_empty() {
-        b.not_run(&format!("{}: no known quantity", files::SUMMARY));
-        return;
-    }
+    let limits = b.scenario().map_or(SizeLimits::default(), |s| SizeLimits {
+        member: Some(s.limits.min_hinge_thickness),
+        gap: Some(s.limits.min_slot_width),
+    });
+    let rows = rows(&summary.design, limits);
     b.note(
         "Final analysis of the blueprint design, geometrically nonlinear, without the \
          additive material; sizes measured at ρ = ½; limits from the scenario's [limits].",
@@ -170,18 +163,37 @@ mod tests {
     #[test]
     fn sizes_are_judged_against_the_scenario_limits() {
         // Goal: a member thinner than the workshop limit is flagged, not shown as fine.
-        let d: Value = serde_json::json!({
-            "alpha": 2.5, "theta_deg": 0.0, "theta_target_deg": 0.0, "area": 4e-10,
-            "thinnest_member": 0.3e-3, "thinnest_member_at": [0.01, 0.002],
-            "narrowest_gap": 0.6e-3, "peak_stress": 90e6, "allowable_stress": 63e6,
-            "one_node_hinges": 0
-        });
-        let limits = |k: &str| match k {
-            "min_hinge_thickness" => Some(0.5e-3),
-            "min_slot_width" => Some(0.4e-3),
-            _ => None,
+        let d = DesignRecord {
+            area: 4e-10,
+            area_ratio: 1.0,
+            alpha: 2.5,
+            theta_deg: 0.0,
+            theta_target_deg: 0.0,
+            mass: 0.05,
+            volume_fraction: 0.25,
+            area_eroded: None,
+            area_dilated: None,
+            peak_stress: 90e6,
+            constrained_stress: None,
+            allowable_stress: 63e6,
+            design_allowable: 31.5e6,
+            one_node_hinges: 0,
+            thinnest_member: Some(0.3e-3),
+            thinnest_member_at: Some([0.01, 0.002]),
+            narrowest_gap: Some(0.6e-3),
+            narrowest_gap_at: None,
+            guaranteed_member: None,
+            guaranteed_gap: None,
+            mirror_asymmetry: 0.0,
+            first_frequency_hz: None,
+            frequencies_hz: Vec::new(),
+            mechanism: None,
         };
-        let rows = rows(&d, &limits);
+        let limits = SizeLimits {
+            member: Some(0.5e-3),
+            gap: Some(0.4e-3),
+        };
+        let rows = rows(&d, limits);
         let find = |q: &str| rows.iter().find(|r| r[0].starts_with(q)).unwrap().clone();
         assert_eq!(find("thinnest")[1], "0.3000 mm at (10.0, 2.0) mm");
         assert!(find("thinnest")[2].starts_with("BELOW"));

@@ -6,11 +6,13 @@
 //! stresses, minimum sizes, first frequency), the body-fitted verification of the exported
 //! outline and the digital twin (modes, Bode, validity).
 //!
-//! The report only *reads* a run folder, so it works on any run, also a partial one: a
-//! missing result is shown as "not run". Figures are embedded: SVG inline (text stays
+//! The report only *reads* a run folder, through the typed files of `flexstage-run`, so it
+//! works on any run, also a partial one: a missing result is shown as "not run", a file that
+//! exists but does not parse as an error on the page and in [`Report::errors`] (the command
+//! then fails). Figures are embedded: SVG inline (text stays
 //! text, searchable and sharp at any zoom), PNG as `data:` URIs; the file opens offline
 //! and can be mailed around. Each figure fills the page width (at most 960 px) with text
-//! ≥ 11 px at 100 % zoom ([`crate::plot::MIN_TEXT_PX`] at its own size), and a click
+//! ≥ 11 px at 100 % zoom ([`flexstage_figures::plot::MIN_TEXT_PX`] at its own size), and a click
 //! enlarges it to the whole window (a few lines of inline script, no network).
 //!
 //! # Adding a section
@@ -32,13 +34,16 @@ mod twin;
 mod verify;
 
 use std::fmt::Write as _;
-use std::fs;
-use std::path::Path;
+use std::sync::Arc;
 
-use crate::layout::{self, Tracking};
-use crate::read_csv_columns as csv_cols;
-
-pub use reduce::mode_shape_pngs;
+use flexstage_run::files::design::DesignSummaryFile;
+use flexstage_run::files::reduce::{ReduceSummaryFile, ReduceSummaryJson};
+use flexstage_run::files::stage::ParameterRow;
+use flexstage_run::files::track::MetricsRow;
+use flexstage_run::format::Rows;
+use flexstage_run::layout::{self, Tracking};
+use flexstage_run::scenario::Scenario;
+use flexstage_run::{Format, RunDir};
 
 /// One section of the report.
 pub struct Section {
@@ -160,39 +165,76 @@ enum Width {
 
 /// Builds the HTML while reading the run folder.
 pub struct Builder<'a> {
-    root: &'a Path,
+    dir: &'a RunDir,
     html: String,
     /// Run folder files already embedded (so [`Builder::other_figures`] skips them).
     shown: Vec<String>,
+    /// Files that exist but could not be read or parsed, with the reason.
+    errors: Vec<String>,
 }
 
 impl<'a> Builder<'a> {
-    fn new(root: &'a Path) -> Self {
+    fn new(dir: &'a RunDir) -> Self {
         Builder {
-            root,
+            dir,
             html: String::with_capacity(1 << 20),
             shown: Vec::new(),
+            errors: Vec::new(),
         }
     }
 
-    fn read(&self, rel: &str) -> Option<Vec<u8>> {
-        fs::read(self.root.join(rel)).ok()
+    /// Records an error: on the page (where the section would show the file) and in the
+    /// report's error list.
+    fn error(&mut self, e: &flexstage_run::RunError) {
+        let text = e.to_string();
+        let _ = writeln!(self.html, "<p class=\"error\">error: {}</p>", esc(&text));
+        self.errors.push(text);
     }
 
-    fn text(&self, rel: &str) -> Option<String> {
-        fs::read_to_string(self.root.join(rel)).ok()
+    /// Records that the file `rel` parses but lacks what the report needs.
+    fn damaged(&mut self, rel: &str, reason: String) {
+        let path = self.dir.path(rel);
+        self.error(&flexstage_run::RunError::Damaged { path, reason });
+    }
+
+    /// The bytes of a file: `None` if it does not exist or cannot be read (an error then).
+    fn read(&mut self, rel: &str) -> Option<Vec<u8>> {
+        match self.dir.read(rel) {
+            Ok(b) => b,
+            Err(e) => {
+                self.error(&e);
+                None
+            }
+        }
+    }
+
+    /// The typed value of a file: `None` if it does not exist, or if it does not parse (an
+    /// error on the page and in the report's list; never "not run").
+    fn load<F: Format>(&mut self, rel: &str) -> Option<Arc<F>> {
+        match self.dir.load::<F>(rel) {
+            Ok(v) => v,
+            Err(e) => {
+                self.error(&e);
+                None
+            }
+        }
     }
 
     fn exists(&self, rel: &str) -> bool {
-        self.root.join(rel).is_file()
+        self.dir.exists(rel)
     }
 
-    fn json(&self, rel: &str) -> Option<serde_json::Value> {
-        serde_json::from_str(&self.text(rel)?).ok()
+    /// "not run" for a file that does not exist; nothing for one that exists (it could not
+    /// be read, and [`Builder::load`] already said why).
+    fn missing(&mut self, rel: &str) {
+        if !self.exists(rel) {
+            self.not_run(&format!("{rel} missing"));
+        }
     }
 
-    fn toml(&self, rel: &str) -> Option<toml::Table> {
-        self.text(rel)?.parse().ok()
+    /// The run's scenario.
+    fn scenario(&mut self) -> Option<Arc<Scenario>> {
+        self.load(layout::SCENARIO)
     }
 
     /// Opens a figure: `<figure>` with the width class.
@@ -250,7 +292,7 @@ impl<'a> Builder<'a> {
     /// Embeds an SVG or PNG file of the run, or notes it as missing.
     fn file_figure(&mut self, rel: &str, caption: &str, width: Width) -> bool {
         let Some(bytes) = self.read(rel) else {
-            self.not_run(&format!("{rel} missing"));
+            self.missing(rel);
             return false;
         };
         self.shown.push(rel.to_string());
@@ -266,12 +308,10 @@ impl<'a> Builder<'a> {
     /// a short heading: the place where new results of a stage appear before they get a
     /// section of their own.
     pub fn other_figures(&mut self, dir: &str, heading: &str) {
-        let Ok(entries) = fs::read_dir(self.root.join(dir)) else {
-            return;
-        };
-        let mut rels: Vec<String> = entries
-            .filter_map(|e| e.ok())
-            .map(|e| e.file_name().to_string_lossy().into_owned())
+        let mut rels: Vec<String> = self
+            .dir
+            .files_in(dir)
+            .into_iter()
             .filter(|n| n.ends_with(".svg") || n.ends_with(".png"))
             .map(|n| format!("{dir}/{n}"))
             .filter(|rel| !self.shown.contains(rel))
@@ -331,28 +371,6 @@ impl<'a> Builder<'a> {
         self.html.push_str("</tbody></table>\n");
     }
 
-    /// A CSV file of the run as a table, numbers shortened to 4 significant digits.
-    fn csv_table(&mut self, rel: &str, keep: impl Fn(&str) -> bool) -> bool {
-        let Some(text) = self.text(rel) else {
-            self.not_run(&format!("{rel} missing"));
-            return false;
-        };
-        let mut lines = text.lines().filter(|l| !l.trim().is_empty());
-        let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
-        let cols: Vec<usize> = (0..header.len()).filter(|&i| keep(header[i])).collect();
-        let rows: Vec<Vec<String>> = lines
-            .map(|l| {
-                let cells: Vec<&str> = l.split(',').collect();
-                cols.iter()
-                    .map(|&i| short(cells.get(i).copied().unwrap_or("")))
-                    .collect()
-            })
-            .collect();
-        let head: Vec<String> = cols.iter().map(|&i| header[i].to_string()).collect();
-        self.table(&head, &rows);
-        true
-    }
-
     fn kv(&mut self, rows: &[(String, String)]) {
         self.html.push_str("<table class=\"kv\"><tbody>\n");
         for (k, v) in rows {
@@ -360,6 +378,12 @@ impl<'a> Builder<'a> {
         }
         self.html.push_str("</tbody></table>\n");
     }
+}
+
+/// A number as a table cell: its shortest form shortened to 4 significant digits when it
+/// has a fraction or an exponent (integers stay whole).
+fn cell(v: f64) -> String {
+    short(&v.to_string())
 }
 
 /// Shortens a numeric cell to 4 significant digits; other text is kept.
@@ -384,38 +408,29 @@ pub fn fmt_num(v: f64) -> String {
     }
 }
 
-/// A number inside a JSON value, by a path of keys and array indices.
-fn num(v: &serde_json::Value, path: &[&str]) -> Option<f64> {
-    let mut cur = v;
-    for p in path {
-        cur = match p.parse::<usize>() {
-            Ok(i) => cur.get(i)?,
-            Err(_) => cur.get(p)?,
-        };
-    }
-    cur.as_f64()
+/// A built report: the page, and the files it could not read (each also shown on the page
+/// where its section would be).
+#[derive(Debug, Clone)]
+pub struct Report {
+    /// The HTML page.
+    pub html: String,
+    /// Files that exist but could not be read or parsed, with the reason.
+    pub errors: Vec<String>,
 }
 
-/// A number inside a TOML table, by a path of keys (integers read as numbers).
-fn toml_num(t: &toml::Table, path: &[&str]) -> Option<f64> {
-    let (last, head) = path.split_last()?;
-    let mut cur = t;
-    for p in head {
-        cur = cur.get(*p)?.as_table()?;
-    }
-    let v = cur.get(*last)?;
-    v.as_float().or_else(|| v.as_integer().map(|i| i as f64))
-}
-
-/// Builds `report.html` for the run folder `root` and returns the HTML text (the caller
-/// writes it, e.g. to `root/report.html`).
-pub fn build_report(root: &Path) -> String {
-    let mut b = Builder::new(root);
+/// Builds `report.html` for the run folder `dir` (the caller writes it, e.g. to
+/// `layout::REPORT`).
+pub fn build_report(dir: &RunDir) -> Report {
+    let mut b = Builder::new(dir);
     let scenario_name = b
-        .toml(layout::SCENARIO)
-        .and_then(|t| t.get("name").and_then(|n| n.as_str()).map(str::to_string))
+        .scenario()
+        .map(|s| s.name.clone())
         .unwrap_or_else(|| "unknown".into());
-    page::head(&mut b.html, &scenario_name, &root.display().to_string());
+    page::head(
+        &mut b.html,
+        &scenario_name,
+        &dir.root().display().to_string(),
+    );
     for s in SECTIONS {
         let _ = writeln!(
             b.html,
@@ -427,64 +442,69 @@ pub fn build_report(root: &Path) -> String {
         b.html.push_str("</section>\n");
     }
     page::tail(&mut b.html);
-    b.html
+    Report {
+        html: b.html,
+        errors: b.errors,
+    }
 }
 
-/// The headline numbers of a run folder: workspace area and growth, α, first natural
-/// frequency, identification error and tracking RMS per controller (what `flexstage run`
-/// prints at the end and the report's summary table shows).
-pub fn summary_rows(root: &Path) -> Vec<(String, String)> {
-    let b = &Builder::new(root);
+/// The typed results the headline numbers come from.
+#[derive(Debug, Default, Clone, Copy)]
+pub struct Headline<'a> {
+    /// The design stage's summary.
+    pub design: Option<&'a DesignSummaryFile>,
+    /// The reduced model's summary.
+    pub reduce: Option<&'a ReduceSummaryFile>,
+    /// The stage identification against the truth (Table 4).
+    pub identified: Option<&'a [ParameterRow]>,
+    /// The tracking metrics of the default conditions.
+    pub tracking: Option<&'a [MetricsRow]>,
+}
+
+/// The headline numbers of a run: workspace area and growth, α, first natural frequency,
+/// identification error and tracking RMS per controller (what `flexstage run` prints at the
+/// end and the report's summary table shows).
+pub fn headline_rows(h: &Headline) -> Vec<(String, String)> {
     let mut rows: Vec<(String, String)> = Vec::new();
-    if let Some(d) = b.json(layout::design::SUMMARY) {
-        if let (Some(a0), Some(a1)) = (num(&d, &["area_initial_m2"]), num(&d, &["area_final_m2"])) {
-            let g = num(&d, &["area_growth"]).unwrap_or(a1 / a0);
-            // A growth factor needs a positive start (the uniform start of the reversed
-            // configuration traces its polygon the other way: a negative area).
-            let growth = if a0 > 0.0 {
-                format!(" (×{})", fmt_num(g))
-            } else {
-                String::new()
-            };
-            rows.push((
-                "workspace area (initial → final)".into(),
-                format!(
-                    "{} µm² → {} µm²{growth}",
-                    fmt_num(a0 * 1e12),
-                    fmt_num(a1 * 1e12)
-                ),
-            ));
-        }
-        if let Some(a) = num(&d, &["design", "alpha"]) {
-            rows.push(("α, design's final analysis (Eq. 27)".into(), fmt_num(a)));
-        }
-        if let Some(it) = num(&d, &["iterations"]) {
-            rows.push((
-                "design iterations".into(),
-                format!(
-                    "{it} in {} s ({})",
-                    fmt_num(num(&d, &["seconds"]).unwrap_or(f64::NAN)),
-                    d.get("stop").and_then(|s| s.as_str()).unwrap_or("?")
-                ),
-            ));
-        }
+    if let Some(d) = h.design {
+        let (a0, a1) = (d.area_initial_m2, d.area_final_m2);
+        // A growth factor needs a positive start (the uniform start of the reversed
+        // configuration traces its polygon the other way: a negative area).
+        let growth = if a0 > 0.0 {
+            format!(" (×{})", fmt_num(a1 / a0))
+        } else {
+            String::new()
+        };
+        rows.push((
+            "workspace area (initial → final)".into(),
+            format!(
+                "{} µm² → {} µm²{growth}",
+                fmt_num(a0 * 1e12),
+                fmt_num(a1 * 1e12)
+            ),
+        ));
+        rows.push((
+            "α, design's final analysis (Eq. 27)".into(),
+            fmt_num(d.design.alpha),
+        ));
+        rows.push((
+            "design iterations".into(),
+            format!("{} in {} s ({})", d.iterations, fmt_num(d.seconds), d.stop),
+        ));
     }
-    if let Some(r) = b.json(layout::reduce::SUMMARY_JSON) {
-        if let Some(a) = num(&r, &["alpha_scalar"]) {
-            rows.push(("α, reduced model (Eq. 27)".into(), fmt_num(a)));
-        }
-        if let Some(f) = num(&r, &["modal", "frequencies_hz", "0"]) {
+    if let Some(r) = h.reduce {
+        rows.push(("α, reduced model (Eq. 27)".into(), fmt_num(r.alpha_scalar)));
+        if let Some(f) = r.modal.as_ref().and_then(|m| m.frequencies_hz.first()) {
             rows.push((
                 "first natural frequency".into(),
-                format!("{} Hz", fmt_num(f)),
+                format!("{} Hz", fmt_num(*f)),
             ));
         }
     }
-    if let Some(text) = b.text(layout::stage::TABLE)
-        && let Some(c) = csv_cols(&text, &["error_pct"])
-    {
-        let worst = c[0]
+    if let Some(table) = h.identified {
+        let worst = table
             .iter()
+            .filter_map(|r| r.error_pct)
             .filter(|v| v.is_finite())
             .fold(0.0f64, |m, v| m.max(v.abs()));
         rows.push((
@@ -492,19 +512,26 @@ pub fn summary_rows(root: &Path) -> Vec<(String, String)> {
             format!("{} %", fmt_num(worst)),
         ));
     }
-    if let Some(text) = b.text(&Tracking::main().metrics()) {
-        for r in tracking::metric_rows(&text) {
-            rows.push((
-                format!("tracking RMS {} / {}", r.trajectory, r.controller),
-                format!("{} / {} nm", short(&r.rms[0]), short(&r.rms[1])),
-            ));
-        }
+    for r in h.tracking.unwrap_or_default() {
+        rows.push((
+            format!("tracking RMS {} / {}", r.trajectory, r.variant),
+            format!("{} / {} nm", cell(r.rms1_nm), cell(r.rms2_nm)),
+        ));
     }
     rows
 }
 
 fn summary(b: &mut Builder) {
-    let rows = summary_rows(b.root);
+    let design = b.load::<DesignSummaryFile>(layout::design::SUMMARY);
+    let reduce = b.load::<ReduceSummaryJson>(layout::reduce::SUMMARY_JSON);
+    let table = b.load::<Rows<ParameterRow>>(layout::stage::TABLE);
+    let metrics = b.load::<Rows<MetricsRow>>(&Tracking::main().metrics());
+    let rows = headline_rows(&Headline {
+        design: design.as_deref(),
+        reduce: reduce.as_ref().map(|r| &r.0),
+        identified: table.as_ref().map(|t| t.0.as_slice()),
+        tracking: metrics.as_ref().map(|t| t.0.as_slice()),
+    });
     if rows.is_empty() {
         b.not_run("no stage results in this folder");
     } else {
@@ -548,9 +575,12 @@ mod tests {
     #[test]
     fn empty_run_folder_gives_every_section_as_not_run() {
         // Goal: the report works on a partial run: missing results are "not run", not errors.
-        let dir = std::env::temp_dir().join(format!("flexstage-html-empty-{}", std::process::id()));
-        fs::create_dir_all(&dir).unwrap();
-        let html = build_report(&dir);
+        let root =
+            std::env::temp_dir().join(format!("flexstage-html-empty-{}", std::process::id()));
+        let dir = RunDir::create(&root).unwrap();
+        let report = build_report(&dir);
+        assert!(report.errors.is_empty(), "{:?}", report.errors);
+        let html = report.html;
         for s in SECTIONS {
             assert!(
                 html.contains(&format!("<section id=\"{}\">", s.id)),
@@ -560,7 +590,7 @@ mod tests {
         }
         assert!(html.matches("class=\"notrun\"").count() >= SECTIONS.len());
         assert!(!html.contains("<img") && !html.contains("<figure"));
-        fs::remove_dir_all(&dir).unwrap();
+        std::fs::remove_dir_all(&root).unwrap();
     }
 
     #[test]

@@ -27,7 +27,7 @@ figcaption{font-size:14px;color:#445;margin-top:4px}figcaption .src{color:#889;f
 table{border-collapse:collapse;font-size:14px;margin:8px 0}td,th{border:1px solid #ccd;\
 padding:3px 9px;text-align:right}th{background:#eef1f6}table.kv th,td.l,th.l,td:first-child,th:first-child{text-align:left}\
 tr.part td{background:#f6f7fa;text-align:left;font-weight:600}\
-.notrun{color:#a33;font-style:italic}.notrun span{color:#888;font-size:13px}\
+.notrun{color:#a33;font-style:italic}.error{color:#fff;background:#a33;padding:4px 8px}.notrun span{color:#888;font-size:13px}\
 .note{color:#445;font-size:14px;max-width:960px}\
 #viewer{position:fixed;inset:0;background:rgba(20,28,40,.86);display:none;z-index:10;\
 align-items:center;justify-content:center;cursor:zoom-out}\
@@ -88,9 +88,9 @@ const UNSAFE: [&str; 8] = [
 ];
 
 /// Prepares an SVG document for inline embedding: drops an XML declaration and doctype,
-/// replaces the fixed `width`/`height` by `width="100%"` (keeping or adding the `viewBox`, so
-/// the drawing scales with the page). `None` for anything that is not a plain drawing (the
-/// caller then embeds it as an image, where scripts cannot run).
+/// replaces the fixed `width`/`height` by `width="100%"` (keeping the `viewBox`, so the
+/// drawing scales with the page). `None` for anything that is not a plain drawing with a
+/// `viewBox` (the caller then embeds it as an image, where scripts cannot run).
 pub(super) fn inline_svg(svg: &str) -> Option<String> {
     let mut s = svg.trim_start();
     for prefix in ["<?xml", "<!DOCTYPE", "<!doctype"] {
@@ -116,11 +116,8 @@ pub(super) fn inline_svg(svg: &str) -> Option<String> {
             let _ = write!(tag, " {k}=\"{v}\"");
         }
     }
-    if get("viewBox").is_none() {
-        let w: f64 = get("width")?.trim_end_matches("px").parse().ok()?;
-        let h: f64 = get("height")?.trim_end_matches("px").parse().ok()?;
-        let _ = write!(tag, " viewBox=\"0 0 {w} {h}\"");
-    }
+    // A drawing without a viewBox would not scale; it is shown as an image instead.
+    get("viewBox")?;
     tag.push_str(" width=\"100%\" role=\"img\">");
     Some(format!("{tag}{}", &s[tag_end + 1..]))
 }
@@ -181,11 +178,7 @@ mod tests {
         assert!(s.contains("on the left"), "text is not an event handler");
         let no_view_box =
             "<?xml version=\"1.0\"?>\n<svg width=\"320\" height=\"200\"><path/></svg>";
-        let s = inline_svg(no_view_box).unwrap();
-        assert!(
-            s.contains("viewBox=\"0 0 320 200\"") && !s.contains("height="),
-            "{s}"
-        );
+        assert!(inline_svg(no_view_box).is_none(), "shown as an image");
     }
 
     #[test]

@@ -2,35 +2,48 @@
 //! Figure A2 (identification convergence of each PEA and the hysteresis curves of both) and
 //! the hysteresis before and after inverse compensation (Eq. 21).
 
-use super::{Builder, Width, fmt_num, toml_num};
-use crate::layout::{self, PeaIdentification};
-use crate::plot::{Figure, Legend, Series};
-use crate::read_csv_columns as csv_cols;
+use std::sync::Arc;
+
+use flexstage_figures::plot::{Figure, Legend, Series};
+use flexstage_run::Table;
+use flexstage_run::files::pea::PeaEstimates;
+use flexstage_run::layout::{self, PeaIdentification};
+use flexstage_run::scenario::BoucWen;
+
+use super::{Builder, Width, fmt_num};
 
 /// The PEAs of the paper.
 const PEAS: [u8; 2] = [1, 2];
 
-/// Table A1's rows: (key in `estimates.toml`, symbol, unit).
-const PARAMETERS: [(&str, &str, &str); 5] = [
-    ("d_p", "d_p", "µm/V"),
-    ("a_bw", "A_bw", "µm/V"),
-    ("b_bw", "B_bw", "1/V"),
-    ("gamma_bw", "Γ_bw", "1/V"),
-    ("delta_bw", "δ_bw", "µm/(V·s)"),
+/// One parameter of Eq. (18).
+type Getter = fn(&BoucWen) -> f64;
+
+/// Table A1's rows: (parameter, symbol, unit).
+const PARAMETERS: [(Getter, &str, &str); 5] = [
+    (|p| p.d_p, "d_p", "µm/V"),
+    (|p| p.a_bw, "A_bw", "µm/V"),
+    (|p| p.b_bw, "B_bw", "1/V"),
+    (|p| p.gamma_bw, "Γ_bw", "1/V"),
+    (|p| p.delta_bw, "δ_bw", "µm/(V·s)"),
 ];
 
 /// Section "pea".
 pub(super) fn pea(b: &mut Builder) {
-    let estimates: Vec<(u8, toml::Table)> = PEAS
+    let estimates: Vec<(u8, Arc<PeaEstimates>)> = PEAS
         .iter()
-        .filter_map(|&n| Some((n, b.toml(&PeaIdentification { pea: n }.estimates())?)))
+        .filter_map(|&n| Some((n, b.load(&PeaIdentification { pea: n }.estimates())?)))
         .collect();
     if estimates.is_empty() {
         let records: Vec<u8> = PEAS
             .into_iter()
             .filter(|&n| b.exists(&layout::pea::loop_svg(n)))
             .collect();
-        b.not_run("identify/pea1/ and identify/pea2/ missing");
+        if PEAS
+            .iter()
+            .all(|&n| !b.exists(&PeaIdentification { pea: n }.estimates()))
+        {
+            b.not_run("identify/pea1/ and identify/pea2/ missing");
+        }
         for n in records {
             b.img(
                 &layout::pea::loop_svg(n),
@@ -69,7 +82,7 @@ pub(super) fn pea(b: &mut Builder) {
 
 /// Table A1: each parameter's estimate for every identified PEA, the scenario's value
 /// (Table A1 for the paper preset) and their difference.
-fn table_a1(b: &mut Builder, estimates: &[(u8, toml::Table)]) {
+fn table_a1(b: &mut Builder, estimates: &[(u8, Arc<PeaEstimates>)]) {
     let mut header = vec!["symbol".to_string(), "unit".to_string()];
     for (n, _) in estimates {
         header.push(format!("PEA{n} estimate"));
@@ -78,17 +91,17 @@ fn table_a1(b: &mut Builder, estimates: &[(u8, toml::Table)]) {
     }
     let mut rows: Vec<Vec<String>> = PARAMETERS
         .iter()
-        .map(|(key, symbol, unit)| {
+        .map(|(get, symbol, unit)| {
             let mut row = vec![symbol.to_string(), unit.to_string()];
             for (_, t) in estimates {
-                let est = toml_num(t, &["recommended_params", key]);
-                let truth = toml_num(t, &["scenario", key]);
-                let diff = match (est, truth) {
-                    (Some(e), Some(s)) if s != 0.0 => fmt_num(100.0 * (e - s) / s),
-                    _ => "–".into(),
+                let (e, s) = (get(&t.recommended_params), get(&t.scenario));
+                let diff = if s != 0.0 {
+                    fmt_num(100.0 * (e - s) / s)
+                } else {
+                    "–".into()
                 };
-                row.push(est.map(fmt_num).unwrap_or_else(|| "–".into()));
-                row.push(truth.map(fmt_num).unwrap_or_else(|| "–".into()));
+                row.push(fmt_num(e));
+                row.push(fmt_num(s));
                 row.push(diff);
             }
             row
@@ -97,20 +110,14 @@ fn table_a1(b: &mut Builder, estimates: &[(u8, toml::Table)]) {
     let mut method = vec!["estimate from".to_string(), String::new()];
     let mut rms = vec!["RMS model error".to_string(), "nm".to_string()];
     for (_, t) in estimates {
-        let rec = t
-            .get("recommended")
-            .and_then(|v| v.as_str())
-            .unwrap_or("?")
-            .to_string();
-        let key = if rec == "batch" {
-            "batch"
+        let best = if t.recommended == "batch" {
+            &t.batch
         } else {
-            "parallel_rls"
+            &t.parallel_rls
         };
-        let e = toml_num(t, &[key, "rms_error_um"]).map(|v| fmt_num(v * 1e3));
-        method.extend([rec, String::new(), String::new()]);
+        method.extend([t.recommended.clone(), String::new(), String::new()]);
         rms.extend([
-            e.unwrap_or_else(|| "–".into()),
+            fmt_num(best.rms_error_um * 1e3),
             String::new(),
             String::new(),
         ]);
@@ -127,7 +134,7 @@ fn table_a1(b: &mut Builder, estimates: &[(u8, toml::Table)]) {
 }
 
 /// The hysteresis curves of both PEAs: record and identified model, x against U.
-fn both_loops(b: &mut Builder, estimates: &[(u8, toml::Table)]) {
+fn both_loops(b: &mut Builder, estimates: &[(u8, Arc<PeaEstimates>)]) {
     let mut fig = Figure::new(
         "Hysteresis of the PEAs: record and identified model (Figure A2, right)",
         "U [V]",
@@ -137,16 +144,20 @@ fn both_loops(b: &mut Builder, estimates: &[(u8, toml::Table)]) {
     let mut sources = Vec::new();
     for (k, (n, _)) in estimates.iter().enumerate() {
         let rel = PeaIdentification { pea: *n }.loop_csv();
-        let Some(c) = b
-            .text(&rel)
-            .and_then(|t| csv_cols(&t, &["U", "x", "x_model"]))
-        else {
+        let Some(t) = b.load::<Table>(&rel) else {
             continue;
+        };
+        let c = match t.columns(&["U", "x", "x_model"]) {
+            Ok(c) => c,
+            Err(reason) => {
+                b.damaged(&rel, reason);
+                continue;
+            }
         };
         let pairs = |y: &[f64]| c[0].iter().copied().zip(y.iter().copied()).collect();
         fig = fig
-            .with(Series::line(format!("PEA{n} record"), pairs(&c[1])).with_color(2 * k))
-            .with(Series::line(format!("PEA{n} model"), pairs(&c[2])).with_color(2 * k + 1));
+            .with(Series::line(format!("PEA{n} record"), pairs(c[1])).with_color(2 * k))
+            .with(Series::line(format!("PEA{n} model"), pairs(c[2])).with_color(2 * k + 1));
         sources.push(rel);
     }
     if let Ok(svg) = fig.to_svg() {

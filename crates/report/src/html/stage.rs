@@ -2,9 +2,12 @@
 //! least-squares estimate, simulated truth), the known masses and α, and the state-estimator
 //! and controller gains the run used beside the paper's values.
 
-use super::{Builder, esc, fmt_num, toml_num};
-use crate::layout::{self, stage as files};
-use crate::read_csv_columns as csv_cols;
+use flexstage_run::files::stage::ParameterRow;
+use flexstage_run::format::Rows;
+use flexstage_run::layout::{self, stage as files};
+use flexstage_run::scenario::{Controller, Scenario, StageParams};
+
+use super::{Builder, esc, fmt_num};
 
 /// Table 4's parts: (title, parameters in `table.csv` or `[stage.guess]`, in order).
 const PARTS: [(&str, &[&str]); 3] = [
@@ -21,66 +24,99 @@ const PARTS: [(&str, &[&str]); 3] = [
     ("", &[]),
 ];
 
-/// Units of the parameters that `table.csv` does not list (known, not estimated).
-const KNOWN: [(&str, &str, &str); 4] = [
-    ("mass", "kg", "moving mass M"),
-    ("alpha", "–", "amplification ratio α (Eq. 27)"),
-    ("m_in1", "kg", "input plate mass M_in1"),
-    ("m_in2", "kg", "input plate mass M_in2"),
+/// One known parameter of [`StageParams`].
+type Known = fn(&StageParams) -> f64;
+
+/// The parameters that `table.csv` does not list (known, not estimated): (name, unit,
+/// quantity, value).
+const KNOWN: [(&str, &str, &str, Known); 4] = [
+    ("mass", "kg", "moving mass M", |p| p.mass),
+    ("alpha", "–", "amplification ratio α (Eq. 27)", |p| {
+        p.alpha
+    }),
+    ("m_in1", "kg", "input plate mass M_in1", |p| p.m_in1),
+    ("m_in2", "kg", "input plate mass M_in2", |p| p.m_in2),
 ];
 
-/// The gains of Table 4 and of the retuned loop: (symbol, key in `[controller]`, index,
-/// Table 4's value or "–", role).
-const GAINS: [(&str, &str, usize, &str, &str); 11] = [
+/// The values of one gain of `[controller]`.
+type Gain = fn(&Controller) -> Vec<f64>;
+
+/// The gains of Table 4 and of the retuned loop: (symbol, values, index, Table 4's value or
+/// "–", role).
+const GAINS: [(&str, Gain, usize, &str, &str); 11] = [
     (
         "k_e1",
-        "observer_gain",
+        |c| c.observer_gain.to_vec(),
         0,
         "1e5",
         "state estimator (K-filter, Eq. 37–38)",
     ),
     (
         "k_e2",
-        "observer_gain",
+        |c| c.observer_gain.to_vec(),
         1,
         "1e5",
         "state estimator (K-filter, Eq. 37–38)",
     ),
-    ("k_ε1", "error_gain", 0, "2e4", "error gain, s = ε̇ + k_ε ε"),
+    (
+        "k_ε1",
+        |c| c.error_gain.to_vec(),
+        0,
+        "2e4",
+        "error gain, s = ε̇ + k_ε ε",
+    ),
     (
         "k_ε2",
-        "error_gain",
+        |c| c.error_gain.to_vec(),
         1,
         "1.5e4",
         "error gain, s = ε̇ + k_ε ε",
     ),
-    ("k_1", "feedback_gain", 0, "1.2e4", "feedback gain (A34)"),
-    ("k_2", "feedback_gain", 1, "1.2e3", "feedback gain (A34)"),
+    (
+        "k_1",
+        |c| c.feedback_gain.to_vec(),
+        0,
+        "1.2e4",
+        "feedback gain (A34)",
+    ),
+    (
+        "k_2",
+        |c| c.feedback_gain.to_vec(),
+        1,
+        "1.2e3",
+        "feedback gain (A34)",
+    ),
     (
         "k_η1",
-        "eta_gain",
+        |c| c.eta_gain.to_vec(),
         0,
         "–",
         "linear feedback gain (A21) [1/s]",
     ),
     (
         "k_η2",
-        "eta_gain",
+        |c| c.eta_gain.to_vec(),
         1,
         "–",
         "linear feedback gain (A21) [1/s]",
     ),
     (
         "κ_d",
-        "disturbance_gain",
+        |c| vec![c.disturbance_gain],
         0,
         "–",
         "observer bandwidth of Δ_η [1/s]",
     ),
-    ("k_p, k_i, k_d", "pid", 0, "–", "PID + feedforward baseline"),
+    (
+        "k_p, k_i, k_d",
+        |c| c.pid.to_vec(),
+        0,
+        "–",
+        "PID + feedforward baseline",
+    ),
     (
         "φ_s, φ_a",
-        "boundary_layer",
+        |c| c.boundary_layer.to_vec(),
         0,
         "–",
         "boundary layers of the robust terms",
@@ -106,7 +142,7 @@ pub(super) fn stage(b: &mut Builder) {
 /// The identification on the twin: what its frequency response gives the controller's
 /// model, against the same quantities from the twin's exact modes.
 fn twin(b: &mut Builder) {
-    let Some(text) = b.text(files::TWIN_TABLE) else {
+    let Some(table) = b.load::<Rows<ParameterRow>>(files::TWIN_TABLE) else {
         return;
     };
     b.h3("On the twin: the response fit that sets the backstepping up");
@@ -118,24 +154,18 @@ fn twin(b: &mut Builder) {
          exact modes. `track` on the twin sets the backstepping up from this fit \
          (docs/DECISIONS.md, \"Stage identification that closes the loop\").",
     );
-    let rows: Vec<Vec<String>> = text
-        .lines()
-        .skip(1)
-        .map(|l| {
-            let c: Vec<&str> = l.split(',').collect();
-            let num = |i: usize| {
-                c.get(i)
-                    .and_then(|v| v.parse::<f64>().ok())
-                    .map(fmt_num)
-                    .unwrap_or_else(|| "–".into())
-            };
+    let num = |v: Option<f64>| v.map_or_else(|| "–".into(), fmt_num);
+    let rows: Vec<Vec<String>> = table
+        .0
+        .iter()
+        .map(|r| {
             vec![
-                c.first().unwrap_or(&"").to_string(),
-                c.get(1).unwrap_or(&"").to_string(),
-                num(2),
-                num(3),
-                num(4),
-                num(5),
+                r.parameter.clone(),
+                r.unit.clone(),
+                num(Some(r.guess)),
+                num(Some(r.estimate)),
+                num(r.truth),
+                num(r.error_pct),
             ]
         })
         .collect();
@@ -160,43 +190,31 @@ fn twin(b: &mut Builder) {
 
 /// The parameter part of Table 4.
 fn parameters(b: &mut Builder) {
-    let Some(text) = b.text(files::TABLE) else {
-        b.not_run(&format!("{} missing", files::TABLE));
+    let Some(table) = b.load::<Rows<ParameterRow>>(files::TABLE) else {
+        b.missing(files::TABLE);
         return;
     };
-    let stage = b
-        .toml(layout::PLANT)
-        .or_else(|| b.toml(layout::SCENARIO))
-        .and_then(|t| t.get("stage")?.as_table().cloned());
-    let names: Vec<String> = text
-        .lines()
-        .skip(1)
-        .filter_map(|l| Some(l.split(',').next()?.to_string()))
-        .collect();
-    let units: Vec<String> = text
-        .lines()
-        .skip(1)
-        .map(|l| l.split(',').nth(1).unwrap_or("").to_string())
-        .collect();
-    let c = csv_cols(&text, &["guess", "estimate", "truth", "error_pct"]);
+    let stage = match b.exists(layout::PLANT) {
+        true => b.load::<Scenario>(layout::PLANT),
+        false => b.scenario(),
+    }
+    .map(|s| s.stage.clone());
+    let rows = &table.0;
     let mut html = String::from(
         "<table><thead><tr><th class=\"l\">quantity</th><th>unit</th><th>guess</th>\
          <th>estimate</th><th>truth (simulated)</th><th>error [%]</th></tr></thead><tbody>\n",
     );
-    let cell = |v: f64| {
-        if v.is_finite() {
-            fmt_num(v)
-        } else {
-            "–".to_string()
-        }
+    let cell = |v: Option<f64>| match v {
+        Some(v) if v.is_finite() => fmt_num(v),
+        _ => "–".to_string(),
     };
-    let mut listed = vec![false; names.len()];
+    let mut listed = vec![false; rows.len()];
     for (title, keys) in PARTS {
-        let rest: Vec<&str> = names
+        let rest: Vec<&str> = rows
             .iter()
             .enumerate()
             .filter(|(i, _)| !listed[*i])
-            .map(|(_, n)| n.as_str())
+            .map(|(_, r)| r.parameter.as_str())
             .collect();
         let keys: Vec<&str> = if title.is_empty() {
             rest
@@ -212,34 +230,28 @@ fn parameters(b: &mut Builder) {
             esc(title)
         ));
         for key in keys {
-            if let Some(i) = names.iter().position(|n| n == key)
-                && let Some(c) = &c
-            {
+            if let Some(i) = rows.iter().position(|r| r.parameter == key) {
                 listed[i] = true;
+                let r = &rows[i];
                 html.push_str(&format!(
                     "<tr><td class=\"l\">{}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>\
                      <td>{}</td></tr>\n",
                     esc(key),
-                    esc(&units[i]),
-                    cell(c[0][i]),
-                    cell(c[1][i]),
-                    cell(c[2][i]),
-                    cell(c[3][i])
+                    esc(&r.unit),
+                    cell(Some(r.guess)),
+                    cell(Some(r.estimate)),
+                    cell(r.truth),
+                    cell(r.error_pct)
                 ));
-            } else if let Some((_, unit, what)) = KNOWN.iter().find(|k| k.0 == key) {
-                let get = |part: &str| {
-                    stage
-                        .as_ref()
-                        .and_then(|s| toml_num(s, &[part, key]))
-                        .map(fmt_num)
-                        .unwrap_or_else(|| "–".into())
-                };
+            } else if let Some((_, unit, what, get)) = KNOWN.iter().find(|k| k.0 == key) {
+                let value =
+                    |p: Option<&StageParams>| p.map_or_else(|| "–".into(), |p| fmt_num(get(p)));
                 html.push_str(&format!(
                     "<tr><td class=\"l\">{}</td><td>{unit}</td><td>{}</td><td>— (known)</td>\
                      <td>{}</td><td>–</td></tr>\n",
                     esc(what),
-                    get("guess"),
-                    get("truth")
+                    value(stage.as_ref().map(|s| &s.guess)),
+                    value(stage.as_ref().map(|s| &s.truth))
                 ));
             }
         }
@@ -250,24 +262,15 @@ fn parameters(b: &mut Builder) {
 
 /// The gain part of Table 4: the run's `[controller]` values beside the paper's.
 fn gains(b: &mut Builder) {
-    let Some(controller) = b
-        .toml(layout::SCENARIO)
-        .and_then(|t| t.get("controller")?.as_table().cloned())
-    else {
-        b.not_run(&format!("{} has no [controller]", layout::SCENARIO));
+    let Some(scenario) = b.scenario() else {
+        b.missing(layout::SCENARIO);
         return;
     };
+    let controller = &scenario.controller;
     let rows: Vec<Vec<String>> = GAINS
         .iter()
-        .filter_map(|(symbol, key, index, paper, role)| {
-            let value = controller.get(*key)?;
-            let numbers: Vec<f64> = match value {
-                toml::Value::Array(a) => a
-                    .iter()
-                    .filter_map(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
-                    .collect(),
-                v => vec![v.as_float().or_else(|| v.as_integer().map(|i| i as f64))?],
-            };
+        .filter_map(|(symbol, values, index, paper, role)| {
+            let numbers = values(controller);
             // Several-valued gains (PID, boundary layers) are shown whole on one row.
             let used = if symbol.contains(',') {
                 numbers

@@ -2,79 +2,93 @@
 //! paths of every controller (Figure 11), the tracking error in the plane per controller
 //! (Figure 11's error view), and the error of each controller against time (Figures 9–10).
 
-use super::{Builder, Width, fmt_num};
-use crate::cloud::Cloud;
-use crate::layout::Tracking;
-use crate::plot::{Figure, Legend, Multiples, Series};
-use crate::read_csv_columns as csv_cols;
+use std::sync::Arc;
 
-/// One row of `metrics.csv`, as text.
-pub(super) struct MetricRow {
-    /// Trajectory name.
-    pub trajectory: String,
-    /// Controller name.
-    pub controller: String,
-    /// RMS error of q1 and q2 \[nm\].
-    pub rms: [String; 2],
+use flexstage_figures::cloud::Cloud;
+use flexstage_figures::plot::{Figure, Legend, Multiples, Series};
+use flexstage_run::Table;
+use flexstage_run::files::track::{MarginRow, MetricsRow};
+use flexstage_run::format::{Row, Rows};
+use flexstage_run::layout::Tracking;
+
+use super::{Builder, Width, cell, fmt_num};
+
+/// One shown cell of a `metrics.csv` row.
+type MetricCell = fn(&MetricsRow) -> String;
+
+/// The columns of `metrics.csv` the report shows, in the file's order.
+const METRICS_SHOWN: [(&str, MetricCell); 10] = [
+    ("trajectory", |r| r.trajectory.clone()),
+    ("variant", |r| r.variant.clone()),
+    ("rms1_nm", |r| cell(r.rms1_nm)),
+    ("rms2_nm", |r| cell(r.rms2_nm)),
+    ("rms1_pct", |r| cell(r.rms1_pct)),
+    ("rms2_pct", |r| cell(r.rms2_pct)),
+    ("max1_nm", |r| cell(r.max1_nm)),
+    ("max2_nm", |r| cell(r.max2_nm)),
+    ("peak_voltage_V", |r| cell(r.peak_voltage_v)),
+    ("saturated_samples", |r| r.saturated_samples.to_string()),
+];
+
+/// A margin cell: the value to the file's precision, shortened; empty when there is none.
+fn margin(v: Option<f64>, digits: usize) -> String {
+    v.map(|v| super::short(&format!("{v:.digits$}")))
+        .unwrap_or_default()
 }
 
-/// The (trajectory, controller, RMS) rows of a `metrics.csv`.
-pub(super) fn metric_rows(text: &str) -> Vec<MetricRow> {
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
-    let col = |n: &str| header.iter().position(|h| *h == n);
-    let (Some(tr), Some(va), Some(r1), Some(r2)) = (
-        col("trajectory"),
-        col("variant"),
-        col("rms1_nm"),
-        col("rms2_nm"),
-    ) else {
-        return Vec::new();
-    };
-    lines
-        .filter_map(|l| {
-            let c: Vec<&str> = l.split(',').collect();
-            Some(MetricRow {
-                trajectory: c.get(tr)?.to_string(),
-                controller: c.get(va)?.to_string(),
-                rms: [c.get(r1)?.to_string(), c.get(r2)?.to_string()],
-            })
+/// The rows of `margins.csv` as the report shows them (every column but the method).
+fn margin_table(rows: &[MarginRow]) -> (Vec<String>, Vec<Vec<String>>) {
+    let header = <MarginRow as Row>::HEADER
+        .iter()
+        .filter(|h| **h != "method")
+        .map(|h| h.to_string())
+        .collect();
+    let rows = rows
+        .iter()
+        .map(|r| {
+            vec![
+                r.controller.clone(),
+                r.delay_samples.to_string(),
+                r.axis.clone(),
+                r.gain_margin_db
+                    .map_or_else(|| "unstable".into(), |v| margin(Some(v), 2)),
+                margin(r.phase_crossover_hz, 1),
+                margin(r.phase_margin_deg, 1),
+                margin(r.gain_crossover_hz, 1),
+                margin(r.delay_margin_samples, 2),
+                r.meets_targets.to_string(),
+                margin(r.montecarlo_pass_pct, 0),
+            ]
         })
-        .collect()
+        .collect();
+    (header, rows)
 }
 
 /// Section "tracking".
 pub(super) fn tracking(b: &mut Builder) {
     let track = Tracking::main();
-    let metrics = track.metrics();
-    let Some(text) = b.text(&metrics) else {
-        b.not_run(&format!("{metrics} missing"));
+    let rel = track.metrics();
+    let Some(metrics) = b.load::<Rows<MetricsRow>>(&rel) else {
+        b.missing(&rel);
         return;
     };
-    b.csv_table(&metrics, |h| {
-        matches!(
-            h,
-            "trajectory"
-                | "variant"
-                | "rms1_nm"
-                | "rms2_nm"
-                | "max1_nm"
-                | "max2_nm"
-                | "rms1_pct"
-                | "rms2_pct"
-                | "peak_voltage_V"
-                | "saturated_samples"
-        )
-    });
+    let header: Vec<String> = METRICS_SHOWN.iter().map(|(h, _)| h.to_string()).collect();
+    let rows: Vec<Vec<String>> = metrics
+        .0
+        .iter()
+        .map(|r| METRICS_SHOWN.iter().map(|(_, f)| f(r)).collect())
+        .collect();
+    b.table(&header, &rows);
     // Loop-at-a-time margins of each controller on the twin (flagged below 6 dB / 40°).
-    let margins = track.margins();
-    if b.text(&margins).is_some() {
-        b.csv_table(&margins, |h| h != "method");
+    let margins: Option<Arc<Rows<MarginRow>>> = b.load(&track.margins());
+    if let Some(m) = &margins {
+        let (header, rows) = margin_table(&m.0);
+        b.table(&header, &rows);
     }
-    for line in verdict(&text, b.text(&margins).as_deref()) {
+    for line in verdict(&metrics.0, margins.as_ref().map(|m| m.0.as_slice())) {
         b.note(&line);
     }
-    // Issue #18, item 5: error against scan frequency (on the twin only).
+    // Error against scan frequency (on the twin only).
     if b.exists(&track.scan_frequency_svg()) {
         b.img(
             &track.scan_frequency_svg(),
@@ -83,8 +97,8 @@ pub(super) fn tracking(b: &mut Builder) {
         );
     }
     // Trajectories in the table's order, each with its controllers.
-    let mut groups: Vec<(String, Vec<MetricRow>)> = Vec::new();
-    for r in metric_rows(&text) {
+    let mut groups: Vec<(String, Vec<&MetricsRow>)> = Vec::new();
+    for r in &metrics.0 {
         match groups.iter_mut().find(|(t, _)| *t == r.trajectory) {
             Some((_, rows)) => rows.push(r),
             None => groups.push((r.trajectory.clone(), vec![r])),
@@ -99,10 +113,10 @@ pub(super) fn tracking(b: &mut Builder) {
         error_view(b, &track, t, rows);
         for r in rows {
             b.img(
-                &track.error_svg(t, &r.controller),
+                &track.error_svg(t, &r.variant),
                 &format!(
                     "{t}, {}: tracking error against time (Figures 9–10)",
-                    r.controller
+                    r.variant
                 ),
             );
         }
@@ -115,40 +129,28 @@ pub(super) fn tracking(b: &mut Builder) {
 /// runners-up; controllers below the margins are named apart, whatever their error, because
 /// a practitioner would not ship them. Without margins (the lumped plant) every controller
 /// competes and the text says so.
-pub(super) fn verdict(metrics: &str, margins: Option<&str>) -> Vec<String> {
+pub(super) fn verdict(rows: &[MetricsRow], margins: Option<&[MarginRow]>) -> Vec<String> {
     // Controllers whose margins fall short, from `meets_targets`.
-    let flagged: Vec<String> = margins
-        .map(|t| {
-            let mut lines = t.lines();
-            let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
-            let col = |n: &str| header.iter().position(|h| *h == n);
-            let (Some(c), Some(m)) = (col("controller"), col("meets_targets")) else {
-                return Vec::new();
-            };
-            let mut out: Vec<String> = lines
-                .filter_map(|l| {
-                    let f: Vec<&str> = l.split(',').collect();
-                    (f.get(m)? != &"true").then(|| f.get(c).map(|s| s.to_string()))?
-                })
-                .collect();
-            out.dedup();
-            out
-        })
-        .unwrap_or_default();
+    let mut flagged: Vec<String> = margins
+        .unwrap_or_default()
+        .iter()
+        .filter(|m| !m.meets_targets)
+        .map(|m| m.controller.clone())
+        .collect();
+    flagged.dedup();
     let mut order: Vec<String> = Vec::new();
-    let rows = metric_rows(metrics);
-    for r in &rows {
+    for r in rows {
         if !order.contains(&r.trajectory) {
             order.push(r.trajectory.clone());
         }
     }
     let mut out = Vec::new();
     for t in &order {
-        let mut ranked: Vec<(f64, &MetricRow, [f64; 2])> = rows
+        let mut ranked: Vec<(f64, &MetricsRow, [f64; 2])> = rows
             .iter()
-            .filter(|r| &r.trajectory == t && !flagged.contains(&r.controller))
+            .filter(|r| &r.trajectory == t && !flagged.contains(&r.variant))
             .filter_map(|r| {
-                let (a, b) = (r.rms[0].parse::<f64>().ok()?, r.rms[1].parse::<f64>().ok()?);
+                let (a, b) = (r.rms1_nm, r.rms2_nm);
                 let planar = a.hypot(b);
                 planar.is_finite().then_some((planar, r, [a, b]))
             })
@@ -162,11 +164,11 @@ pub(super) fn verdict(metrics: &str, margins: Option<&str>) -> Vec<String> {
         };
         let rest: Vec<String> = ranked[1..]
             .iter()
-            .map(|(_, r, e)| format!("{} {:.1} / {:.1} nm", r.controller, e[0], e[1]))
+            .map(|(_, r, e)| format!("{} {:.1} / {:.1} nm", r.variant, e[0], e[1]))
             .collect();
         out.push(format!(
             "{t}: {} wins with {:.1} / {:.1} nm RMS (q1 / q2){}{}.",
-            best.controller,
+            best.variant,
             e[0],
             e[1],
             if margins.is_some() {
@@ -194,21 +196,20 @@ pub(super) fn verdict(metrics: &str, margins: Option<&str>) -> Vec<String> {
 /// \[nm\], on axes shared by all panels: the hull of every sample, the 2σ covariance ellipse
 /// and the mean. The paths of Figure 11 differ by nanometres on a path of micrometres; here
 /// the controllers' errors are side by side at their own scale.
-fn error_view(b: &mut Builder, track: &Tracking, trajectory: &str, rows: &[MetricRow]) {
+fn error_view(b: &mut Builder, track: &Tracking, trajectory: &str, rows: &[&MetricsRow]) {
     let mut clouds = Vec::new();
     for (k, r) in rows.iter().enumerate() {
-        let rel = track.record(trajectory, &r.controller);
-        let Some(c) = b
-            .text(&rel)
-            .and_then(|t| csv_cols(&t, &["err1_m", "err2_m"]))
-        else {
+        let rel = track.record(trajectory, &r.variant);
+        let Some(t) = b.load::<Table>(&rel) else {
             continue;
         };
-        let pts: Vec<(f64, f64)> = c[0]
-            .iter()
-            .zip(&c[1])
-            .map(|(x, y)| (x * 1e9, y * 1e9))
-            .collect();
+        let pts: Vec<(f64, f64)> = match t.pairs("err1_m", "err2_m") {
+            Ok(p) => p.into_iter().map(|(x, y)| (x * 1e9, y * 1e9)).collect(),
+            Err(reason) => {
+                b.damaged(&rel, reason);
+                continue;
+            }
+        };
         if let Some(cloud) = Cloud::of(&pts) {
             clouds.push((k, r, cloud));
         }
@@ -232,9 +233,9 @@ fn error_view(b: &mut Builder, track: &Tracking, trajectory: &str, rows: &[Metri
         let panel = Figure::new(
             format!(
                 "{}: RMS {} / {} nm",
-                r.controller,
-                short_nm(&r.rms[0]),
-                short_nm(&r.rms[1])
+                r.variant,
+                fmt_num(r.rms1_nm),
+                fmt_num(r.rms2_nm)
             ),
             "e1 [nm]",
             "e2 [nm]",
@@ -261,36 +262,72 @@ fn error_view(b: &mut Builder, track: &Tracking, trajectory: &str, rows: &[Metri
     }
 }
 
-/// A metrics cell in nm, shortened.
-fn short_nm(cell: &str) -> String {
-    cell.parse::<f64>()
-        .map(fmt_num)
-        .unwrap_or_else(|_| cell.to_string())
-}
-
 #[cfg(test)]
 mod tests {
-    use super::verdict;
+    use super::*;
 
-    const METRICS: &str = "trajectory,variant,rms1_nm,rms2_nm\n\
-        circle,robust,2.0,2.0\n\
-        circle,pi-notch-ff,4.3,5.0\n\
-        circle,pid-ff,7.0,8.7\n\
-        line,pi-notch-ff,NaN,1.0\n\
-        line,pid-ff,9.0,9.0\n";
+    fn row(trajectory: &str, variant: &str, rms: [f64; 2]) -> MetricsRow {
+        MetricsRow {
+            trajectory: trajectory.into(),
+            variant: variant.into(),
+            compensation: "inverse".into(),
+            model: "guess".into(),
+            plant: "twin".into(),
+            rms1_nm: rms[0],
+            rms2_nm: rms[1],
+            rms1_pct: 0.0,
+            rms2_pct: 0.0,
+            max1_nm: 0.0,
+            max2_nm: 0.0,
+            max1_pct: 0.0,
+            max2_pct: 0.0,
+            settling_s: 0.0,
+            peak_voltage_v: 0.0,
+            saturated_samples: 0,
+            dropouts: 0,
+            workspace_usage: 0.5,
+        }
+    }
+
+    fn metrics() -> Vec<MetricsRow> {
+        vec![
+            row("circle", "robust", [2.0, 2.0]),
+            row("circle", "pi-notch-ff", [4.3, 5.0]),
+            row("circle", "pid-ff", [7.0, 8.7]),
+            row("line", "pi-notch-ff", [f64::NAN, 1.0]),
+            row("line", "pid-ff", [9.0, 9.0]),
+        ]
+    }
+
+    fn margin(controller: &str, axis: &str, gm: Option<f64>, meets: bool) -> MarginRow {
+        MarginRow {
+            controller: controller.into(),
+            delay_samples: 1,
+            axis: axis.into(),
+            gain_margin_db: gm,
+            phase_crossover_hz: None,
+            phase_margin_deg: None,
+            gain_crossover_hz: None,
+            delay_margin_samples: None,
+            method: "transfer function".into(),
+            meets_targets: meets,
+            montecarlo_pass_pct: Some(95.0),
+        }
+    }
 
     #[test]
     fn the_winner_keeps_its_margins_and_the_flagged_are_named_apart() {
         // Goal: a controller below the margins never wins, even with the smallest error; a
         // diverged (NaN) row is not ranked; runners-up follow in order.
-        let margins = "controller,delay_samples,loop,gain_margin_dB,meets_targets\n\
-            pi-notch-ff,1,q1,6.0,true\n\
-            pi-notch-ff,1,q2,9.5,true\n\
-            robust,1,q1,unstable,false\n\
-            robust,1,q2,unstable,false\n\
-            pid-ff,1,q1,6.2,true\n\
-            pid-ff,1,q2,15.0,true\n";
-        let v = verdict(METRICS, Some(margins));
+        let margins = [
+            margin("pi-notch-ff", "q1", Some(6.0), true),
+            margin("pi-notch-ff", "q2", Some(9.5), true),
+            margin("robust", "q1", None, false),
+            margin("robust", "q2", None, false),
+            margin("pid-ff", "q1", Some(6.2), true),
+            margin("pid-ff", "q2", Some(15.0), true),
+        ];
+        let v = verdict(&metrics(), Some(&margins));
         assert_eq!(v.len(), 3, "{v:?}");
         assert!(
             v[0].starts_with("circle: pi-notch-ff wins with 4.3 / 5.0 nm"),
@@ -302,11 +339,15 @@ mod tests {
             v[2].contains("not ranked") && v[2].ends_with(": robust."),
             "{v:?}"
         );
+        let (_, shown) = margin_table(&margins);
+        assert_eq!(shown[0][3], "6.000");
+        assert_eq!(shown[2][3], "unstable");
+        assert_eq!(shown[0][9], "95");
     }
 
     #[test]
     fn without_margins_every_controller_competes() {
-        let v = verdict(METRICS, None);
+        let v = verdict(&metrics(), None);
         assert!(
             v[0].starts_with("circle: robust wins with 2.0 / 2.0 nm"),
             "{v:?}"

@@ -4,80 +4,56 @@
 //! phase), and its validity (`validity.json`): order, build time, mode errors and the step
 //! and sine errors against the full nonlinear transient in % of the output range.
 
-use serde_json::Value;
+use flexstage_run::files::twin::{ModeRow, TwinValidity};
+use flexstage_run::format::{Row, Rows};
+use flexstage_run::layout::twin as files;
 
-use super::{Builder, Width, fmt_num, num};
-
-use crate::layout::twin as files;
+use super::{Builder, Width, cell, fmt_num};
 
 /// Key figures of `validity.json` as (quantity, value) rows.
-pub(super) fn validity_rows(v: &Value) -> Vec<(String, String)> {
-    let mut rows = Vec::new();
-    let mut push = |k: &str, val: Option<String>| {
-        if let Some(val) = val {
-            rows.push((k.to_string(), val));
-        }
-    };
-    push(
-        "order (modes of the twin)",
-        v.get("order").and_then(Value::as_u64).map(|o| {
-            let fi = v
-                .get("fixed_interface_modes")
-                .and_then(Value::as_u64)
-                .map(|f| format!(" ({f} fixed-interface modes)"))
-                .unwrap_or_default();
-            format!("{o}{fi}")
-        }),
-    );
-    push(
-        "band covered",
-        num(v, &["covered_frequency_hz"]).map(|f| format!("up to {} Hz", fmt_num(f))),
-    );
-    push(
-        "geometric-nonlinearity correction",
-        v.get("nonlinear")
-            .and_then(Value::as_bool)
-            .map(|n| if n { "on" } else { "off" }.to_string()),
-    );
-    push(
-        "largest mode error vs FE",
-        num(v, &["max_mode_error_pct"]).map(|e| format!("{} %", fmt_num(e))),
-    );
-    push(
-        "build time",
-        num(v, &["build_seconds"]).map(|s| format!("{} s", fmt_num(s))),
-    );
-    let transient = v.get("transient").cloned().unwrap_or(Value::Null);
-    let ran = transient.get("ran").and_then(Value::as_bool);
-    if ran == Some(false) {
-        let why = transient
-            .get("reason")
-            .and_then(Value::as_str)
-            .unwrap_or("");
-        push(
-            "check against the full transient",
-            Some(format!("not run: {why}")),
-        );
+pub(super) fn validity_rows(v: &TwinValidity) -> Vec<(String, String)> {
+    let mut rows = vec![
+        (
+            "order (modes of the twin)".to_string(),
+            format!(
+                "{} ({} fixed-interface modes)",
+                v.order, v.fixed_interface_modes
+            ),
+        ),
+        (
+            "band covered".into(),
+            format!("up to {} Hz", fmt_num(v.covered_frequency_hz)),
+        ),
+        (
+            "geometric-nonlinearity correction".into(),
+            if v.nonlinear { "on" } else { "off" }.to_string(),
+        ),
+        (
+            "largest mode error vs FE".into(),
+            format!("{} %", fmt_num(v.max_mode_error_pct)),
+        ),
+        (
+            "build time".into(),
+            format!("{} s", fmt_num(v.build_seconds)),
+        ),
+    ];
+    let t = &v.transient;
+    if !t.ran {
+        rows.push((
+            "check against the full transient".into(),
+            format!("not run: {}", t.reason),
+        ));
     }
-    for c in transient
-        .get("cases")
-        .and_then(Value::as_array)
-        .into_iter()
-        .flatten()
-    {
-        let name = c.get("name").and_then(Value::as_str).unwrap_or("case");
-        let pct = |k: &str| match (num(c, &[k, "0"]), num(c, &[k, "1"])) {
-            (Some(a), Some(b)) => format!("{} / {} %", fmt_num(a), fmt_num(b)),
-            _ => "–".into(),
-        };
-        push(
-            &format!("{name}: error q1 / q2 in % of range"),
-            Some(format!(
+    for c in &t.cases {
+        let pct = |e: [f64; 2]| format!("{} / {} %", fmt_num(e[0]), fmt_num(e[1]));
+        rows.push((
+            format!("{}: error q1 / q2 in % of range", c.name),
+            format!(
                 "{} (without the nonlinear correction {})",
-                pct("error_pct"),
-                pct("linear_error_pct")
-            )),
-        );
+                pct(c.error_pct),
+                pct(c.linear_error_pct)
+            ),
+        ));
     }
     rows
 }
@@ -101,13 +77,30 @@ pub(super) fn twin(b: &mut Builder) {
          of the same assembled stage, its frequency response beside the run's lumped model, \
          and its errors against the full nonlinear transient.",
     );
-    if let Some(v) = b.json(files::VALIDITY) {
-        b.kv(&validity_rows(&v));
-    } else {
-        b.not_run(&format!("{} missing", files::VALIDITY));
+    match b.load::<TwinValidity>(files::VALIDITY) {
+        Some(v) => b.kv(&validity_rows(&v)),
+        None => b.missing(files::VALIDITY),
     }
     b.h3("Modes: twin against FE");
-    b.csv_table(files::MODES, |_| true);
+    match b.load::<Rows<ModeRow>>(files::MODES) {
+        Some(modes) => {
+            let header: Vec<String> = ModeRow::HEADER.iter().map(|h| h.to_string()).collect();
+            let rows: Vec<Vec<String>> = modes
+                .0
+                .iter()
+                .map(|m| {
+                    vec![
+                        m.mode.to_string(),
+                        cell(m.frequency_hz),
+                        cell(m.fe_frequency_hz),
+                        cell(m.relative_difference),
+                    ]
+                })
+                .collect();
+            b.table(&header, &rows);
+        }
+        None => b.missing(files::MODES),
+    }
     for (rel, caption) in [
         (
             files::BODE_MAGNITUDE_SVG,
@@ -126,16 +119,46 @@ pub(super) fn twin(b: &mut Builder) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flexstage_run::RunDir;
+    use flexstage_run::files::twin::{CaseRow, TransientCheck, VERSION};
+
+    fn validity(ran: bool, cases: Vec<CaseRow>) -> TwinValidity {
+        TwinValidity {
+            version: VERSION,
+            order: 4,
+            fixed_interface_modes: 6,
+            frequencies_hz: vec![412.5],
+            damping_ratios: vec![0.01],
+            covered_frequency_hz: 3000.0,
+            nonlinear: true,
+            build_seconds: 1.25,
+            modes: Vec::new(),
+            max_mode_error_pct: 0.5,
+            transient: TransientCheck {
+                ran,
+                reason: "too big".into(),
+                cases,
+                seconds: 0.0,
+            },
+        }
+    }
+
+    fn case(name: &str, error_pct: [f64; 2], linear_error_pct: [f64; 2]) -> CaseRow {
+        CaseRow {
+            name: name.into(),
+            error_pct,
+            linear_error_pct,
+            range_m: [1e-6; 2],
+            reference_seconds: 1.0,
+            dofs: 100,
+            steps: 10,
+        }
+    }
 
     #[test]
     fn validity_rows_show_errors_in_percent_and_a_skipped_check() {
         // Goal: the step/sine errors read as % of range; a check that did not run says why.
-        let v: Value = serde_json::json!({
-            "order": 4, "fixed_interface_modes": 6, "covered_frequency_hz": 3000.0,
-            "nonlinear": true, "build_seconds": 1.25, "max_mode_error_pct": 0.5,
-            "transient": {"ran": true, "reason": "requested", "cases": [
-                {"name": "step", "error_pct": [1.5, 2.0], "linear_error_pct": [3.0, 4.0]}]}
-        });
+        let v = validity(true, vec![case("step", [1.5, 2.0], [3.0, 4.0])]);
         let rows = validity_rows(&v);
         let get = |k: &str| rows.iter().find(|r| r.0.starts_with(k)).unwrap().1.clone();
         assert_eq!(get("order"), "4 (6 fixed-interface modes)");
@@ -144,23 +167,31 @@ mod tests {
             get("step"),
             "1.500 / 2.000 % (without the nonlinear correction 3.000 / 4.000 %)"
         );
-        let off: Value = serde_json::json!({"transient": {"ran": false, "reason": "too big"}});
-        assert_eq!(validity_rows(&off)[0].1, "not run: too big");
+        let off = validity_rows(&validity(false, Vec::new()));
+        assert_eq!(off.last().unwrap().1, "not run: too big");
     }
 
     #[test]
     fn fixture_twin_folder_shows_modes_both_bode_figures_and_validity() {
-        // Goal: with hand-written twin files the section shows the modes table, both Bode
-        // figures and the validity numbers; without them it is "not run".
-        let dir = std::env::temp_dir().join(format!("flexstage-html-twin-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&dir);
-        std::fs::create_dir_all(dir.join(files::DIR)).unwrap();
-        let w = |rel: &str, text: &str| std::fs::write(dir.join(rel), text).unwrap();
-        w(
+        // Goal: with twin files the section shows the modes table, both Bode figures and the
+        // validity numbers; a damaged file is an error on the page and in the report's list.
+        let root = std::env::temp_dir().join(format!("flexstage-html-twin-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let dir = RunDir::create(&root).unwrap();
+        let mode = |mode, frequency_hz, fe_frequency_hz, relative_difference| ModeRow {
+            mode,
+            frequency_hz,
+            fe_frequency_hz,
+            relative_difference,
+        };
+        dir.store(
             files::MODES,
-            "mode,frequency_Hz,fe_frequency_Hz,relative_difference\n1,412.5,412.0,0.0012\n\
-             2,1530.0,1528.0,0.0013\n",
-        );
+            Rows(vec![
+                mode(1, 412.5, 412.0, 0.0012),
+                mode(2, 1530.0, 1528.0, 0.0013),
+            ]),
+        )
+        .unwrap();
         let svg = |t: &str| {
             format!(
                 "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"800\" height=\"400\" \
@@ -168,27 +199,40 @@ mod tests {
                  <polyline points=\"0,0 800,400\" stroke=\"black\"/></svg>"
             )
         };
-        w(files::BODE_MAGNITUDE_SVG, &svg("magnitude"));
-        w(files::BODE_PHASE_SVG, &svg("phase"));
-        w(
-            files::VALIDITY,
-            r#"{"order": 2, "build_seconds": 0.5, "max_mode_error_pct": 0.13,
-                "transient": {"ran": true, "cases": [{"name": "sine",
-                "error_pct": [0.8, 0.9], "linear_error_pct": [1.0, 1.1]}]}}"#,
-        );
-        let html = crate::html::build_report(&dir);
-        let section = html
-            .split("<section id=\"twin\">")
-            .nth(1)
-            .unwrap()
-            .split("</section>")
-            .next()
+        dir.write(files::BODE_MAGNITUDE_SVG, svg("magnitude").as_bytes())
             .unwrap();
-        assert!(!section.contains("notrun"), "{section}");
-        assert_eq!(section.matches("<figure").count(), 2);
-        assert!(section.contains(">magnitude<") && section.contains(">phase<"));
-        assert!(section.contains("<td>412.5</td>") && section.contains("<td>1528</td>"));
-        assert!(section.contains("0.1300 %") && section.contains("sine: error q1 / q2"));
-        std::fs::remove_dir_all(&dir).unwrap();
+        dir.write(files::BODE_PHASE_SVG, svg("phase").as_bytes())
+            .unwrap();
+        let mut v = validity(true, vec![case("sine", [0.8, 0.9], [1.0, 1.1])]);
+        v.max_mode_error_pct = 0.13;
+        dir.store(files::VALIDITY, v).unwrap();
+        let report = crate::html::build_report(&RunDir::create(&root).unwrap());
+        assert!(report.errors.is_empty(), "{:?}", report.errors);
+        let section = |html: &str| {
+            html.split("<section id=\"twin\">")
+                .nth(1)
+                .unwrap()
+                .split("</section>")
+                .next()
+                .unwrap()
+                .to_string()
+        };
+        let twin = section(&report.html);
+        assert!(!twin.contains("notrun"), "{twin}");
+        assert_eq!(twin.matches("<figure").count(), 2);
+        assert!(twin.contains(">magnitude<") && twin.contains(">phase<"));
+        assert!(twin.contains("<td>412.5</td>") && twin.contains("<td>1528</td>"));
+        assert!(twin.contains("0.1300 %") && twin.contains("sine: error q1 / q2"));
+        // A truncated validity.json: an error naming it, not "not run".
+        std::fs::write(dir.path(files::VALIDITY), "{\"version\": 1, \"ord").unwrap();
+        let report = crate::html::build_report(&RunDir::create(&root).unwrap());
+        assert_eq!(report.errors.len(), 1, "{:?}", report.errors);
+        assert!(report.errors[0].contains("validity.json is damaged"));
+        let twin = section(&report.html);
+        assert!(
+            twin.contains("class=\"error\"") && !twin.contains("notrun"),
+            "{twin}"
+        );
+        std::fs::remove_dir_all(&root).unwrap();
     }
 }

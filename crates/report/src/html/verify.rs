@@ -5,99 +5,81 @@
 //! 11(7), 179, Eq. 27), θ (Eq. 26) and the first natural frequency beside the design mesh's
 //! values, and the manufacturability findings.
 
-use serde_json::Value;
+use flexstage_run::files::export::{VerificationFile, Width};
+use flexstage_run::layout::export::VERIFICATION_JSON;
 
-use super::{Builder, fmt_num, num};
+use super::{Builder, fmt_num};
 
-/// The verification record `flexstage-verify` writes into the run folder.
-pub const VERIFICATION_JSON: &str = "export/verification.json";
-
-/// MPa text of a stress \[Pa\] at a JSON path.
-fn mpa(v: &Value, path: &[&str]) -> String {
-    num(v, path)
-        .map(|s| format!("{} MPa", fmt_num(s * 1e-6)))
+/// MPa text of a stress \[Pa\].
+fn mpa(v: Option<f64>) -> String {
+    v.map(|s| format!("{} MPa", fmt_num(s * 1e-6)))
         .unwrap_or_else(|| "–".into())
 }
 
-/// A number at a JSON path, formatted, or "–".
-fn val(v: &Value, path: &[&str], scale: f64, unit: &str) -> String {
-    num(v, path)
-        .map(|x| format!("{}{unit}", fmt_num(x * scale)))
+/// A number times `scale` with its unit, or "–".
+fn val(v: Option<f64>, scale: f64, unit: &str) -> String {
+    v.map(|x| format!("{}{unit}", fmt_num(x * scale)))
         .unwrap_or_else(|| "–".into())
 }
 
 /// The comparison table: body-fitted mesh against the design mesh.
-pub(super) fn comparison(v: &Value) -> Vec<Vec<String>> {
-    fn bf<'a>(p: &[&'a str]) -> Vec<&'a str> {
-        [&["body_fitted"][..], p].concat()
-    }
-    fn dm<'a>(p: &[&'a str]) -> Vec<&'a str> {
-        [&["design_mesh"][..], p].concat()
-    }
+pub(super) fn comparison(v: &VerificationFile) -> Vec<Vec<String>> {
+    let (bf, dm) = (&v.body_fitted, v.design_mesh.as_ref());
     vec![
         vec![
             "peak von Mises (stroke corners)".into(),
-            mpa(v, &bf(&["stress", "von_mises"])),
-            mpa(v, &dm(&["stress", "von_mises"])),
+            mpa(Some(bf.stress.von_mises)),
+            mpa(dm.map(|d| d.stress.von_mises)),
         ],
         vec![
             "  re-check, half the element size".into(),
-            mpa(v, &bf(&["stress_refined", "von_mises"])),
+            mpa(bf.stress_refined.map(|s| s.von_mises)),
             "".into(),
         ],
         vec![
             "α (Eq. 27)".into(),
-            val(v, &bf(&["transfer", "alpha_scalar"]), 1.0, ""),
-            val(v, &dm(&["transfer", "alpha_scalar"]), 1.0, ""),
+            val(Some(bf.transfer.alpha_scalar), 1.0, ""),
+            val(dm.map(|d| d.transfer.alpha_scalar), 1.0, ""),
         ],
         vec![
             "θ (Eq. 26)".into(),
-            val(v, &bf(&["transfer", "theta_deg"]), 1.0, "°"),
-            val(v, &dm(&["transfer", "theta_deg"]), 1.0, "°"),
+            val(Some(bf.transfer.theta_deg), 1.0, "°"),
+            val(dm.map(|d| d.transfer.theta_deg), 1.0, "°"),
         ],
         vec![
             "first natural frequency".into(),
-            val(v, &bf(&["frequencies", "0"]), 1.0, " Hz"),
-            val(v, &dm(&["first_frequency"]), 1.0, " Hz"),
+            val(bf.frequencies.first().copied(), 1.0, " Hz"),
+            val(dm.map(|d| d.first_frequency), 1.0, " Hz"),
         ],
         vec![
             "mass".into(),
-            val(v, &bf(&["mass"]), 1e3, " g"),
-            val(v, &dm(&["mass"]), 1e3, " g"),
+            val(Some(bf.mass), 1e3, " g"),
+            val(dm.map(|d| d.mass), 1e3, " g"),
         ],
         vec![
             "elements".into(),
-            val(v, &bf(&["elements"]), 1.0, " T6"),
-            val(v, &dm(&["elements"]), 1.0, " Q4"),
+            val(Some(bf.elements as f64), 1.0, " T6"),
+            val(dm.map(|d| d.elements as f64), 1.0, " Q4"),
         ],
     ]
 }
 
 /// The verdict line: "SAFE" or "NOT SAFE: reasons".
-pub(super) fn verdict(v: &Value) -> String {
-    let safe = v
-        .pointer("/verdict/safe")
-        .and_then(Value::as_bool)
-        .unwrap_or(false);
-    if safe {
+pub(super) fn verdict(v: &VerificationFile) -> String {
+    if v.verdict.safe {
         return "Verdict: safe (stress within the allowable, manufacturable).".into();
     }
-    let reasons: Vec<&str> = v
-        .pointer("/verdict/reasons")
-        .and_then(Value::as_array)
-        .map(|r| r.iter().filter_map(Value::as_str).collect())
-        .unwrap_or_default();
-    if reasons.is_empty() {
+    if v.verdict.reasons.is_empty() {
         "Verdict: NOT SAFE.".into()
     } else {
-        format!("Verdict: NOT SAFE: {}.", reasons.join("; "))
+        format!("Verdict: NOT SAFE: {}.", v.verdict.reasons.join("; "))
     }
 }
 
 /// Section "export verification".
 pub(super) fn verification(b: &mut Builder) {
-    let Some(v) = b.json(VERIFICATION_JSON) else {
-        b.not_run(&format!("{VERIFICATION_JSON} missing"));
+    let Some(v) = b.load::<VerificationFile>(VERIFICATION_JSON) else {
+        b.missing(VERIFICATION_JSON);
         return;
     };
     b.note(&verdict(&v));
@@ -105,47 +87,42 @@ pub(super) fn verification(b: &mut Builder) {
         "Allowable stress {} (fatigue strength / safety factor), yield strength {}. The \
          body-fitted mesh (quadratic triangles on the exported outline) is what is cut; the \
          design mesh is what the optimizer saw.",
-        mpa(&v, &["allowable"]),
-        mpa(&v, &["yield_strength"])
+        mpa(Some(v.allowable)),
+        mpa(Some(v.yield_strength))
     );
     b.note(&allowable);
     let header = ["quantity", "body-fitted mesh", "design mesh"].map(String::from);
     b.table(&header, &comparison(&v));
-    let m = v.get("manufacturing").cloned().unwrap_or(Value::Null);
-    let width = |k: &str| val(&m, &[k, "width"], 1e3, " mm");
+    let m = &v.manufacturing;
+    let width = |w: &Option<Width>| val(w.map(|w| w.width), 1e3, " mm");
     b.kv(&[
-        ("thinnest ligament".into(), width("min_ligament")),
-        ("narrowest gap".into(), width("min_gap")),
+        ("thinnest ligament".into(), width(&m.min_ligament)),
+        ("narrowest gap".into(), width(&m.min_gap)),
         (
             "islands (unconnected parts)".into(),
-            val(&m, &["islands"], 1.0, ""),
+            val(Some(m.islands as f64), 1.0, ""),
         ),
         (
             "closed pockets (start holes)".into(),
-            val(&m, &["pockets"], 1.0, ""),
+            val(Some(m.pockets as f64), 1.0, ""),
         ),
     ]);
     let findings: Vec<Vec<String>> = m
-        .get("findings")
-        .and_then(Value::as_array)
+        .findings
+        .iter()
         .map(|f| {
-            f.iter()
-                .map(|f| {
-                    let s = |k: &str| f.get(k).and_then(Value::as_str).unwrap_or("").to_string();
-                    vec![
-                        s("severity"),
-                        s("kind").replace('_', " "),
-                        format!(
-                            "({}, {}) mm",
-                            val(f, &["at_mm", "0"], 1.0, ""),
-                            val(f, &["at_mm", "1"], 1.0, "")
-                        ),
-                        s("message"),
-                    ]
-                })
-                .collect()
+            vec![
+                f.severity.clone(),
+                f.kind.replace('_', " "),
+                format!(
+                    "({}, {}) mm",
+                    val(Some(f.at_mm[0]), 1.0, ""),
+                    val(Some(f.at_mm[1]), 1.0, "")
+                ),
+                f.message.clone(),
+            ]
         })
-        .unwrap_or_default();
+        .collect();
     if findings.is_empty() {
         b.note("Manufacturability: no findings.");
     } else {
@@ -162,14 +139,58 @@ mod tests {
     fn verdict_names_the_reasons_and_values_sit_beside_the_design_mesh() {
         // Goal: an unsafe outline says why; the body-fitted and design-mesh values of one
         // quantity share a row.
-        let v: Value = serde_json::json!({
-            "allowable": 63e6,
-            "body_fitted": {"stress": {"von_mises": 70e6}, "transfer": {"alpha_scalar": 2.1},
-                            "frequencies": [412.0], "mass": 0.012, "elements": 900},
-            "design_mesh": {"stress": {"von_mises": 50e6}, "transfer": {"alpha_scalar": 2.2},
-                            "first_frequency": 420.0},
-            "verdict": {"safe": false, "reasons": ["stress 70 MPa > allowable 63 MPa"]}
-        });
+        use flexstage_run::files::export::*;
+        let peak = |von_mises| StressPeak {
+            von_mises,
+            at: [0.0; 2],
+            case: [0.0; 2],
+        };
+        let transfer = |alpha_scalar| Transfer {
+            alpha_abs: [[0.0; 2]; 2],
+            alpha: [[0.0; 2]; 2],
+            alpha_scalar,
+            theta_deg: 0.0,
+        };
+        let v = VerificationFile {
+            version: VERSION,
+            allowable: 63e6,
+            yield_strength: 276e6,
+            body_fitted: BodyFitted {
+                nodes: 1900,
+                elements: 900,
+                dofs: 3800,
+                edge_range: [1e-4, 1e-3],
+                area: 1e-3,
+                mass: 0.012,
+                stress: peak(70e6),
+                stress_refined: None,
+                refined_elements: 0,
+                transfer: transfer(2.1),
+                frequencies: vec![412.0],
+            },
+            design_mesh: Some(DesignMesh {
+                elements: 1152,
+                element_size: 2.5e-3,
+                mass: 0.012,
+                stress: peak(50e6),
+                stress_linear: 50e6,
+                transfer: transfer(2.2),
+                first_frequency: 420.0,
+            }),
+            manufacturing: Manufacturing {
+                min_ligament: None,
+                min_gap: None,
+                islands: 0,
+                pockets: 0,
+                findings: Vec::new(),
+            },
+            verdict: Verdict {
+                safe: false,
+                stress_ok: false,
+                manufacturable: true,
+                reasons: vec!["stress 70 MPa > allowable 63 MPa".into()],
+            },
+        };
         assert_eq!(
             verdict(&v),
             "Verdict: NOT SAFE: stress 70 MPa > allowable 63 MPa."

@@ -3,7 +3,8 @@
 //! A run folder (`runs/<scenario name>/` unless the user picks another) holds the scenario
 //! exactly as used and one sub-folder per stage. The pipeline writes through these names and
 //! the HTML report reads through them, so the two cannot drift apart. Paths are relative to
-//! the run folder and use `/` (they are joined with [`crate::RunDir::path`]).
+//! the run folder and use `/` (they are joined with [`crate::RunDir::path`]). No other crate
+//! spells a file name of a run folder (CI checks it with `scripts/run-file-names.py`).
 //!
 //! ```text
 //! scenario.toml  plant.toml  run_state.json  report.html  run.lock (while a command runs)
@@ -12,9 +13,11 @@
 //!             workspace_{initial,final}.csv workspace_iterNNNNN.csv workspace{,_history}.svg
 //!             summary.json checkpoint.bin
 //! analyze/<variant>/   cases.csv deformed.vtu summary.json workspace.svg
-//! export/     outline.{dxf,svg,stl}
-//! reduce/     params.toml summary.{toml,json} modes.{vtu,csv} validity{,_scale}.{csv,svg}
+//! export/     outline.{dxf,svg,stl} verification.{json,txt} body_fitted.vtu
+//! reduce/     params.toml summary.{toml,json} modes.{vtu,csv} mode<K>.png
+//!             validity{,_scale}.{csv,svg}
 //! twin/       modes.csv bode.csv bode_{magnitude,phase}.svg validity.json
+//! front/      front.{json,csv,svg} d<K>/{design.json, outline.svg, modes.vtu, mode<M>.png}
 //! pea/        pea<N>.csv pea<N>_loop.svg
 //! identify/pea<N>/   estimates.toml convergence.{csv,svg} loop.{csv,svg} compensation.{csv,svg}
 //! identify/stage/    params.toml table.csv convergence.{csv,svg} record.csv
@@ -81,7 +84,7 @@ pub mod design {
 
     /// The polygon snapshot of one iteration.
     pub fn snapshot(iteration: usize) -> String {
-        format!("{DIR}/{SNAPSHOT_PREFIX}{iteration:05}.csv")
+        format!("{DIR}/workspace_iter{iteration:05}.csv")
     }
 
     /// The iteration of a snapshot file name (the name only, e.g. `workspace_iter00025.csv`).
@@ -98,7 +101,7 @@ pub mod design {
 pub mod front {
     /// The stage folder.
     pub const DIR: &str = "front";
-    /// Every design with its checks (`flexstage_pipeline::front::FrontSummary`).
+    /// Every design with its checks ([`crate::files::front::FrontFile`]).
     pub const JSON: &str = "front/front.json";
     /// One row per design.
     pub const CSV: &str = "front/front.csv";
@@ -119,6 +122,14 @@ pub mod front {
     pub fn modes(k: usize) -> String {
         format!("{DIR}/d{k}/modes.vtu")
     }
+
+    /// Mode shapes of each design drawn as pictures.
+    pub const MODE_PNGS: usize = 2;
+
+    /// The picture of mode `m` (from 1) of design `k`.
+    pub fn mode_png(k: usize, m: usize) -> String {
+        format!("{DIR}/d{k}/mode{m}.png")
+    }
 }
 
 /// `export/`: the manufacturing outline (Section 4.1).
@@ -131,6 +142,12 @@ pub mod export {
     pub const SVG: &str = "export/outline.svg";
     /// Binary STL, extruded by the thickness.
     pub const STL: &str = "export/outline.stl";
+    /// The body-fitted verification of the outline, every value in SI units.
+    pub const VERIFICATION_JSON: &str = "export/verification.json";
+    /// The verification's summary lines (ending with the verdict).
+    pub const VERIFICATION_TXT: &str = "export/verification.txt";
+    /// The body-fitted mesh with the worst corner's displacement and stress, for ParaView.
+    pub const BODY_FITTED_VTU: &str = "export/body_fitted.vtu";
 }
 
 /// `reduce/`: the reduced model (Section 3.2.1).
@@ -147,6 +164,13 @@ pub mod reduce {
     pub const MODES_VTU: &str = "reduce/modes.vtu";
     /// Natural frequencies.
     pub const MODES_CSV: &str = "reduce/modes.csv";
+    /// The most mode shapes drawn as pictures ([`mode_png`]).
+    pub const MODE_PNGS: usize = 4;
+
+    /// Mode shape `k` (from 1) drawn deformed, as PNG.
+    pub fn mode_png(k: usize) -> String {
+        format!("{DIR}/mode{k}.png")
+    }
     /// Validity map samples.
     pub const VALIDITY_CSV: &str = "reduce/validity.csv";
     /// Validity map per stroke scale.

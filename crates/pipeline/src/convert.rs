@@ -1,0 +1,228 @@
+//! The stage crates' values as the typed files of the run folder (`flexstage-run`): the one
+//! place where a domain type meets a file type.
+
+use flexstage_assess::margins::MarginRow as Margins;
+use flexstage_assess::montecarlo::MonteCarlo;
+use flexstage_assess::sweep::SweepPoint;
+use flexstage_run::files::design::{DesignRecord, MechanismRecord};
+use flexstage_run::files::export as file;
+use flexstage_run::files::track::{MarginRow, MonteCarloRow, ScanRow};
+use flexstage_topopt::summary::{DesignSummary, MechanismSummary};
+use flexstage_verify::Verification;
+
+/// What a design delivers, as `design.json` and `design/summary.json` hold it.
+pub(crate) fn design_record(s: &DesignSummary) -> DesignRecord {
+    DesignRecord {
+        area: s.area,
+        area_ratio: s.area_ratio,
+        alpha: s.alpha,
+        theta_deg: s.theta_deg,
+        theta_target_deg: s.theta_target_deg,
+        mass: s.mass,
+        volume_fraction: s.volume_fraction,
+        area_eroded: s.area_eroded,
+        area_dilated: s.area_dilated,
+        peak_stress: s.peak_stress,
+        constrained_stress: s.constrained_stress,
+        allowable_stress: s.allowable_stress,
+        design_allowable: s.design_allowable,
+        one_node_hinges: s.one_node_hinges,
+        thinnest_member: s.thinnest_member,
+        thinnest_member_at: s.thinnest_member_at,
+        narrowest_gap: s.narrowest_gap,
+        narrowest_gap_at: s.narrowest_gap_at,
+        guaranteed_member: s.guaranteed_member,
+        guaranteed_gap: s.guaranteed_gap,
+        mirror_asymmetry: s.mirror_asymmetry,
+        first_frequency_hz: s.first_frequency_hz,
+        frequencies_hz: s.frequencies_hz.clone(),
+        mechanism: s.mechanism.as_ref().map(mechanism_record),
+    }
+}
+
+fn mechanism_record(m: &MechanismSummary) -> MechanismRecord {
+    MechanismRecord {
+        direction: m.direction,
+        output_displacement: m.output_displacement,
+        output: m.output,
+        inputs: m.inputs.clone(),
+        geometric_advantage: m.geometric_advantage,
+        eroded: m.eroded,
+        dilated: m.dilated,
+    }
+}
+
+/// The verification of the exported outline as `export/verification.json`.
+pub(crate) fn verification(v: &Verification) -> file::VerificationFile {
+    let peak = |p: &flexstage_verify::StressPeak| file::StressPeak {
+        von_mises: p.von_mises,
+        at: p.at,
+        case: p.case,
+    };
+    let transfer = |t: &flexstage_verify::Transfer| file::Transfer {
+        alpha_abs: t.alpha_abs,
+        alpha: t.alpha,
+        alpha_scalar: t.alpha_scalar,
+        theta_deg: t.theta_deg,
+    };
+    let width = |w: &flexstage_verify::manufacture::Width| file::Width {
+        width: w.width,
+        at: w.at,
+    };
+    let b = &v.body_fitted;
+    let m = &v.manufacturing;
+    file::VerificationFile {
+        version: file::VERSION,
+        allowable: v.allowable,
+        yield_strength: v.yield_strength,
+        body_fitted: file::BodyFitted {
+            nodes: b.nodes,
+            elements: b.elements,
+            dofs: b.dofs,
+            edge_range: b.edge_range,
+            area: b.area,
+            mass: b.mass,
+            stress: peak(&b.stress),
+            stress_refined: b.stress_refined.as_ref().map(peak),
+            refined_elements: b.refined_elements,
+            transfer: transfer(&b.transfer),
+            frequencies: b.frequencies.clone(),
+        },
+        design_mesh: v.design_mesh.as_ref().map(|d| file::DesignMesh {
+            elements: d.elements,
+            element_size: d.element_size,
+            mass: d.mass,
+            stress: peak(&d.stress),
+            stress_linear: d.stress_linear,
+            transfer: transfer(&d.transfer),
+            first_frequency: d.first_frequency,
+        }),
+        manufacturing: file::Manufacturing {
+            min_ligament: m.min_ligament.as_ref().map(width),
+            min_gap: m.min_gap.as_ref().map(width),
+            islands: m.islands,
+            pockets: m.pockets,
+            findings: m
+                .findings
+                .iter()
+                .map(|f| file::Finding {
+                    kind: snake(&format!("{:?}", f.kind)),
+                    severity: snake(&format!("{:?}", f.severity)),
+                    at_mm: f.at_mm,
+                    size: f.size,
+                    message: f.message.clone(),
+                })
+                .collect(),
+        },
+        verdict: file::Verdict {
+            safe: v.verdict.safe,
+            stress_ok: v.verdict.stress_ok,
+            manufacturable: v.verdict.manufacturable,
+            reasons: v.verdict.reasons.clone(),
+        },
+    }
+}
+
+/// `ThinLigament` → `thin_ligament` (the verification's serde names).
+fn snake(name: &str) -> String {
+    let mut out = String::new();
+    for (i, c) in name.chars().enumerate() {
+        if c.is_ascii_uppercase() {
+            if i > 0 {
+                out.push('_');
+            }
+            out.push(c.to_ascii_lowercase());
+        } else {
+            out.push(c);
+        }
+    }
+    out
+}
+
+/// The margins of every controller as `margins.csv` rows (two loops each), delay margins in
+/// samples of `sample_time`.
+pub(crate) fn margin_rows(rows: &[Margins], sample_time: f64) -> Vec<MarginRow> {
+    let mut out = Vec::with_capacity(2 * rows.len());
+    for r in rows {
+        for l in 0..2 {
+            let m = r.margins.map(|m| m[l]);
+            out.push(MarginRow {
+                controller: r.candidate.name().to_string(),
+                delay_samples: r.delay,
+                axis: format!("q{}", l + 1),
+                gain_margin_db: m.map(|m| m.gain_db),
+                phase_crossover_hz: m.map(|m| m.phase_crossover),
+                phase_margin_deg: m.map(|m| m.phase_deg),
+                gain_crossover_hz: m.map(|m| m.gain_crossover),
+                delay_margin_samples: m.map(|m| m.delay / sample_time),
+                method: r.method.to_string(),
+                meets_targets: m.is_some() && r.meets,
+                montecarlo_pass_pct: r.montecarlo_pass.map(|p| 100.0 * p),
+            });
+        }
+    }
+    out
+}
+
+/// The Monte-Carlo study as `montecarlo.csv` rows: one per plant and controller.
+pub(crate) fn montecarlo_rows(mc: &MonteCarlo) -> Vec<MonteCarloRow> {
+    mc.plants
+        .iter()
+        .flat_map(|p| {
+            p.results.iter().map(|(c, rms, pass)| MonteCarloRow {
+                plant: p.index,
+                stiffness: p.stiffness,
+                mass: p.mass,
+                alpha: p.alpha,
+                damping: p.damping,
+                coupling1: p.coupling[0],
+                coupling2: p.coupling[1],
+                delay: p.delay,
+                controller: c.name().to_string(),
+                rms1_nm: rms[0] * 1e9,
+                rms2_nm: rms[1] * 1e9,
+                pass: *pass,
+            })
+        })
+        .collect()
+}
+
+/// The sweep as `scan_frequency.csv` rows: one per point and controller.
+pub(crate) fn scan_rows(points: &[SweepPoint]) -> Vec<ScanRow> {
+    points
+        .iter()
+        .flat_map(|p| {
+            p.results.iter().map(|(c, rms, pct)| ScanRow {
+                fraction_of_f1: p.fraction,
+                fast_frequency_hz: p.frequency,
+                amplitude1_m: p.amplitude[0],
+                amplitude2_m: p.amplitude[1],
+                controller: c.name().to_string(),
+                rms1_nm: rms[0] * 1e9,
+                rms2_nm: rms[1] * 1e9,
+                rms1_pct_range: pct[0],
+                rms2_pct_range: pct[1],
+            })
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finding_names_are_the_verifications_serde_names() {
+        // Reference: flexstage-verify's `#[serde(rename_all = "snake_case")]`.
+        use flexstage_verify::{FindingKind, Severity};
+        for (k, name) in [
+            (FindingKind::Island, "island"),
+            (FindingKind::ThinLigament, "thin_ligament"),
+            (FindingKind::PocketTooSmall, "pocket_too_small"),
+        ] {
+            assert_eq!(snake(&format!("{k:?}")), name);
+            assert_eq!(serde_json::to_value(k).unwrap(), name);
+        }
+        assert_eq!(snake(&format!("{:?}", Severity::Error)), "error");
+    }
+}
