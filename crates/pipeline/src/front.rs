@@ -16,7 +16,7 @@
 //!   `track` designs them on that twin (`flexstage_assess::Bench`: the PI + notch and PID
 //!   tuned on the twin's sampled response, the backstepping from the exact modes' response
 //!   fit), including the scan speed the user names.
-//! * **Files** in `front/` ([`flexstage_report::layout::front`]): `front.csv`, `front.json`, the figure
+//! * **Files** in `front/` ([`flexstage_run::layout::front`]): `front.csv`, `front.json`, the figure
 //!   `front.svg` (workspace against first resonance, each design's tracking error at the named
 //!   scan speed in the legend), and per design `d<k>/`: `design.json` (a design source for the
 //!   other commands), `outline.svg`, `modes.vtu` and the lowest mode shapes as pictures.
