@@ -24,8 +24,9 @@
 use std::time::Instant;
 
 use flexstage_assess::sweep::{self, SweepParams};
-use flexstage_assess::{Bench, Candidate};
-use flexstage_control::experiment::{Setup, Variant};
+use flexstage_assess::Bench;
+use flexstage_control::experiment::Setup;
+use flexstage_control::registry::CONTROLLERS;
 use flexstage_control::tuning::TuningParams;
 use flexstage_figures::plot::{Figure, Legend, Series};
 use flexstage_run::Table;
@@ -394,13 +395,9 @@ fn assess_one(
         ));
         return Ok(());
     }
-    let candidates: Vec<Candidate> = Variant::ALL
-        .iter()
-        .map(|&v| crate::track::candidate(v))
-        .collect();
     let points = sweep::sweep(
         &bench,
-        &candidates,
+        &CONTROLLERS,
         amplitude,
         &SweepParams {
             fractions: vec![fraction],
@@ -412,7 +409,7 @@ fn assess_one(
             .results
             .iter()
             .map(|(c, rms, percent)| ScanError {
-                controller: c.name().into(),
+                controller: c.name.into(),
                 rms: *rms,
                 percent: *percent,
                 amplitude: p.amplitude,
