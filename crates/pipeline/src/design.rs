@@ -119,8 +119,37 @@ pub struct DesignSummary {
     pub constraints: Vec<(&'static str, f64)>,
     /// Load cases that needed a cutback retry, summed over iterations.
     pub retried_load_cases: usize,
+    /// What the scenario asked for and the design does not deliver (an unmet first-frequency
+    /// bound, [`unmet_bound`]).
+    pub warnings: Vec<String>,
     /// The stage folder.
     pub dir: PathBuf,
+}
+
+/// Relative shortfall of the first natural frequency below `optimization.min_frequency` at
+/// which the design is said not to meet its bound (the bound is on an aggregate that lies
+/// below the lowest eigenvalue, so a design that meets it has `f₁ ≥ f_min`).
+pub const BOUND_TOLERANCE: f64 = 0.01;
+
+/// A warning when the design's first natural frequency `design` stays more than
+/// [`BOUND_TOLERANCE`] below the scenario's `optimization.min_frequency` (the loop stopped
+/// with the resonance constraint violated, e.g. at `max_iterations`).
+pub fn unmet_bound(
+    s: &Scenario,
+    design: &flexstage_topopt::DesignSummary,
+    stop: StopReason,
+) -> Option<String> {
+    let bound = s.optimization.min_frequency;
+    let f = design.first_frequency_hz?;
+    (bound > 0.0 && f < (1.0 - BOUND_TOLERANCE) * bound).then(|| {
+        format!(
+            "the first-frequency bound is not met: optimization.min_frequency = {bound:.0} Hz, \
+             the design's first natural frequency is {f:.0} Hz ({:+.1} %; the loop stopped: \
+             {stop:?}); raise optimization.max_iterations, lower the bound, or continue from \
+             this design",
+            100.0 * (f / bound - 1.0)
+        )
+    })
 }
 
 /// Runs the design stage on the run's scenario.
@@ -344,6 +373,9 @@ fn finish(
             .zip(last.constraints.iter().copied())
             .collect(),
         retried_load_cases: h.iter().map(|r| r.retried_cases.len()).sum(),
+        warnings: unmet_bound(s, &analysis.summary, stop)
+            .into_iter()
+            .collect(),
         dir: run.path(files::DIR),
     };
     let file = DesignFile {

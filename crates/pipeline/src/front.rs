@@ -23,8 +23,8 @@
 
 use std::time::Instant;
 
-use flexstage_assess::sweep::{self, SweepParams};
 use flexstage_assess::Bench;
+use flexstage_assess::sweep::{self, SweepParams};
 use flexstage_control::experiment::Setup;
 use flexstage_control::registry::CONTROLLERS;
 use flexstage_control::tuning::TuningParams;
