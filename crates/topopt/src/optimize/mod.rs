@@ -23,14 +23,19 @@
 //! `f0 = −s_obj·τ` and one constraint `τ − Φ_r/|Φ⁰| ≤ 0` per realization. Before every MMA
 //! update the bound is set to its optimum for the current densities, the worst case
 //! `τ = min_r Φ_r/|Φ⁰|`, in the unit `T = 2τ` (ξ = ½), and MMA's history of ξ (previous
-//! iterates, asymptotes, bound multipliers) is expressed in that unit. The worst realization's
+//! iterates, asymptotes, bound multipliers) is expressed in that unit. The bound is kept at or
+//! above `BOUND_FLOOR` = 10⁻³ times the largest worst case so far (at least |Φ⁰|): a worst
+//! case at or below zero (a realization whose output polygon turns inside out, seen when the
+//! start is almost void) would give a unit of zero and rescale the history to infinity. Above
+//! the floor the worst realization's constraint is violated, and MMA restores it; the rescale
+//! stays within a factor 10³ per iteration. The worst realization's
 //! constraint is then active at the start of every subproblem, so the densities always see its
 //! gradient; a bound left behind by the move limit (the worst case grows ~50-fold from the
 //! uniform start) would leave them without any objective gradient. The volume bound acts on the dilated design, with
 //! its target `V*_d = V*·V_d/V_b` refreshed every `update_interval` iterations so that the
 //! blueprint meets `V*`; the fatigue stress acts on the eroded design, the strain energy, input
-//! strokes and tilt on the blueprint. The unit `T` takes either sign (never zero): the
-//! uniform start of the reversed configuration has a negative workspace.
+//! strokes and tilt on the blueprint. The floor also covers the uniform start of the reversed
+//! configuration, whose workspace (in its orientation, `sign · J`) is negative.
 //!
 //! **The stage's resonance** ([`crate::modal`], DECISIONS.md "Design for bandwidth"). A
 //! first-frequency bound is one constraint `1 − Λ_r/λ_min ≤ 0` for the eroded design and the
@@ -104,6 +109,10 @@ use crate::responses::{PerResponse, ResponseKind};
 /// Constraints below this value at the last design enter MMA with a zero gradient (module
 /// docs, "Inactive constraints").
 pub const INACTIVE_BELOW: f64 = -0.5;
+
+/// Floor of the robust bound τ, as a fraction of the largest worst case so far (module docs,
+/// "Objective and constraints"): a worst case at or below zero cannot set the bound's unit.
+pub const BOUND_FLOOR: f64 = 1e-3;
 
 /// One line of the history (CSV/JSON).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -494,7 +503,7 @@ impl<'p> Optimizer<'p> {
                 }
                 e => e,
             })?;
-        self.init_state(&ev);
+        self.init_state(&ev)?;
         let sc = self.scaled(&ev);
         if !sc.f0.is_finite() || sc.g.iter().any(|v| !v.is_finite()) {
             return Err(TopoptError::NonFinite {
@@ -540,7 +549,7 @@ impl<'p> Optimizer<'p> {
 
     /// Scales, the stress normalization, the volume target and the bound variable at the first
     /// iteration.
-    fn init_state(&mut self, ev: &Evaluation) {
+    fn init_state(&mut self, ev: &Evaluation) -> Result<()> {
         let problem = self.evaluator.problem;
         let bp = ev.blueprint();
         if self.scales.is_none() {
@@ -552,9 +561,11 @@ impl<'p> Optimizer<'p> {
                 1.0
             };
             let phi0 = bp.values[self.maximized()].abs().max(f64::MIN_POSITIVE);
-            // The bound starts at the worst case with ξ = ½ (a feasible start).
+            // The bound starts at the worst case with ξ = ½ (a feasible start), in a unit kept
+            // above the floor of the module docs ("Objective and constraints").
+            let worst = (self.worst(ev) / phi0).max(BOUND_FLOOR);
             let bound = if self.has_bound_variable() {
-                bound_unit(self.worst(ev) / phi0)
+                2.0 * worst
             } else {
                 0.0
             };
@@ -569,8 +580,15 @@ impl<'p> Optimizer<'p> {
                 self.x[n] = 0.5;
             }
         } else {
-            let worst = self.worst(ev) / self.scales.map_or(1.0, |s| s.objective);
-            self.reset_bound(worst);
+            let phi0 = self.scales.map_or(1.0, |s| s.objective);
+            // The largest worst case so far, in units of |Φ⁰| (at least 1, the start's scale).
+            let best = self
+                .history
+                .iter()
+                .map(|r| self.maximized_value(r.objective) / phi0)
+                .fold(1.0, f64::max);
+            let worst = self.worst(ev) / phi0;
+            self.reset_bound(worst.max(BOUND_FLOOR * best))?;
         }
         if problem.stress.is_some() && self.stress_norm.is_none() {
             self.stress_norm = Some(stress_ratio(ev.get(Realization::Eroded).unwrap_or(bp)));
@@ -582,6 +600,7 @@ impl<'p> Optimizer<'p> {
         ) {
             self.volume_target = Some(volume_target(vf, d, bp));
         }
+        Ok(())
     }
 
     /// Whether the MMA problem has the bound variable ξ of the robust formulation.
@@ -589,43 +608,52 @@ impl<'p> Optimizer<'p> {
         self.x.len() > self.evaluator.n()
     }
 
-    /// Sets the bound to the worst case of the current design, τ = min_r Φ_r/|Φ⁰| (its optimum
-    /// for the current densities), in the unit `T = 2τ` that puts ξ = ½, and expresses MMA's
-    /// history of ξ in the new unit (module docs).
-    fn reset_bound(&mut self, worst: f64) {
+    /// A history record's objective in the unit of the maximized response (the resonance
+    /// aggregate Λ = (2πf)² from the frequency the history records).
+    fn maximized_value(&self, objective: f64) -> f64 {
+        if maximizes_resonance(self.evaluator.problem) {
+            (2.0 * std::f64::consts::PI * objective).powi(2)
+        } else {
+            objective
+        }
+    }
+
+    /// Sets the bound to `tau`, the worst case of the current design τ = min_r Φ_r/|Φ⁰| (its
+    /// optimum for the current densities) kept above the floor of the module docs, in the unit
+    /// `T = 2τ` that puts ξ = ½, and expresses MMA's history of ξ in the new unit.
+    ///
+    /// # Errors
+    /// [`TopoptError::NonFinite`] if the rescaled history is not finite.
+    fn reset_bound(&mut self, tau: f64) -> Result<()> {
         let n = self.evaluator.n();
-        let Some(sc) = self.scales.as_mut().filter(|s| s.bound != 0.0) else {
-            return;
+        let Some(sc) = self.scales.as_mut().filter(|s| s.bound > 0.0) else {
+            return Ok(());
         };
-        let t_new = bound_unit(worst);
+        let t_new = 2.0 * tau;
         // Old ξ values in the new unit: ξ' = ξ·T/T'.
         let f = sc.bound / t_new;
         sc.bound = t_new;
         self.x[n] = 0.5;
         if self.mma.iteration() == 0 {
-            return;
+            return Ok(());
         }
         let mut st = self.mma.state();
-        if f > 0.0 {
-            for v in [&mut st.xold1, &mut st.xold2, &mut st.low, &mut st.upp] {
-                v[n] *= f;
-            }
-            st.xsi[n] /= f;
-            st.eta[n] /= f;
-        } else {
-            // The worst case changed sign (a reversed configuration starts with a negative
-            // workspace): the old unit has no meaning in the new one.
-            (st.xsi[n], st.eta[n]) = (0.0, 0.0);
+        for v in [&mut st.xold1, &mut st.xold2, &mut st.low, &mut st.upp] {
+            v[n] *= f;
         }
+        st.xsi[n] /= f;
+        st.eta[n] /= f;
         // The reset value must lie between the asymptotes; otherwise restart them there.
         if !(st.low[n] < 0.5 && 0.5 < st.upp[n]) {
             let d = self.params.mma.asyinit;
             (st.low[n], st.upp[n]) = (0.5 - d, 0.5 + d);
             (st.xold1[n], st.xold2[n]) = (0.5, 0.5);
         }
-        self.mma
-            .restore(&st)
-            .expect("a rescaled state of the same dimensions");
+        let iteration = self.iteration;
+        self.mma.restore(&st).map_err(|_| TopoptError::NonFinite {
+            what: "MMA history of the robust bound, rescaled to its new unit",
+            iteration,
+        })
     }
 
     /// The response the design maximizes: the workspace (or output displacement), or the
@@ -942,13 +970,6 @@ impl<'p> Optimizer<'p> {
 /// Whether the problem maximizes the stage's first natural frequency.
 fn maximizes_resonance(p: &Problem) -> bool {
     matches!(p.resonance, Some(Resonance::Maximize { .. }))
-}
-
-/// The unit `T = 2τ` of the bound variable that puts ξ = ½ at `τ` (either sign: a reversed
-/// configuration starts with a negative workspace; never zero).
-fn bound_unit(tau: f64) -> f64 {
-    let t = 2.0 * tau;
-    if t == 0.0 { f64::MIN_POSITIVE } else { t }
 }
 
 /// `max s / Σ_S` of a realization's stress response (1 when there is no stress).
