@@ -237,6 +237,7 @@ impl Command {
             Command::Pea { .. } => "pea",
             Command::Track(_) => "track",
             Command::Export(_) => "export",
+            Command::Front(_) => "front",
             Command::Run(_) => "run",
             Command::Report { .. } => "report",
         }
