@@ -6,9 +6,9 @@ use std::path::PathBuf;
 use clap::{Args, Subcommand};
 use flexstage_pipeline::names::{self, COMPENSATIONS, SCHEMES, SHAPES, UNITS, name, parse};
 use flexstage_pipeline::{
-    AnalyzeOptions, DesignOptions, DesignSource, DesignStart, ExportOptions, LimitOverrides,
-    PeaIdOptions, PeaOptions, ReduceOptions, RunFolder, Simulation, StageData, StageIdOptions,
-    TrackOptions, TwinOptions, VerifyParams,
+    AnalyzeOptions, DesignOptions, DesignSource, DesignStart, ExportOptions, FrontOptions,
+    LimitOverrides, PeaIdOptions, PeaOptions, ReduceOptions, RunFolder, Simulation, StageData,
+    StageIdOptions, TrackOptions, TwinOptions, VerifyParams,
 };
 
 /// The simulated actuators of `identify stage`: index 1 is the linear one.
@@ -527,5 +527,42 @@ pub fn track(a: TrackArgs) -> anyhow::Result<()> {
         &options,
         &Bars::default(),
     )?);
+    Ok(())
+}
+
+/// Arguments of `flexstage front`.
+#[derive(Debug, Args)]
+pub struct FrontArgs {
+    #[command(flatten)]
+    pub target: Target,
+    /// The scan speed you need: the fast component of a 3:1 Lissajous [Hz].
+    #[arg(long, default_value_t = FrontOptions::default().scan_hz)]
+    pub scan_hz: f64,
+    /// The tracking error you accept at that speed [% of range]; picks the design.
+    #[arg(long, default_value_t = FrontOptions::default().max_error_pct)]
+    pub max_error_pct: f64,
+    /// Designs on the front, the workspace design included.
+    #[arg(long, default_value_t = FrontOptions::default().designs)]
+    pub designs: usize,
+    /// The last design's first-frequency bound, as a multiple of the workspace design's.
+    #[arg(long, default_value_t = FrontOptions::default().max_ratio)]
+    pub max_ratio: f64,
+    /// Iterations of each continuation design (default: twice the β interval plus twice the
+    /// stagnation window).
+    #[arg(long)]
+    pub iterations: Option<usize>,
+}
+
+pub fn front(a: FrontArgs) -> anyhow::Result<()> {
+    let folder = a.target.open()?;
+    let options = FrontOptions {
+        designs: a.designs,
+        max_ratio: a.max_ratio,
+        scan_hz: a.scan_hz,
+        max_error_pct: a.max_error_pct,
+        iterations: a.iterations,
+    };
+    let summary = flexstage_pipeline::front(&folder, &options, &Bars::default())?;
+    print::summary(&summary);
     Ok(())
 }

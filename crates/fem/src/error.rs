@@ -130,6 +130,13 @@ pub enum SolverError {
         /// The offending curvature pᵀAp.
         curvature: f64,
     },
+    /// Springs taken off a factored stiffness leave it singular (a low-rank update whose
+    /// capacitance matrix cannot be inverted): the structure is no longer held.
+    #[error(
+        "the spring update leaves the stiffness singular: the springs taken off held the \
+         structure"
+    )]
+    SingularUpdate,
     /// A vector contained NaN/∞ (input or result).
     #[error("non-finite value in `{what}`")]
     NonFinite {

@@ -38,6 +38,9 @@
 //!
 //! ## Dynamics
 //!
+//! [`eigen`] is the one modal solver of the project: shift-invert Lanczos for the lowest
+//! eigenpairs of `K φ = λ M φ` on any operators (the design loop, the reduced model, the
+//! body-fitted verification and the twin all call it).
 //! [`mass`] assembles the consistent mass matrix in the tangent's own pattern, and
 //! [`transient`] integrates `M ü + C u̇ + R(u) = P(t)` with Newmark's average-acceleration rule
 //! or HHT-α, Newton iterations on the Total Lagrangian residual per step and Rayleigh damping:
@@ -77,6 +80,7 @@
 //! g.iter_mut().for_each(|x| *x = -*x);
 //! ```
 
+pub mod eigen;
 pub mod element;
 pub mod error;
 pub mod mass;
@@ -89,9 +93,13 @@ pub mod solver;
 pub mod stress;
 pub mod transient;
 
+pub use eigen::{EigenError, EigenOperators, Eigenpairs, Lanczos, LanczosParams, SpringUpdate};
 pub use element::{ElementCoefficients, ElementGeometry, ElementKernel};
 pub use error::{IterationRecord, NewtonError, ParamError, SolverError};
-pub use mass::{DofMass, consistent_mass, rigid_body_load};
+pub use mass::{
+    DofMass, MassInterpolation, consistent_mass, consistent_mass_forms, consistent_mass_into,
+    rigid_body_load,
+};
 pub use material::{AdditiveYeoh, Kinematics, Material, YeohUpdate};
 pub use mesh::{Edge, Mesh, Passive};
 pub use model::{

@@ -928,6 +928,31 @@ impl Model {
             });
     }
 
+    /// `out[e] = a_eᵀ (∂K₀/∂ρ_e) a_e` for the stiffness `K₀` at `u = 0` (springs do not depend
+    /// on ρ): the stiffness part of an eigenvalue sensitivity `φᵀ(∂K/∂ρ_e − λ ∂M/∂ρ_e)φ`. At
+    /// `u = 0` the total Lagrangian tangent is the small-strain stiffness (F = I, no stress, so no
+    /// geometric part; the additive material's tangent at zero strain is its linearization), so
+    /// both kinematics use the small-strain `∂r_e/∂ρ_e`. Entries of `a` at fixed DOFs must be
+    /// zero.
+    pub fn stiffness_drho_forms(&self, design: &Design, a: &[f64], out: &mut [f64]) {
+        self.check_sizes(design, a);
+        assert_eq!(out.len(), self.mesh.n_elements(), "out length");
+        let kernel = ElementKernel {
+            kinematics: Kinematics::Linear,
+            ..self.kernel
+        };
+        out.par_iter_mut()
+            .enumerate()
+            .with_min_len(CHUNK)
+            .for_each(|(e, o)| {
+                let c = self.coefficients(design, e);
+                let ae = self.element_displacement(e, a);
+                let mut dr = [0.0; 8];
+                kernel.drho(&c, &ae, &mut dr);
+                *o = ae.iter().zip(&dr).map(|(x, y)| x * y).sum();
+            });
+    }
+
     /// Element strain energies `W_e` (J) into `out`; returns the total (springs excluded).
     pub fn element_energies(&self, design: &Design, u: &[f64], out: &mut [f64]) -> f64 {
         self.check_sizes(design, u);

@@ -35,6 +35,7 @@ pub(crate) fn design_record(s: &DesignSummary) -> DesignRecord {
         guaranteed_gap: s.guaranteed_gap,
         mirror_asymmetry: s.mirror_asymmetry,
         first_frequency_hz: s.first_frequency_hz,
+        frequencies_hz: s.frequencies_hz.clone(),
         mechanism: s.mechanism.as_ref().map(mechanism_record),
     }
 }

@@ -21,7 +21,7 @@ use flexstage_topopt::check::{CheckSetup, check_gradients};
 use flexstage_topopt::summary::{FinalAnalysis, final_analysis};
 use flexstage_topopt::{
     AnalysisParams, CaseResults, DesignSpace, Evaluator, IterationRecord, Optimizer,
-    OptimizerParams, Problem, StopReason, density_csv, perimeter_walk, shoelace,
+    OptimizerParams, Problem, StopReason, density_csv, perimeter_walk,
 };
 
 use crate::convert::design_record;
@@ -126,10 +126,37 @@ pub struct DesignSummary {
     /// Load cases that needed a cutback retry, summed over iterations.
     pub retried_load_cases: usize,
     /// What the user must know about the result: each constraint violated by more than
-    /// [`INFEASIBLE_ABOVE`] at the last iteration.
+    /// [`INFEASIBLE_ABOVE`] at the last iteration, and a first-frequency bound the design
+    /// misses by more than [`BOUND_TOLERANCE`] ([`unmet_bound`], in Hz).
     pub warnings: Vec<String>,
     /// The stage folder.
     pub dir: PathBuf,
+}
+
+/// Relative shortfall of the first natural frequency below `optimization.min_frequency` at
+/// which the design is said not to meet its bound (the bound is on an aggregate that lies
+/// below the lowest eigenvalue, so a design that meets it has `f₁ ≥ f_min`).
+pub const BOUND_TOLERANCE: f64 = 0.01;
+
+/// A warning when the design's first natural frequency `design` stays more than
+/// [`BOUND_TOLERANCE`] below the scenario's `optimization.min_frequency` (the loop stopped
+/// with the resonance constraint violated, e.g. at `max_iterations`).
+pub fn unmet_bound(
+    s: &Scenario,
+    design: &flexstage_topopt::DesignSummary,
+    stop: StopReason,
+) -> Option<String> {
+    let bound = s.optimization.min_frequency;
+    let f = design.first_frequency_hz?;
+    (bound > 0.0 && f < (1.0 - BOUND_TOLERANCE) * bound).then(|| {
+        format!(
+            "the first-frequency bound is not met: optimization.min_frequency = {bound:.0} Hz, \
+             the design's first natural frequency is {f:.0} Hz ({:+.1} %; the loop stopped: \
+             {stop:?}); raise optimization.max_iterations, lower the bound, or continue from \
+             this design",
+            100.0 * (f / bound - 1.0)
+        )
+    })
 }
 
 /// Runs the design stage on the run's scenario.
@@ -339,8 +366,12 @@ fn iteration_message(names: &[&str], rec: &IterationRecord, input_square: f64) -
             rec.beta
         );
     }
+    let f1 = rec
+        .frequencies
+        .first()
+        .map_or(String::new(), |f| format!("  f1 {f:.0} Hz"));
     format!(
-        "J {:.0} µm² ({:.2} × input square)  {}  grey {:.2}  β {}",
+        "J {:.0} µm² ({:.2} × input square){f1}  {}  grey {:.2}  β {}",
         rec.area * 1e12,
         rec.area / input_square,
         g.join(" "),
@@ -349,20 +380,19 @@ fn iteration_message(names: &[&str], rec: &IterationRecord, input_square: f64) -
     )
 }
 
-/// The final analyses: the design's (every realization; flexstage-topopt's
-/// [`final_analysis`], with the first natural frequency added) and the uniform start design's
+/// The final analyses: the design's (every realization and the stage's natural frequencies;
+/// flexstage-topopt's [`final_analysis`]) and the uniform start design's
 /// (nonlinear, no additive material, the p_m workspace samples). Returns the final-analysis
 /// problem, the start design's response and the design's analysis.
 /// A general mechanism (`[[ports]]`) has its one load case with its own kinematics and no
 /// PEA-held modal analysis.
 fn final_analyses(s: &Scenario, opt: &Optimizer) -> Result<(Problem, CaseResults, FinalAnalysis)> {
     let (dens, _) = opt.last().expect("at least one iteration");
-    let mut fin = final_analysis(s, dens, opt.params().robust)?;
+    let fin = final_analysis(s, dens, opt.params().robust)?;
     let mechanism = Problem::is_mechanism(s);
     let mut problem = if mechanism {
         Problem::from_scenario(s, None)?
     } else {
-        fin.summary.first_frequency_hz = Some(first_frequency(s, &dens.physical)?);
         Problem::from_scenario(s, Some(Kinematics::TotalLagrangian))?
     };
     if !mechanism {
@@ -372,19 +402,6 @@ fn final_analyses(s: &Scenario, opt: &Optimizer) -> Result<(Problem, CaseResults
     problem.mesh().apply_passive(&mut rho0, problem.rho_min);
     let r0 = Evaluator::new(&problem, AnalysisParams::default())?.solve_cases(&rho0, None)?;
     Ok((problem, r0, fin))
-}
-
-/// The lowest natural frequency of the design: the mechanism held by the PEA springs, without
-/// the optimizer's output load or plate masses (flexstage-reduce's modal analysis).
-fn first_frequency(s: &Scenario, rho: &[f64]) -> Result<f64> {
-    let problem = flexstage_reduce::reduction_problem(s, false)?;
-    let params = flexstage_reduce::ModalParams {
-        modes: 1,
-        ..flexstage_reduce::ModalParams::default()
-    };
-    let modes =
-        flexstage_reduce::modal_analysis(&problem.model, rho, s.material.density, &[], &params)?;
-    Ok(modes.frequencies[0])
 }
 
 /// The final analysis and every result file of the design folder.
@@ -402,7 +419,6 @@ fn finish(
     let last = h.last().expect("at least one iteration");
     let rho = &opt.last().expect("at least one iteration").0.physical;
     let (fin, r0, analysis) = final_analyses(s, opt)?;
-    crate::error::require_area("design", analysis.summary.area)?;
     let (r, u) = (&analysis.response, &analysis.corner_displacement);
     let mesh = problem.mesh();
     let summary = DesignSummary {
@@ -411,7 +427,7 @@ fn finish(
         resumed_at,
         seconds,
         seconds_per_iteration: h.iter().map(|r| r.time).sum::<f64>() / h.len() as f64,
-        area_initial: shoelace(&r0.outputs),
+        area_initial: fin.workspace_area(&r0.outputs),
         area: analysis.summary.area,
         design: Box::new(analysis.summary.clone()),
         // The optimizer's own measure of the design it analysed last (= `rho`).
@@ -423,7 +439,10 @@ fn finish(
             .zip(last.constraints.iter().copied())
             .collect(),
         retried_load_cases: h.iter().map(|r| r.retried_cases.len()).sum(),
-        warnings: infeasible(&opt.constraint_names(), &last.constraints),
+        warnings: infeasible(&opt.constraint_names(), &last.constraints)
+            .into_iter()
+            .chain(unmet_bound(s, &analysis.summary, stop))
+            .collect(),
         dir: run.path(files::DIR),
     };
     let file = DesignFile {
@@ -459,6 +478,12 @@ fn finish(
         write_figures(run, h.len(), &r0.outputs, &r.outputs)?;
     }
     run.store(files::SUMMARY, summary_file(&summary))?;
+    // A design whose workspace is not a workspace keeps everything it computed, under a name
+    // no later stage reads, and the run stops saying why.
+    if let Err(e) = crate::error::require_area("design", summary.area) {
+        run.store(files::REJECTED, file)?;
+        return Err(e);
+    }
     // Last: the finished design marks the stage as done for the other commands.
     run.store(files::DESIGN, file)?;
     // The checkpoint served only to resume; a finished design is refused as a resume point.
@@ -535,7 +560,8 @@ type Column<'a> = (&'a str, &'a dyn Fn(&IterationRecord) -> f64);
 /// e.g. `g_volume` = V/V* − 1 of the volume constraint), `energy_J`, `stroke_ratio`,
 /// `volume_fraction` (the blueprint's material fraction of the design elements), `grey`
 /// (fraction with 0.1 < ρ < 0.9), `change`, `mean_change`, `kkt`, `beta`, `newton_total`,
-/// `newton_max`, `retried_cases`, `time_s`, `area_rel` (A / A at iteration 0).
+/// `newton_max`, `retried_cases`, `time_s`, `area_rel` (A / A at iteration 0), and with a
+/// resonance requirement `f1_hz`, `f2_hz`, … (the stage's lowest natural frequencies).
 fn history_table(names: &[&str], h: &[IterationRecord]) -> Table {
     let col = |f: &dyn Fn(&IterationRecord) -> f64| h.iter().map(f).collect::<Vec<f64>>();
     let mut header = vec!["iteration", "area_m2", "objective", "f0"];
@@ -568,6 +594,12 @@ fn history_table(names: &[&str], h: &[IterationRecord]) -> Table {
     for (n, f) in rest {
         header.push(n);
         cols.push(col(f));
+    }
+    let modes = h.iter().map(|r| r.frequencies.len()).max().unwrap_or(0);
+    let mode_headers: Vec<String> = (1..=modes).map(|k| format!("f{k}_hz")).collect();
+    for (k, n) in mode_headers.iter().enumerate() {
+        header.push(n);
+        cols.push(col(&|r| r.frequencies.get(k).copied().unwrap_or(f64::NAN)));
     }
     Table::new(&header, cols)
 }

@@ -226,10 +226,12 @@ pub(crate) fn require(
     })
 }
 
-/// `Ok` when the workspace `area` \[m²\] of `what` (e.g. `analyze`) is finite and ≥ 0, else
+/// `Ok` when the workspace `area` \[m²\] of `what` (e.g. `analyze`), in the configuration's
+/// orientation (`flexstage_topopt::Problem::workspace_area`), is finite and ≥ 0, else
 /// [`PipelineError::Unphysical`]. A NaN area comes from non-finite outputs (a singular
-/// structure); a negative one from an output polygon traversed backwards, i.e. a mechanism
-/// that inverts or mirrors the input square, or outputs dominated by round-off.
+/// structure); a negative one from an output polygon traversed against the configuration
+/// (Table 2): a mechanism that moves the output the other way than the configuration asks, or
+/// outputs dominated by round-off. Callers write what they computed first.
 pub(crate) fn require_area(what: &str, area: f64) -> Result<()> {
     if area.is_finite() && area >= 0.0 {
         return Ok(());
@@ -237,11 +239,12 @@ pub(crate) fn require_area(what: &str, area: f64) -> Result<()> {
     Err(PipelineError::Unphysical {
         what: format!("{what}: workspace area"),
         value: format!("{area:e} m²"),
-        expected: "a finite area ≥ 0",
-        hint: "the outputs of the stroke-square corners are not a workspace: check that the \
-               structure is held (`flexstage check` on the scenario: [[supports]], \
-               optimization.output_spring) and that the design connects the inputs to the \
-               output"
+        expected: "a finite area ≥ 0 in the configuration's orientation",
+        hint: "the outputs of the stroke-square corners do not trace a workspace the way \
+               actuators.configuration asks (Table 2; the files computed are written, a \
+               design's as design/rejected.json): check that the structure is held \
+               (`flexstage check` on the scenario: [[supports]], optimization.output_spring), \
+               that the design connects the inputs to the output, and the configuration"
             .into(),
     })
 }

@@ -2,6 +2,7 @@
 //! workspace polygons.
 
 use flexstage_fem::Design;
+use flexstage_figures::mode_shape;
 use flexstage_figures::plot::{Figure, Series};
 use flexstage_figures::vtk::{PointField, QuadMesh};
 use flexstage_run::files::design::POLYGON;
@@ -45,6 +46,64 @@ pub(crate) fn write_vtu(
     }
     .to_vtu()?;
     run.write(rel, vtu.as_bytes())?;
+    Ok(())
+}
+
+/// Width of the mode-shape pictures \[px\] (two per row of the report).
+const MODE_PNG_WIDTH: u32 = 640;
+
+/// Mode shapes of a design: a VTU for ParaView at `vtu` (one `mode_<k>_<f>Hz` point array per
+/// mode, scaled to a largest nodal displacement of 1, and the cell densities) and the lowest
+/// `pngs` as pictures at `png(k)` (k from 1; the solid cells drawn deformed).
+pub(crate) fn write_modes(
+    run: &RunDir,
+    vtu: &str,
+    png: impl Fn(usize) -> String,
+    pngs: usize,
+    mesh: &flexstage_fem::Mesh,
+    rho: &[f64],
+    (shapes, frequencies): (&[Vec<f64>], &[f64]),
+) -> Result<()> {
+    let points: Vec<[f64; 2]> = (0..mesh.n_nodes()).map(|n| mesh.node_coords(n)).collect();
+    let cells: Vec<[usize; 4]> = (0..mesh.n_elements())
+        .map(|e| mesh.element_nodes(e))
+        .collect();
+    let shapes: Vec<Vec<[f64; 2]>> = shapes
+        .iter()
+        .map(|phi| {
+            let mx = phi.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(1e-300);
+            (0..mesh.n_nodes())
+                .map(|n| [phi[2 * n] / mx, phi[2 * n + 1] / mx])
+                .collect()
+        })
+        .collect();
+    let names: Vec<String> = frequencies
+        .iter()
+        .enumerate()
+        .map(|(k, f)| format!("mode_{}_{:.0}Hz", k + 1, f))
+        .collect();
+    let text = QuadMesh {
+        points: &points,
+        cells: &cells,
+        point_data: names
+            .iter()
+            .zip(&shapes)
+            .map(|(n, s)| (n.as_str(), PointField::Vector2(s)))
+            .collect(),
+        cell_data: vec![("density", rho)],
+    }
+    .to_vtu()?;
+    run.write(vtu, text.as_bytes())?;
+    let picture = mode_shape::Mesh {
+        points: &points,
+        cells: &cells,
+        density: Some(rho),
+    };
+    for (k, shape) in shapes.iter().take(pngs).enumerate() {
+        if let Some(bytes) = mode_shape::png(&picture, shape, MODE_PNG_WIDTH) {
+            run.write(&png(k + 1), &bytes)?;
+        }
+    }
     Ok(())
 }
 

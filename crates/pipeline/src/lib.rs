@@ -57,6 +57,7 @@ pub mod error;
 pub mod export;
 mod figures;
 pub mod folder;
+pub mod front;
 pub mod lock;
 pub mod names;
 pub mod pea;
@@ -82,6 +83,7 @@ pub use design::{
 pub use error::{PipelineError, Result};
 pub use export::{ExportOptions, ExportSummary, LimitOverrides, export};
 pub use folder::{DEFAULT_PRESET, PRESETS, RunFolder, default_root, default_run, load_scenario};
+pub use front::{FrontDesign, FrontOptions, FrontSummary, front};
 pub use lock::{LockHolder, RunLock};
 pub use pea::{
     PeaIdOptions, PeaIdSummary, PeaOptions, PeaRecord, identify_pea, simulate_pea, write_pea_csv,

@@ -1,9 +1,7 @@
 //! The result files of `reduce` ([`flexstage_run::layout::reduce`]): the stage parameter
 //! file, the summary (TOML and JSON), the mode shapes (VTU and pictures) and the validity map.
 
-use flexstage_figures::mode_shape;
 use flexstage_figures::plot::{Figure, Series};
-use flexstage_figures::vtk::{PointField, QuadMesh};
 use flexstage_reduce::{MassLumping, ReduceParams, Reduction, ValidityMap, ValiditySample};
 use flexstage_run::files::reduce::{
     ModalSummary, ReduceSummaryFile, ReduceSummaryJson, ReduceSummaryToml, VERSION, ValiditySummary,
@@ -144,62 +142,24 @@ impl Outputs<'_> {
         let Some(m) = &self.reduction.modes else {
             return Ok(());
         };
-        let mesh = self.problem.mesh();
-        let points: Vec<[f64; 2]> = (0..mesh.n_nodes()).map(|n| mesh.node_coords(n)).collect();
-        let cells: Vec<[usize; 4]> = (0..mesh.n_elements())
-            .map(|e| mesh.element_nodes(e))
-            .collect();
-        let shapes: Vec<Vec<[f64; 2]>> = m
-            .shapes
-            .iter()
-            .map(|phi| {
-                let mx = phi.iter().fold(0.0f64, |a, v| a.max(v.abs())).max(1e-300);
-                (0..mesh.n_nodes())
-                    .map(|n| [phi[2 * n] / mx, phi[2 * n + 1] / mx])
-                    .collect()
-            })
-            .collect();
-        let names: Vec<String> = m
-            .frequencies
-            .iter()
-            .enumerate()
-            .map(|(k, f)| format!("mode_{}_{:.0}Hz", k + 1, f))
-            .collect();
-        let vtu = QuadMesh {
-            points: &points,
-            cells: &cells,
-            point_data: names
-                .iter()
-                .zip(&shapes)
-                .map(|(n, s)| (n.as_str(), PointField::Vector2(s)))
-                .collect(),
-            cell_data: vec![("density", self.rho)],
-        }
-        .to_vtu()?;
-        self.run.write(files::MODES_VTU, vtu.as_bytes())?;
+        crate::figures::write_modes(
+            self.run,
+            files::MODES_VTU,
+            files::mode_png,
+            files::MODE_PNGS,
+            self.problem.mesh(),
+            self.rho,
+            (&m.shapes, &m.frequencies),
+        )?;
         let k: Vec<f64> = (1..=m.frequencies.len()).map(|k| k as f64).collect();
         let table = Table::new(
             &["mode", "frequency_hz", "residual"],
             vec![k, m.frequencies.clone(), m.residuals.clone()],
         );
         self.run.store(files::MODES_CSV, table)?;
-        // The lowest mode shapes as pictures (the report's "Mode shapes").
-        let mesh = mode_shape::Mesh {
-            points: &points,
-            cells: &cells,
-            density: Some(self.rho),
-        };
-        for (k, shape) in shapes.iter().take(files::MODE_PNGS).enumerate() {
-            if let Some(png) = mode_shape::png(&mesh, shape, MODE_PNG_WIDTH) {
-                self.run.write(&files::mode_png(k + 1), &png)?;
-            }
-        }
         Ok(())
     }
 }
-
-/// Width of the mode-shape pictures \[px\] (two per row of the report).
-const MODE_PNG_WIDTH: u32 = 640;
 
 fn validity_summary(v: &ValidityMap) -> ValiditySummary {
     ValiditySummary {

@@ -130,6 +130,44 @@ impl Summary for ExportSummary {
     }
 }
 
+impl fmt::Display for crate::front::FrontSummary {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let front = &self.front;
+        writeln!(
+            f,
+            "workspace–first-resonance front: {} designs in {:.0} s",
+            front.designs.len(),
+            front.seconds
+        )?;
+        for d in &front.designs {
+            writeln!(f, "{}", crate::front::line(d, front.scan_hz))?;
+        }
+        match front.pick() {
+            Some(d) => writeln!(
+                f,
+                "pick d{}: the largest workspace ({:.0} µm²) verified safe that tracks a {:.0} Hz \
+                 scan within {} % of range",
+                d.index,
+                d.design.area * 1e12,
+                front.scan_hz,
+                front.max_error_pct
+            ),
+            None => writeln!(
+                f,
+                "no design is verified safe and tracks a {:.0} Hz scan within {} % of range: \
+                 raise --max-ratio, lower the scan speed or accept a larger error",
+                front.scan_hz, front.max_error_pct
+            ),
+        }
+    }
+}
+
+impl Summary for crate::front::FrontSummary {
+    fn written(&self) -> (Vec<&Path>, bool) {
+        (vec![self.dir.as_path()], false)
+    }
+}
+
 impl fmt::Display for ReduceSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let r = &self.reduction;

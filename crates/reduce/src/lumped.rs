@@ -2,7 +2,8 @@
 //! the [`StageParams`] format that the control stage reads (`flexstage track --params`).
 //!
 //! From the design (this crate): `K_qo1`, `K_qo2` (output stiffness with the inputs held,
-//! [`crate::Condensation::k_qo1`]), `M` ([`crate::design_mass`]) and `α` (the scalar
+//! [`crate::Condensation::k_qo1`]), `M` ([`crate::design_mass`], plus the payload
+//! `output.payload`, which moves with the output) and `α` (the scalar
 //! amplification `½(α21 − α22)`, [`crate::Condensation::alpha_scalar`]). Not from the design:
 //! `K_pea1 = K_pea2` = `scenario.actuators.stiffness`, the input plates `k_in`, `m_in` from
 //! `scenario.stage.guess` (Table 4), and the damping from `scenario.stage.damping_ratio`

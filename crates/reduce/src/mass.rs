@@ -7,18 +7,10 @@
 //! counted in proportion.
 //!
 //! # Mass interpolation for the modal analysis
-//! With SIMP stiffness `E ∝ ρ^p` (p = 3) and mass `∝ ρ`, the ratio `E/m ∝ ρ^{p−1}` vanishes in
-//! low-density regions, which then carry spurious, localized low-frequency modes (Pedersen 2000,
-//! Struct. Multidisc. Optim. 20:2–11). [`MassInterpolation`] removes them as Du & Olhoff (2007,
-//! Struct. Multidisc. Optim. 34:91–110) do:
-//!
-//! ```text
-//! m(ρ) = ρ                         ρ ≥ ρ_c
-//! m(ρ) = ρ_c (ρ/ρ_c)^q              ρ < ρ_c          (continuous at ρ_c)
-//! ```
-//!
-//! with `q > p` (default `ρ_c = 0.1`, `q = 6`), so `E/m → ∞` as `ρ → 0`: void and faint grey
-//! regions become massless and cannot resonate. Elements with `ρ ≥ ρ_c` keep their true mass.
+//! [`MassInterpolation`] (re-exported from `flexstage-fem`, where the design loop uses it too):
+//! Du & Olhoff's (2007) interpolation, `m = ρ` above `ρ_c = 0.1` and a C¹ polynomial
+//! `c₁ρ⁶ + c₂ρ⁷` below, so void and faint grey regions carry no mass and make no spurious
+//! local modes (Pedersen 2000).
 //!
 //! # Element mass matrices (rectangular Q4, thickness t)
 //! * consistent: `m_e/36 · [[4,2,1,2],[2,4,2,1],[1,2,4,2],[2,1,2,4]] ⊗ I₂` (counter-clockwise
@@ -27,9 +19,10 @@
 //!
 //! Point masses (e.g. the input plates `m_in`) add to both directions of a node.
 
+pub use flexstage_fem::MassInterpolation;
 use flexstage_fem::{DofMass, Mesh, Model, consistent_mass};
 
-use crate::error::{Result, check, within};
+use crate::error::{Result, check};
 
 /// `Σ_e ρ_e ρ0 V_e` \[kg\].
 pub fn design_mass(mesh: &Mesh, rho: &[f64], density: f64) -> f64 {
@@ -44,48 +37,6 @@ pub enum MassLumping {
     Consistent,
     /// Row-sum lumped (diagonal).
     Lumped,
-}
-
-/// The density → mass interpolation of the modal analysis (module docs).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct MassInterpolation {
-    /// Threshold `ρ_c`, in [0, 1] (0: plain `m = ρ`). Default 0.1.
-    pub cutoff: f64,
-    /// Exponent `q` below the threshold, in [1, 20]. Default 6.
-    pub exponent: f64,
-}
-
-impl Default for MassInterpolation {
-    fn default() -> Self {
-        Self {
-            cutoff: 0.1,
-            exponent: 6.0,
-        }
-    }
-}
-
-impl MassInterpolation {
-    /// Plain proportional mass `m = ρ`.
-    pub fn linear() -> Self {
-        Self {
-            cutoff: 0.0,
-            exponent: 1.0,
-        }
-    }
-    /// Checks the fields.
-    pub fn validate(&self) -> Result<()> {
-        within("MassInterpolation::cutoff", self.cutoff, 0.0, 1.0)?;
-        within("MassInterpolation::exponent", self.exponent, 1.0, 20.0)
-    }
-    /// Relative mass `m(ρ)`.
-    #[inline]
-    pub fn relative_mass(&self, rho: f64) -> f64 {
-        if rho >= self.cutoff || self.cutoff == 0.0 {
-            rho
-        } else {
-            self.cutoff * (rho / self.cutoff).powf(self.exponent)
-        }
-    }
 }
 
 /// A point mass on a node (both directions).

@@ -3,20 +3,16 @@
 //!
 //! `K` is the model's stiffness at the undeformed state (material stiffness, supports and
 //! grounded springs — the PEAs hold the stage, Eq. 2–3) and `M` the mass matrix of
-//! [`crate::mass`]. The solver is **shift-invert Lanczos** (σ = 0) on `K⁻¹M`, self-adjoint in
-//! the `M` inner product: every step is one solve with the sparse Cholesky factor of `K`
-//! (faer low-level API through [`flexstage_fem::Factor`], factored once) and one `M` mat-vec;
-//! the Lanczos basis is fully reorthogonalized (twice, classical Gram–Schmidt in the `M` inner
-//! product), which is cheap for the few modes needed. The eigenvalues `θ = 1/ω²` of the
-//! tridiagonal matrix come from nalgebra's symmetric QR algorithm
-//! ([`flexstage_numerics::dense::symmetric_eigen`]). A Ritz pair is accepted when the
-//! Lanczos residual bound `|β_j s_ji| ≤ tol·θ_i`; the reported residual
-//! `‖Kφ − ω²Mφ‖/‖Kφ‖` is recomputed from the mode shape. `M` may be singular (massless void
-//! nodes): the start vector is taken in the range of `K⁻¹M`, so infinite eigenvalues stay out.
+//! [`crate::mass`]. The solver is the project's one modal solver,
+//! [`flexstage_fem::eigen`] (shift-invert Lanczos with the sparse Cholesky factor of `K`,
+//! factored once); this module only assembles the design's operators and returns full-length
+//! mode shapes. `M` may be singular (massless void nodes): the solver keeps the infinite
+//! eigenvalues out.
 
-use flexstage_fem::{Design, Factor, Model, SolveWorkspace, SparseMatrix, SymbolicFactor};
-use flexstage_numerics::dense::{dot, symmetric_eigen};
-use flexstage_numerics::noise::SplitMix64;
+use flexstage_fem::{
+    Design, EigenError, EigenOperators, Factor, Lanczos, LanczosParams, Model, SolveWorkspace,
+    SolverError, SparseMatrix, SymbolicFactor,
+};
 
 use crate::error::{ReduceError, Result, count, within};
 use crate::mass::{MassInterpolation, MassLumping, MassMatrix, PointMass};
@@ -58,7 +54,7 @@ impl ModalParams {
         count("ModalParams::modes", self.modes, 1, 50)?;
         within("ModalParams::tolerance", self.tolerance, 1e-14, 1e-3)?;
         count("ModalParams::max_steps", self.max_steps, 10, 5000)?;
-        self.interpolation.validate()
+        Ok(self.interpolation.validate()?)
     }
 }
 
@@ -99,22 +95,65 @@ pub fn modal_analysis(
         params.lumping,
         point_masses,
     )?;
-    let mut stiffness = Stiffness::factor(model, &design)?;
-    let nev = params.modes.min(mass.n());
-    let mut lanczos = Lanczos::start(&mass, &mut stiffness, params.seed)?;
-    let ritz = lanczos.run(&mass, &mut stiffness, nev, params)?;
-    Ok(lanczos.modes(model, &mass, &stiffness.k, &ritz, nev))
+    let mut op = Operators::factor(model, &design, &mass)?;
+    let pairs = Lanczos::new()
+        .solve(
+            &mut op,
+            &LanczosParams {
+                modes: params.modes,
+                tolerance: params.tolerance,
+                max_steps: params.max_steps,
+                seed: params.seed,
+                ..LanczosParams::default()
+            },
+        )
+        .map_err(|e| match e {
+            EigenError::NotConverged {
+                wanted,
+                converged,
+                steps,
+            } => ReduceError::Eigen {
+                wanted,
+                converged,
+                steps,
+            },
+            EigenError::Solver(e) => e.into(),
+            EigenError::Params(e) => e.into(),
+            EigenError::ZeroMass => {
+                ReduceError::Input("the mass matrix is zero on the free DOFs".into())
+            }
+        })?;
+    let frequencies = pairs.frequencies();
+    let shapes = pairs
+        .vectors
+        .iter()
+        .map(|phi| {
+            let mut full = model.zero_vector();
+            model.dofs().scatter(phi, &mut full);
+            full
+        })
+        .collect();
+    Ok(Modes {
+        omega2: pairs.values,
+        frequencies,
+        shapes,
+        residuals: pairs.residuals,
+        steps: pairs.steps,
+        total_mass: mass.total_mass(),
+    })
 }
 
-/// K at the undeformed state and its sparse Cholesky factor: `K⁻¹` is applied by solves.
-struct Stiffness {
+/// The design's operators: `K` at the undeformed state with its sparse Cholesky factor (`K⁻¹`
+/// is applied by solves) and the mass matrix.
+struct Operators<'a> {
     k: SparseMatrix,
     factor: Factor,
     workspace: SolveWorkspace,
+    mass: &'a MassMatrix,
 }
 
-impl Stiffness {
-    fn factor(model: &Model, design: &Design) -> Result<Self> {
+impl<'a> Operators<'a> {
+    fn factor(model: &Model, design: &Design, mass: &'a MassMatrix) -> Result<Self> {
         let mut k = model.new_matrix();
         let zero = model.zero_vector();
         let mut aws = model.new_workspace();
@@ -128,222 +167,22 @@ impl Stiffness {
             k,
             factor,
             workspace,
+            mass,
         })
     }
-
-    /// `w ← K⁻¹ w`.
-    fn solve(&mut self, w: &mut [f64]) -> Result<()> {
-        self.factor.solve_in_place(w, &mut self.workspace)?;
-        Ok(())
-    }
 }
 
-/// The converged Ritz values `θ = 1/ω²` and vectors `s` (row-major `m × m`, column `i` for
-/// `θ_i`) of the `m`-step Lanczos tridiagonal matrix.
-struct Ritz {
-    theta: Vec<f64>,
-    s: Vec<f64>,
-    m: usize,
-}
-
-impl Ritz {
-    /// Indices of the Ritz values, largest θ (lowest ω) first.
-    fn order(&self) -> Vec<usize> {
-        let mut order: Vec<usize> = (0..self.m).collect();
-        order.sort_by(|&x, &y| self.theta[y].total_cmp(&self.theta[x]));
-        order
+impl EigenOperators for Operators<'_> {
+    fn n(&self) -> usize {
+        self.mass.n()
     }
-}
-
-/// The M-orthonormal Lanczos basis `q` (and `M q`) of `K⁻¹M` with the tridiagonal
-/// coefficients α (diagonal) and β (off-diagonal).
-struct Lanczos {
-    q: Vec<Vec<f64>>,
-    mq: Vec<Vec<f64>>,
-    alphas: Vec<f64>,
-    betas: Vec<f64>,
-    /// Scratch: the next vector and `M` times it.
-    w: Vec<f64>,
-    mw: Vec<f64>,
-}
-
-impl Lanczos {
-    /// The first basis vector `q₀ ∝ K⁻¹M r₀` (in the range of `K⁻¹M`, so that the infinite
-    /// eigenvalues of a singular `M` stay out), `r₀` pseudo-random from `seed`.
-    fn start(mass: &MassMatrix, stiffness: &mut Stiffness, seed: u64) -> Result<Self> {
-        let n = mass.n();
-        let mut rng = SplitMix64::new(seed ^ 0x5DEE_CE66);
-        let r0: Vec<f64> = (0..n).map(|_| rng.next_f64() - 0.5).collect();
-        let mut w = vec![0.0; n];
-        mass.matvec(&r0, &mut w);
-        stiffness.solve(&mut w)?;
-        let mut mw = vec![0.0; n];
-        mass.matvec(&w, &mut mw);
-        let b0 = dot(&w, &mw).sqrt();
-        if b0.is_nan() || b0 <= 0.0 {
-            return Err(ReduceError::Input(
-                "the mass matrix is zero on the free DOFs".into(),
-            ));
-        }
-        Ok(Self {
-            q: vec![w.iter().map(|x| x / b0).collect()],
-            mq: vec![mw.iter().map(|x| x / b0).collect()],
-            alphas: Vec::new(),
-            betas: Vec::new(),
-            w,
-            mw,
-        })
+    fn solve(&mut self, x: &mut [f64]) -> std::result::Result<(), SolverError> {
+        self.factor.solve_in_place(x, &mut self.workspace)
     }
-
-    /// Lanczos steps until the `nev` largest Ritz values pass the residual bound
-    /// `|β_j s_ji| ≤ tol·θ_i` (checked every 5 steps), the Krylov space is exhausted or
-    /// `max_steps` is reached.
-    fn run(
-        &mut self,
-        mass: &MassMatrix,
-        stiffness: &mut Stiffness,
-        nev: usize,
-        params: &ModalParams,
-    ) -> Result<Ritz> {
-        let max_steps = params.max_steps.min(mass.n());
-        let mut n_conv = 0;
-        for j in 0..max_steps {
-            let (a, b) = self.step(j, mass, stiffness)?;
-            let m = j + 1;
-            let exhausted = b <= 1e-14 * a.abs();
-            if m >= nev && (m % 5 == 0 || m == max_steps || exhausted) {
-                let ritz = self.ritz(m);
-                n_conv = ritz.order()[..nev]
-                    .iter()
-                    .filter(|&&i| {
-                        (b * ritz.s[(m - 1) * m + i]).abs()
-                            <= params.tolerance * ritz.theta[i].abs()
-                    })
-                    .count();
-                if n_conv == nev || exhausted || m == max_steps {
-                    if n_conv < nev {
-                        break;
-                    }
-                    return Ok(ritz);
-                }
-            }
-            if b <= 0.0 {
-                break;
-            }
-            self.extend(b);
-        }
-        Err(ReduceError::Eigen {
-            wanted: nev,
-            converged: n_conv,
-            steps: self.alphas.len(),
-        })
+    fn mass(&self, x: &[f64], y: &mut [f64]) {
+        self.mass.matvec(x, y);
     }
-
-    /// Step `j`: `w = K⁻¹M q_j − α_j q_j − β_{j−1} q_{j−1}`, fully reorthogonalized (twice,
-    /// classical Gram–Schmidt in the M inner product); returns α_j and β_j = ‖w‖_M.
-    fn step(
-        &mut self,
-        j: usize,
-        mass: &MassMatrix,
-        stiffness: &mut Stiffness,
-    ) -> Result<(f64, f64)> {
-        let w = &mut self.w;
-        w.copy_from_slice(&self.mq[j]);
-        stiffness.solve(w)?;
-        let a = dot(&self.mq[j], w);
-        self.alphas.push(a);
-        for (wi, qi) in w.iter_mut().zip(&self.q[j]) {
-            *wi -= a * qi;
-        }
-        if j > 0 {
-            let b = self.betas[j - 1];
-            for (wi, qi) in w.iter_mut().zip(&self.q[j - 1]) {
-                *wi -= b * qi;
-            }
-        }
-        for _ in 0..2 {
-            for (qi, mqi) in self.q.iter().zip(&self.mq) {
-                let c = dot(mqi, w);
-                for (wk, qk) in w.iter_mut().zip(qi) {
-                    *wk -= c * qk;
-                }
-            }
-        }
-        mass.matvec(w, &mut self.mw);
-        Ok((a, dot(w, &self.mw).max(0.0).sqrt()))
-    }
-
-    /// Appends `q_{j+1} = w/β_j` (and `M q_{j+1}`).
-    fn extend(&mut self, b: f64) {
-        self.betas.push(b);
-        self.q.push(self.w.iter().map(|x| x / b).collect());
-        self.mq.push(self.mw.iter().map(|x| x / b).collect());
-    }
-
-    /// Eigen-decomposition of the leading `m × m` tridiagonal matrix.
-    fn ritz(&self, m: usize) -> Ritz {
-        let mut t = vec![0.0; m * m];
-        for i in 0..m {
-            t[i * m + i] = self.alphas[i];
-            if i + 1 < m {
-                t[i * m + i + 1] = self.betas[i];
-                t[(i + 1) * m + i] = self.betas[i];
-            }
-        }
-        let (theta, s) = symmetric_eigen(&t, m);
-        Ritz { theta, s, m }
-    }
-
-    /// The `nev` lowest modes from the Ritz pairs: `φ = Q s` normalized to `φᵀMφ = 1`,
-    /// `ω² = 1/θ`, and the residual `‖Kφ − ω²Mφ‖/‖Kφ‖` recomputed from the shape.
-    fn modes(
-        &mut self,
-        model: &Model,
-        mass: &MassMatrix,
-        k: &SparseMatrix,
-        ritz: &Ritz,
-        nev: usize,
-    ) -> Modes {
-        let (n, m) = (mass.n(), ritz.m);
-        let mut out = Modes {
-            omega2: Vec::new(),
-            frequencies: Vec::new(),
-            shapes: Vec::new(),
-            residuals: Vec::new(),
-            steps: m,
-            total_mass: mass.total_mass(),
-        };
-        let mw = &mut self.mw;
-        let mut kphi = vec![0.0; n];
-        for &i in &ritz.order()[..nev] {
-            let mut phi = vec![0.0; n];
-            for (jj, qj) in self.q.iter().take(m).enumerate() {
-                let c = ritz.s[jj * m + i];
-                for (p, qv) in phi.iter_mut().zip(qj) {
-                    *p += c * qv;
-                }
-            }
-            mass.matvec(&phi, mw);
-            let nrm = dot(&phi, mw).sqrt();
-            phi.iter_mut().for_each(|x| *x /= nrm);
-            mw.iter_mut().for_each(|x| *x /= nrm);
-            let om2 = 1.0 / ritz.theta[i];
-            k.matvec(&phi, &mut kphi);
-            let res = kphi
-                .iter()
-                .zip(mw.iter())
-                .map(|(a, b)| (a - om2 * b).powi(2))
-                .sum::<f64>()
-                .sqrt()
-                / dot(&kphi, &kphi).sqrt();
-            let mut full = model.zero_vector();
-            model.dofs().scatter(&phi, &mut full);
-            out.omega2.push(om2);
-            out.frequencies
-                .push(om2.sqrt() / (2.0 * std::f64::consts::PI));
-            out.shapes.push(full);
-            out.residuals.push(res);
-        }
-        out
+    fn stiffness(&self, x: &[f64], y: &mut [f64]) {
+        self.k.matvec(x, y);
     }
 }

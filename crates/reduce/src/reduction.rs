@@ -37,8 +37,8 @@ pub struct ReduceParams {
     pub operating_point: Option<[f64; 2]>,
     /// Modal analysis (`None`: skipped).
     pub modal: Option<ModalParams>,
-    /// Put the input-plate masses `m_in` (scenario `stage.guess`) on the input nodes in the
-    /// modal analysis (the assembled stage). Default true.
+    /// Put the input-plate masses `m_in` (scenario `stage.guess`) on the input nodes and the
+    /// payload on the output node in the modal analysis (the assembled stage). Default true.
     pub plate_masses: bool,
     /// Assumption 2 holds when the first natural frequency is at least this multiple of the
     /// highest input frequency, in [1, 1e6]. Default 10.
@@ -136,7 +136,7 @@ pub struct Reduction {
     pub operating_point: Option<[f64; 2]>,
     /// FE output displacement at the operating point \[m\] (zero when undeformed).
     pub operating_output: [f64; 2],
-    /// Mass `M` \[kg\].
+    /// Mass `M` of the design's material \[kg\] (the parameter set adds the payload).
     pub mass: f64,
     /// Volume fraction `Σρ/N`.
     pub volume_fraction: f64,
@@ -197,11 +197,12 @@ pub fn reduce(
     let condensation = condenser.condense(model, &design, u0.as_deref())?;
     let mass = design_mass(model.mesh(), rho, scenario.material.density);
     let volume_fraction = rho.iter().sum::<f64>() / rho.len() as f64;
+    // The payload moves with the output: it adds to the moving mass M of Eq. 31–32.
     let stage = stage_params(
         scenario,
         condensation.k_qo1(),
         condensation.k_qo2(),
-        mass,
+        mass + scenario.output.payload,
         condensation.alpha_scalar(),
     )?;
     let modes = match &params.modal {
@@ -256,10 +257,11 @@ pub fn reduce(
     })
 }
 
-/// The PEA input plates as point masses on the input nodes (`m_in1`, `m_in2` of the
-/// scenario's model guess, Eq. 1–3), for the modal analysis of the design with its actuators.
+/// The stage's point masses: the PEA input plates on the input nodes (`m_in1`, `m_in2` of the
+/// scenario's model guess, Eq. 1–3) and the payload on the output node (`output.payload`,
+/// when it is not zero), for the modal analysis of the design with its actuators.
 pub fn plate_masses(problem: &Problem, scenario: &Scenario) -> Vec<PointMass> {
-    problem
+    let mut out: Vec<PointMass> = problem
         .inputs
         .iter()
         .zip([scenario.stage.guess.m_in1, scenario.stage.guess.m_in2])
@@ -267,5 +269,12 @@ pub fn plate_masses(problem: &Problem, scenario: &Scenario) -> Vec<PointMass> {
             node: p.node,
             mass: m,
         })
-        .collect()
+        .collect();
+    if scenario.output.payload > 0.0 {
+        out.push(PointMass {
+            node: problem.output,
+            mass: scenario.output.payload,
+        });
+    }
+    out
 }

@@ -17,6 +17,7 @@
 //! reduce/     params.toml summary.{toml,json} modes.{vtu,csv} mode<K>.png
 //!             validity{,_scale}.{csv,svg}
 //! twin/       modes.csv bode.csv bode_{magnitude,phase}.svg validity.json
+//! front/      front.{json,csv,svg} d<K>/{design.json, outline.svg, modes.vtu, mode<M>.png}
 //! pea/        pea<N>.csv pea<N>_loop.svg
 //! identify/pea<N>/   estimates.toml convergence.{csv,svg} loop.{csv,svg} compensation.{csv,svg}
 //! identify/stage/    params.toml table.csv convergence.{csv,svg} record.csv
@@ -51,6 +52,9 @@ pub mod design {
     pub const DIR: &str = "design";
     /// The finished design (`flexstage_topopt::DesignFile`).
     pub const DESIGN: &str = "design/design.json";
+    /// A finished design refused by the final checks (e.g. a workspace running the wrong
+    /// way), kept for inspection: no later stage reads it.
+    pub const REJECTED: &str = "design/rejected.json";
     /// The optimizer checkpoint of an unfinished design.
     pub const CHECKPOINT: &str = "design/checkpoint.bin";
     /// Densities as CSV (`i,j,x,y,rho`).
@@ -90,6 +94,41 @@ pub mod design {
             .strip_suffix(".csv")?
             .parse()
             .ok()
+    }
+}
+
+/// `front/`: the workspace–first-resonance front of the scenario (`flexstage front`).
+pub mod front {
+    /// The stage folder.
+    pub const DIR: &str = "front";
+    /// Every design with its checks ([`crate::files::front::FrontFile`]).
+    pub const JSON: &str = "front/front.json";
+    /// One row per design.
+    pub const CSV: &str = "front/front.csv";
+    /// Figure: workspace against first resonance, the tracking error at the scan speed.
+    pub const SVG: &str = "front/front.svg";
+
+    /// The design file of design `k` (a design source for the other commands).
+    pub fn design(k: usize) -> String {
+        format!("{DIR}/d{k}/design.json")
+    }
+
+    /// The exported outline of design `k` (SVG, millimetres).
+    pub fn outline(k: usize) -> String {
+        format!("{DIR}/d{k}/outline.svg")
+    }
+
+    /// The stage's mode shapes of design `k` (VTU).
+    pub fn modes(k: usize) -> String {
+        format!("{DIR}/d{k}/modes.vtu")
+    }
+
+    /// Mode shapes of each design drawn as pictures.
+    pub const MODE_PNGS: usize = 2;
+
+    /// The picture of mode `m` (from 1) of design `k`.
+    pub fn mode_png(k: usize, m: usize) -> String {
+        format!("{DIR}/d{k}/mode{m}.png")
     }
 }
 

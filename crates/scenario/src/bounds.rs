@@ -149,7 +149,7 @@ impl DesignEstimate {
         let factor_nonzeros = 8.0 * dofs * dofs.log2().max(1.0);
         let o = &s.optimization;
         let samples = match o.objective {
-            ObjectiveKind::Workspace => o.samples as f64,
+            ObjectiveKind::Workspace | ObjectiveKind::Resonance => o.samples as f64,
             ObjectiveKind::Displacement => 1.0,
         };
         let robust = Self::robust(s);
@@ -177,9 +177,16 @@ impl DesignEstimate {
             Self::sets(s) * (per_set + samples * per_case) + 12.0 * filter_entries + RUNTIME_BYTES;
         let factor = factor_nonzeros.powf(1.5) / dofs;
         let iterations = o.max_iterations.max(1) as f64;
+        // The stage's eigen-analysis: up to the Lanczos limit of 400 solves per iteration.
+        let eigen_solves = if o.min_frequency > 0.0 || o.objective == ObjectiveKind::Resonance {
+            400.0
+        } else {
+            0.0
+        };
         let flops = iterations * load_cases * 3.0 * (factor + 4.0 * factor_nonzeros)
             + ne * window
-            + iterations * realizations * 4.0 * filter_entries;
+            + iterations * realizations * 4.0 * filter_entries
+            + iterations * eigen_solves * 4.0 * factor_nonzeros;
         DesignEstimate {
             dofs,
             factor_nonzeros,

@@ -267,6 +267,11 @@ pub struct Output {
         deserialize_with = "crate::strict::option_array"
     )]
     pub direction: Option<[f64; 2]>,
+    /// Payload carried by the output port \[kg\], in [0, 10]: the sample holder or mirror the
+    /// stage moves, a point mass on the output node. It enters the stage's eigenproblem in the
+    /// design, the reduced model, the body-fitted verification and the twin. Default 0.
+    #[serde(default)]
+    pub payload: f64,
 }
 
 impl Output {
@@ -274,6 +279,7 @@ impl Output {
     pub fn validate(&self, mesh: &Mesh) -> Result<()> {
         self.at.validate("output.at", mesh)?;
         within("output.tilt_deg", self.tilt_deg, -89.0, 89.0)?;
+        within("output.payload", self.payload, 0.0, 10.0)?;
         if let Some(d) = self.direction {
             direction("output.direction", d, false)?;
         }
@@ -492,6 +498,22 @@ pub struct Optimization {
     /// (DECISIONS.md, "Stress constraint"). Default true.
     #[serde(default = "default_true")]
     pub stress_constraint: bool,
+    /// Lower bound on the stage's first natural frequency \[Hz\], in [0, 1e6]; 0 = none. With
+    /// `objective = "workspace"` the design maximizes the workspace subject to it (the stage's
+    /// eigenproblem: design, PEA springs and plates, rollers, `output.payload`; DECISIONS.md,
+    /// "Design for bandwidth"). Default 0.
+    #[serde(default)]
+    pub min_frequency: f64,
+    /// Lower bound on the volume fraction of the design domain (the material the made design
+    /// keeps), in [0, volume_fraction); 0 = none. A stiffer-per-mass design tends to shed
+    /// material; this keeps its mass near the budget (e.g. 0.215: within 10 % of the paper's
+    /// 46 g). Default 0.
+    #[serde(default)]
+    pub min_volume_fraction: f64,
+    /// Lower bound on the workspace area \[m²\] with `objective = "resonance"`, in (0, 1]
+    /// (the worst of the robust realizations must reach it); unused otherwise (0). Default 0.
+    #[serde(default)]
+    pub min_workspace: f64,
     /// Heaviside projection with β continuation (DECISIONS.md filtering).
     pub projection: Projection,
     /// Additive Yeoh hyperelasticity in low-density elements (Appendix A, Eq. A2–A4).
@@ -518,6 +540,9 @@ pub enum ObjectiveKind {
     /// axis): for the two PEAs under the compressive input (PEA1 +a, PEA2 −a), for
     /// `[[ports]]` under their loads; with the output spring.
     Displacement,
+    /// Maximize the stage's first natural frequency subject to the workspace area bound
+    /// `min_workspace` (DECISIONS.md, "Design for bandwidth").
+    Resonance,
 }
 
 /// Smoothed Heaviside projection `ρ̄ = (tanh βη + tanh β(ρ̃−η)) / (tanh βη + tanh β(1−η))`
@@ -594,6 +619,33 @@ impl Optimization {
             "a number in (0, 1)",
         )?;
         non_negative("optimization.output_spring", self.output_spring)?;
+        within("optimization.min_frequency", self.min_frequency, 0.0, 1e6)?;
+        within("optimization.min_workspace", self.min_workspace, 0.0, 1.0)?;
+        check(
+            "optimization.min_volume_fraction",
+            self.min_volume_fraction,
+            self.min_volume_fraction >= 0.0
+                && (self.min_volume_fraction == 0.0
+                    || self.min_volume_fraction < self.volume_fraction),
+            "a number in [0, volume_fraction), 0 = none",
+        )?;
+        if self.objective == ObjectiveKind::Resonance && self.min_workspace <= 0.0 {
+            return Err(ScenarioError::Inconsistent {
+                fields: "optimization.objective, optimization.min_workspace".into(),
+                reason: "objective = \"resonance\" maximizes the first natural frequency \
+                         subject to a workspace bound: set min_workspace > 0 [m²] (e.g. 2e-9 \
+                         = 2000 µm²)"
+                    .into(),
+            });
+        }
+        if self.min_frequency > 0.0 && self.objective != ObjectiveKind::Workspace {
+            return Err(ScenarioError::Inconsistent {
+                fields: "optimization.min_frequency, optimization.objective".into(),
+                reason: "a first-frequency bound goes with objective = \"workspace\" (with \
+                         \"resonance\" the frequency is maximized): set min_frequency = 0"
+                    .into(),
+            });
+        }
         non_negative("optimization.strain_energy_limit", self.strain_energy_limit)?;
         check(
             "optimization.tilt_tolerance_deg",

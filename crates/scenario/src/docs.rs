@@ -149,6 +149,10 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
         "output.tilt_deg",
         "Tilt θ of the target output frame [deg], in [-89, 89] (Figure 4b, Eq. 22). 0: normal setup.",
     ),
+    (
+        "output.payload",
+        "Payload the output carries [kg], in [0, 10]: the sample holder or mirror, a point mass on the output node. It lowers the stage's resonances in the design, the reduced model, the verification and the twin. Default 0.",
+    ),
     ("output.at", "The output node."),
     (
         "output.at.kind",
@@ -220,7 +224,19 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.objective",
-        "\"workspace\": maximize the output polygon area (Eq. 4-5); \"displacement\": maximize one output displacement (inverter).",
+        "\"workspace\": maximize the output polygon area (Eq. 4-5), subject to min_frequency if > 0; \"resonance\": maximize the stage's first natural frequency subject to min_workspace; \"displacement\": maximize one output displacement (inverter).",
+    ),
+    (
+        "optimization.min_frequency",
+        "Lower bound on the stage's first natural frequency [Hz], in [0, 1e6]; 0 = none. The stage: the design with the PEA springs and input plates (stage.guess), the rollers and output.payload, linearized at rest (DECISIONS.md, Design for bandwidth). Default 0.",
+    ),
+    (
+        "optimization.min_volume_fraction",
+        "Lower bound on the volume fraction the made design keeps, in [0, volume_fraction); 0 = none. A design for a higher resonance tends to shed material; 0.215 keeps it within 10 % of the paper's 46 g. Default 0.",
+    ),
+    (
+        "optimization.min_workspace",
+        "Lower bound on the workspace area [m²] when objective = \"resonance\", in (0, 1] (the worst robust realization must reach it; the paper preset's default design has about 4.1e-9); 0 otherwise.",
     ),
     (
         "optimization.output_spring",

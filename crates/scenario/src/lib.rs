@@ -264,6 +264,7 @@ impl Scenario {
                 at: Selector::Nearest { point: out },
                 tilt_deg: 0.0,
                 direction: None,
+                payload: 0.0,
             },
             optimization: Optimization {
                 penalty: 3.0,
@@ -277,6 +278,9 @@ impl Scenario {
                 kinematics: KinematicsKind::Nonlinear,
                 objective: ObjectiveKind::Workspace,
                 output_spring: 4e6,
+                min_frequency: 0.0,
+                min_workspace: 0.0,
+                min_volume_fraction: 0.0,
                 strain_energy_limit: 0.0,
                 tilt_tolerance_deg: 1.0,
                 kkt_tolerance: 1e-3,

@@ -18,7 +18,10 @@ fn main() {
 
 /// Iterations of a preset after `warmup` iterations (the first ones move the design most).
 fn preset_iteration(b: Bencher, preset: Preset, warmup: usize) {
-    let s = Scenario::preset(preset);
+    scenario_iteration(b, Scenario::preset(preset), warmup);
+}
+
+fn scenario_iteration(b: Bencher, s: Scenario, warmup: usize) {
     let problem = Problem::from_scenario(&s, None).unwrap();
     let mut opt = Optimizer::new(&problem, OptimizerParams::from_scenario(&s)).unwrap();
     for _ in 0..warmup {
@@ -30,6 +33,16 @@ fn preset_iteration(b: Bencher, preset: Preset, warmup: usize) {
 #[divan::bench(sample_count = 5)]
 fn paper_preset_iteration(b: Bencher) {
     preset_iteration(b, Preset::Paper, 3);
+}
+
+/// The paper preset with a first-frequency bound: the same iteration plus the stage's
+/// eigen-analysis (4 modes by shift-invert Lanczos on the blueprint's factorization) and its
+/// sensitivities. Compare with `paper_preset_iteration` in the same invocation (same load).
+#[divan::bench(sample_count = 5)]
+fn paper_preset_iteration_resonance_bound(b: Bencher) {
+    let mut s = Scenario::preset(Preset::Paper);
+    s.optimization.min_frequency = 6000.0;
+    scenario_iteration(b, s, 3);
 }
 
 #[divan::bench(sample_count = 3)]

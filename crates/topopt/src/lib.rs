@@ -12,6 +12,9 @@
 //! * [`realization`]: the density chain and the eroded / blueprint / dilated designs.
 //! * [`analysis`]: all load cases in parallel, exact adjoint gradients of the named
 //!   [`responses`] (objective, strain energy, strokes, tilt, [`stress`]).
+//! * [`modal`]: the stage's natural frequencies (design, PEA sets, rollers, payload) with exact
+//!   sensitivities and a smooth aggregate of the lowest few, reusing the design's
+//!   factorization.
 //! * [`optimize`]: Algorithm 1 with MMA (bound formulation of the worst case), checkpoints.
 //! * [`summary`] and [`geometry`]: what a design delivers (α, θ, area, mass, stress, minimum
 //!   sizes, one-node hinges); [`design_file`]: density CSV input and output.
@@ -24,6 +27,7 @@ pub mod error;
 pub mod filter;
 pub mod geometry;
 pub mod length_scale;
+pub mod modal;
 pub mod optimize;
 pub mod problem;
 pub mod realization;
@@ -38,11 +42,12 @@ pub use design_space::DesignSpace;
 pub use error::{Result, TopoptError};
 pub use filter::{DensityFilter, Projection};
 pub use length_scale::{LengthScale, LengthScaleParams};
+pub use modal::{ModalParams, ModalWorkspace, StageDynamics, StageModes, stage_modes};
 pub use optimize::{
     AdditiveParams, Constraint, IterationRecord, Optimizer, OptimizerParams, ProjectionSchedule,
     Scales, StopReason,
 };
-pub use problem::{Objective, Port, Problem, Tilt, perimeter_walk, shoelace};
+pub use problem::{Objective, Port, Problem, Resonance, Tilt, perimeter_walk, shoelace};
 pub use realization::{
     Densities, DesignEvaluator, Evaluation, Realization, RealizationEvaluation, RobustThresholds,
 };

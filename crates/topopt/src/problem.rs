@@ -41,7 +41,8 @@
 //! `α < 0`.
 
 use flexstage_fem::{
-    BoundaryConditions, Component, Kinematics, Material as FemMaterial, Mesh, Model, Passive,
+    BoundaryConditions, Component, DofMass, Kinematics, LinkSpring, MassInterpolation,
+    Material as FemMaterial, Mesh, Model, Passive,
 };
 use flexstage_scenario::{
     Configuration, Edge as ScEdge, Fix, KinematicsKind, ObjectiveKind, RegionKind, Scenario,
@@ -50,6 +51,7 @@ use flexstage_scenario::{
 
 use crate::design_space::{DesignSpace, mirror_element};
 use crate::error::{Result, TopoptError};
+use crate::modal::StageDynamics;
 use crate::stress::StressConstraint;
 
 /// An input port: a grounded spring on one DOF, loaded by `stiffness · x_nom` (Eq. 2–3).
@@ -90,6 +92,23 @@ pub struct Tilt {
     pub tolerance: f64,
 }
 
+/// The stage's first natural frequency in the design (DECISIONS.md, "Design for bandwidth"),
+/// through the aggregate of its lowest eigenvalues ([`crate::modal`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Resonance {
+    /// Maximize the workspace with the first natural frequency at least `min_hz`.
+    Bound {
+        /// Lower bound \[Hz\].
+        min_hz: f64,
+    },
+    /// Maximize the first natural frequency with the workspace at least `min_area` (the
+    /// worst robust realization's, in the configuration's orientation).
+    Maximize {
+        /// Lower bound on the workspace area \[m²\].
+        min_area: f64,
+    },
+}
+
 /// A complete optimization problem.
 #[derive(Debug, Clone)]
 pub struct Problem {
@@ -109,6 +128,8 @@ pub struct Problem {
     pub max_stroke: Option<f64>,
     /// Volume-fraction bound (None = no constraint).
     pub volume_fraction: Option<f64>,
+    /// Lower volume-fraction bound of the blueprint (None = no constraint).
+    pub min_volume_fraction: Option<f64>,
     /// Tilted-output requirement (workspace objective only).
     pub tilt: Option<Tilt>,
     /// Fatigue stress constraint (None = no constraint).
@@ -119,6 +140,11 @@ pub struct Problem {
     pub rho_min: f64,
     /// Initial uniform design density.
     pub initial_density: f64,
+    /// The stage's masses and the springs by which it differs from `model` (the two-PEA
+    /// stage; None for a general mechanism).
+    pub dynamics: Option<StageDynamics>,
+    /// The requirement on the stage's first natural frequency (None: not designed for).
+    pub resonance: Option<Resonance>,
 }
 
 /// Nodes picked by a selector.
@@ -218,6 +244,58 @@ fn energy_limit(s: &Scenario) -> Option<f64> {
     })
 }
 
+/// The stage's dynamic parts of a two-PEA scenario (`crate::modal`): the input plates of the
+/// model guess (`stage.guess`: K_in and m_in on the input DOFs, Eq. 1–3), the payload on both
+/// output DOFs, and the optimizer's output load taken off.
+fn stage_dynamics(s: &Scenario, inputs: [usize; 2], out: usize) -> StageDynamics {
+    let g = &s.stage.guess;
+    let mut springs = vec![
+        LinkSpring {
+            terms: vec![(2 * inputs[0], 1.0)],
+            stiffness: g.k_in1,
+        },
+        LinkSpring {
+            terms: vec![(2 * inputs[1], 1.0)],
+            stiffness: g.k_in2,
+        },
+    ];
+    let k = s.optimization.output_spring;
+    if k > 0.0 {
+        springs.push(LinkSpring {
+            terms: vec![(2 * out + 1, 1.0)],
+            stiffness: -k,
+        });
+        springs.push(LinkSpring {
+            terms: vec![(2 * out, 1.0), (2 * inputs[0], -0.5), (2 * inputs[1], -0.5)],
+            stiffness: -k,
+        });
+    }
+    let payload = s.output.payload;
+    StageDynamics {
+        density: s.material.density,
+        interpolation: MassInterpolation::default(),
+        point_masses: vec![
+            DofMass {
+                dof: 2 * inputs[0],
+                mass: g.m_in1,
+            },
+            DofMass {
+                dof: 2 * inputs[1],
+                mass: g.m_in2,
+            },
+            DofMass {
+                dof: 2 * out,
+                mass: payload,
+            },
+            DofMass {
+                dof: 2 * out + 1,
+                mass: payload,
+            },
+        ],
+        springs,
+    }
+}
+
 /// SIMP material of a scenario.
 fn scenario_material(s: &Scenario) -> FemMaterial {
     FemMaterial {
@@ -311,7 +389,7 @@ impl Problem {
                 .add_link(&[(2 * out, 1.0), (2 * n1, -0.5), (2 * n2, -0.5)], k);
         }
         let (objective, cases) = match o.objective {
-            ObjectiveKind::Workspace => (
+            ObjectiveKind::Workspace | ObjectiveKind::Resonance => (
                 Objective::Workspace { sign },
                 perimeter_walk(o.samples, a.stroke_amplitude),
             ),
@@ -363,11 +441,22 @@ impl Problem {
             energy_limit,
             max_stroke: Some(a.max_stroke),
             volume_fraction: (o.volume_fraction < 1.0).then_some(o.volume_fraction),
+            min_volume_fraction: (o.min_volume_fraction > 0.0).then_some(o.min_volume_fraction),
             tilt,
             stress,
             mirror_symmetry: o.mirror_symmetry,
             rho_min: o.rho_min,
             initial_density: o.initial_density,
+            dynamics: Some(stage_dynamics(s, [n1, n2], out)),
+            resonance: match o.objective {
+                ObjectiveKind::Resonance => Some(Resonance::Maximize {
+                    min_area: o.min_workspace,
+                }),
+                _ if o.min_frequency > 0.0 => Some(Resonance::Bound {
+                    min_hz: o.min_frequency,
+                }),
+                _ => None,
+            },
         };
         p.validate()?;
         Ok(p)
@@ -418,11 +507,14 @@ impl Problem {
             energy_limit: energy_limit(s),
             max_stroke: None,
             volume_fraction: (o.volume_fraction < 1.0).then_some(o.volume_fraction),
+            min_volume_fraction: None,
             tilt: None,
             stress: None,
             mirror_symmetry: o.mirror_symmetry,
             rho_min: o.rho_min,
             initial_density: o.initial_density,
+            dynamics: None,
+            resonance: None,
         };
         p.validate()?;
         Ok(p)
@@ -560,6 +652,17 @@ impl Problem {
             p[port.dof] += flexstage_fem::pea_force(port.stiffness, x);
         }
         p
+    }
+
+    /// The workspace area of an output polygon (Eq. 4) in the configuration's orientation,
+    /// `sign · J` \[m²\]: positive when the polygon runs the way Table 2 asks (counter-clockwise
+    /// in the regular configuration, clockwise in the reversed one, whose compressive inputs
+    /// drive the output along −y). 0 for the displacement objective.
+    pub fn workspace_area(&self, outputs: &[[f64; 2]]) -> f64 {
+        match self.objective {
+            Objective::Workspace { sign } => sign * shoelace(outputs),
+            Objective::Displacement { .. } => 0.0,
+        }
     }
 
     /// Index of the compressive corner `(+a, −a)` and of the tensile corner `(−a, +a)` of the

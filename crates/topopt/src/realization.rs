@@ -13,17 +13,19 @@
 //!
 //! Each realization evaluates the responses it is needed for: with the robust formulation the
 //! objective on all three (the worst case is maximized), the fatigue stress on the eroded design
-//! (the thinnest hinges), the volume on the dilated design (the most material), and the strain
-//! energy, input strokes and tilt on the blueprint; without it everything on the blueprint.
-//! Gradients flow back through the adjoint of each map.
+//! (the thinnest hinges), the volume on the dilated design (the most material), the strain
+//! energy, input strokes and tilt on the blueprint, the stage's resonance ([`crate::modal`]) on
+//! the eroded design and the blueprint, and a lower volume bound on the blueprint; without it
+//! everything on the blueprint. Gradients flow back through the adjoint of each map.
 
-use flexstage_fem::{AdditiveYeoh, Passive};
+use flexstage_fem::{AdditiveYeoh, Design, Passive};
 use rayon::prelude::*;
 
 use crate::analysis::{AnalysisParams, CaseResults, Evaluator, Workspace};
 use crate::design_space::DesignSpace;
 use crate::error::{Result, TopoptError};
 use crate::filter::{DensityFilter, Projection};
+use crate::modal::ModalWorkspace;
 use crate::problem::Problem;
 use crate::responses::{self, PerResponse, ResponseCoefficients, ResponseKind};
 use crate::stress::stress_measure;
@@ -107,11 +109,14 @@ pub struct RealizationEvaluation {
     pub values: PerResponse<f64>,
     /// Gradients of the evaluated responses w.r.t. the design variables.
     pub gradients: PerResponse<Option<Vec<f64>>>,
-    /// Shoelace area J of the output polygon \[m²\] (Eq. 4; 0 for the displacement objective).
+    /// Workspace area `sign · J` of the output polygon in the configuration's orientation
+    /// \[m²\] (Eq. 4; 0 for the displacement objective).
     pub area: f64,
     /// Largest relaxed stress over the stress cases, in units of the design allowable (stress
     /// evaluated only).
     pub stress_max: Option<f64>,
+    /// The stage's lowest natural frequencies (resonance evaluated only).
+    pub modes: Option<crate::modal::StageModes>,
 }
 
 /// The responses of all realizations of one design.
@@ -148,6 +153,9 @@ pub struct DesignEvaluator<'p> {
     /// One set of FE buffers per realization (same order, one symbolic factorization), so that
     /// the realizations are analysed concurrently.
     workspaces: Vec<Workspace>,
+    /// The stage's eigen-analysis buffers of each realization that evaluates the resonance
+    /// (same order).
+    modal: Vec<Option<ModalWorkspace>>,
 }
 
 /// Which responses a problem has.
@@ -158,7 +166,8 @@ fn problem_responses(p: &Problem) -> PerResponse<bool> {
         ResponseKind::Stroke => p.max_stroke.is_some(),
         ResponseKind::Tilt => p.tilt.is_some(),
         ResponseKind::Stress => p.stress.is_some(),
-        ResponseKind::Volume => p.volume_fraction.is_some(),
+        ResponseKind::Volume => p.volume_fraction.is_some() || p.min_volume_fraction.is_some(),
+        ResponseKind::Resonance => p.resonance.is_some(),
     })
 }
 
@@ -182,12 +191,19 @@ pub fn realization_specs(
         RealizationSpec {
             kind: Realization::Eroded,
             eta: t.eroded,
-            responses: only(&[Objective, Stress]),
+            responses: only(&[Objective, Stress, Resonance]),
         },
         RealizationSpec {
             kind: Realization::Blueprint,
             eta,
-            responses: only(&[Objective, Energy, Stroke, Tilt]),
+            responses: PerResponse::from_fn(|q| {
+                has[q]
+                    && match q {
+                        Volume => p.min_volume_fraction.is_some(),
+                        Stress => false,
+                        _ => true,
+                    }
+            }),
         },
         RealizationSpec {
             kind: Realization::Dilated,
@@ -224,6 +240,14 @@ impl<'p> DesignEvaluator<'p> {
             workspaces.push(Workspace::sharing(problem, first.symbolic().clone())?);
         }
         workspaces.insert(0, first);
+        let modal = specs
+            .iter()
+            .map(|s| {
+                s.responses[ResponseKind::Resonance]
+                    .then(|| ModalWorkspace::new(problem))
+                    .transpose()
+            })
+            .collect::<Result<Vec<_>>>()?;
         Ok(Self {
             problem,
             space,
@@ -231,6 +255,7 @@ impl<'p> DesignEvaluator<'p> {
             specs,
             evaluators,
             workspaces,
+            modal,
         })
     }
 
@@ -334,10 +359,11 @@ impl<'p> DesignEvaluator<'p> {
             .evaluators
             .par_iter_mut()
             .zip(self.workspaces.par_iter_mut())
+            .zip(self.modal.par_iter_mut())
             .zip(self.specs.par_iter())
             .enumerate()
-            .map(|(i, ((ev, ws), spec))| {
-                maps.evaluate_realization(
+            .map(|(i, (((ev, ws), modal), spec))| {
+                let mut r = maps.evaluate_realization(
                     spec,
                     ev,
                     ws,
@@ -346,7 +372,21 @@ impl<'p> DesignEvaluator<'p> {
                     beta,
                     yeoh,
                     skip,
-                )
+                )?;
+                if let Some(mw) = modal.as_mut() {
+                    maps.resonance(
+                        mw,
+                        ev,
+                        ws,
+                        &dens.realizations[i].1,
+                        &dens,
+                        spec,
+                        beta,
+                        yeoh,
+                        &mut r,
+                    )?;
+                }
+                Ok(r)
             })
             .collect();
         let realizations = results.into_iter().collect::<Result<Vec<_>>>()?;
@@ -445,7 +485,46 @@ impl Maps<'_> {
             gradients,
             area,
             stress_max,
+            modes: None,
         })
+    }
+
+    /// The stage's eigen-analysis of a realization ([`crate::modal`]) on the factorization its
+    /// load cases just used: the aggregate `Λ` and its gradient w.r.t. the design variables.
+    #[allow(clippy::too_many_arguments)]
+    fn resonance(
+        &self,
+        mw: &mut ModalWorkspace,
+        ev: &Evaluator,
+        ws: &mut Workspace,
+        rho: &[f64],
+        dens: &Densities,
+        spec: &RealizationSpec,
+        beta: f64,
+        yeoh: Option<&AdditiveYeoh>,
+        r: &mut RealizationEvaluation,
+    ) -> Result<()> {
+        let design = match yeoh {
+            Some(y) => Design::with_yeoh(rho, y),
+            None => Design::new(rho),
+        };
+        let (k, factor) = ev.stiffness_at_rest();
+        let modes = mw.solve(
+            self.problem,
+            &design,
+            crate::modal::Factored { k, factor },
+            &mut ws.groups[0].sws,
+            &ev.params.modal,
+            true,
+        )?;
+        let proj = Self::projection(spec, beta);
+        r.values[ResponseKind::Resonance] = modes.aggregate;
+        r.gradients[ResponseKind::Resonance] = modes
+            .gradient
+            .as_ref()
+            .map(|g| self.chain(&dens.filtered, proj, g));
+        r.modes = Some(modes);
+        Ok(())
     }
 }
 

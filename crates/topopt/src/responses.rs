@@ -37,20 +37,24 @@ pub enum ResponseKind {
     Stress,
     /// Volume fraction of the design elements.
     Volume,
+    /// Aggregate `Λ` of the stage's lowest eigenvalues `ω²` [rad²/s²] ([`crate::modal`]).
+    Resonance,
 }
 
 impl ResponseKind {
     /// Every response, in a fixed order.
-    pub const ALL: [ResponseKind; 6] = [
+    pub const ALL: [ResponseKind; 7] = [
         ResponseKind::Objective,
         ResponseKind::Energy,
         ResponseKind::Stroke,
         ResponseKind::Tilt,
         ResponseKind::Stress,
         ResponseKind::Volume,
+        ResponseKind::Resonance,
     ];
 
-    /// Responses computed from the load cases (by adjoints); the volume is not.
+    /// Responses computed from the load cases (by adjoints); the volume and the resonance are
+    /// not.
     pub const FE: [ResponseKind; 5] = [
         ResponseKind::Objective,
         ResponseKind::Energy,
@@ -68,6 +72,7 @@ impl ResponseKind {
             ResponseKind::Tilt => "tilt",
             ResponseKind::Stress => "stress",
             ResponseKind::Volume => "volume",
+            ResponseKind::Resonance => "resonance",
         }
     }
 
@@ -78,7 +83,7 @@ impl ResponseKind {
 
 /// One value per response, indexed by [`ResponseKind`].
 #[derive(Debug, Clone, Default, PartialEq)]
-pub struct PerResponse<T>(pub [T; 6]);
+pub struct PerResponse<T>(pub [T; 7]);
 
 impl<T> Index<ResponseKind> for PerResponse<T> {
     type Output = T;
@@ -159,14 +164,15 @@ pub fn pnorm(v: &[f64], p: f64) -> (f64, Vec<f64>) {
     (n, d)
 }
 
-/// The objective Φ (Eq. 4 or `d·u_out`) and the shoelace area J of the output polygon (0 for
-/// the displacement objective).
+/// The objective Φ (Eq. 4 or `d·u_out`) and the workspace area `sign · J` of the output
+/// polygon in the configuration's orientation ([`Problem::workspace_area`]; 0 for the
+/// displacement objective).
 pub fn objective(problem: &Problem, r: &CaseResults) -> (ResponseCoefficients, f64) {
     let nc = r.outputs.len();
     match problem.objective {
         Objective::Workspace { sign } => {
-            let a = shoelace(&r.outputs);
-            let mut c = ResponseCoefficients::zero(sign * a, nc);
+            let a = sign * shoelace(&r.outputs);
+            let mut c = ResponseCoefficients::zero(a, nc);
             for (cc, g) in c.cases.iter_mut().zip(shoelace_gradient(&r.outputs)) {
                 cc.output = [sign * g[0], sign * g[1]];
             }

@@ -47,11 +47,14 @@ pub fn inverter(nl: usize, nw: usize) -> Result<Problem> {
         energy_limit: None,
         max_stroke: None,
         volume_fraction: Some(0.3),
+        min_volume_fraction: None,
         tilt: None,
         stress: None,
         mirror_symmetry: false,
         rho_min: 1e-3,
         initial_density: 0.3,
+        dynamics: None,
+        resonance: None,
     };
     p.validate()?;
     Ok(p)

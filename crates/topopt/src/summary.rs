@@ -13,7 +13,8 @@ use crate::analysis::{AnalysisParams, CaseResults, Evaluator};
 use crate::error::Result;
 use crate::geometry::{Field, Measured, member_sizes, mirror_asymmetry, one_node_hinges};
 use crate::length_scale::LengthScale;
-use crate::problem::{Problem, perimeter_walk, shoelace};
+use crate::modal::{ModalParams, stage_modes};
+use crate::problem::{Problem, perimeter_walk};
 use crate::realization::{Densities, Realization};
 use crate::stress::stress_measure;
 
@@ -23,7 +24,9 @@ pub const GEOMETRY_REFINE: usize = 4;
 /// What a design delivers (module docs). Areas in m², lengths in m, stresses in Pa.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DesignSummary {
-    /// Workspace area J of the blueprint (Eq. 4) \[m²\].
+    /// Workspace area of the blueprint (Eq. 4) in the configuration's orientation, `sign · J`
+    /// \[m²\] ([`Problem::workspace_area`]): positive for a workspace traced the way Table 2
+    /// asks.
     pub area: f64,
     /// `J / (2a)²`: the workspace in units of the input stroke square (≈ |det A| ≈ |α| in the
     /// floating set-up).
@@ -74,9 +77,14 @@ pub struct DesignSummary {
     pub guaranteed_gap: Option<f64>,
     /// Largest |ρ − ρ_mirror| about x = l/2.
     pub mirror_asymmetry: f64,
-    /// Lowest natural frequency of the design \[Hz\] (computed by the reduced model, if run).
+    /// Lowest natural frequency of the stage \[Hz\]: the design with the PEA springs and input
+    /// plates, the rollers and the payload, at rest ([`crate::modal`], the eigenproblem the
+    /// design loop bounds). None for a general mechanism.
     #[serde(default)]
     pub first_frequency_hz: Option<f64>,
+    /// The stage's lowest natural frequencies \[Hz\] (the first is `first_frequency_hz`).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub frequencies_hz: Vec<f64>,
     /// What a general mechanism (`[[ports]]`: inverter, gripper) delivers; None for the
     /// two-PEA workspace problem, whose area, α and θ are the fields above.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -169,7 +177,7 @@ pub fn final_analysis(
     let area_of = |rho: &[f64]| -> Result<(f64, CaseResults, Evaluator)> {
         let mut ev = Evaluator::new(&problem, AnalysisParams::default())?;
         let r = ev.solve_cases(rho, None)?;
-        Ok((shoelace(&r.outputs), r, ev))
+        Ok((problem.workspace_area(&r.outputs), r, ev))
     };
     let (area, response, ev) = area_of(&dens.physical)?;
     let eroded = dens
@@ -204,6 +212,12 @@ pub fn final_analysis(
         peak_stress: peak_stress(&problem, &ev, &dens.physical),
         constrained_stress,
         ..base_summary(s, &problem, &dens.physical, length_scale)
+    };
+    let modes = stage_modes(&problem, &dens.physical, &ModalParams::default(), false)?;
+    let summary = DesignSummary {
+        first_frequency_hz: modes.frequencies.first().copied(),
+        frequencies_hz: modes.frequencies,
+        ..summary
     };
     let corner_displacement = ev.cases[problem.differential_corners().0].u.clone();
     Ok(FinalAnalysis {
@@ -254,6 +268,7 @@ fn base_summary(
         guaranteed_gap: length_scale.map(|l| l.void_size),
         mirror_asymmetry: mirror_asymmetry(&field),
         first_frequency_hz: None,
+        frequencies_hz: Vec::new(),
         mechanism: None,
     }
 }
@@ -380,7 +395,10 @@ impl DesignSummary {
             ));
         }
         if let Some(f) = self.first_frequency_hz {
-            out.push(format!("first natural frequency {f:.0} Hz"));
+            out.push(format!(
+                "first natural frequency {f:.0} Hz (the stage: PEA springs and plates, rollers, \
+                 payload)"
+            ));
         }
         out
     }
@@ -446,6 +464,7 @@ mod tests {
             guaranteed_gap: None,
             mirror_asymmetry: 0.0,
             first_frequency_hz: Some(900.0),
+            frequencies_hz: vec![900.0],
             mechanism: None,
         }
     }

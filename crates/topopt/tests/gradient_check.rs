@@ -99,3 +99,20 @@ fn adjoint_matches_central_differences_nonlinear_mechanism_from_toml() {
     };
     check(&s, Some(robust), false, 5);
 }
+
+/// The robust, symmetric, stress-constrained default with a first-frequency bound: the
+/// resonance aggregate of the eroded design and the blueprint (the stage's eigenproblem with
+/// the PEA plates and a payload, on each realization's factorization through the spring
+/// update) through the
+/// projection, the filter and the symmetric design variables, besides every other response.
+#[test]
+fn adjoint_matches_central_differences_with_a_resonance_bound() {
+    let mut s = small(Scenario::preset(Preset::Quick));
+    s.optimization.min_frequency = 3000.0;
+    s.output.payload = 0.02;
+    let robust = RobustThresholds {
+        eroded: 0.6,
+        dilated: 0.4,
+    };
+    check(&s, Some(robust), false, 9);
+}

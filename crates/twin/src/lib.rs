@@ -10,7 +10,7 @@
 //!
 //! 1. **The assembled stage** ([`structure`]): the scenario's FE model of the design (Q4, Total
 //!    Lagrangian, SIMP stiffness `ρ^p E0`), consistent mass `m(ρ)·ρ0·V` with the void
-//!    interpolation of `flexstage_reduce::MassInterpolation` (void and faint grey carry no
+//!    interpolation of `flexstage_fem::MassInterpolation` (void and faint grey carry no
 //!    mass), void (ρ < 0.01) removed as air, and at each input port the **PEA set of Eq. 1–3**:
 //!    the PEA spring K_pea (Table 1), the input plate's spring K_in and mass m_in (Table 4
 //!    estimates, `stage.truth`), driven by the force K_pea·x_nom(t). The optimizer's output

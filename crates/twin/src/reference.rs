@@ -246,14 +246,17 @@ pub fn mode_check(twin: &Twin) -> Result<Vec<ModeCheck>> {
         .filter(|m| m.frequency <= limit * (1.0 + 1e-9))
         .count()
         .max(1);
-    let plates: Vec<PointMass> = fe
-        .point_masses
-        .iter()
-        .map(|p| PointMass {
-            node: p.dof / 2,
-            mass: p.mass,
-        })
-        .collect();
+    // The plates (on the input DOFs along x; their y is held by the rollers) and the payload
+    // (on both output DOFs) as node masses, one per node.
+    let mut plates: Vec<PointMass> = Vec::new();
+    for p in &fe.point_masses {
+        if !plates.iter().any(|q| q.node == p.dof / 2) {
+            plates.push(PointMass {
+                node: p.dof / 2,
+                mass: p.mass,
+            });
+        }
+    }
     let params = ModalParams {
         modes: claimed,
         interpolation: fe.interpolation,

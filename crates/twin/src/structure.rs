@@ -7,15 +7,19 @@
 //!   optimizer's output spring (`optimization.output_spring`) is a design device, not a part of
 //!   the stage, and is left out: the output point is free, as on the rig.
 //! * **Void is air**: elements below [`StageFe::void_threshold`] (default 0.01) are removed
-//!   (zero stiffness and mass) and nodes left without any element are fixed. The optimizer's
+//!   (zero stiffness and mass), so are islands and fragments that hang on the structure by a
+//!   single node (kept: the elements joined to a port through shared edges), and nodes left
+//!   without any element are fixed. The optimizer's
 //!   E_min = 1 kPa keeps its equations regular, but in a *dynamic* Total Lagrangian model
 //!   massless void nodes with 1e-8 of the solid's stiffness are ill-posed (they drift by
 //!   hundreds of µm and Newton stalls on them), and they are no part of the machined stage.
 //!   Kept elements follow SIMP, `E = ρ^p E0` (E_min = 0): for a crisp design the statics and
 //!   modes differ from `flexstage reduce`'s by about E_min/E0 = 1e-8.
-//! * **Mass**: consistent Q4 element masses `m_e = m(ρ_e)·ρ0·V_e` with the void interpolation of
-//!   `flexstage_reduce::MassInterpolation` (`m = ρ` above ρ_c = 0.1, `ρ_c(ρ/ρ_c)⁶` below): void
-//!   and faint grey material carry no mass, so they cannot resonate (Du & Olhoff 2007).
+//! * **Mass**: consistent Q4 element masses `m_e = m(ρ_e)·ρ0·V_e` with Du & Olhoff's (2007)
+//!   interpolation `flexstage_fem::MassInterpolation` (`m = ρ` above ρ_c = 0.1, a C¹ polynomial
+//!   `c₁ρ⁶ + c₂ρ⁷` below), the one the design's eigenproblem uses: void and faint grey material
+//!   carry no mass, so they cannot resonate. The payload (`output.payload`) is a point mass on
+//!   the output node.
 //! * **PEA sets** (Eq. 1–3): at each input DOF a grounded spring K_pea (the PEA, Table 1) and a
 //!   grounded spring K_in (the input plate's flexure, Table 4 estimate), a point mass m_in (the
 //!   output blocking plate, Table 4) and the force K_pea·x_nom(t). The input ports stay on their
@@ -56,6 +60,8 @@ pub struct StageFe {
     pub k_in: [f64; 2],
     /// Input-plate masses m_in \[kg\].
     pub m_in: [f64; 2],
+    /// Payload on the output node \[kg\] (`output.payload`).
+    pub payload: f64,
     /// Material density ρ0 [kg/m³].
     pub density: f64,
     /// The void mass interpolation.
@@ -69,10 +75,47 @@ pub struct StageFe {
 /// Default density below which an element is void and removed.
 pub const VOID_THRESHOLD: f64 = 0.01;
 
+/// `rho` with every element removed (set to 0) that is not joined to an element at one of
+/// the `ports` through a chain of kept elements sharing edges: an island, or a fragment hanging
+/// on a single node, is a mechanism once void is air (a singular stiffness), and no part of a
+/// wire-cut stage.
+fn edge_connected(mesh: &flexstage_fem::Mesh, mut rho: Vec<f64>, ports: &[usize]) -> Vec<f64> {
+    let (nl, nw) = (mesh.nl, mesh.nw);
+    let mut seen = vec![false; rho.len()];
+    let mut stack: Vec<usize> = (0..rho.len())
+        .filter(|&e| rho[e] > 0.0 && mesh.element_nodes(e).iter().any(|n| ports.contains(n)))
+        .collect();
+    for &e in &stack {
+        seen[e] = true;
+    }
+    while let Some(e) = stack.pop() {
+        let (i, j) = (e / nw, e % nw);
+        let neighbours = [
+            (i > 0).then(|| mesh.element(i - 1, j)),
+            (i + 1 < nl).then(|| mesh.element(i + 1, j)),
+            (j > 0).then(|| mesh.element(i, j - 1)),
+            (j + 1 < nw).then(|| mesh.element(i, j + 1)),
+        ];
+        for f in neighbours.into_iter().flatten() {
+            if !seen[f] && rho[f] > 0.0 {
+                seen[f] = true;
+                stack.push(f);
+            }
+        }
+    }
+    for (r, keep) in rho.iter_mut().zip(&seen) {
+        if !keep {
+            *r = 0.0;
+        }
+    }
+    rho
+}
+
 impl StageFe {
     /// The stage of `problem` (two inputs with their PEA springs, rollers, output node) with
-    /// densities `rho`, material density `density`, the plates `m_in` and `k_in`; elements
-    /// below [`VOID_THRESHOLD`] are removed.
+    /// densities `rho`, material density `density`, the plates `m_in` and `k_in` and the
+    /// payload on the output; elements below [`VOID_THRESHOLD`] are removed.
+    #[allow(clippy::too_many_arguments)]
     pub fn new(
         problem: &Problem,
         rho: &[f64],
@@ -80,6 +123,7 @@ impl StageFe {
         interpolation: MassInterpolation,
         m_in: [f64; 2],
         k_in: [f64; 2],
+        payload: f64,
     ) -> Result<StageFe> {
         let base = &problem.model;
         let n = base.mesh().n_elements();
@@ -101,6 +145,7 @@ impl StageFe {
                 )));
             }
         };
+        check("output.payload", payload, payload >= 0.0, "≥ 0 kg")?;
         for i in 0..2 {
             check(&format!("m_in{}", i + 1), m_in[i], m_in[i] > 0.0, "> 0 kg")?;
             check(
@@ -115,6 +160,7 @@ impl StageFe {
             .iter()
             .map(|&r| if r < VOID_THRESHOLD { 0.0 } else { r })
             .collect();
+        let rho = edge_connected(mesh, rho, &[a.node, b.node, problem.output]);
         let mut attached = vec![0usize; mesh.n_nodes()];
         for (e, &r) in rho.iter().enumerate() {
             if r > 0.0 {
@@ -149,22 +195,30 @@ impl StageFe {
             .iter()
             .map(|&r| interpolation.relative_mass(r) * density * v)
             .collect();
+        let mut point_masses = vec![
+            DofMass {
+                dof: a.dof,
+                mass: m_in[0],
+            },
+            DofMass {
+                dof: b.dof,
+                mass: m_in[1],
+            },
+        ];
+        if payload > 0.0 {
+            point_masses.extend((0..2).map(|c| DofMass {
+                dof: 2 * out + c,
+                mass: payload,
+            }));
+        }
         Ok(StageFe {
-            point_masses: vec![
-                DofMass {
-                    dof: a.dof,
-                    mass: m_in[0],
-                },
-                DofMass {
-                    dof: b.dof,
-                    mass: m_in[1],
-                },
-            ],
+            point_masses,
             interface: [a.dof, b.dof, 2 * out, 2 * out + 1],
             output_node: out,
             k_pea: [a.stiffness, b.stiffness],
             k_in,
             m_in,
+            payload,
             density,
             interpolation,
             void_threshold: VOID_THRESHOLD,
@@ -176,8 +230,8 @@ impl StageFe {
     }
 
     /// The stage of a scenario and a design: the final-analysis problem without the output
-    /// spring, `stage.truth`'s input plates (Table 4 estimates) and the default void mass
-    /// interpolation.
+    /// spring, `stage.truth`'s input plates (Table 4 estimates), the payload and the default
+    /// void mass interpolation.
     pub fn from_scenario(scenario: &Scenario, rho: &[f64]) -> Result<StageFe> {
         let problem = flexstage_reduce::reduction_problem(scenario, false)?;
         let t = &scenario.stage.truth;
@@ -188,6 +242,7 @@ impl StageFe {
             MassInterpolation::default(),
             [t.m_in1, t.m_in2],
             [t.k_in1, t.k_in2],
+            scenario.output.payload,
         )
     }
 
@@ -240,8 +295,8 @@ impl StageFe {
         p
     }
 
-    /// The structure's mass (element masses + plates) \[kg\].
+    /// The structure's mass (element masses + plates + payload) \[kg\].
     pub fn total_mass(&self) -> f64 {
-        self.element_mass.iter().sum::<f64>() + self.m_in[0] + self.m_in[1]
+        self.element_mass.iter().sum::<f64>() + self.m_in[0] + self.m_in[1] + self.payload
     }
 }

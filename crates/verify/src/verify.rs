@@ -185,7 +185,8 @@ fn port_specs(
             )
         })
         .collect();
-    named.push(("output".into(), stress.output, 0.0));
+    // The payload (`output.payload`) rides on the output port.
+    named.push(("output".into(), stress.output, s.output.payload));
     for sp in &stress.model.bcs().springs {
         let node = sp.dof / 2;
         if !named.iter().any(|n| n.1 == node) {

@@ -186,6 +186,7 @@ mod tests {
             guaranteed_gap: None,
             mirror_asymmetry: 0.0,
             first_frequency_hz: None,
+            frequencies_hz: Vec::new(),
             mechanism: None,
         };
         let limits = SizeLimits {

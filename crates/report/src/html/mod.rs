@@ -24,6 +24,7 @@
 
 mod design;
 mod design_summary;
+mod front;
 mod page;
 mod pea;
 mod reduce;
@@ -114,6 +115,11 @@ pub const SECTIONS: &[Section] = &[
         id: "twin",
         title: "Digital twin",
         render: twin::twin,
+    },
+    Section {
+        id: "front",
+        title: "Workspace–first-resonance front",
+        render: front::front,
     },
 ];
 
@@ -462,13 +468,19 @@ pub fn headline_rows(h: &Headline) -> Vec<(String, String)> {
     let mut rows: Vec<(String, String)> = Vec::new();
     if let Some(d) = h.design {
         let (a0, a1) = (d.area_initial_m2, d.area_final_m2);
+        // A growth factor needs a positive start (the uniform start of the reversed
+        // configuration traces its polygon the other way: a negative area).
+        let growth = if a0 > 0.0 {
+            format!(" (×{})", fmt_num(a1 / a0))
+        } else {
+            String::new()
+        };
         rows.push((
             "workspace area (initial → final)".into(),
             format!(
-                "{} µm² → {} µm² (×{})",
+                "{} µm² → {} µm²{growth}",
                 fmt_num(a0 * 1e12),
-                fmt_num(a1 * 1e12),
-                fmt_num(a1 / a0)
+                fmt_num(a1 * 1e12)
             ),
         ));
         rows.push((

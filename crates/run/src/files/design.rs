@@ -64,7 +64,8 @@ impl Format for DesignFile {
 /// `flexstage-topopt`, Actuators 2022, 11(7), 179, Eq. 4 and 24–27).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct DesignRecord {
-    /// Workspace area J of the blueprint (Eq. 4) \[m²\].
+    /// Workspace area of the blueprint (Eq. 4) in the configuration's orientation, `sign · J`
+    /// \[m²\].
     pub area: f64,
     /// `J / (2a)²`: the workspace in units of the input stroke square.
     pub area_ratio: f64,
@@ -110,9 +111,13 @@ pub struct DesignRecord {
     pub guaranteed_gap: Option<f64>,
     /// Largest |ρ − ρ_mirror| about x = l/2.
     pub mirror_asymmetry: f64,
-    /// Lowest natural frequency of the design \[Hz\].
+    /// Lowest natural frequency of the stage \[Hz\]: the design with the PEA springs and
+    /// input plates, the rollers and the payload, at rest.
     #[serde(default)]
     pub first_frequency_hz: Option<f64>,
+    /// The stage's lowest natural frequencies \[Hz\].
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub frequencies_hz: Vec<f64>,
     /// What a general mechanism (`[[ports]]`) delivers; `None` for the two-PEA stage.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub mechanism: Option<MechanismRecord>,

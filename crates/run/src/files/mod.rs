@@ -9,6 +9,7 @@
 pub mod analyze;
 pub mod design;
 pub mod export;
+pub mod front;
 pub mod pea;
 pub mod reduce;
 pub mod scenario;

@@ -61,6 +61,9 @@ pub struct AnalysisParams {
     /// so the gradients by far less than the adjoint tolerance, and a case that needs a sweep
     /// saves a tangent assembly. Gradient checks use true.
     pub exact_tangent: bool,
+    /// The stage's eigen-analysis ([`crate::modal`]), when the problem has a resonance
+    /// requirement.
+    pub modal: crate::modal::ModalParams,
 }
 
 impl Default for AnalysisParams {
@@ -92,6 +95,7 @@ impl Default for AnalysisParams {
             }),
             predictor: true,
             exact_tangent: false,
+            modal: crate::modal::ModalParams::default(),
         }
     }
 }
@@ -129,7 +133,8 @@ impl AnalysisParams {
             self.retries as f64,
             self.retries <= 4,
             "[0, 4]",
-        )
+        )?;
+        self.modal.validate()
     }
 }
 
@@ -405,6 +410,12 @@ impl<'p> Evaluator<'p> {
         self.timing.adjoint = t0.elapsed().as_secs_f64();
         self.timing.adjoint_iterations = self.cases.iter().map(|c| c.adjoint_iterations).sum();
         Ok(out)
+    }
+
+    /// `K(ρ)` at `u = 0` of the last [`Evaluator::solve_cases_in`] and its factor (the
+    /// preconditioner of the load cases), for the stage's eigen-analysis.
+    pub(crate) fn stiffness_at_rest(&self) -> (&SparseMatrix, &Factor) {
+        (&self.k0, &self.precond)
     }
 
     /// Element-wise maximum over the load cases of the average von Mises strain (for the `c2`

@@ -34,7 +34,17 @@
 //! uniform start) would leave them without any objective gradient. The volume bound acts on the dilated design, with
 //! its target `V*_d = V*·V_d/V_b` refreshed every `update_interval` iterations so that the
 //! blueprint meets `V*`; the fatigue stress acts on the eroded design, the strain energy, input
-//! strokes and tilt on the blueprint.
+//! strokes and tilt on the blueprint. The floor also covers the uniform start of the reversed
+//! configuration, whose workspace (in its orientation, `sign · J`) is negative.
+//!
+//! **The stage's resonance** ([`crate::modal`], DECISIONS.md "Design for bandwidth"). A
+//! first-frequency bound is one constraint `1 − Λ_r/λ_min ≤ 0` for the eroded design and the
+//! blueprint (the aggregate `Λ` of the lowest eigenvalues; a bound on the blueprint alone let
+//! the optimizer stiffen it modally through one-node joints that erosion removes; the dilated
+//! design's grey fill carried spurious low modes). With `objective = "resonance"` the
+//! maximized quantity is `Λ` instead of `Φ`, in the same bound formulation over those two
+//! realizations, and each realization's workspace is bounded by `min_workspace`. An optional
+//! lower volume bound acts on the blueprint.
 //!
 //! **Inactive constraints.** A constraint whose scaled value was below `INACTIVE_BELOW = −0.5`
 //! at the last design enters MMA with a zero gradient (its linearization is the constant it
@@ -92,7 +102,7 @@ pub use params::{AdditiveParams, OptimizerParams, ProjectionSchedule};
 
 use crate::error::{Result, TopoptError};
 use crate::filter::Projection;
-use crate::problem::Problem;
+use crate::problem::{Problem, Resonance};
 use crate::realization::{Densities, DesignEvaluator, Evaluation, Realization};
 use crate::responses::{PerResponse, ResponseKind};
 
@@ -109,8 +119,8 @@ pub const BOUND_FLOOR: f64 = 1e-3;
 pub struct IterationRecord {
     /// Design iteration k (0 = initial design).
     pub iteration: usize,
-    /// Shoelace area J of the blueprint's output polygon \[m²\] (workspace objective; 0
-    /// otherwise).
+    /// Workspace area `sign · J` of the blueprint's output polygon in the configuration's
+    /// orientation \[m²\] (workspace objective; 0 otherwise).
     pub area: f64,
     /// Maximized objective Φ (signed area \[m²\] or output displacement \[m\]); with the robust
     /// formulation the worst case over the realizations.
@@ -155,6 +165,10 @@ pub struct IterationRecord {
     /// constraint).
     #[serde(default)]
     pub stress: Option<f64>,
+    /// The stage's lowest natural frequencies of the blueprint \[Hz\] (resonance requirement;
+    /// empty otherwise).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub frequencies: Vec<f64>,
 }
 
 /// Why the loop stopped.
@@ -172,7 +186,8 @@ pub enum StopReason {
 /// Fixed normalization constants, set at the initial design.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Scales {
-    /// |Φ⁰| of the blueprint.
+    /// |Φ⁰| of the blueprint: the maximized response at the initial design (the workspace, or
+    /// the resonance aggregate Λ when it is maximized).
     pub objective: f64,
     /// Σ0 \[J\].
     pub energy_limit: f64,
@@ -199,6 +214,14 @@ pub enum Constraint {
     Stress,
     /// Volume `V/V* − 1 ≤ 0` (the dilated design's with the robust formulation).
     Volume,
+    /// Workspace bound `1 − Φ_r/A_min ≤ 0` of a realization (resonance maximized).
+    Workspace(Realization),
+    /// Lower volume bound `1 − V_b/V_min ≤ 0` of the blueprint.
+    MinVolume,
+    /// First-frequency bound `1 − Λ_r/λ_min ≤ 0`, `λ_min = (2π f_min)²`, of a realization
+    /// (workspace maximized; the eroded design and the blueprint with the robust
+    /// formulation).
+    Resonance(Realization),
 }
 
 impl Constraint {
@@ -213,6 +236,13 @@ impl Constraint {
             Constraint::Tilt => "tilt",
             Constraint::Stress => "stress",
             Constraint::Volume => "volume",
+            Constraint::Workspace(Realization::Eroded) => "workspace_eroded",
+            Constraint::Workspace(Realization::Blueprint) => "workspace_blueprint",
+            Constraint::Workspace(Realization::Dilated) => "workspace_dilated",
+            Constraint::Resonance(Realization::Eroded) => "resonance_eroded",
+            Constraint::Resonance(Realization::Blueprint) => "resonance",
+            Constraint::Resonance(Realization::Dilated) => "resonance_dilated",
+            Constraint::MinVolume => "min_volume",
         }
     }
 }
@@ -265,6 +295,8 @@ impl<'p> Optimizer<'p> {
         )?;
         let n = evaluator.n();
         let constraints = Self::constraint_list(problem, params.robust.is_some());
+        // The bound variable ξ of the robust formulation (of the worst workspace, or of the
+        // worst resonance when it is maximized).
         let robust = params.robust.is_some() as usize;
         let (mut xmin, mut xmax) = (vec![problem.rho_min; n], vec![1.0; n]);
         xmin.resize(n + robust, 0.0);
@@ -298,6 +330,41 @@ impl<'p> Optimizer<'p> {
         })
     }
 
+    /// Starts at the design variables `x` of an earlier design (warm-started continuation,
+    /// e.g. a tighter resonance bound from the design of a looser one) with the projection at
+    /// sharpness `beta` (clamped to the schedule's β_max; the continuation of β resumes from
+    /// it). The scales, the stress normalization and the volume target are those of this
+    /// design; MMA starts afresh.
+    pub fn continue_from(
+        problem: &'p Problem,
+        params: OptimizerParams,
+        x: &[f64],
+        beta: f64,
+    ) -> Result<Self> {
+        let mut o = Self::new(problem, params)?;
+        let n = o.evaluator.n();
+        if x.len() != n {
+            return Err(TopoptError::Problem(format!(
+                "{} design variables given, the problem has {n}",
+                x.len()
+            )));
+        }
+        if let Some(j) = x
+            .iter()
+            .position(|v| !(v.is_finite() && (problem.rho_min..=1.0).contains(v)))
+        {
+            return Err(TopoptError::Problem(format!(
+                "design variable {j} = {} is outside [rho_min, 1]",
+                x[j]
+            )));
+        }
+        o.x[..n].copy_from_slice(x);
+        if let Some(p) = o.params.projection {
+            o.beta = beta.clamp(1.0, p.beta_max);
+        }
+        Ok(o)
+    }
+
     fn additive(
         problem: &Problem,
         params: &OptimizerParams,
@@ -320,15 +387,28 @@ impl<'p> Optimizer<'p> {
     /// The constraints of a problem, in MMA order.
     pub fn constraint_list(p: &Problem, robust: bool) -> Vec<Constraint> {
         let mut v = Vec::new();
+        let all = [
+            Realization::Eroded,
+            Realization::Blueprint,
+            Realization::Dilated,
+        ];
+        // The resonance is evaluated on the eroded design and the blueprint (the dilated one
+        // adds material everywhere, and its grey fill carried spurious low modes).
+        let (realizations, resonant): (&[Realization], &[Realization]) = if robust {
+            (&all, &all[..2])
+        } else {
+            (&all[1..2], &all[1..2])
+        };
         if robust {
-            v.extend(
-                [
-                    Realization::Eroded,
-                    Realization::Blueprint,
-                    Realization::Dilated,
-                ]
-                .map(Constraint::Worst),
-            );
+            let worst = if maximizes_resonance(p) {
+                resonant
+            } else {
+                realizations
+            };
+            v.extend(worst.iter().map(|&r| Constraint::Worst(r)));
+        }
+        if maximizes_resonance(p) {
+            v.extend(realizations.iter().map(|&r| Constraint::Workspace(r)));
         }
         if p.energy_limit.is_some() {
             v.push(Constraint::Energy);
@@ -342,8 +422,14 @@ impl<'p> Optimizer<'p> {
         if p.stress.is_some() {
             v.push(Constraint::Stress);
         }
+        if matches!(p.resonance, Some(Resonance::Bound { .. })) {
+            v.extend(resonant.iter().map(|&r| Constraint::Resonance(r)));
+        }
         if p.volume_fraction.is_some() {
             v.push(Constraint::Volume);
+        }
+        if p.min_volume_fraction.is_some() {
+            v.push(Constraint::MinVolume);
         }
         v
     }
@@ -474,13 +560,11 @@ impl<'p> Optimizer<'p> {
             } else {
                 1.0
             };
-            let phi0 = bp.values[ResponseKind::Objective]
-                .abs()
-                .max(f64::MIN_POSITIVE);
+            let phi0 = bp.values[self.maximized()].abs().max(f64::MIN_POSITIVE);
             // The bound starts at the worst case with ξ = ½ (a feasible start), in a unit kept
             // above the floor of the module docs ("Objective and constraints").
             let worst = (self.worst(ev) / phi0).max(BOUND_FLOOR);
-            let bound = if self.params.robust.is_some() {
+            let bound = if self.has_bound_variable() {
                 2.0 * worst
             } else {
                 0.0
@@ -491,7 +575,7 @@ impl<'p> Optimizer<'p> {
                 tilt: d2.max(f64::MIN_POSITIVE),
                 bound,
             });
-            if bound > 0.0 {
+            if bound != 0.0 {
                 let n = self.evaluator.n();
                 self.x[n] = 0.5;
             }
@@ -501,7 +585,7 @@ impl<'p> Optimizer<'p> {
             let best = self
                 .history
                 .iter()
-                .map(|r| r.objective / phi0)
+                .map(|r| self.maximized_value(r.objective) / phi0)
                 .fold(1.0, f64::max);
             let worst = self.worst(ev) / phi0;
             self.reset_bound(worst.max(BOUND_FLOOR * best))?;
@@ -517,6 +601,21 @@ impl<'p> Optimizer<'p> {
             self.volume_target = Some(volume_target(vf, d, bp));
         }
         Ok(())
+    }
+
+    /// Whether the MMA problem has the bound variable ξ of the robust formulation.
+    fn has_bound_variable(&self) -> bool {
+        self.x.len() > self.evaluator.n()
+    }
+
+    /// A history record's objective in the unit of the maximized response (the resonance
+    /// aggregate Λ = (2πf)² from the frequency the history records).
+    fn maximized_value(&self, objective: f64) -> f64 {
+        if maximizes_resonance(self.evaluator.problem) {
+            (2.0 * std::f64::consts::PI * objective).powi(2)
+        } else {
+            objective
+        }
     }
 
     /// Sets the bound to `tau`, the worst case of the current design τ = min_r Φ_r/|Φ⁰| (its
@@ -557,12 +656,36 @@ impl<'p> Optimizer<'p> {
         })
     }
 
-    /// The worst objective over the realizations (the blueprint's without robustness).
+    /// The response the design maximizes: the workspace (or output displacement), or the
+    /// resonance aggregate Λ.
+    fn maximized(&self) -> ResponseKind {
+        if maximizes_resonance(self.evaluator.problem) {
+            ResponseKind::Resonance
+        } else {
+            ResponseKind::Objective
+        }
+    }
+
+    /// The worst maximized response over the realizations (the blueprint's without
+    /// robustness).
     fn worst(&self, ev: &Evaluation) -> f64 {
+        let q = self.maximized();
         ev.realizations
             .iter()
-            .map(|r| r.values[ResponseKind::Objective])
+            .filter(|r| r.gradients[q].is_some() || q == ResponseKind::Objective)
+            .map(|r| r.values[q])
             .fold(f64::INFINITY, f64::min)
+    }
+
+    /// What the design maximizes, as recorded: the worst workspace (or output displacement),
+    /// or the worst realization's aggregate first frequency `√Λ/2π` \[Hz\].
+    fn objective_value(&self, ev: &Evaluation) -> f64 {
+        let w = self.worst(ev);
+        if maximizes_resonance(self.evaluator.problem) {
+            w.max(0.0).sqrt() / (2.0 * std::f64::consts::PI)
+        } else {
+            w
+        }
     }
 
     /// The scaled MMA problem (module docs, "Objective and constraints").
@@ -581,25 +704,23 @@ impl<'p> Optimizer<'p> {
             g.resize(nx, 0.0);
             g
         };
-        let (f0, df0) = if sc.bound > 0.0 {
+        let q = self.maximized();
+        let (f0, df0) = if sc.bound != 0.0 {
             let mut d = vec![0.0; nx];
             d[n] = -s * sc.bound;
             (-s * sc.bound * self.x[n], d)
         } else {
-            let phi = bp.values[ResponseKind::Objective];
-            (
-                -s * phi / sc.objective,
-                grad(bp, ResponseKind::Objective, -s / sc.objective),
-            )
+            let phi = bp.values[q];
+            (-s * phi / sc.objective, grad(bp, q, -s / sc.objective))
         };
         let (mut g, mut dg) = (Vec::new(), Vec::new());
         for c in &self.constraints {
             let (value, row) = match *c {
                 Constraint::Worst(kind) => {
                     let r = ev.get(kind).expect("robust realization");
-                    let mut row = grad(r, ResponseKind::Objective, -1.0 / sc.objective);
+                    let mut row = grad(r, q, -1.0 / sc.objective);
                     row[n] = sc.bound;
-                    let phi = r.values[ResponseKind::Objective] / sc.objective;
+                    let phi = r.values[q] / sc.objective;
                     (sc.bound * self.x[n] - phi, row)
                 }
                 Constraint::Energy => {
@@ -635,6 +756,36 @@ impl<'p> Optimizer<'p> {
                         grad(r, ResponseKind::Volume, 1.0 / target),
                     )
                 }
+                Constraint::Workspace(kind) => {
+                    let r = ev.get(kind).expect("an evaluated realization");
+                    let a = match problem.resonance {
+                        Some(Resonance::Maximize { min_area }) => min_area,
+                        _ => 1.0,
+                    };
+                    (
+                        1.0 - r.values[ResponseKind::Objective] / a,
+                        grad(r, ResponseKind::Objective, -1.0 / a),
+                    )
+                }
+                Constraint::MinVolume => {
+                    let v = problem.min_volume_fraction.unwrap_or(1.0);
+                    (
+                        1.0 - bp.values[ResponseKind::Volume] / v,
+                        grad(bp, ResponseKind::Volume, -1.0 / v),
+                    )
+                }
+                Constraint::Resonance(kind) => {
+                    let r = ev.get(kind).expect("an evaluated realization");
+                    let f = match problem.resonance {
+                        Some(Resonance::Bound { min_hz }) => min_hz,
+                        _ => 1.0,
+                    };
+                    let l_min = (2.0 * std::f64::consts::PI * f).powi(2);
+                    (
+                        1.0 - r.values[ResponseKind::Resonance] / l_min,
+                        grad(r, ResponseKind::Resonance, -1.0 / l_min),
+                    )
+                }
             };
             g.push(value);
             dg.extend(row);
@@ -668,7 +819,7 @@ impl<'p> Optimizer<'p> {
         IterationRecord {
             iteration: k,
             area: bp.area,
-            objective: self.worst(ev),
+            objective: self.objective_value(ev),
             f0: sc.f0,
             constraints: sc.g.clone(),
             energy: bp.values[ResponseKind::Energy],
@@ -688,6 +839,10 @@ impl<'p> Optimizer<'p> {
             area_eroded: ev.get(Realization::Eroded).map(|r| r.area),
             area_dilated: ev.get(Realization::Dilated).map(|r| r.area),
             stress: stress_real.stress_max.zip(allowable).map(|(s, a)| s * a),
+            frequencies: bp
+                .modes
+                .as_ref()
+                .map_or_else(Vec::new, |m| m.frequencies.clone()),
         }
     }
 
@@ -810,6 +965,11 @@ impl<'p> Optimizer<'p> {
             }
         }
     }
+}
+
+/// Whether the problem maximizes the stage's first natural frequency.
+fn maximizes_resonance(p: &Problem) -> bool {
+    matches!(p.resonance, Some(Resonance::Maximize { .. }))
 }
 
 /// `max s / Σ_S` of a realization's stress response (1 when there is no stress).
