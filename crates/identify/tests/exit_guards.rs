@@ -76,3 +76,34 @@ fn ljung_non_finite_estimate_is_refused() {
         "{msg}"
     );
 }
+
+/// The second hardening review: stage identification on a record whose x_nom1 is 1e300 times too large returned
+/// k_in1, k_pea1 and c_in1 exactly at the guess with exit 0 (only the x_in1 row was stuck; the
+/// guard needed every row stuck). The record itself is now refused by its range, and a row
+/// stuck at the guess is refused by name even when the others moved.
+#[test]
+fn ljung_one_row_stuck_at_the_guess_is_refused_by_name() {
+    let mut record = simulate(&samples::paper_simulation(0.5, true, false)).unwrap();
+    record.x_nom[0].iter_mut().for_each(|v| *v *= 1e300);
+    let msg = message(identify(
+        &record,
+        &samples::table4_guess(),
+        &IdentifyParams::default(),
+    ));
+    assert!(
+        msg.contains("x_in1") && msg.contains("initial guess"),
+        "{msg}"
+    );
+    assert!(!msg.contains("q_o1") && !msg.contains("x_in2"), "{msg}");
+    let e = flexstage_identify::StageRecord::new(
+        record.t.clone(),
+        record.x_nom.clone(),
+        record.x_in.clone(),
+        record.q.clone(),
+        None,
+        1e-3,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("x_nom1[0]") && e.contains("beyond ±1 m"), "{e}");
+}

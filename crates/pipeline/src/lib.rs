@@ -103,6 +103,6 @@ pub use flexstage_control::{
     registry::{CONTROLLERS, Controller},
 };
 pub use flexstage_piezo::WaveShape;
-pub use flexstage_scenario::Scenario;
+pub use flexstage_scenario::{DesignEstimate, Scenario, limit};
 pub use flexstage_verify::outline::Unit;
 pub use flexstage_verify::{Verification, VerifyParams};
