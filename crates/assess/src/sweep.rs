@@ -109,14 +109,15 @@ pub fn sweep(
     Ok(out)
 }
 
-/// The figure: RMS error (mean of both axes, % of range, log10) against the fast
+/// The figure: RMS error (mean of both axes, % of range, on a log axis) against the fast
 /// component's frequency in % of the first resonance, one line per candidate.
 pub fn figure(points: &[SweepPoint], candidates: &[&Controller]) -> Result<String> {
     let mut fig = Figure::new(
         "Lissajous 3:1 on the twin: error against scan frequency",
         "fast component [% of first resonance]",
-        "log10 RMS error [% of range], mean of q1, q2",
-    );
+        "RMS error [% of range], mean of q1, q2",
+    )
+    .log10_y();
     for (j, c) in candidates.iter().enumerate() {
         let pts = points
             .iter()

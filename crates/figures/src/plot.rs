@@ -128,6 +128,9 @@ pub struct Figure {
     pub range: Option<(f64, f64, f64, f64)>,
     /// Legend placement.
     pub legend: Legend,
+    /// Logarithmic axes (x, y): the data are given as log₁₀ of the quantity, and the axis is
+    /// labelled at the decades with the quantity itself (10, 100, 1k, …).
+    pub log10: (bool, bool),
 }
 
 /// Errors of the figure writer.
@@ -206,7 +209,20 @@ impl Figure {
             size: (800, 500),
             range: None,
             legend: Legend::UpperRight,
+            log10: (false, false),
         }
+    }
+
+    /// The x values are log₁₀ of the quantity: label the x axis at the decades.
+    pub fn log10_x(mut self) -> Self {
+        self.log10.0 = true;
+        self
+    }
+
+    /// The y values are log₁₀ of the quantity: label the y axis at the decades.
+    pub fn log10_y(mut self) -> Self {
+        self.log10.1 = true;
+        self
     }
 
     /// Adds a series.
@@ -323,14 +339,29 @@ impl Figure {
             .y_label_area_size(Y_LABEL_AREA)
             .build_cartesian_2d(x0..x1, y0..y1)
             .map_err(|e| self.draw_err(&e))?;
-        chart
-            .configure_mesh()
-            .x_desc(&self.x_label)
+        // On a log₁₀ axis ask for ticks every half decade at most (plotters' steps are 1, 2, 5
+        // × 10ⁿ, so the decades are among them) and label only the decades.
+        let ticks = |log: bool, span: f64, linear: usize| {
+            if log {
+                ((2.0 * span).floor() as usize + 1).clamp(2, 41)
+            } else {
+                linear
+            }
+        };
+        let decade = |v: &f64| decade_label(*v);
+        let mut mesh = chart.configure_mesh();
+        if self.log10.0 {
+            mesh.x_label_formatter(&decade);
+        }
+        if self.log10.1 {
+            mesh.y_label_formatter(&decade);
+        }
+        mesh.x_desc(&self.x_label)
             .y_desc(&self.y_label)
             .label_style(font(TICK_SIZE))
             .axis_desc_style(font(AXIS_NAME_SIZE))
-            .x_labels(x_ticks)
-            .y_labels(y_ticks)
+            .x_labels(ticks(self.log10.0, x1 - x0, x_ticks))
+            .y_labels(ticks(self.log10.1, y1 - y0, y_ticks))
             .max_light_lines(2)
             .light_line_style(RGBColor(238, 238, 238))
             .bold_line_style(RGBColor(215, 215, 215))
@@ -378,6 +409,27 @@ impl Figure {
                 .map_err(|e| self.draw_err(&e))?;
         }
         Ok(())
+    }
+}
+
+/// The tick label of a log₁₀ axis at `v`: the quantity `10^v` at a decade (0.01, 0.1, 1, 10,
+/// 100, 1k, 10k, 100k, 1M; else 1eN), nothing between decades.
+pub fn decade_label(v: f64) -> String {
+    let k = v.round();
+    if (v - k).abs() > 1e-6 {
+        return String::new();
+    }
+    match k as i32 {
+        -2 => "0.01".into(),
+        -1 => "0.1".into(),
+        0 => "1".into(),
+        1 => "10".into(),
+        2 => "100".into(),
+        3 => "1k".into(),
+        4 => "10k".into(),
+        5 => "100k".into(),
+        6 => "1M".into(),
+        n => format!("1e{n}"),
     }
 }
 
@@ -510,6 +562,43 @@ mod tests {
             assert!(svg.contains(text), "missing {text}");
         }
         assert!(svg.matches("<polyline").count() >= 2);
+    }
+
+    #[test]
+    fn log10_axes_are_labelled_at_the_decades_only() {
+        // Goal: a frequency axis given as log10 f reads 10, 100, 1k, 10k (not 1.0 … 4.5), and
+        // a log10 y axis likewise; no label between decades.
+        assert_eq!(decade_label(3.0), "1k");
+        assert_eq!(decade_label(-1.0), "0.1");
+        assert_eq!(decade_label(2.5), "");
+        assert_eq!(decade_label(9.0), "1e9");
+        let pts: Vec<(f64, f64)> = (0..=70)
+            .map(|k| (1.0 + 0.05 * k as f64, k as f64))
+            .collect();
+        let svg = Figure::new("Bode", "frequency [Hz]", "gain")
+            .log10_x()
+            .with(Series::line("g", pts))
+            .to_svg()
+            .unwrap();
+        // plotters writes each text on a line of its own.
+        let has = |svg: &str, label: &str| svg.contains(&format!("\n{label}\n"));
+        for label in ["100", "1k", "10k"] {
+            assert!(has(&svg, label), "missing {label}");
+        }
+        for label in ["1.5", "2.0", "3.5"] {
+            assert!(!has(&svg, label), "half-decade label {label}");
+        }
+        let pts: Vec<(f64, f64)> = (0..=20)
+            .map(|k| (k as f64, -2.0 + 0.2 * k as f64))
+            .collect();
+        let svg = Figure::new("error", "f", "RMS [%]")
+            .log10_y()
+            .with(Series::line("e", pts))
+            .to_svg()
+            .unwrap();
+        for label in ["0.01", "0.1", "1", "10", "100"] {
+            assert!(has(&svg, label), "missing {label}");
+        }
     }
 
     #[test]

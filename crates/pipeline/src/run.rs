@@ -19,13 +19,9 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use flexstage_report::{Headline, headline_rows};
-use flexstage_run::files::design::DesignSummaryFile;
-use flexstage_run::files::reduce::ReduceSummaryJson;
 use flexstage_run::files::stage::ParameterRow as TableRow;
-use flexstage_run::files::track::MetricsRow;
 use flexstage_run::format::Rows;
-use flexstage_run::layout::{self, Tracking};
+use flexstage_run::layout;
 use flexstage_scenario::Scenario;
 
 use crate::design::{DesignOptions, DesignStart, DesignSummary, design};
@@ -40,6 +36,7 @@ use crate::stage_id::{
     identify_stage_on, table_rows,
 };
 use crate::state::{Mismatch, RunState, fnv1a, scenario_hash};
+use crate::summary::verdict::Verdict;
 use crate::track::{PlantKind, TrackOptions, TrackSummary, TwinBuild, track_on, try_build};
 use crate::twin::{TwinOptions, TwinSummary, write_twin_of};
 
@@ -163,8 +160,8 @@ pub struct RunSummary {
     pub root: PathBuf,
     /// Wall-clock time of this call \[s\].
     pub seconds: f64,
-    /// The headline numbers (the report's summary table).
-    pub headline: Vec<(String, String)>,
+    /// What was designed, whether it is safe, which controller to use, what was limited.
+    pub verdict: Verdict,
     /// The identified stage parameters against the truth (Table 4).
     pub identified: Vec<ParameterRow>,
     /// The report (absolute when it can be resolved).
@@ -238,26 +235,10 @@ pub fn run(
     Ok(RunSummary {
         root: root.to_path_buf(),
         seconds: t0.elapsed().as_secs_f64(),
-        headline: headline(&folder)?,
+        verdict: Verdict::of(folder.dir())?,
         identified: table.map(|t| table_rows(&t)).unwrap_or_default(),
         report: std::fs::canonicalize(&report).unwrap_or(report),
     })
-}
-
-/// The headline numbers of the run from its typed results: the stage summaries this call
-/// stored, or those an earlier call did (read once).
-fn headline(folder: &RunFolder) -> Result<Vec<(String, String)>> {
-    let dir = folder.dir();
-    let design = dir.load::<DesignSummaryFile>(layout::design::SUMMARY)?;
-    let reduce = dir.load::<ReduceSummaryJson>(layout::reduce::SUMMARY_JSON)?;
-    let table = dir.load::<Rows<TableRow>>(layout::stage::TABLE)?;
-    let metrics = dir.load::<Rows<MetricsRow>>(&Tracking::main().metrics())?;
-    Ok(headline_rows(&Headline {
-        design: design.as_deref(),
-        reduce: reduce.as_ref().map(|r| &r.0),
-        identified: table.as_ref().map(|t| t.0.as_slice()),
-        tracking: metrics.as_ref().map(|t| t.0.as_slice()),
-    }))
 }
 
 /// The state `run` starts from, and whether it resumes: records the scenario in the locked

@@ -4,6 +4,8 @@
 //! One place formats every summary, so `flexstage run`, the single-stage commands and any
 //! other caller of the pipeline show the same numbers with the same units.
 
+pub mod verdict;
+
 use std::fmt;
 use std::path::Path;
 
@@ -38,8 +40,11 @@ impl fmt::Display for DesignSummary {
         }
         writeln!(
             f,
-            "{:?} after {} iterations in {:.1} s ({:.3} s/iteration)",
-            self.stop, self.iterations, self.seconds, self.seconds_per_iteration
+            "design {} after {} iterations in {:.1} s ({:.3} s/iteration)",
+            verdict::stop_in_words(&format!("{:?}", self.stop)),
+            self.iterations,
+            self.seconds,
+            self.seconds_per_iteration
         )?;
         for line in self.design.lines() {
             writeln!(f, "{line}")?;
@@ -588,21 +593,21 @@ impl fmt::Display for RunSummary {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let (root, seconds) = (self.root.display(), self.seconds);
         writeln!(f, "\n== flexstage run: {root} ({seconds:.1} s)")?;
-        for (k, v) in &self.headline {
-            writeln!(f, "  {k:<48} {v}")?;
-        }
-        if !self.identified.is_empty() {
-            writeln!(f, "  identified stage parameters (estimate vs truth):")?;
-        }
-        for r in self.identified.iter().filter(|r| r.truth.is_some()) {
+        self.verdict.fmt(f)?;
+        let worst = self
+            .identified
+            .iter()
+            .filter_map(|r| r.error_pct())
+            .filter(|v| v.is_finite())
+            .fold(None, |m: Option<f64>, v| {
+                Some(m.map_or(v.abs(), |m| m.max(v.abs())))
+            });
+        if let Some(w) = worst {
             writeln!(
                 f,
-                "    {:<8} {:>12} vs {:>12} {:<6} ({:>6} %)",
-                r.name,
-                fmt_num(r.estimate),
-                r.truth.map(fmt_num).unwrap_or_default(),
-                r.unit,
-                r.error_pct().map(fmt_num).unwrap_or_default()
+                "stage identification (Table 4): largest error against the truth {} % (every \
+                 parameter in identify/stage/table.csv)",
+                fmt_num(w)
             )?;
         }
         writeln!(f, "report: {}", self.report.display())

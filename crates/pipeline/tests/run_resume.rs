@@ -64,7 +64,8 @@ fn run_resumes_and_refuses_another_scenario_until_restarted() {
     // Checkpoints were written (every 2 of 4 iterations) and removed with the finished design.
     assert!(root.join(layout::design::DESIGN).is_file());
     assert!(!root.join(layout::design::CHECKPOINT).exists());
-    assert!(!s.headline.is_empty(), "headline numbers");
+    let v = &s.verdict;
+    assert!(v.design.is_some() && v.control.is_some(), "verdict: {v:?}");
     let names = Stage::ALL.map(Stage::name);
     let state = RunState::load(&RunDir::create(&root).unwrap(), &names)
         .unwrap()

@@ -380,9 +380,16 @@ impl DesignSummary {
             // mirror symmetry to keep: those lines would report numbers nobody asked for.
             out.push(sizes);
         } else {
+            let over = match self.constrained_stress {
+                Some(c) if c > self.design_allowable => format!(
+                    " OVER its bound by {:.1} %",
+                    100.0 * (c / self.design_allowable - 1.0)
+                ),
+                _ => String::new(),
+            };
             out.push(format!(
                 "design-mesh von Mises: peak of the solid {:.1} MPa, constrained (relaxed) {} \
-                 MPa (bound {:.1} MPa = allowable {:.1} MPa / mesh factor)",
+                 MPa{over} (bound {:.1} MPa = allowable {:.1} MPa / mesh factor)",
                 self.peak_stress / 1e6,
                 self.constrained_stress
                     .map_or("-".into(), |v| format!("{:.1}", v / 1e6)),
@@ -479,6 +486,16 @@ mod tests {
             "{text}"
         );
         assert!(text.contains("amplification α = 1.500"), "{text}");
+        // The constrained stress (70 MPa) over its bound (32 MPa) is flagged on the line.
+        assert!(
+            text.contains("70.0 MPa OVER its bound by 118.8 %"),
+            "{text}"
+        );
+        let within = DesignSummary {
+            constrained_stress: Some(30e6),
+            ..stage()
+        };
+        assert!(!within.lines().join("\n").contains("OVER"));
         let mechanism = DesignSummary {
             mechanism: Some(MechanismSummary {
                 direction: [-1.0, 0.0],

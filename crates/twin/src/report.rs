@@ -9,7 +9,7 @@
 //! and for the lumped 8-state model (Eq. 36) the controller is designed on; the CSV has the
 //! four entries of both 2 × 2 matrices.
 
-use flexstage_figures::plot::{Figure, Series};
+use flexstage_figures::plot::{Figure, Legend, Series};
 use flexstage_sim::model::StageModel;
 use nalgebra::{Complex, DMatrix};
 use serde::Serialize;
@@ -186,7 +186,11 @@ impl Bode {
                     "|q/x_nom| [dB]",
                 )
             };
-            let fig = Figure::new(title, "log10 f [Hz]", unit)
+            // The legend sits lower left, where neither the flat static gain nor the falling
+            // high-frequency magnitude and phase run.
+            let fig = Figure::new(title, "frequency [Hz]", unit)
+                .log10_x()
+                .with_legend(Legend::LowerLeft)
                 .with(Series::line(
                     "twin q1 (common x_nom)",
                     series(&self.twin, 0, phase),

@@ -74,7 +74,26 @@ pub(super) fn design(b: &mut Builder) {
             .map(|s| format!(", workspace {} µm²", fmt_num(s.area_final_m2 * 1e12)))
             .unwrap_or_default();
         let caption = format!("{}: density ρ{area}", d.label());
-        b.file_figure(&d.rel(files::DENSITY_PNG), &caption, Width::Half);
+        let rel = d.rel(files::DENSITY_PNG);
+        let scenario = b.load::<Scenario>(&d.rel(layout::SCENARIO));
+        match (scenario, b.exists(&rel)) {
+            (Some(s), true) => {
+                let Some(png) = b.read(&rel) else { continue };
+                b.shown.push(rel.clone());
+                let caption = format!(
+                    "{caption}; supports, PEA input nodes and output as the scenario sets them"
+                );
+                b.svg(
+                    &super::design_picture::svg(&png, &s),
+                    &caption,
+                    Some(&rel),
+                    Width::Half,
+                );
+            }
+            _ => {
+                b.file_figure(&rel, &caption, Width::Half);
+            }
+        }
     }
     b.grid_close();
     workspace(b, &shown);
@@ -135,35 +154,72 @@ fn workspace(b: &mut Builder, shown: &[Shown]) {
     }
 }
 
-/// Section "convergence": area growth, volume and grey fraction over the iterations.
+/// Section "convergence": the workspace area, volume and grey fraction over the iterations.
+///
+/// The area is drawn in µm² as the optimizer saw it at each iteration (`area_m2` of the
+/// history: its own analysis of the filtered and projected iterate), with the final analyses
+/// of the uniform start design and of the finished design as two markers: the summary's
+/// growth factor is the ratio of those two, which a ratio to the history's first iterate
+/// would not show (the two analyses of the start differ).
 pub(super) fn convergence(b: &mut Builder) {
     let Some(history) = b.load::<Table>(files::HISTORY_CSV) else {
         b.missing(files::HISTORY_CSV);
         return;
     };
-    let c = match history.columns(&["iteration", "area_rel", "volume_fraction", "grey"]) {
+    let c = match history.columns(&["iteration", "area_m2", "volume_fraction", "grey"]) {
         Ok(c) => c,
         Err(reason) => return b.damaged(files::HISTORY_CSV, reason),
     };
-    let pts = |k: usize| -> Vec<(f64, f64)> {
+    let pts = |k: usize, scale: f64| -> Vec<(f64, f64)> {
         c[0].iter()
             .zip(c[k])
             .filter(|(a, b)| a.is_finite() && b.is_finite())
-            .map(|(a, b)| (*a, *b))
+            .map(|(a, b)| (*a, *b * scale))
             .collect()
     };
-    let area = Figure::new(
+    let mut area = Figure::new(
         "Workspace area over the design iterations",
         "iteration",
-        "area / initial area",
+        "workspace area [µm²]",
     )
     .with_legend(Legend::LowerRight)
-    .with(Series::line("area growth", pts(1)));
+    .with(Series::line(
+        "optimizer's analysis of each iterate",
+        pts(1, 1e12),
+    ));
+    let summary = b.load::<DesignSummaryFile>(files::SUMMARY);
+    let last = c[0]
+        .iter()
+        .copied()
+        .filter(|i| i.is_finite())
+        .fold(0.0, f64::max);
+    let mut caption = "Workspace area (history.csv, area_m2)".to_string();
+    if let Some(s) = &summary {
+        area = area.with(
+            Series::points(
+                "final analysis: uniform start, design",
+                vec![
+                    (0.0, s.area_initial_m2 * 1e12),
+                    (last, s.area_final_m2 * 1e12),
+                ],
+            )
+            .with_color(1),
+        );
+        caption = format!(
+            "Workspace area: the optimizer's analysis of each iterate (filtered and projected \
+             densities), and the final analysis (total Lagrangian, no additive material) of the \
+             uniform start design, {} µm², and of the design, {} µm²: the growth ×{} of the \
+             summary is between these two",
+            fmt_num(s.area_initial_m2 * 1e12),
+            fmt_num(s.area_final_m2 * 1e12),
+            fmt_num(s.area_final_m2 / s.area_initial_m2)
+        );
+    }
     let fractions = Figure::new("Volume and grey fraction", "iteration", "fraction")
-        .with(Series::line("volume", pts(2)))
-        .with(Series::line("grey (0.1 < ρ < 0.9)", pts(3)));
+        .with(Series::line("volume", pts(2, 1.0)))
+        .with(Series::line("grey (0.1 < ρ < 0.9)", pts(3, 1.0)));
     for (fig, caption) in [
-        (area, "Area growth"),
+        (area, caption.as_str()),
         (fractions, "Volume and grey fraction"),
     ] {
         if let Ok(svg) = fig.to_svg() {

@@ -50,7 +50,11 @@ pub(super) fn rows(d: &DesignRecord, limits: SizeLimits) -> Vec<Vec<String>> {
     };
     let mpa = |s: Option<f64>| s.map(|s| format!("{} MPa", fmt_num(s * 1e-6)));
     let um2 = |a: Option<f64>| a.map(|a| format!("{} µm²", fmt_num(a * 1e12)));
-    row("α (Eq. 27)", Some(fmt_num(d.alpha)), String::new());
+    row(
+        "α (Eq. 27)",
+        Some(fmt_num(d.alpha)),
+        "output loaded by the optimizer's spring, at the stroke".into(),
+    );
     // Rounding noise of a symmetric design (1e-16°) reads as 0°.
     let theta = if d.theta_deg.abs() < 1e-9 {
         0.0
@@ -132,7 +136,7 @@ pub(super) fn rows(d: &DesignRecord, limits: SizeLimits) -> Vec<Vec<String>> {
     row(
         "first natural frequency",
         d.first_frequency_hz.map(|f| format!("{} Hz", fmt_num(f))),
-        String::new(),
+        "design mesh without the PEA plate masses".into(),
     );
     out
 }

@@ -23,6 +23,7 @@
 //! [`Builder::other_figures`] embeds every figure of a folder not shown yet.
 
 mod design;
+mod design_picture;
 mod design_summary;
 mod front;
 mod page;
@@ -476,7 +477,7 @@ pub fn headline_rows(h: &Headline) -> Vec<(String, String)> {
             String::new()
         };
         rows.push((
-            "workspace area (initial → final)".into(),
+            "workspace area, final analyses (uniform start → design)".into(),
             format!(
                 "{} µm² → {} µm²{growth}",
                 fmt_num(a0 * 1e12),
@@ -484,19 +485,31 @@ pub fn headline_rows(h: &Headline) -> Vec<(String, String)> {
             ),
         ));
         rows.push((
-            "α, design's final analysis (Eq. 27)".into(),
+            "mass of the design".into(),
+            format!("{} g", fmt_num(d.design.mass * 1e3)),
+        ));
+        rows.push((
+            "α (Eq. 27), design, output loaded by the optimizer's spring".into(),
             fmt_num(d.design.alpha),
         ));
         rows.push((
             "design iterations".into(),
-            format!("{} in {} s ({})", d.iterations, fmt_num(d.seconds), d.stop),
+            format!(
+                "{} in {} s ({})",
+                d.iterations,
+                fmt_num(d.seconds),
+                d.stop_in_words()
+            ),
         ));
     }
     if let Some(r) = h.reduce {
-        rows.push(("α, reduced model (Eq. 27)".into(), fmt_num(r.alpha_scalar)));
+        rows.push((
+            "α (Eq. 27), reduced model, output free".into(),
+            fmt_num(r.alpha_scalar),
+        ));
         if let Some(f) = r.modal.as_ref().and_then(|m| m.frequencies_hz.first()) {
             rows.push((
-                "first natural frequency".into(),
+                "first natural frequency, reduced model".into(),
                 format!("{} Hz", fmt_num(*f)),
             ));
         }

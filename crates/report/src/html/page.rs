@@ -24,8 +24,9 @@ figure svg,figure img{display:block;width:100%;height:auto;border:1px solid #dde
 background:#fff;cursor:zoom-in}\
 figure img.px{image-rendering:pixelated}\
 figcaption{font-size:14px;color:#445;margin-top:4px}figcaption .src{color:#889;font-size:13px}\
-table{border-collapse:collapse;font-size:14px;margin:8px 0}td,th{border:1px solid #ccd;\
-padding:3px 9px;text-align:right}th{background:#eef1f6}table.kv th,td.l,th.l,td:first-child,th:first-child{text-align:left}\
+table{border-collapse:collapse;font-size:14px;margin:8px 0;max-width:100%}\
+td,th{border:1px solid #ccd;padding:3px 9px;text-align:right;overflow-wrap:anywhere}\
+th{background:#eef1f6;vertical-align:bottom}table.kv th,td.l,th.l,td:first-child,th:first-child{text-align:left}\
 tr.part td{background:#f6f7fa;text-align:left;font-weight:600}\
 .notrun{color:#a33;font-style:italic}.error{color:#fff;background:#a33;padding:4px 8px}.notrun span{color:#888;font-size:13px}\
 .note{color:#445;font-size:14px;max-width:960px}\

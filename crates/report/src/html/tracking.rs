@@ -8,7 +8,7 @@ use flexstage_figures::cloud::Cloud;
 use flexstage_figures::plot::{Figure, Legend, Multiples, Series};
 use flexstage_run::Table;
 use flexstage_run::files::track::{MarginRow, MetricsRow};
-use flexstage_run::format::{Row, Rows};
+use flexstage_run::format::Rows;
 use flexstage_run::layout::Tracking;
 
 use super::{Builder, Width, cell, fmt_num};
@@ -16,19 +16,36 @@ use super::{Builder, Width, cell, fmt_num};
 /// One shown cell of a `metrics.csv` row.
 type MetricCell = fn(&MetricsRow) -> String;
 
-/// The columns of `metrics.csv` the report shows, in the file's order.
+/// The columns of `metrics.csv` the report shows, in the file's order, with headers for
+/// people (the file's column names are for programs).
 const METRICS_SHOWN: [(&str, MetricCell); 11] = [
     ("trajectory", |r| r.trajectory.clone()),
-    ("variant", |r| r.variant.clone()),
-    ("rms1_nm", |r| cell(r.rms1_nm)),
-    ("rms2_nm", |r| cell(r.rms2_nm)),
-    ("rms1_pct", |r| cell(r.rms1_pct)),
-    ("rms2_pct", |r| cell(r.rms2_pct)),
-    ("max1_nm", |r| cell(r.max1_nm)),
-    ("max2_nm", |r| cell(r.max2_nm)),
-    ("peak_voltage_V", |r| cell(r.peak_voltage_v)),
-    ("saturated_samples", |r| r.saturated_samples.to_string()),
+    ("controller", |r| r.variant.clone()),
+    ("RMS error q1 [nm]", |r| cell(r.rms1_nm)),
+    ("RMS error q2 [nm]", |r| cell(r.rms2_nm)),
+    ("RMS q1 [% of range]", |r| cell(r.rms1_pct)),
+    ("RMS q2 [% of range]", |r| cell(r.rms2_pct)),
+    ("largest error q1 [nm]", |r| cell(r.max1_nm)),
+    ("largest error q2 [nm]", |r| cell(r.max2_nm)),
+    ("peak voltage [V]", |r| cell(r.peak_voltage_v)),
+    ("samples at the amplifier's limit", |r| {
+        r.saturated_samples.to_string()
+    }),
     ("status", |r| r.status.clone()),
+];
+
+/// The headers of the margins table: every column of `margins.csv` but the method.
+const MARGIN_HEADER: [&str; 10] = [
+    "controller",
+    "loop delay [samples]",
+    "loop",
+    "gain margin [dB]",
+    "phase crossover [Hz]",
+    "phase margin [°]",
+    "gain crossover [Hz]",
+    "delay margin [samples]",
+    "keeps 6 dB / 40°",
+    "Monte-Carlo pass [%]",
 ];
 
 /// A margin cell: the value to the file's precision, shortened; empty when there is none.
@@ -39,11 +56,7 @@ fn margin(v: Option<f64>, digits: usize) -> String {
 
 /// The rows of `margins.csv` as the report shows them (every column but the method).
 fn margin_table(rows: &[MarginRow]) -> (Vec<String>, Vec<Vec<String>>) {
-    let header = <MarginRow as Row>::HEADER
-        .iter()
-        .filter(|h| **h != "method")
-        .map(|h| h.to_string())
-        .collect();
+    let header = MARGIN_HEADER.map(String::from).to_vec();
     let rows = rows
         .iter()
         .map(|r| {
@@ -57,7 +70,7 @@ fn margin_table(rows: &[MarginRow]) -> (Vec<String>, Vec<Vec<String>>) {
                 margin(r.phase_margin_deg, 1),
                 margin(r.gain_crossover_hz, 1),
                 margin(r.delay_margin_samples, 2),
-                r.meets_targets.to_string(),
+                ["no", "yes"][r.meets_targets as usize].to_string(),
                 margin(r.montecarlo_pass_pct, 0),
             ]
         })
@@ -283,6 +296,7 @@ fn error_view(b: &mut Builder, track: &Tracking, trajectory: &str, rows: &[&Metr
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flexstage_run::format::Row;
 
     fn row(trajectory: &str, variant: &str, rms: [f64; 2]) -> MetricsRow {
         MetricsRow {
@@ -359,7 +373,11 @@ mod tests {
             v[2].contains("not ranked") && v[2].ends_with(": robust."),
             "{v:?}"
         );
-        let (_, shown) = margin_table(&margins);
+        let (header, shown) = margin_table(&margins);
+        // One header per shown column of the file (every column but the method).
+        assert_eq!(header.len(), <MarginRow as Row>::HEADER.len() - 1);
+        assert_eq!(shown[0].len(), header.len());
+        assert_eq!(shown[0][8], "yes");
         assert_eq!(shown[0][3], "6.000");
         assert_eq!(shown[2][3], "unstable");
         assert_eq!(shown[0][9], "95");

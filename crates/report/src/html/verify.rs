@@ -37,7 +37,7 @@ pub(super) fn comparison(v: &VerificationFile) -> Vec<Vec<String>> {
             "".into(),
         ],
         vec![
-            "α (Eq. 27)".into(),
+            "α (Eq. 27), output free".into(),
             val(Some(bf.transfer.alpha_scalar), 1.0, ""),
             val(dm.map(|d| d.transfer.alpha_scalar), 1.0, ""),
         ],
@@ -47,7 +47,7 @@ pub(super) fn comparison(v: &VerificationFile) -> Vec<Vec<String>> {
             val(dm.map(|d| d.transfer.theta_deg), 1.0, "°"),
         ],
         vec![
-            "first natural frequency".into(),
+            "first natural frequency, with the PEA plate masses".into(),
             val(bf.frequencies.first().copied(), 1.0, " Hz"),
             val(dm.map(|d| d.first_frequency), 1.0, " Hz"),
         ],

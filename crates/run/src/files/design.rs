@@ -175,6 +175,25 @@ pub struct DesignSummaryFile {
     pub retried_load_cases: usize,
 }
 
+impl DesignSummaryFile {
+    /// How the design stage ended, in words ([`DesignSummaryFile::stop`] spells the reason as
+    /// `Converged`, `Stagnated` or `MaxIterations`).
+    pub fn stop_in_words(&self) -> String {
+        stop_in_words(&self.stop)
+    }
+}
+
+/// A design stop reason (`Converged`, `Stagnated`, `MaxIterations`) in words; another word
+/// is kept, in lower case.
+pub fn stop_in_words(stop: &str) -> String {
+    match stop {
+        "Converged" => "converged".into(),
+        "Stagnated" => "stopped when it no longer improved (stagnated)".into(),
+        "MaxIterations" => "stopped at its iteration limit, not converged".into(),
+        other => other.to_lowercase(),
+    }
+}
+
 impl Format for DesignSummaryFile {
     fn encode(&self) -> Result<Vec<u8>, String> {
         json_sorted(self)
