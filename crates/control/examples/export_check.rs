@@ -25,7 +25,9 @@ fn write(
     law: &TargetLaw,
     sequence_of: &TargetLaw,
 ) -> std::io::Result<()> {
-    let src = law.c_source(prefix).map_err(std::io::Error::other)?;
+    let src = law
+        .c_source(prefix, &format!("{prefix}.h"))
+        .map_err(std::io::Error::other)?;
     std::fs::write(dir.join(format!("{prefix}.h")), src.header)?;
     std::fs::write(dir.join(format!("{prefix}.c")), src.source)?;
     let seq = recorded_sequence(sequence_of, 2022).map_err(std::io::Error::other)?;

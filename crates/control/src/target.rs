@@ -135,10 +135,11 @@ impl TargetLaw {
         self.actuator.compensator()
     }
 
-    /// This law as a self-contained C99 header and source whose functions are prefixed
-    /// `prefix` (a C identifier: letters, digits, `_`, not starting with a digit).
-    pub fn c_source(&self, prefix: &str) -> Result<CSource> {
-        crate::target_c::c_source(self, prefix)
+    /// This law as a self-contained C99 header and source whose functions and types are
+    /// prefixed `prefix` (a C identifier: letters, digits, `_`, not starting with a digit);
+    /// the source includes the header by the file name `header_file` (e.g. `pi-notch-ff.h`).
+    pub fn c_source(&self, prefix: &str, header_file: &str) -> Result<CSource> {
+        crate::target_c::c_source(self, prefix, header_file)
     }
 }
 
@@ -420,14 +421,29 @@ mod tests {
     /// and refuses a prefix that is no C identifier.
     #[test]
     fn c_source_is_prefixed_and_checks_the_prefix() {
-        let src = law(Compensation::Inverse).c_source("pi_notch_ff").unwrap();
+        let src = law(Compensation::Inverse)
+            .c_source("pi_notch_ff", "pi-notch-ff.h")
+            .unwrap();
         assert!(src.header.contains("pi_notch_ff_command pi_notch_ff_step("));
         assert!(
             src.source
                 .contains("static const double GAINS[2][3] = {{2e-1, 6e2, 2e-6}")
         );
-        assert!(!src.source.contains("PREFIX") && !src.source.contains("COEFFICIENTS"));
-        let e = law(Compensation::Inverse).c_source("pi-notch").unwrap_err();
+        assert!(src.source.contains("#include \"pi-notch-ff.h\""));
+        for token in [
+            "PREFIX",
+            "COEFFICIENTS",
+            "HEADER_FILE",
+            "SAMPLE_TIME_LITERAL",
+        ] {
+            assert!(
+                !src.source.contains(token) && !src.header.contains(token),
+                "{token}"
+            );
+        }
+        let e = law(Compensation::Inverse)
+            .c_source("pi-notch", "pi-notch.h")
+            .unwrap_err();
         assert!(e.to_string().contains("controller.c_prefix"), "{e}");
         assert_eq!(c_prefix("pi-notch-ff"), "pi_notch_ff");
         assert!(!is_c_identifier("9a") && is_c_identifier("_a9"));

@@ -166,9 +166,10 @@ fn coefficients(law: &TargetLaw) -> String {
     s
 }
 
-/// The header and source of `law` with functions and types prefixed `prefix`
-/// ([`TargetLaw::c_source`]); the law is checked first ([`TargetLaw::controller`]).
-pub fn c_source(law: &TargetLaw, prefix: &str) -> Result<CSource> {
+/// The header and source of `law` with functions and types prefixed `prefix`, the source
+/// including the header as `header_file` ([`TargetLaw::c_source`]); the law is checked first
+/// ([`TargetLaw::controller`]).
+pub fn c_source(law: &TargetLaw, prefix: &str, header_file: &str) -> Result<CSource> {
     if !is_c_identifier(prefix) {
         return Err(flexstage_numerics::RangeError::new(
             "controller.c_prefix",
@@ -177,10 +178,24 @@ pub fn c_source(law: &TargetLaw, prefix: &str) -> Result<CSource> {
         )
         .into());
     }
+    let plain = header_file.ends_with(".h")
+        && header_file.len() <= 100
+        && header_file
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'));
+    if !plain {
+        return Err(flexstage_numerics::RangeError::new(
+            "controller.c_header",
+            header_file.to_string(),
+            "a file name of letters, digits, -, _ and . ending in .h",
+        )
+        .into());
+    }
     law.controller()?;
     let fill = |t: &str| {
         t.replace("COEFFICIENTS", &coefficients(law))
             .replace("SAMPLE_TIME_LITERAL", &lit(law.sample_time))
+            .replace("HEADER_FILE", header_file)
             .replace("PREFIX", prefix)
     };
     Ok(CSource {

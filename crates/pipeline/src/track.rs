@@ -283,6 +283,9 @@ pub struct TrackSummary {
     pub margins: Vec<MarginRow>,
     /// The rig's sample time \[s\] (delay margins in samples).
     pub sample_time: f64,
+    /// The controllers written for a real-time target (`controllers/` of the result
+    /// folder: coefficients JSON, C99 source and header), and those not exported.
+    pub exported: crate::controllers::Exported,
 }
 
 impl TrackSummary {
@@ -618,6 +621,13 @@ pub fn track_on(
     if let Some(sc) = &scan {
         sc.write(folder.dir(), &out)?;
     }
+    let exported = crate::controllers::write_controllers(
+        folder.dir(),
+        &out,
+        &designs,
+        &options.controllers,
+        setup.actuator(options.compensation),
+    )?;
     crate::error::require_converged_tracking(&rows)?;
     Ok(TrackSummary {
         simulated: kind,
@@ -631,6 +641,7 @@ pub fn track_on(
         replaced,
         margins,
         sample_time: dt,
+        exported,
     })
 }
 
