@@ -242,6 +242,7 @@ impl Command {
             Command::Track(_) => "track",
             Command::Export(_) => "export",
             Command::Run(_) => "run",
+            Command::Controller { .. } => "controller",
             Command::Report { .. } => "report",
         }
     }

@@ -106,7 +106,7 @@ pub fn c_files(f: &ControllerFile) -> Result<CSource> {
     Ok(law.c_source(&c_prefix(&f.controller), &format!("{}.h", f.controller))?)
 }
 
-/// What [`write_controllers`] wrote.
+/// The controllers `track` wrote for a target, and those it did not export.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Exported {
     /// The controllers written (JSON, C and header).
