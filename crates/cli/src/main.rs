@@ -178,6 +178,27 @@ Examples:
   flexstage run my.toml --out runs/mine --restart"
     )]
     Run(RunArgs),
+    /// A tuned controller for a real-time target: its C99 source and header from its
+    /// coefficients file (written by `track` as <run>/track/controllers/<controller>.json).
+    #[command(
+        after_help = "`track` already writes every linear controller it ran as \
+<controller>.json, .c and .h in <run>/track/controllers/ (or the conditions' folder). This \
+command writes the C of one coefficients file again, e.g. after editing a gain, or into a \
+firmware tree: <DIR>/<controller>.c and .h, C99 with <math.h> only, functions \
+<controller>_init and <controller>_step (with - as _). The backstepping controllers are \
+nonlinear and are not exported. docs/controller-export.md says how to call them at 10 kHz.
+
+Examples:
+  flexstage controller runs/quick/track/controllers/pi-notch-ff.json
+  flexstage controller runs/quick/track/controllers/pid-ff.json --to firmware/control"
+    )]
+    Controller {
+        /// The coefficients file (JSON).
+        json: PathBuf,
+        /// Folder for the source and header (default: the folder of the JSON file).
+        #[arg(long)]
+        to: Option<PathBuf>,
+    },
     /// Rebuild <run>/report.html from a run folder (stages not run are marked "not run").
     #[command(after_help = "Examples:
   flexstage report                 # runs/quick
@@ -239,6 +260,7 @@ impl Command {
             Command::Export(_) => "export",
             Command::Front(_) => "front",
             Command::Run(_) => "run",
+            Command::Controller { .. } => "controller",
             Command::Report { .. } => "report",
         }
     }
@@ -261,6 +283,23 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Export(a) => stages::export(a),
         Command::Front(a) => stages::front(a),
         Command::Run(a) => run(a),
+        Command::Controller { json, to } => {
+            let dir = match to {
+                Some(d) => d,
+                None => json
+                    .parent()
+                    .map(std::path::Path::to_path_buf)
+                    .unwrap_or_default(),
+            };
+            let e = flexstage_pipeline::export_controller(&json, &dir)?;
+            outln!(
+                "{}: {} and {}",
+                e.controller,
+                e.source.display(),
+                e.header.display()
+            );
+            Ok(())
+        }
         Command::Report { run } => {
             anyhow::ensure!(run.is_dir(), "{} is not a run folder", run.display());
             let folder = args::opened(RunFolder::existing(&run)?);

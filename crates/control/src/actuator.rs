@@ -67,6 +67,16 @@ impl ActuatorParams {
         )?;
         positive("stroke", self.stroke)
     }
+
+    /// The settings of the inverse compensator: the amplifier range, with the default
+    /// tolerance and iteration budget.
+    pub fn compensator(&self) -> CompensatorParams {
+        CompensatorParams {
+            u_min: self.voltage_range[0],
+            u_max: self.voltage_range[1],
+            ..CompensatorParams::default()
+        }
+    }
 }
 
 /// The result of one actuator command.
@@ -93,11 +103,7 @@ impl Actuator {
     /// Builds the stage and preloads its models to the bias.
     pub fn new(params: ActuatorParams) -> Result<Actuator> {
         params.validate()?;
-        let settings = CompensatorParams {
-            u_min: params.voltage_range[0],
-            u_max: params.voltage_range[1],
-            ..CompensatorParams::default()
-        };
+        let settings = params.compensator();
         let make = |p: BoucWenParams| {
             let mut c = InverseCompensator::new(p, settings).map_err(|e| {
                 RangeError::new("hysteresis", e.to_string(), "valid compensator settings")

@@ -39,6 +39,9 @@
 //!   response, largest integral gain with ≥ 6 dB / 40°) applied with equal budget to every
 //!   loop-shaping structure, on a sampled response ([`flexstage_sim::modal::LoopPlant`]);
 //! * [`analysis`]: closed-loop poles of the sampled loop on the nominal linear model;
+//! * [`target`]: a linear controller as a real-time target runs it (`step(reference,
+//!   reading) -> command`, the law the PI + notch and PID step), its coefficients, and its
+//!   self-contained C99 source and header;
 //! * [`samples`]: settings with known answers.
 //!
 //! ```
@@ -161,6 +164,8 @@ pub mod pi_notch;
 pub mod pid;
 pub mod registry;
 pub mod samples;
+pub mod target;
+mod target_c;
 pub mod tuning;
 
 pub use error::{ControlError, Result};

@@ -25,12 +25,13 @@
 
 use std::sync::Arc;
 
-use flexstage_control_core::{Biquad, PidGains, PidLaw};
-use nalgebra::{Complex, Matrix2};
+use flexstage_control_core::Biquad;
+use nalgebra::Complex;
 
-use crate::actuator::{Actuator, ActuatorParams};
-use crate::error::{ControlError, Result, check};
+use crate::actuator::ActuatorParams;
+use crate::error::{Result, check};
 use crate::registry::{Controller, Design, Stage};
+use crate::target::{TargetController, TargetLaw};
 use crate::tuning::{Structure, tuned};
 use flexstage_sim::experiment::{Command, StageControl};
 use flexstage_sim::trajectory::Reference;
@@ -197,15 +198,15 @@ pub fn notch_section(n: &Notch, t: f64) -> Biquad {
     )
 }
 
-/// The PI(D) + notch + feed-forward controller (module docs). No allocation per step.
+/// The PI(D) + notch + feed-forward controller (module docs): the
+/// [`TargetController`] of its [`TargetLaw`] with the reference sampled at each step. No
+/// allocation per step.
 #[derive(Debug, Clone)]
 pub struct PiNotchController {
-    params: PiNotchParams,
-    law: PidLaw,
-    actuator: Actuator,
+    target: TargetController,
     reference: Reference,
+    sample_time: f64,
     k: u64,
-    last: Command,
 }
 
 impl PiNotchController {
@@ -215,36 +216,12 @@ impl PiNotchController {
         actuator: ActuatorParams,
         reference: Reference,
     ) -> Result<Self> {
-        params.validate()?;
         reference.validate()?;
-        let g = params.static_gain;
-        let g_inv = Matrix2::new(g[0][0], g[0][1], g[1][0], g[1][1])
-            .try_inverse()
-            .ok_or_else(|| ControlError::Singular {
-                what: "pi_notch.static_gain".into(),
-            })?;
-        let t = params.sample_time;
-        let gains = params.axes.map(|a| PidGains {
-            kp: a.kp,
-            ki: a.ki,
-            kd: a.kd,
-        });
-        let sections = params.axes.map(|a| {
-            a.notches
-                .map(|n| n.map_or(Biquad::IDENTITY, |n| notch_section(&n, t)))
-        });
-        let g_inv = [
-            [g_inv[(0, 0)], g_inv[(0, 1)]],
-            [g_inv[(1, 0)], g_inv[(1, 1)]],
-        ];
-        let law = PidLaw::new(gains, g_inv, t, actuator.stroke)?.with_sections(sections);
         Ok(PiNotchController {
-            params,
-            law,
-            actuator: Actuator::new(actuator)?,
+            target: TargetLaw::of_linear(&params, actuator)?.controller()?,
             reference,
+            sample_time: params.sample_time,
             k: 0,
-            last: Command::default(),
         })
     }
 }
@@ -252,25 +229,17 @@ impl PiNotchController {
 impl StageControl for PiNotchController {
     #[inline]
     fn step(&mut self, y_in: [f64; 2]) -> Command {
-        let t = self.params.sample_time;
         let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
-        let r = self.reference.sample(self.k as f64 * t);
-        let mut u = self.law.command(y_in, r.q);
-        if !(u[0].is_finite() && u[1].is_finite()) {
-            u = self.last.x_nom;
-        }
-        let act = self.actuator.command(u, t);
-        let cmd = Command {
+        let r = self.reference.sample(self.k as f64 * self.sample_time);
+        let act = self.target.step(r.q, y_in);
+        self.k += 1;
+        Command {
             voltage: act.voltage,
             x_nom: act.x_nom,
             reference: r.q,
             saturated: act.saturated,
             dropout,
-        };
-        self.law.end_sample(act.saturated);
-        self.k += 1;
-        self.last = cmd;
-        cmd
+        }
     }
 
     fn estimate(&self) -> [f64; 10] {

@@ -49,6 +49,7 @@
 //! lumped model, also the fallback before a design exists).
 
 pub mod analyze;
+pub mod controllers;
 mod convert;
 pub mod design;
 pub mod diff;
@@ -77,6 +78,7 @@ mod track_files;
 pub mod twin;
 
 pub use analyze::{AnalyzeOptions, AnalyzeSummary, analyze};
+pub use controllers::{ExportedController, export_controller};
 pub use design::{
     DesignOptions, DesignStart, DesignSummary, GradientReport, design, gradient_check,
 };

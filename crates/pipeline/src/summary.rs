@@ -537,6 +537,21 @@ impl fmt::Display for TrackSummary {
             "(hysteresis compensation: {}; errors against the true output)",
             crate::names::compensation(self.compensation)
         )?;
+        let e = &self.exported;
+        if !e.written.is_empty() {
+            writeln!(
+                f,
+                "for a real-time target (JSON, C99 source and header in controllers/): {}",
+                e.written.join(", ")
+            )?;
+        }
+        if !e.nonlinear.is_empty() {
+            writeln!(
+                f,
+                "not exported (nonlinear: observer and robust law): {}",
+                e.nonlinear.join(", ")
+            )?;
+        }
         f.write_str(&self.margins_table())
     }
 }

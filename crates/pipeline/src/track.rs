@@ -283,6 +283,9 @@ pub struct TrackSummary {
     pub margins: Vec<MarginRow>,
     /// The rig's sample time \[s\] (delay margins in samples).
     pub sample_time: f64,
+    /// The controllers written for a real-time target (`controllers/` of the result
+    /// folder: coefficients JSON, C99 source and header), and those not exported.
+    pub exported: crate::controllers::Exported,
 }
 
 impl TrackSummary {
@@ -629,6 +632,13 @@ pub fn track_on(
             r.metrics.status_detail()
         ));
     }
+    let exported = crate::controllers::write_controllers(
+        folder.dir(),
+        &out,
+        &designs,
+        &options.controllers,
+        setup.actuator(options.compensation),
+    )?;
     crate::error::require_converged_tracking(&rows)?;
     Ok(TrackSummary {
         simulated: kind,
@@ -642,6 +652,7 @@ pub fn track_on(
         replaced,
         margins,
         sample_time: dt,
+        exported,
     })
 }
 

@@ -23,7 +23,7 @@
 //! identify/stage/    params.toml table.csv convergence.{csv,svg} record.csv
 //! track/[<variant>/] <trajectory>_<controller>.csv <trajectory>_<controller>_error.svg
 //!                    margins.csv montecarlo.csv scan_frequency.csv scan_frequency.svg
-//!                    <trajectory>_2d.svg metrics.csv
+//!                    <trajectory>_2d.svg metrics.csv controllers/<controller>.{json,c,h}
 //! ```
 
 use std::path::{Component, Path, PathBuf};
@@ -335,6 +335,22 @@ impl Tracking {
     /// Figure 11: 2D paths of every controller on one trajectory.
     pub fn paths_svg(&self, trajectory: &str) -> String {
         format!("{}/{trajectory}_2d.svg", self.dir)
+    }
+    /// The controllers exported for a real-time target.
+    pub fn controllers_dir(&self) -> String {
+        format!("{}/controllers", self.dir)
+    }
+    /// One exported controller's coefficients (JSON).
+    pub fn controller_json(&self, controller: &str) -> String {
+        format!("{}/controllers/{controller}.json", self.dir)
+    }
+    /// One exported controller's C99 source.
+    pub fn controller_c(&self, controller: &str) -> String {
+        format!("{}/controllers/{controller}.c", self.dir)
+    }
+    /// One exported controller's C99 header.
+    pub fn controller_h(&self, controller: &str) -> String {
+        format!("{}/controllers/{controller}.h", self.dir)
     }
     /// The metrics table, one row per trajectory and controller.
     pub fn metrics(&self) -> String {

@@ -7,6 +7,7 @@
 //! versioned by their schema (unknown keys are refused).
 
 pub mod analyze;
+pub mod controller;
 pub mod design;
 pub mod export;
 pub mod front;

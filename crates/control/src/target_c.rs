@@ -1,0 +1,205 @@
+//! The C99 form of a [`TargetLaw`]: the templates `c/controller.h.in` and `c/controller.c.in`
+//! (the law of [`crate::target::TargetController`] written out in C, operation by operation
+//! in the Rust order) with the law's coefficients compiled in as `static const` constants.
+//! Every number is written in Rust's shortest round-trip form, which a C compiler reads back
+//! to the same `double` (C99 §6.4.4.2 with correctly rounded conversion, as GCC and Clang do).
+
+use std::fmt::Write;
+
+use crate::actuator::Compensation;
+use crate::error::Result;
+use crate::target::{CSource, TargetLaw};
+
+const HEADER: &str = include_str!("../c/controller.h.in");
+const SOURCE: &str = include_str!("../c/controller.c.in");
+
+/// A C identifier usable as the prefix of the exported functions and types: 1–63 ASCII
+/// letters, digits and `_`, not starting with a digit.
+pub fn is_c_identifier(s: &str) -> bool {
+    let mut chars = s.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+        && s.len() <= 63
+}
+
+/// The C prefix of a controller name: `-` and `.` become `_` (`pi-notch-ff` → `pi_notch_ff`).
+pub fn c_prefix(name: &str) -> String {
+    name.replace(['-', '.'], "_")
+}
+
+/// A `double` literal that reads back to exactly `v` (finite).
+pub(crate) fn lit(v: f64) -> String {
+    format!("{v:e}")
+}
+
+fn list(v: &[f64]) -> String {
+    let items: Vec<String> = v.iter().map(|&x| lit(x)).collect();
+    format!("{{{}}}", items.join(", "))
+}
+
+fn coefficients(law: &TargetLaw) -> String {
+    let mut s = String::new();
+    let a = &law.actuator;
+    let pre = law.preload();
+    let comp = law.compensator();
+    let mode = match a.compensation {
+        Compensation::Inverse => "COMPENSATION_INVERSE",
+        Compensation::Off => "COMPENSATION_OFF",
+        Compensation::Ideal => "COMPENSATION_IDEAL",
+    };
+    let gains: Vec<String> = law
+        .gains
+        .iter()
+        .map(|g| list(&[g.kp, g.ki, g.kd]))
+        .collect();
+    let section_b: Vec<String> = law
+        .sections
+        .iter()
+        .map(|ax| {
+            format!(
+                "{{{}, {}}}",
+                list(&ax[0].numerator()),
+                list(&ax[1].numerator())
+            )
+        })
+        .collect();
+    let section_a: Vec<String> = law
+        .sections
+        .iter()
+        .map(|ax| {
+            format!(
+                "{{{}, {}}}",
+                list(&ax[0].denominator()),
+                list(&ax[1].denominator())
+            )
+        })
+        .collect();
+    let bw: Vec<String> = a
+        .hysteresis
+        .iter()
+        .map(|p| list(&[p.d_p, p.a_bw, p.b_bw, p.gamma_bw, p.delta_bw]))
+        .collect();
+    let g = law.inverse_gain;
+    let lines = [
+        "#define COMPENSATION_INVERSE 0".to_string(),
+        "#define COMPENSATION_OFF 1".to_string(),
+        "#define COMPENSATION_IDEAL 2".to_string(),
+        "/* One micrometre in metres (the Bouc-Wen model works in um, V, s). */".to_string(),
+        "static const double MICROMETRE = 1e-6;".to_string(),
+        "/* Sample time T [s]. */".to_string(),
+        format!(
+            "static const double SAMPLE_TIME = {};",
+            lit(law.sample_time)
+        ),
+        "/* Per axis: k_p [-], k_i [1/s], k_d [s] on e = q_d - y [m]. */".to_string(),
+        format!(
+            "static const double GAINS[2][3] = {{{}}};",
+            gains.join(", ")
+        ),
+        "/* Per axis, two sections in series: numerators [b0, b1, b2], denominators [a1, a2]. */"
+            .to_string(),
+        format!(
+            "static const double SECTION_B[2][2][3] = {{{}}};",
+            section_b.join(", ")
+        ),
+        format!(
+            "static const double SECTION_A[2][2][2] = {{{}}};",
+            section_a.join(", ")
+        ),
+        "/* G_dc^-1, row-major: x_nom = G_dc^-1 (q_d + N(c)) [m]. */".to_string(),
+        format!(
+            "static const double INVERSE_GAIN[2][2] = {{{}, {}}};",
+            list(&g[0]),
+            list(&g[1])
+        ),
+        "/* Largest |x_nom| [m]. */".to_string(),
+        format!("static const double STROKE = {};", lit(a.stroke)),
+        "/* Amplifier range [V] and preload bias voltage U_b [V]. */".to_string(),
+        format!(
+            "static const double VOLTAGE_RANGE[2] = {};",
+            list(&a.voltage_range)
+        ),
+        format!(
+            "static const double BIAS_VOLTAGE = {};",
+            lit(a.bias_voltage)
+        ),
+        "/* Per PEA, Eq. (18): d_p [um/V], A_bw [um/V], B_bw [1/V], Gamma_bw [1/V], \
+         delta_bw [um/(V s)]. */"
+            .to_string(),
+        format!(
+            "static const double BOUC_WEN[2][5] = {{{}}};",
+            bw.join(", ")
+        ),
+        "/* Per PEA at the bias: voltage [V], h [um], x_bias [um]; virgin mean slope [um/V]. */"
+            .to_string(),
+        format!(
+            "static const double PRELOAD_VOLTAGE[2] = {};",
+            list(&pre.map(|p| p.voltage))
+        ),
+        format!(
+            "static const double PRELOAD_H[2] = {};",
+            list(&pre.map(|p| p.h))
+        ),
+        format!(
+            "static const double PRELOAD_X_BIAS[2] = {};",
+            list(&pre.map(|p| p.x_bias))
+        ),
+        format!(
+            "static const double SLOPE[2] = {};",
+            list(&pre.map(|p| p.slope))
+        ),
+        "/* Inverse compensator: accepted |d_p U - h - x| [um], most model evaluations. */"
+            .to_string(),
+        format!(
+            "static const double COMPENSATOR_TOLERANCE = {};",
+            lit(comp.tolerance)
+        ),
+        format!(
+            "static const int COMPENSATOR_MAX_ITERATIONS = {};",
+            comp.max_iterations
+        ),
+        format!("static const int COMPENSATION = {mode};"),
+    ];
+    for l in lines {
+        let _ = writeln!(s, "{l}");
+    }
+    s
+}
+
+/// The header and source of `law` with functions and types prefixed `prefix`, the source
+/// including the header as `header_file` ([`TargetLaw::c_source`]); the law is checked first
+/// ([`TargetLaw::controller`]).
+pub fn c_source(law: &TargetLaw, prefix: &str, header_file: &str) -> Result<CSource> {
+    if !is_c_identifier(prefix) {
+        return Err(flexstage_numerics::RangeError::new(
+            "controller.c_prefix",
+            prefix.to_string(),
+            "a C identifier of 1–63 letters, digits and _, not starting with a digit",
+        )
+        .into());
+    }
+    let plain = header_file.ends_with(".h")
+        && header_file.len() <= 100
+        && header_file
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'));
+    if !plain {
+        return Err(flexstage_numerics::RangeError::new(
+            "controller.c_header",
+            header_file.to_string(),
+            "a file name of letters, digits, -, _ and . ending in .h",
+        )
+        .into());
+    }
+    law.controller()?;
+    let fill = |t: &str| {
+        t.replace("COEFFICIENTS", &coefficients(law))
+            .replace("SAMPLE_TIME_LITERAL", &lit(law.sample_time))
+            .replace("HEADER_FILE", header_file)
+            .replace("PREFIX", prefix)
+    };
+    Ok(CSource {
+        header: fill(HEADER),
+        source: fill(SOURCE),
+    })
+}

@@ -1,0 +1,300 @@
+//! The tuned controllers taken to a real-time target: every linear design of the registry
+//! (PI + notch, PID) with its actuator stage as a coefficients file
+//! (`track/[<conditions>/]controllers/<controller>.json`, [`ControllerFile`]) and a
+//! self-contained C99 source and header generated from it
+//! (`flexstage_control::target::TargetLaw::c_source`). `track` writes them for the
+//! controllers it ran; [`export_controller`] writes the C of any controller file (one edited by
+//! hand, or into another folder). A file read back gives the law it was written from, bitwise.
+//! The backstepping controllers are nonlinear (observer, Kalman estimate, robust law) and are
+//! not exported.
+
+use std::path::{Path, PathBuf};
+
+use flexstage_control::actuator::ActuatorParams;
+use flexstage_control::registry::{Controller, Designs};
+use flexstage_control::target::{CSource, TargetLaw, c_prefix, compensation_name, compensation_of};
+use flexstage_control_core::{Biquad, PidGains};
+use flexstage_piezo::{BoucWenParams, CompensatorParams};
+use flexstage_run::files::controller::{
+    ActuatorFile, AxisFile, ControllerFile, SectionFile, VERSION,
+};
+use flexstage_run::layout::Tracking;
+use flexstage_run::{Format, RunDir};
+
+use crate::error::{PipelineError, Result};
+
+/// The coefficients file of `law`, the law of the registry controller `c`.
+pub fn controller_file(c: &Controller, law: &TargetLaw) -> ControllerFile {
+    let a = &law.actuator;
+    let comp = law.compensator();
+    ControllerFile {
+        version: VERSION,
+        controller: c.name.to_string(),
+        label: c.label.to_string(),
+        sample_time_s: law.sample_time,
+        axes: [0, 1].map(|i| AxisFile {
+            kp: law.gains[i].kp,
+            ki_per_s: law.gains[i].ki,
+            kd_s: law.gains[i].kd,
+            sections: law.sections[i].map(|s| SectionFile {
+                b: s.numerator(),
+                a: s.denominator(),
+            }),
+        }),
+        inverse_static_gain: law.inverse_gain,
+        actuator: ActuatorFile {
+            compensation: compensation_name(a.compensation).to_string(),
+            stroke_m: a.stroke,
+            voltage_range_v: a.voltage_range,
+            bias_voltage_v: a.bias_voltage,
+            compensator_tolerance_um: comp.tolerance,
+            compensator_max_iterations: comp.max_iterations,
+            hysteresis: a.hysteresis.map(|p| (&p).into()),
+        },
+    }
+}
+
+/// The law of a coefficients file, checked (every coefficient in its range, the
+/// compensator settings the ones this flexstage runs).
+pub fn target_law(f: &ControllerFile) -> Result<TargetLaw> {
+    let a = &f.actuator;
+    let law = TargetLaw {
+        gains: f.axes.map(|x| PidGains {
+            kp: x.kp,
+            ki: x.ki_per_s,
+            kd: x.kd_s,
+        }),
+        sections: f.axes.map(|x| x.sections.map(|s| Biquad::new(s.b, s.a))),
+        inverse_gain: f.inverse_static_gain,
+        sample_time: f.sample_time_s,
+        actuator: ActuatorParams {
+            hysteresis: [
+                BoucWenParams::from(&a.hysteresis[0]),
+                BoucWenParams::from(&a.hysteresis[1]),
+            ],
+            voltage_range: a.voltage_range_v,
+            bias_voltage: a.bias_voltage_v,
+            stroke: a.stroke_m,
+            compensation: compensation_of(&a.compensation)?,
+        },
+    };
+    let expected = CompensatorParams::default();
+    if a.compensator_tolerance_um != expected.tolerance
+        || a.compensator_max_iterations != expected.max_iterations
+    {
+        return Err(PipelineError::Option {
+            option: "actuator.compensator_tolerance_um, compensator_max_iterations",
+            value: format!(
+                "{}, {}",
+                a.compensator_tolerance_um, a.compensator_max_iterations
+            ),
+            expected: format!(
+                "{}, {} (the compensator settings this flexstage runs)",
+                expected.tolerance, expected.max_iterations
+            ),
+        });
+    }
+    law.controller()?;
+    Ok(law)
+}
+
+/// The C source and header of a coefficients file: functions and types prefixed by the
+/// controller's name with `-` as `_` (`pi_notch_ff_step`), the header named
+/// `<controller>.h`.
+pub fn c_files(f: &ControllerFile) -> Result<CSource> {
+    let law = target_law(f)?;
+    Ok(law.c_source(&c_prefix(&f.controller), &format!("{}.h", f.controller))?)
+}
+
+/// The controllers `track` wrote for a target, and those it did not export.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct Exported {
+    /// The controllers written (JSON, C and header).
+    pub written: Vec<&'static str>,
+    /// The controllers ran but not exported (nonlinear).
+    pub nonlinear: Vec<&'static str>,
+}
+
+/// Writes the coefficients file, the C source and the header of every controller of
+/// `controllers` that `designs` holds and that is linear, with the actuator stage `actuator`,
+/// into `out`'s `controllers/` folder.
+pub(crate) fn write_controllers(
+    run: &RunDir,
+    out: &Tracking,
+    designs: &Designs,
+    controllers: &[&'static Controller],
+    actuator: ActuatorParams,
+) -> Result<Exported> {
+    let mut done = Exported::default();
+    for &c in controllers {
+        let Some(design) = designs.get(c) else {
+            continue;
+        };
+        let Some(law) = TargetLaw::of_design(&**design, actuator)? else {
+            done.nonlinear.push(c.name);
+            continue;
+        };
+        let file = controller_file(c, &law);
+        let src = c_files(&file)?;
+        run.store(&out.controller_json(c.name), file)?;
+        run.write(&out.controller_c(c.name), src.source.as_bytes())?;
+        run.write(&out.controller_h(c.name), src.header.as_bytes())?;
+        done.written.push(c.name);
+    }
+    Ok(done)
+}
+
+/// What [`export_controller`] wrote.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ExportedController {
+    /// The controller's name (from the file).
+    pub controller: String,
+    /// The C source.
+    pub source: PathBuf,
+    /// The C header.
+    pub header: PathBuf,
+}
+
+/// Reads the coefficients file `json` and writes its C source and header
+/// (`<controller>.c`, `<controller>.h`) into the folder `dir` (created if missing), each
+/// atomically.
+pub fn export_controller(json: &Path, dir: &Path) -> Result<ExportedController> {
+    let bytes = std::fs::read(json).map_err(|source| PipelineError::Read {
+        path: json.to_path_buf(),
+        source,
+    })?;
+    let file = ControllerFile::decode(&bytes).map_err(|reason| PipelineError::Format {
+        path: json.display().to_string(),
+        reason,
+    })?;
+    let src = c_files(&file)?;
+    let name = &file.controller;
+    let source = dir.join(format!("{name}.c"));
+    let header = dir.join(format!("{name}.h"));
+    flexstage_run::write_atomic(&source, src.source.as_bytes())?;
+    flexstage_run::write_atomic(&header, src.header.as_bytes())?;
+    Ok(ExportedController {
+        controller: name.clone(),
+        source,
+        header,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flexstage_control::actuator::Compensation;
+    use flexstage_control::experiment::Setup;
+    use flexstage_control::pi_notch::{AxisGains, Notch, PiNotchParams};
+    use flexstage_control::registry::{DEFAULT, Stage};
+    use flexstage_control::target::{Recorded, recorded_sequence};
+
+    fn law(compensation: Compensation) -> TargetLaw {
+        let axis = |f: f64| AxisGains {
+            kp: 0.1,
+            ki: 1234.5678,
+            kd: 0.0,
+            notches: [
+                Some(Notch {
+                    frequency: f,
+                    zero_damping: 0.03,
+                    pole_damping: 0.6,
+                }),
+                Some(Notch {
+                    frequency: 2.0 * f,
+                    zero_damping: 0.0,
+                    pole_damping: 0.3,
+                }),
+            ],
+        };
+        let p = PiNotchParams {
+            axes: [axis(1010.0), axis(1700.0)],
+            static_gain: [[0.93, 0.0123], [-0.0456, 1.07]],
+            sample_time: 1e-4,
+        };
+        let setup = Setup::from_scenario(&flexstage_scenario::Scenario::paper());
+        TargetLaw::of_linear(&p, setup.actuator(compensation)).unwrap()
+    }
+
+    fn bits(seq: &[Recorded]) -> Vec<u64> {
+        seq.iter()
+            .flat_map(|r| {
+                let c = r.command;
+                [c.voltage, c.x_nom]
+                    .into_iter()
+                    .flatten()
+                    .map(f64::to_bits)
+                    .chain([u64::from(c.saturated)])
+            })
+            .collect()
+    }
+
+    /// Goal: a controller written to its JSON file and read back is the same controller,
+    /// bitwise: the same coefficients, and the same commands on the recorded sequence (every
+    /// compensation mode, two notches per axis, the scenario's PID).
+    #[test]
+    fn controller_file_reads_back_the_same_controller_bitwise() {
+        let setup = Setup::from_scenario(&flexstage_scenario::Scenario::paper());
+        let designs = Designs::for_stage(&Stage::scenario(&setup)).unwrap();
+        let pid = &flexstage_control::pid::PID_FF_SCENARIO;
+        let scenario_pid = TargetLaw::of_design(
+            &**designs.get(pid).unwrap(),
+            setup.actuator(Compensation::Inverse),
+        )
+        .unwrap()
+        .unwrap();
+        let laws = [
+            (DEFAULT, law(Compensation::Inverse)),
+            (DEFAULT, law(Compensation::Off)),
+            (DEFAULT, law(Compensation::Ideal)),
+            (pid, scenario_pid),
+        ];
+        for (c, l) in laws {
+            let bytes = controller_file(c, &l).encode().unwrap();
+            let back = target_law(&ControllerFile::decode(&bytes).unwrap()).unwrap();
+            assert_eq!(back, l);
+            assert_eq!(
+                bits(&recorded_sequence(&back, 3).unwrap()),
+                bits(&recorded_sequence(&l, 3).unwrap())
+            );
+        }
+    }
+
+    /// A file of another version, an unknown compensation or other compensator settings is
+    /// refused with the field named.
+    #[test]
+    fn a_bad_controller_file_is_refused_naming_the_field() {
+        let file = controller_file(DEFAULT, &law(Compensation::Inverse));
+        let mut v = file.clone();
+        v.version = 99;
+        let e = ControllerFile::decode(&flexstage_run::format::json(&v).unwrap()).unwrap_err();
+        assert!(e.contains("format version 99"), "{e}");
+        let mut v = file.clone();
+        v.actuator.compensation = "sometimes".into();
+        let e = target_law(&v).unwrap_err().to_string();
+        assert!(e.contains("actuator.compensation"), "{e}");
+        let mut v = file.clone();
+        v.actuator.compensator_max_iterations = 3;
+        let e = target_law(&v).unwrap_err().to_string();
+        assert!(e.contains("compensator_max_iterations"), "{e}");
+        let mut v = file;
+        v.axes[1].ki_per_s = -1.0;
+        let e = target_law(&v).unwrap_err().to_string();
+        assert!(e.contains("pid.ki"), "{e}");
+    }
+
+    /// `export_controller` writes the C of a file into a folder, named by the controller.
+    #[test]
+    fn export_controller_writes_source_and_header() {
+        let dir = std::env::temp_dir().join(format!("flexstage-ctl-{}", std::process::id()));
+        let json = dir.join("in.json");
+        let file = controller_file(DEFAULT, &law(Compensation::Inverse));
+        flexstage_run::write_atomic(&json, &file.encode().unwrap()).unwrap();
+        let e = export_controller(&json, &dir.join("out")).unwrap();
+        let source = std::fs::read_to_string(&e.source).unwrap();
+        assert!(e.header.ends_with("pi-notch-ff.h"));
+        assert!(source.contains("#include \"pi-notch-ff.h\""));
+        assert!(source.contains("pi_notch_ff_step("));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}

@@ -1,0 +1,90 @@
+//! `track/[<conditions>/]controllers/<controller>.json`: a tuned linear controller as a
+//! real-time target runs it — the PID + notch + static feed-forward law with its inverse
+//! hysteresis actuator stage (Eq. 19–21 and 36 of Actuators 2022, 11(7), 179), every
+//! coefficient as the simulation used it. `flexstage-control`'s `TargetLaw` is the same law
+//! in memory; the C source and header next to the file are generated from it.
+
+use serde::{Deserialize, Serialize};
+
+use crate::format::{Format, check_version, from_json, json};
+
+/// The format version of a controller file.
+pub const VERSION: u32 = 1;
+
+/// One second-order section y = (b₀ + b₁ z⁻¹ + b₂ z⁻²)/(1 + a₁ z⁻¹ + a₂ z⁻²) u.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SectionFile {
+    /// Numerator [b₀, b₁, b₂].
+    pub b: [f64; 3],
+    /// Denominator [a₁, a₂] (a₀ = 1).
+    pub a: [f64; 2],
+}
+
+/// The feedback of one output axis on e = q_d − y.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisFile {
+    /// Proportional gain k_p (dimensionless).
+    pub kp: f64,
+    /// Integral gain k_i \[1/s\] (trapezoidal integral).
+    pub ki_per_s: f64,
+    /// Derivative gain k_d \[s\] (backward difference).
+    pub kd_s: f64,
+    /// Two sections in series on the PID's output (notches; the identity b = [1, 0, 0],
+    /// a = [0, 0] where there is none).
+    pub sections: [SectionFile; 2],
+}
+
+/// The actuator stage: x_nom \[m\] to amplifier voltages.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ActuatorFile {
+    /// `inverse` (Eq. 21 through the Bouc–Wen model), `off` (a straight line through the
+    /// bias) or `ideal` (x_nom passed on; simulation only).
+    pub compensation: String,
+    /// Largest |x_nom| \[m\].
+    pub stroke_m: f64,
+    /// Amplifier range \[V\].
+    pub voltage_range_v: [f64; 2],
+    /// Preload bias voltage U_b \[V\].
+    pub bias_voltage_v: f64,
+    /// The compensator's accepted |d_p U − h − x_nom| \[µm\].
+    pub compensator_tolerance_um: f64,
+    /// The compensator's most model evaluations per sample.
+    pub compensator_max_iterations: u32,
+    /// Bouc–Wen parameters of PEA1 and PEA2 (Eq. 18; µm, V, s as in Table A1).
+    pub hysteresis: [flexstage_scenario::BoucWen; 2],
+}
+
+/// A controller file (module docs).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ControllerFile {
+    /// Format version ([`VERSION`]).
+    pub version: u32,
+    /// The controller's name in the registry (`track --variant`).
+    pub controller: String,
+    /// Its label for people.
+    pub label: String,
+    /// Sample time T \[s\] the coefficients are designed for.
+    pub sample_time_s: f64,
+    /// Feedback per output axis (q1, q2).
+    pub axes: [AxisFile; 2],
+    /// G_dc⁻¹, row-major: x_nom = G_dc⁻¹ (q_d + N(c)) \[m\].
+    pub inverse_static_gain: [[f64; 2]; 2],
+    /// The actuator stage.
+    pub actuator: ActuatorFile,
+}
+
+impl Format for ControllerFile {
+    fn encode(&self) -> Result<Vec<u8>, String> {
+        json(self)
+    }
+
+    fn decode(bytes: &[u8]) -> Result<Self, String> {
+        let v: ControllerFile = from_json(bytes)?;
+        check_version(v.version, VERSION)?;
+        Ok(v)
+    }
+}
