@@ -90,7 +90,7 @@ pub use pea::{
 pub use plant::{Plant, PlantSource};
 pub use progress::{Progress, RunEvent, Silent, StartOver};
 pub use reduce::{ReduceOptions, ReduceSummary, reduce};
-pub use run::{RunOptions, RunSummary, Stage, StageSummary, write_report};
+pub use run::{RunOptions, RunSummary, Stage, StageSummary, run_in, write_report};
 pub use source::DesignSource;
 pub use stage_id::{Simulation, StageData, StageIdOptions, StageIdSummary, identify_stage};
 pub use state::RunState;

@@ -183,6 +183,21 @@ impl Outputs<'_> {
             vec![k, m.frequencies.clone(), m.residuals.clone()],
         );
         self.run.store(files::MODES_CSV, table)?;
+        // The shapes as data (mass-normalized, unscaled), for notebooks and other tools.
+        let mut header = vec!["x_m".to_string(), "y_m".to_string()];
+        let mut columns = vec![
+            points.iter().map(|p| p[0]).collect::<Vec<f64>>(),
+            points.iter().map(|p| p[1]).collect(),
+        ];
+        for (k, phi) in m.shapes.iter().enumerate() {
+            for (axis, name) in ["ux", "uy"].iter().enumerate() {
+                header.push(format!("{name}_{}", k + 1));
+                columns.push(phi.iter().skip(axis).step_by(2).copied().collect());
+            }
+        }
+        let header: Vec<&str> = header.iter().map(String::as_str).collect();
+        self.run
+            .store(files::MODE_SHAPES_CSV, Table::new(&header, columns))?;
         // The lowest mode shapes as pictures (the report's "Mode shapes").
         let mesh = mode_shape::Mesh {
             points: &points,

@@ -546,6 +546,8 @@ pub fn track_on(
     let compensator = identified_peas(folder, &mut setup)?;
     let mut warnings = Vec::new();
     let sim = simulated(folder, options, progress, prebuilt, &mut warnings)?;
+    const STOPPED_HINT: &str = "its earlier results are unchanged; run track again";
+    crate::progress::check_stop(progress, "track stopped before tuning", STOPPED_HINT)?;
     let kind = match sim {
         Simulated::Twin(_) => PlantKind::Twin,
         Simulated::Lumped => PlantKind::Lumped,
@@ -576,6 +578,7 @@ pub fn track_on(
         progress,
         &mut warnings,
     )?;
+    crate::progress::check_stop(progress, "track stopped after tuning", STOPPED_HINT)?;
     let jobs = plan(&plant.scenario, &setup, &sim, options, &mut warnings)?;
     for w in &warnings {
         progress.note(&format!("warning: {w}"));
