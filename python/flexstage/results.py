@@ -137,8 +137,8 @@ class Twin(StageResult):
     validity: Dict[str, Any] = field(default_factory=dict)
     #: Twin against FE modal frequencies.
     modes: Optional[Records] = None
-    #: Frequency response x_nom_j → q_i: ``f_hz``, then magnitude [dB] and phase [deg] of the
-    #: twin and of the lumped model.
+    #: Frequency response x_nom_j → q_i: ``f_Hz``, then ``<model>_q<i>_x<j>_dB`` and ``_deg``
+    #: (magnitude and phase) of the twin and of the lumped model.
     bode: Optional[Table] = None
 
     def frequency_response(self, output: int, input: int, model: str = "twin"
@@ -147,19 +147,11 @@ class Twin(StageResult):
         of ``model`` ("twin" or "lumped")."""
         if self.bode is None:
             raise ValueError("the twin stage wrote no frequency response")
-        f = self.bode["f_hz"]
-        mag = _column(self.bode, model, "mag", output, input)
-        phase = _column(self.bode, model, "phase", output, input)
-        return f, 10.0 ** (mag / 20.0) * np.exp(1j * np.deg2rad(phase))
-
-
-def _column(table: Table, model: str, kind: str, output: int, input: int) -> np.ndarray:
-    hits = [name for name in table
-            if name.startswith(f"{model}_{kind}") and f"q{output}" in name and f"x{input}" in name]
-    if len(hits) != 1:
-        raise KeyError(f"no {model} {kind} column for q{output}/x_nom{input} "
-                       f"(columns: {', '.join(table)})")
-    return table[hits[0]]
+        name = f"{model}_q{output}_x{input}"
+        if f"{name}_dB" not in self.bode:
+            raise KeyError(f"no response {name} (columns: {', '.join(self.bode)})")
+        mag, phase = self.bode[f"{name}_dB"], self.bode[f"{name}_deg"]
+        return self.bode["f_Hz"], 10.0 ** (mag / 20.0) * np.exp(1j * np.deg2rad(phase))
 
 
 @dataclass(frozen=True, eq=False)
@@ -311,24 +303,30 @@ class RunSummary:
         return self.text
 
 
+#: Fields, keys and columns that say where and how long a result was computed, not what:
+#: :func:`same` skips them.
+_CIRCUMSTANCES = ("folder", "text", "seconds", "seconds_per_iteration", "time_s",
+                  "build_seconds", "reference_seconds")
+
+
 def same(a: Any, b: Any) -> bool:
-    """Whether two results are bitwise equal: arrays by dtype, shape and bytes, floats by
-    their bits (NaN equals NaN of the same bits), dataclasses field by field, containers
-    item by item."""
+    """Whether two results hold bitwise the same values: arrays by dtype, shape and bytes,
+    floats by their bits (NaN equals NaN of the same bits), dataclasses field by field,
+    containers item by item; where and how long it ran (``folder``, ``text``, ``seconds``,
+    ``time_s``, …) is not compared."""
     if is_dataclass(a) and not isinstance(a, type):
         return type(a) is type(b) and all(
-            same(getattr(a, f.name), getattr(b, f.name)) for f in fields(a))
+            same(getattr(a, f.name), getattr(b, f.name)) for f in fields(a)
+            if f.name not in _CIRCUMSTANCES)
     if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
         a, b = np.asarray(a), np.asarray(b)
         return a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
     if isinstance(a, float) and isinstance(b, float):
         return struct.pack("<d", a) == struct.pack("<d", b)
     if isinstance(a, Mapping) and isinstance(b, Mapping):
-        return a.keys() == b.keys() and all(same(a[k], b[k]) for k in a)
+        return a.keys() == b.keys() and all(same(a[k], b[k]) for k in a
+                                            if k not in _CIRCUMSTANCES)
     if isinstance(a, (list, tuple)) and isinstance(b, (list, tuple)):
         return len(a) == len(b) and all(same(x, y) for x, y in zip(a, b))
     return type(a) is type(b) and a == b
 
-
-def _sequence(x: Optional[Sequence[Any]]) -> Tuple[Any, ...]:
-    return tuple(x) if x else ()

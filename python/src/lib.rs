@@ -4,7 +4,7 @@
 //! scenarios ([`scenario`]), a run folder and its stages ([`run`]), results read back through
 //! the typed files as zero-copy numpy views ([`results`], [`arrays`]), long calls without the
 //! GIL with progress and Ctrl-C ([`work`]), and the Monte-Carlo study one plant at a time for
-//! a Dask cluster. Errors carry the command line's text ([`errors`]). The Python
+//! a Dask cluster ([`study`]). Errors carry the command line's text ([`errors`]). The Python
 //! package (`python/flexstage/`) adds the result classes, progress bars and the Dask sweeps.
 
 mod arrays;
@@ -12,6 +12,7 @@ mod errors;
 mod results;
 mod run;
 mod scenario;
+mod study;
 mod work;
 
 use pyo3::prelude::*;
@@ -22,6 +23,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<scenario::PyScenario>()?;
     m.add_class::<run::PyRun>()?;
     m.add_class::<arrays::Buffer>()?;
+    m.add_class::<study::PyStudy>()?;
     m.add("PRESETS", flexstage_pipeline::PRESETS.to_vec())?;
     m.add("DEFAULT_PRESET", flexstage_pipeline::DEFAULT_PRESET)?;
     Ok(())

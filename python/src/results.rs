@@ -53,14 +53,13 @@ fn polygon<'py>(py: Python<'py>, dir: &RunDir, rel: &str) -> PyResult<Option<Bou
         return Ok(None);
     };
     let pairs = t
-        .pairs(
-            layout_polygon::X,
-            layout_polygon::Y,
-        )
-        .map_err(|reason| errors::run(flexstage_run::RunError::Damaged {
-            path: dir.path(rel),
-            reason,
-        }))?;
+        .pairs(layout_polygon::X, layout_polygon::Y)
+        .map_err(|reason| {
+            errors::run(flexstage_run::RunError::Damaged {
+                path: dir.path(rel),
+                reason,
+            })
+        })?;
     let rows: Vec<[f64; 2]> = pairs.iter().map(|(x, y)| [x * 1e-6, y * 1e-6]).collect();
     Ok(Some(owned2(py, &rows).into_any()))
 }
@@ -115,8 +114,8 @@ pub fn rows<'py, T: Row + Serialize + DeserializeOwned>(
     let list = PyList::empty(py);
     let mut numeric: Option<Vec<String>> = None;
     for r in rows {
-        let Value::Object(map) = serde_json::to_value(r)
-            .map_err(|e| errors::FlexstageError::new_err(e.to_string()))?
+        let Value::Object(map) =
+            serde_json::to_value(r).map_err(|e| errors::FlexstageError::new_err(e.to_string()))?
         else {
             continue;
         };
@@ -205,7 +204,8 @@ pub fn analysis<'py>(
     variant: &str,
 ) -> PyResult<Option<Bound<'py, PyDict>>> {
     let a = Analysis::variant(variant);
-    let Some(summary) = doc::<flexstage_run::files::analyze::AnalysisSummary>(py, dir, &a.summary())?
+    let Some(summary) =
+        doc::<flexstage_run::files::analyze::AnalysisSummary>(py, dir, &a.summary())?
     else {
         return Ok(None);
     };
@@ -223,7 +223,10 @@ pub fn export<'py>(py: Python<'py>, dir: &RunDir) -> PyResult<Option<Bound<'py, 
         return Ok(None);
     }
     let d = PyDict::new(py);
-    d.set_item("verification", doc::<VerificationFile>(py, dir, f::VERIFICATION_JSON)?)?;
+    d.set_item(
+        "verification",
+        doc::<VerificationFile>(py, dir, f::VERIFICATION_JSON)?,
+    )?;
     let files = PyDict::new(py);
     for (k, rel) in [("dxf", f::DXF), ("svg", f::SVG), ("stl", f::STL)] {
         files.set_item(k, dir.path(rel))?;
@@ -300,9 +303,18 @@ pub fn stage_identification<'py>(
     d.set_item("table", rows_file::<ParameterRow>(py, dir, f::TABLE)?)?;
     d.set_item("convergence", table(py, dir, f::CONVERGENCE_CSV)?)?;
     d.set_item("twin_params", twin_params)?;
-    d.set_item("twin_table", rows_file::<ParameterRow>(py, dir, f::TWIN_TABLE)?)?;
-    d.set_item("response", rows_file::<ResponseRow>(py, dir, f::RESPONSE_CSV)?)?;
-    d.set_item("response_fit", doc::<ResponseFitFile>(py, dir, f::RESPONSE_FIT)?)?;
+    d.set_item(
+        "twin_table",
+        rows_file::<ParameterRow>(py, dir, f::TWIN_TABLE)?,
+    )?;
+    d.set_item(
+        "response",
+        rows_file::<ResponseRow>(py, dir, f::RESPONSE_CSV)?,
+    )?;
+    d.set_item(
+        "response_fit",
+        doc::<ResponseFitFile>(py, dir, f::RESPONSE_FIT)?,
+    )?;
     d.set_item("folder", dir.path(f::DIR))?;
     Ok(Some(d))
 }
@@ -320,8 +332,14 @@ pub fn tracking<'py>(
     let d = PyDict::new(py);
     d.set_item("metrics", rows(py, &metrics.0)?)?;
     d.set_item("margins", rows_file::<MarginRow>(py, dir, &out.margins())?)?;
-    d.set_item("montecarlo", rows_file::<MonteCarloRow>(py, dir, &out.montecarlo())?)?;
-    d.set_item("scan", rows_file::<ScanRow>(py, dir, &out.scan_frequency_csv())?)?;
+    d.set_item(
+        "montecarlo",
+        rows_file::<MonteCarloRow>(py, dir, &out.montecarlo())?,
+    )?;
+    d.set_item(
+        "scan",
+        rows_file::<ScanRow>(py, dir, &out.scan_frequency_csv())?,
+    )?;
     let series = PyDict::new(py);
     let mut seen: HashMap<(String, String), ()> = HashMap::new();
     for m in &metrics.0 {

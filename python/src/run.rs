@@ -61,7 +61,7 @@ fn plant_kind(option: &'static str, name: &str) -> PyResult<PlantKind> {
     })
 }
 
-fn variants(names: Option<Vec<String>>) -> PyResult<Vec<Variant>> {
+pub(crate) fn variants(names: Option<Vec<String>>) -> PyResult<Vec<Variant>> {
     let Some(names) = names else {
         return Ok(Variant::ALL.to_vec());
     };
@@ -213,7 +213,13 @@ impl PyRun {
     ) -> PyResult<(Outcome, bool)> {
         let folder = self.folder()?;
         let d = ExportOptions::default();
-        let [fatigue_strength, safety_factor, min_ligament, min_gap, start_hole_diameter] = limits;
+        let [
+            fatigue_strength,
+            safety_factor,
+            min_ligament,
+            min_gap,
+            start_hole_diameter,
+        ] = limits;
         let options = ExportOptions {
             design: design_source(design.as_deref())?.unwrap_or(DesignSource::Run),
             unit: named(&UNITS, "export.unit", unit)?,
@@ -384,7 +390,13 @@ impl PyRun {
         resonance_amplitude: Option<f64>,
         linear: bool,
         noise: bool,
-        estimator: (Option<f64>, Option<f64>, Option<usize>, Option<String>, bool),
+        estimator: (
+            Option<f64>,
+            Option<f64>,
+            Option<usize>,
+            Option<String>,
+            bool,
+        ),
     ) -> PyResult<Outcome> {
         use flexstage_identify::data::{Columns, Input};
         let folder = self.folder()?;
@@ -492,6 +504,20 @@ impl PyRun {
         Ok((s.to_string(), s.report.clone(), s.headline.clone()))
     }
 
+    /// The recipe of the run's Monte-Carlo study: the scenario as JSON and the bytes of the
+    /// files the study reads (those the folder has).
+    fn study_recipe(&self) -> PyResult<(String, std::collections::HashMap<String, Vec<u8>>)> {
+        let folder = self.folder()?;
+        let mut files = std::collections::HashMap::new();
+        for rel in flexstage_pipeline::MonteCarloStudy::inputs() {
+            if let Some(bytes) = folder.dir().read(&rel).map_err(errors::run)? {
+                files.insert(rel, bytes);
+            }
+        }
+        let json = serde_json::to_string(folder.scenario()).expect("a scenario serializes");
+        Ok((json, files))
+    }
+
     /// The run's finished design, or None.
     fn load_design<'py>(&self, py: Python<'py>) -> PyResult<Option<Bound<'py, PyDict>>> {
         results::design(py, self.folder()?.dir())
@@ -587,4 +613,3 @@ impl PyRun {
         results::tracking(py, self.folder()?.dir(), conditions)
     }
 }
-

@@ -77,6 +77,22 @@ pub struct Bench {
     /// (`flexstage_identify::response`), or `None` for the fit of the twin's exact modes
     /// ([`flexstage_control::model::ResponseFit::from_modes`]).
     pub identified: Option<ResponseFit>,
+    /// The backstepping's gain scale, sized by the margins
+    /// ([`crate::inject::size_backstepping`]).
+    pub backstepping_scale: f64,
+}
+
+/// What setting a bench up tunes and sizes (its slow part: frequency sweeps and sine
+/// injections): enough to set the same bench up again with [`Bench::with_gains`], e.g. in
+/// another process.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct BenchGains {
+    /// The tuned PID + FF.
+    pub pid: PiNotchParams,
+    /// The tuned PI + notch + FF.
+    pub pi_notch: PiNotchParams,
+    /// The backstepping's gain scale.
+    pub backstepping_scale: f64,
 }
 
 /// The twin's modes (PEA inputs and outputs only).
@@ -134,10 +150,61 @@ impl Bench {
             pi_notch,
             tuning,
             identified,
+            backstepping_scale: 1.0,
         };
         // The backstepping set up from the twin's sampled response, gains sized by the
         // margins (issue #18).
-        crate::inject::size_backstepping(&mut bench)?;
+        bench.backstepping_scale = crate::inject::size_backstepping(&mut bench)?;
+        Ok(bench)
+    }
+
+    /// What [`Bench::with_identified`] tuned and sized.
+    pub fn gains(&self) -> BenchGains {
+        BenchGains {
+            pid: self.pid.params,
+            pi_notch: self.pi_notch.params,
+            backstepping_scale: self.backstepping_scale,
+        }
+    }
+
+    /// The bench [`Bench::with_identified`] sets up from the same `setup`, `twin`, `tuning`
+    /// and `identified`, with the `gains` it found ([`Bench::gains`]) instead of tuning and
+    /// sizing again: the margins of the linear controllers are recomputed, the backstepping
+    /// is set up at the recorded scale as the sizing leaves it.
+    pub fn with_gains(
+        setup: Setup,
+        twin: Twin,
+        tuning: TuningParams,
+        identified: Option<ResponseFit>,
+        gains: BenchGains,
+    ) -> Result<Bench> {
+        let plant = modal_plant(
+            &twin,
+            setup.rig.sample_time,
+            setup.rig.delay,
+            &setup.rig.sensor,
+        )?;
+        let tuned = |params: PiNotchParams| -> Result<Tuned> {
+            let margins = loop_margins(&plant, &params, &tuning.margins)?;
+            Ok(Tuned { params, margins })
+        };
+        let (pid, pi_notch) = (tuned(gains.pid)?, tuned(gains.pi_notch)?);
+        let base = setup.controller.clone();
+        let mut bench = Bench {
+            setup,
+            twin,
+            pid,
+            pi_notch,
+            tuning,
+            identified,
+            backstepping_scale: gains.backstepping_scale,
+        };
+        let notches = bench.pi_notch.params.axes.map(|a| a.notches);
+        let scale = gains.backstepping_scale;
+        bench.setup.controller = match &bench.identified {
+            Some(fit) => base.for_response(fit, notches, scale),
+            None => base.for_sampled_plant(&plant_modes(&bench.twin), notches, scale),
+        };
         Ok(bench)
     }
 

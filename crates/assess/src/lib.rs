@@ -30,7 +30,7 @@ pub mod montecarlo;
 pub mod sweep;
 pub mod track;
 
-pub use bench::{Bench, Candidate};
+pub use bench::{Bench, BenchGains, Candidate};
 pub use error::{AssessError, Result};
 
 use flexstage_control::trajectory::Reference;

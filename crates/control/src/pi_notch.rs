@@ -28,7 +28,7 @@ use crate::error::{ControlError, Result, check};
 use crate::trajectory::Reference;
 
 /// A notch filter N(s) = (s² + 2ζ_z ω s + ω²)/(s² + 2ζ_p ω s + ω²) at f = ω/2π.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Notch {
     /// Centre frequency \[Hz\], 0 < f < f_s/2.
     pub frequency: f64,
@@ -39,7 +39,7 @@ pub struct Notch {
 }
 
 /// Gains of one axis.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AxisGains {
     /// Proportional gain (dimensionless), ≥ 0.
     pub kp: f64,
@@ -52,7 +52,7 @@ pub struct AxisGains {
 }
 
 /// Settings of [`PiNotchController`].
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PiNotchParams {
     /// Gains per axis (q1, q2).
     pub axes: [AxisGains; 2],

@@ -58,6 +58,7 @@ pub mod export;
 mod figures;
 pub mod folder;
 pub mod lock;
+pub mod montecarlo;
 pub mod names;
 pub mod pea;
 mod pea_files;
@@ -83,6 +84,7 @@ pub use error::{PipelineError, Result};
 pub use export::{ExportOptions, ExportSummary, LimitOverrides, export};
 pub use folder::{DEFAULT_PRESET, PRESETS, RunFolder, default_root, default_run, load_scenario};
 pub use lock::{LockHolder, RunLock};
+pub use montecarlo::MonteCarloStudy;
 pub use pea::{
     PeaIdOptions, PeaIdSummary, PeaOptions, PeaRecord, identify_pea, simulate_pea, write_pea_csv,
     write_pea_record,

@@ -318,7 +318,7 @@ impl TrackSummary {
 }
 
 /// The assessment candidate of a variant.
-fn candidate(v: Variant) -> Candidate {
+pub(crate) fn candidate(v: Variant) -> Candidate {
     match v {
         Variant::Robust => Candidate::Robust,
         Variant::NonRobust => Candidate::NonRobust,
@@ -409,7 +409,7 @@ struct Job<'a> {
 }
 
 /// The stage a `track` call simulates.
-enum Simulated {
+pub(crate) enum Simulated {
     /// The twin of the run's design (built once, a fresh rig plant per run).
     Twin(Box<flexstage_twin::Twin>),
     /// The lumped model in its minimal loop.
@@ -506,23 +506,25 @@ pub fn try_build(folder: &RunFolder, progress: &dyn Progress) -> Result<TwinBuil
     }
 }
 
-/// Runs `track` (building the twin of the design when it simulates on the twin).
-pub fn track(
-    folder: &RunFolder,
-    options: &TrackOptions,
-    progress: &dyn Progress,
-) -> Result<TrackSummary> {
-    track_on(folder, options, progress, None)
+/// What `track` sets up before it tunes and runs: the run's plant, the controllers' setup
+/// (model, identified PEAs), the simulated stage and the identified response fit.
+pub(crate) struct Prepared {
+    pub plant: Plant,
+    pub setup: Setup,
+    pub model: ModelSource,
+    pub compensator: [String; 2],
+    pub warnings: Vec<String>,
+    pub sim: Simulated,
+    pub identified: Option<ResponseFit>,
 }
 
-/// Runs `track` with the twin `run` built in its twin stage (`None`: builds it, as [`track`]).
-/// The twin is used only when `options.plant` is the twin and the run has a finished design.
-pub fn track_on(
+/// The set-up of `track` ([`Prepared`]), read from the run folder.
+pub(crate) fn prepare(
     folder: &RunFolder,
     options: &TrackOptions,
     progress: &dyn Progress,
     prebuilt: Option<TwinBuild>,
-) -> Result<TrackSummary> {
+) -> Result<Prepared> {
     options.validate()?;
     let plant = Plant::of_run(folder)?;
     if let Some(d) = options.duration {
@@ -546,12 +548,6 @@ pub fn track_on(
     let compensator = identified_peas(folder, &mut setup)?;
     let mut warnings = Vec::new();
     let sim = simulated(folder, options, progress, prebuilt, &mut warnings)?;
-    const STOPPED_HINT: &str = "its earlier results are unchanged; run track again";
-    crate::progress::check_stop(progress, "track stopped before tuning", STOPPED_HINT)?;
-    let kind = match sim {
-        Simulated::Twin(_) => PlantKind::Twin,
-        Simulated::Lumped => PlantKind::Lumped,
-    };
     // The response fit identified on the twin (else the fit of its exact modes).
     let identified = match folder
         .dir()
@@ -569,6 +565,49 @@ pub fn track_on(
             layout::stage::RESPONSE_FIT
         ));
     }
+    Ok(Prepared {
+        plant,
+        setup,
+        model,
+        compensator,
+        warnings,
+        sim,
+        identified,
+    })
+}
+
+/// Runs `track` (building the twin of the design when it simulates on the twin).
+pub fn track(
+    folder: &RunFolder,
+    options: &TrackOptions,
+    progress: &dyn Progress,
+) -> Result<TrackSummary> {
+    track_on(folder, options, progress, None)
+}
+
+/// Runs `track` with the twin `run` built in its twin stage (`None`: builds it, as [`track`]).
+/// The twin is used only when `options.plant` is the twin and the run has a finished design.
+pub fn track_on(
+    folder: &RunFolder,
+    options: &TrackOptions,
+    progress: &dyn Progress,
+    prebuilt: Option<TwinBuild>,
+) -> Result<TrackSummary> {
+    let Prepared {
+        plant,
+        mut setup,
+        model,
+        compensator,
+        mut warnings,
+        sim,
+        identified,
+    } = prepare(folder, options, progress, prebuilt)?;
+    const STOPPED_HINT: &str = "its earlier results are unchanged; run track again";
+    crate::progress::check_stop(progress, "track stopped before tuning", STOPPED_HINT)?;
+    let kind = match sim {
+        Simulated::Twin(_) => PlantKind::Twin,
+        Simulated::Lumped => PlantKind::Lumped,
+    };
     let (margins, montecarlo, scan) = tune_and_margins(
         &mut setup,
         identified,

@@ -748,4 +748,3 @@ fn push_comment(out: &mut String, doc: &str) {
     out.push_str(doc);
     out.push('\n');
 }
-
