@@ -87,9 +87,6 @@ class MonteCarloStudy:
             digest.update(self.files[name])
         digest.update(repr((self.controllers, sorted(self.settings.items()))).encode())
         self.key = digest.hexdigest()
-        #: What setting the study up tuned and sized (JSON), once it was set up here: a
-        #: worker then sets it up without tuning again.
-        self.gains: Optional[str] = None
 
     @staticmethod
     def of_run(run: Any, controllers: Optional[Sequence[str]] = None, progress: Any = True,
@@ -103,13 +100,13 @@ class MonteCarloStudy:
         scenario_json, files = run._n.study_recipe()
         ctrl = controllers or ("pi-notch-ff", "robust", "nonrobust", "pid-ff")
         study = MonteCarloStudy(scenario_json, files, ctrl, settings)
-        study.gains = study._native(progress).gains
+        study._native(progress)
         return study
 
     def _native(self, progress: Any = False) -> Any:
         return _native.MonteCarloStudy.build(self.key, self.scenario_json, self.files,
                                              list(self.controllers), self.settings,
-                                             self.gains, reporter(progress))
+                                             reporter(progress))
 
     @property
     def plants(self) -> int:

@@ -9,11 +9,13 @@ use std::path::PathBuf;
 use flexstage_pipeline::names::{self, COMPENSATIONS, SCHEMES, SHAPES, UNITS};
 use flexstage_pipeline::summary::Summary;
 use flexstage_pipeline::{
-    AnalyzeOptions, DesignOptions, DesignSource, DesignStart, ExportOptions, LimitOverrides,
-    PeaIdOptions, PeaOptions, PipelineError, PlantKind, ReduceOptions, RunFolder, RunOptions,
-    Simulation, StageData, StageIdOptions, TrackOptions, TwinOptions, TwinValidation, Variant,
+    AnalyzeOptions, CONTROLLERS, Controller, DesignOptions, DesignSource, DesignStart,
+    ExportOptions, LimitOverrides, PeaIdOptions, PeaOptions, PipelineError, PlantKind,
+    ReduceOptions, RunFolder, RunOptions, Simulation, StageData, StageIdOptions, TrackOptions,
+    TwinOptions, TwinValidation,
 };
 use numpy::PyArray1;
+
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
@@ -61,15 +63,15 @@ fn plant_kind(option: &'static str, name: &str) -> PyResult<PlantKind> {
     })
 }
 
-pub(crate) fn variants(names: Option<Vec<String>>) -> PyResult<Vec<Variant>> {
+pub(crate) fn variants(names: Option<Vec<String>>) -> PyResult<Vec<&'static Controller>> {
     let Some(names) = names else {
-        return Ok(Variant::ALL.to_vec());
+        return Ok(Controller::defaults());
     };
     names
         .iter()
         .map(|n| {
-            Variant::from_name(n).ok_or_else(|| {
-                let all: Vec<&str> = Variant::ALL.iter().map(|v| v.name()).collect();
+            Controller::by_name(n).ok_or_else(|| {
+                let all: Vec<&str> = CONTROLLERS.iter().map(|c| c.name).collect();
                 errors::pipeline(PipelineError::Option {
                     option: "track.controllers",
                     value: format!("{n:?}"),

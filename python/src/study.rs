@@ -79,11 +79,8 @@ fn plant_dict<'py>(
 impl PyStudy {
     /// Sets a study up from its recipe (or takes it from this process's cache): `key`
     /// identifies the recipe, `files` maps run-folder paths to their bytes.
-    /// `gains`: the JSON of [`PyStudy::gains`] of a study of the same recipe (the controllers
-    /// are then not tuned again).
     #[staticmethod]
-    #[pyo3(signature = (key, scenario_json, files, controllers, settings, gains = None, reporter = None))]
-    #[allow(clippy::too_many_arguments)]
+    #[pyo3(signature = (key, scenario_json, files, controllers, settings, reporter = None))]
     fn build(
         py: Python<'_>,
         key: String,
@@ -91,7 +88,6 @@ impl PyStudy {
         files: HashMap<String, Vec<u8>>,
         controllers: Vec<String>,
         settings: Settings,
-        gains: Option<&str>,
         reporter: Option<Bound<'_, PyAny>>,
     ) -> PyResult<Self> {
         if let Some((_, s)) = STUDIES
@@ -110,10 +106,7 @@ impl PyStudy {
             ..TrackOptions::default()
         };
         let mp = params(&settings);
-        let gains = gains
-            .map(serde_json::from_str::<flexstage_assess::BenchGains>)
-            .transpose()
-            .map_err(|e| errors::FlexstageError::new_err(format!("study gains: {e}")))?;
+
         let study = blocking(py, reporter.as_ref(), |p| {
             let dir = tempdir()?;
             let built = (|| {
@@ -127,7 +120,7 @@ impl PyStudy {
                     }
                     folder.dir().write(rel, bytes)?;
                 }
-                MonteCarloStudy::of_run(&folder, &options, mp, gains, p)
+                MonteCarloStudy::of_run(&folder, &options, mp, p)
             })();
             let _ = std::fs::remove_dir_all(&dir);
             built
@@ -139,12 +132,6 @@ impl PyStudy {
             cache.remove(0);
         }
         Ok(PyStudy { study })
-    }
-
-    /// What setting the study up tuned and sized, as JSON (exact floats).
-    #[getter]
-    fn gains(&self) -> String {
-        serde_json::to_string(&self.study.gains()).expect("gains serialize")
     }
 
     /// The number of plants.

@@ -12,6 +12,7 @@
 //! 0 = none); every controller is tuned with them in the loop.
 
 use flexstage_assess::{AssessParams, Assessment, Bench};
+use flexstage_control::experiment::Setup;
 use flexstage_run::Format;
 use flexstage_run::files::design::DesignFile;
 use flexstage_scenario::{Preset, Scenario};
@@ -25,11 +26,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("usage: assess quick|paper DESIGN.json [SENSOR_HZ] [ANTI_ALIAS_HZ]")?;
     let design = DesignFile::decode(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let DesignedStage {
-        scenario: s,
-        mut setup,
-        twin,
-        ..
+        scenario: s, twin, ..
     } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
+    let mut setup = Setup::from_scenario(&s);
     if let Some(bw) = args.get(3) {
         setup.rig.sensor.bandwidth = bw.parse()?;
     }

@@ -6,7 +6,7 @@
 //! 2. Kick test and loop-at-a-time margins (sine injection, one sample of delay) of the
 //!    backstepping variants: the design guess with the K-filter (the paper's estimator), the
 //!    guess with the Kalman estimate, and the model fitted to the twin's response below
-//!    Nyquist ("what identification would give", `model::ResponseFit::from_modes`).
+//!    Nyquist ("what identification would give", `response::ResponseFit::from_modes`).
 //! 3. The law's gains k_ε = k_η = k scaled down until both loops keep 6 dB / 40°.
 //! 4. The disturbance bound max|Δ̂_η| measured on the twin in the full rig (non-robust,
 //!    default Lissajous), ρ_η of A25 set to it, and the tracking table: robust, non-robust,
@@ -18,33 +18,46 @@
 //! ```
 
 use flexstage_assess::Bench;
-use flexstage_assess::Candidate;
-use flexstage_assess::bench::plant_modes;
 use flexstage_assess::inject::{InjectionParams, injected_margins, is_stable};
 use flexstage_control::actuator::Compensation;
 use flexstage_control::backstepping::LawParams;
-use flexstage_control::controller::Estimator;
-use flexstage_control::experiment::{Setup, run};
+use flexstage_control::controller::{Backstepping, Estimator, NONROBUST, ROBUST};
+use flexstage_control::experiment::Setup;
+use flexstage_control::fit::fit_to_response;
 use flexstage_control::margins::Margins;
-use flexstage_control::model::{ResponseFit, StageModel, fit_to_response};
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::Reference;
+use flexstage_control::pi_notch::PI_NOTCH_FF;
+use flexstage_control::registry::Design;
+use flexstage_identify::response::ResponseFit;
 use flexstage_run::Format;
 use flexstage_run::files::design::DesignFile;
 use flexstage_scenario::{Preset, Scenario, StageParams};
+use flexstage_sim::experiment::run;
+use flexstage_sim::model::StageModel;
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::Reference;
 use flexstage_twin::DesignedStage;
 
-/// Margins of a backstepping variant (None: unstable).
-fn margins(bench: &Bench, c: Candidate) -> Option<[Margins; 2]> {
+/// Margins of a backstepping design (None: unstable).
+fn margins_of(bench: &Bench, design: &dyn Design) -> Option<[Margins; 2]> {
     let delay = bench.setup.rig.delay;
-    if !is_stable(bench, c, delay, 1.0).unwrap_or(false) {
+    let probe = bench.probe();
+    if !is_stable(&probe, design, delay, 1.0).unwrap_or(false) {
         return None;
     }
     let mut mp = bench.tuning.margins;
     mp.f_min = 10.0;
     mp.points = 40;
     mp.refine = 8;
-    injected_margins(bench, c, delay, &mp, &InjectionParams::default()).unwrap_or(None)
+    injected_margins(&probe, design, delay, &mp, &InjectionParams::default()).unwrap_or(None)
+}
+
+/// Margins of the backstepping with the bench's settings (`bench.setup.controller`), robust
+/// or not (None: unstable).
+fn margins(bench: &Bench, robust: bool) -> Option<[Margins; 2]> {
+    margins_of(
+        bench,
+        &Backstepping::new(bench.setup.controller.clone(), robust),
+    )
 }
 
 fn show(m: &Option<[Margins; 2]>) -> String {
@@ -68,8 +81,8 @@ fn meets(m: &Option<[Margins; 2]>) -> bool {
 }
 
 fn report(name: &str, bench: &Bench) {
-    for c in [Candidate::Robust, Candidate::NonRobust] {
-        println!("{name:<44} {:<9} {}", c.name(), show(&margins(bench, c)));
+    for (c, robust) in [(&ROBUST, true), (&NONROBUST, false)] {
+        println!("{name:<44} {:<9} {}", c.name, show(&margins(bench, robust)));
     }
 }
 
@@ -82,13 +95,10 @@ fn track(
     reference: Reference,
     duration: f64,
 ) -> ([f64; 2], [f64; 2]) {
-    let variant = if robust {
-        flexstage_control::experiment::Variant::Robust
-    } else {
-        flexstage_control::experiment::Variant::NonRobust
-    };
-    let mut c = setup
-        .controller(variant, Compensation::Inverse, reference)
+    let design = Backstepping::new(setup.controller.clone(), robust);
+    let actuator = setup.actuator(Compensation::Inverse);
+    let mut c = design
+        .build(actuator, setup.controller.delay, reference)
         .unwrap();
     let t = setup.rig.sample_time;
     let rec = run(c.as_mut(), plant, duration, t, |_| {});
@@ -153,7 +163,7 @@ fn model_against_twin(
             m.output[1] * (m.input[0] - m.input[1]) / w2 / (gt[1][0] - gt[1][1])
         );
     }
-    let mut fit = ResponseFit::from_modes(&plant_modes(&bench.twin), 0.5 * fs, 0.1);
+    let mut fit = ResponseFit::from_modes(&bench.twin.modal.plant_modes(), 0.5 * fs, 0.1);
     if let Some(f) = env("BS_F1") {
         fit.frequency[0] = Some(f);
     }
@@ -204,7 +214,9 @@ fn stability(bench: &Bench, fitted: &StageParams) -> Bench {
     report("guess model, K-filter (paper)", &b);
     report("guess model, Kalman", &bench);
     if env("BS_NOTCH") != Some(0.0) {
-        bench.setup.controller.measurement_notches = bench.pi_notch.params.axes.map(|a| a.notches);
+        let pi_notch = bench.linear_params(&PI_NOTCH_FF).ok().flatten();
+        bench.setup.controller.measurement_notches =
+            pi_notch.map_or([[None; 2]; 2], |p| p.axes.map(|a| a.notches));
     }
     report("guess model, Kalman, notches", &bench);
     if env("BS_GUESS") != Some(1.0) {
@@ -227,7 +239,7 @@ fn size_gains(fb: &Bench) -> Option<(f64, Bench)> {
         law.error_gain = base.error_gain.map(|g| scale * g);
         law.eta_gain = base.eta_gain.map(|g| 1.0 + scale * (g - 1.0));
         law.feedback_gain = base.feedback_gain.map(|g| scale * g);
-        let m = [Candidate::Robust, Candidate::NonRobust].map(|c| margins(&b, c));
+        let m = [true, false].map(|robust| margins(&b, robust));
         println!(
             "gains × {scale:<5} robust {} | non-robust {}",
             show(&m[0]),
@@ -337,7 +349,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .ok_or("usage: diagnose quick|paper DESIGN.json")?;
     let scenario = Scenario::preset(preset);
     let design = DesignFile::decode(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
-    let DesignedStage { setup, twin, .. } = DesignedStage::new(&scenario, &design.rho)?;
+    let DesignedStage {
+        scenario: s, twin, ..
+    } = DesignedStage::new(&scenario, &design.rho)?;
+    let setup = Setup::from_scenario(&s);
     // The scenario's backstepping settings (design guess, scenario gains, no notches);
     // `Bench::new` sets the shipped ones up from the twin's response.
     let original = setup.controller.clone();
@@ -351,7 +366,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         println!("no gain scale down to 0.05 meets 6 dB / 40° on both loops");
         return Ok(());
     };
-    report("shipped (Bench::new, size_backstepping)", &shipped);
+    for c in [&ROBUST, &NONROBUST] {
+        let m = margins_of(&shipped, &**shipped.design(c)?);
+        let name = "shipped (Bench::new, controller::sized)";
+        println!("{name:<44} {:<9} {}", c.name, show(&m));
+    }
     let law = sized.setup.controller.law;
     println!(
         "chosen: gains × {scale}: k_ε {:.0?}, k_η {:.0?}, k {:.0?}",

@@ -12,19 +12,21 @@
 //!
 //! `cargo run --release -p flexstage-assess --example learn -- quick runs/quick/design/design.json [PERIODS]`
 
-use flexstage_assess::{Bench, Candidate};
+use flexstage_assess::Bench;
 use flexstage_control::ControlError;
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::StageControl;
-use flexstage_control::experiment::run;
+use flexstage_control::experiment::Setup;
 use flexstage_control::learning::{
     DesignParams, Learning, design, measure_learning_plant, rms_per_period,
 };
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::Reference;
+use flexstage_control::registry::Controller;
 use flexstage_run::Format;
 use flexstage_run::files::design::DesignFile;
 use flexstage_scenario::{Preset, Scenario, Trajectory};
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::experiment::run;
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::Reference;
 use flexstage_twin::DesignedStage;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -36,11 +38,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let design_file = DesignFile::decode(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let periods: usize = args.get(3).map(|s| s.parse()).transpose()?.unwrap_or(20);
     let DesignedStage {
-        scenario: s,
-        setup,
-        twin,
-        ..
+        scenario: s, twin, ..
     } = DesignedStage::new(&Scenario::preset(preset), &design_file.rho)?;
+    let setup = Setup::from_scenario(&s);
     let bench = Bench::new(setup, twin, Default::default())?;
     let trajectory = s
         .trajectories
@@ -62,12 +62,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "controller       without q1/q2 [nm]  with learning q1/q2 [nm]  settled from  \
          design γ, λ, M, ρ  sensor lag q1/q2 [samples]"
     );
-    for c in [
-        Candidate::PiNotch,
-        Candidate::PidTuned,
-        Candidate::Robust,
-        Candidate::NonRobust,
-    ] {
+    for c in Controller::defaults() {
         let make = || -> flexstage_control::Result<(Box<dyn StageControl>, Box<dyn StagePlant>)> {
             let ctrl = bench
                 .controller(c, Compensation::Inverse, reference)
@@ -102,7 +97,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             .map_or(1, |j| j + 2);
         println!(
             "{:<16} {:>8.1}/{:<8.1}  {:>12.1}/{:<10.1}  {:>12}  {}, {}, {}, {rho:.3}  {:.2}/{:.2}",
-            c.name(),
+            c.name,
             last0[0] * 1e9,
             last0[1] * 1e9,
             last[0] * 1e9,

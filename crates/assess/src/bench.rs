@@ -1,119 +1,50 @@
-//! The test bench: the twin of a design, the controllers compared on it and how to build
-//! each one, its linear loop for margins and its full rig for tracking.
+//! The test bench: the twin of a design, the controllers of `flexstage-control`'s registry
+//! designed for it (tuned on the twin's sampled response, the backstepping sized by its
+//! margins measured on the twin's linear loop), its linear loop for margins and its full rig
+//! for tracking.
 
+use std::sync::Arc;
+
+use flexstage_control::ControlError;
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::{PidController, StageControl};
-use flexstage_control::experiment::{Setup, Variant};
-use flexstage_control::model::ResponseFit;
-use flexstage_control::pi_notch::{AxisGains, PiNotchController, PiNotchParams};
-use flexstage_control::rig::{AmplifierParams, PlantActuator, RigParams, RigPlant, SensorParams};
-use flexstage_control::trajectory::Reference;
-use flexstage_control::tuning::{
-    ModalPlant, PlantMode, Structure, Tuned, TuningParams, loop_margins, tune,
-};
+use flexstage_control::experiment::Setup;
+use flexstage_control::margins::{MarginParams, Margins};
+use flexstage_control::pi_notch::PiNotchParams;
+use flexstage_control::registry::{Controller, Design, Designs, MarginProbe, Stage};
+use flexstage_control::tuning::{TuningParams, loop_margins};
+use flexstage_identify::response::{RESPONSE_SHARE, ResponseFit};
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::modal::ModalPlant;
+use flexstage_sim::rig::{AmplifierParams, PlantActuator, RigParams, RigPlant, SensorParams};
+use flexstage_sim::trajectory::Reference;
 use flexstage_twin::{Twin, TwinStage};
 
-use crate::error::Result;
+use crate::error::{AssessError, Result};
+use crate::inject::{InjectionParams, injected_margins};
 
-/// The controllers compared.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Candidate {
-    /// Robust backstepping with the disturbance observer (scenario gains).
-    Robust,
-    /// Backstepping without the robust terms.
-    NonRobust,
-    /// The PID + FF baseline with the scenario's gains (`controller.pid`) and the
-    /// controller model's static gain.
-    PidScenario,
-    /// PID + FF with the twin's static gain, tuned by [`flexstage_control::tuning`].
-    PidTuned,
-    /// PI + notch + FF with the twin's static gain, tuned by the same procedure.
-    PiNotch,
-}
-
-impl Candidate {
-    /// All, in report order.
-    pub const ALL: [Candidate; 5] = [
-        Candidate::Robust,
-        Candidate::NonRobust,
-        Candidate::PidScenario,
-        Candidate::PidTuned,
-        Candidate::PiNotch,
-    ];
-
-    /// Short name for files and tables (the `track` variant's name: `pid-ff` is the tuned
-    /// PID, `pid-ff-scenario` the scenario's gains).
-    pub fn name(self) -> &'static str {
-        match self {
-            Candidate::Robust => "robust",
-            Candidate::NonRobust => "nonrobust",
-            Candidate::PidScenario => "pid-ff-scenario",
-            Candidate::PidTuned => "pid-ff",
-            Candidate::PiNotch => "pi-notch-ff",
-        }
-    }
-
-    /// Whether the controller is linear (margins computed analytically from its transfer
-    /// function; otherwise by sine injection).
-    pub fn is_linear(self) -> bool {
-        !matches!(self, Candidate::Robust | Candidate::NonRobust)
-    }
-}
-
-/// The bench: controllers' setup, the twin and the tuned baselines.
+/// The bench: the controllers' settings, the twin and the controllers designed for it.
 #[derive(Debug, Clone)]
 pub struct Bench {
-    /// The controllers' settings (backstepping model, gains, actuator) and the rig.
+    /// The scenario's settings of the controllers and the rig, with the controllers' lumped
+    /// model fitted to the twin's response fit (`Stage::controller_model`).
     pub setup: Setup,
     /// The twin of the design.
     pub twin: Twin,
-    /// The tuned PID + FF.
-    pub pid: Tuned,
-    /// The tuned PI + notch + FF.
-    pub pi_notch: Tuned,
     /// The tuning settings used.
     pub tuning: TuningParams,
-    /// The response fit the backstepping's model comes from: one identified on the stage
+    /// The response fit the model-based designs come from: one identified on the stage
     /// (`flexstage_identify::response`), or `None` for the fit of the twin's exact modes
-    /// ([`flexstage_control::model::ResponseFit::from_modes`]).
+    /// ([`ResponseFit::from_modes`]).
     pub identified: Option<ResponseFit>,
-    /// The backstepping's gain scale, sized by the margins
-    /// ([`crate::inject::size_backstepping`]).
-    pub backstepping_scale: f64,
-}
-
-/// What setting a bench up tunes and sizes (its slow part: frequency sweeps and sine
-/// injections): enough to set the same bench up again with [`Bench::with_gains`], e.g. in
-/// another process.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct BenchGains {
-    /// The tuned PID + FF.
-    pub pid: PiNotchParams,
-    /// The tuned PI + notch + FF.
-    pub pi_notch: PiNotchParams,
-    /// The backstepping's gain scale.
-    pub backstepping_scale: f64,
-}
-
-/// The twin's modes (PEA inputs and outputs only).
-pub fn plant_modes(twin: &Twin) -> Vec<PlantMode> {
-    twin.modal
-        .modes
-        .iter()
-        .map(|m| PlantMode {
-            frequency: m.frequency,
-            damping: m.damping,
-            input: [m.input[0], m.input[1]],
-            output: m.output,
-        })
-        .collect()
+    /// Every controller of the registry, designed for the twin.
+    pub designs: Designs,
 }
 
 /// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay and the
 /// rig's sensor chain `sensor` (electronics and anti-aliasing filter) before the sampler.
 pub fn modal_plant(twin: &Twin, t: f64, delay: usize, sensor: &SensorParams) -> Result<ModalPlant> {
     Ok(ModalPlant::with_sensor(
-        plant_modes(twin),
+        twin.modal.plant_modes(),
         t,
         delay,
         sensor,
@@ -121,16 +52,16 @@ pub fn modal_plant(twin: &Twin, t: f64, delay: usize, sensor: &SensorParams) -> 
 }
 
 impl Bench {
-    /// Tunes the loop-shaping baselines on the twin's sampled loop with the rig's delay and
-    /// returns the bench.
+    /// Designs every controller on the twin's sampled loop with the rig's delay and sensor
+    /// chain and returns the bench.
     pub fn new(setup: Setup, twin: Twin, tuning: TuningParams) -> Result<Bench> {
         Bench::with_identified(setup, twin, tuning, None)
     }
 
-    /// [`Bench::new`] with the backstepping's model from an `identified` response fit
+    /// [`Bench::new`] with the model-based designs from an `identified` response fit
     /// ([`Bench::identified`]).
     pub fn with_identified(
-        setup: Setup,
+        mut setup: Setup,
         twin: Twin,
         tuning: TuningParams,
         identified: Option<ResponseFit>,
@@ -141,143 +72,120 @@ impl Bench {
             setup.rig.delay,
             &setup.rig.sensor,
         )?;
-        let pid = tune(&plant, Structure::Pid, &tuning)?;
-        let pi_notch = tune(&plant, Structure::PiNotch, &tuning)?;
-        let mut bench = Bench {
+        let nyquist = 0.5 / setup.controller.observer.sample_time;
+        let fit = identified.unwrap_or_else(|| {
+            ResponseFit::from_modes(&twin.modal.plant_modes(), nyquist, RESPONSE_SHARE)
+        });
+        let probe = LinearLoop {
+            twin: &twin,
+            setup: &setup,
+        };
+        let stage = Stage::new(
+            &setup,
+            Some(&plant),
+            Some(fit),
+            Some(&probe),
+            tuning.clone(),
+        );
+        let designs = Designs::for_stage(&stage)?;
+        let (model, coupling) = stage.controller_model();
+        drop(stage);
+        (setup.controller.model, setup.controller.coupling) = (model, coupling);
+        Ok(Bench {
             setup,
             twin,
-            pid,
-            pi_notch,
             tuning,
             identified,
-            backstepping_scale: 1.0,
-        };
-        // The backstepping set up from the twin's sampled response, gains sized by the
-        // margins (issue #18).
-        bench.backstepping_scale = crate::inject::size_backstepping(&mut bench)?;
-        Ok(bench)
-    }
-
-    /// What [`Bench::with_identified`] tuned and sized.
-    pub fn gains(&self) -> BenchGains {
-        BenchGains {
-            pid: self.pid.params,
-            pi_notch: self.pi_notch.params,
-            backstepping_scale: self.backstepping_scale,
-        }
-    }
-
-    /// The bench [`Bench::with_identified`] sets up from the same `setup`, `twin`, `tuning`
-    /// and `identified`, with the `gains` it found ([`Bench::gains`]) instead of tuning and
-    /// sizing again: the margins of the linear controllers are recomputed, the backstepping
-    /// is set up at the recorded scale as the sizing leaves it.
-    pub fn with_gains(
-        setup: Setup,
-        twin: Twin,
-        tuning: TuningParams,
-        identified: Option<ResponseFit>,
-        gains: BenchGains,
-    ) -> Result<Bench> {
-        let plant = modal_plant(
-            &twin,
-            setup.rig.sample_time,
-            setup.rig.delay,
-            &setup.rig.sensor,
-        )?;
-        let tuned = |params: PiNotchParams| -> Result<Tuned> {
-            let margins = loop_margins(&plant, &params, &tuning.margins)?;
-            Ok(Tuned { params, margins })
-        };
-        let (pid, pi_notch) = (tuned(gains.pid)?, tuned(gains.pi_notch)?);
-        let base = setup.controller.clone();
-        let mut bench = Bench {
-            setup,
-            twin,
-            pid,
-            pi_notch,
-            tuning,
-            identified,
-            backstepping_scale: gains.backstepping_scale,
-        };
-        let notches = bench.pi_notch.params.axes.map(|a| a.notches);
-        let scale = gains.backstepping_scale;
-        bench.setup.controller = match &bench.identified {
-            Some(fit) => base.for_response(fit, notches, scale),
-            None => base.for_sampled_plant(&plant_modes(&bench.twin), notches, scale),
-        };
-        Ok(bench)
-    }
-
-    /// The linear-controller parameters of a linear candidate (the scenario's PID as a
-    /// PI-notch structure with the controller model's static gain).
-    pub fn linear_params(&self, c: Candidate) -> Result<Option<PiNotchParams>> {
-        Ok(match c {
-            Candidate::PidTuned => Some(self.pid.params),
-            Candidate::PiNotch => Some(self.pi_notch.params),
-            Candidate::PidScenario => {
-                let m = flexstage_control::model::StageModel::new(&self.setup.controller.model)?
-                    .dc_gain()?;
-                let p = self.setup.pid;
-                let axis = AxisGains {
-                    kp: p.kp,
-                    ki: p.ki,
-                    kd: p.kd,
-                    notches: [None, None],
-                };
-                Some(PiNotchParams {
-                    axes: [axis; 2],
-                    static_gain: [[m[(0, 0)], m[(0, 1)]], [m[(1, 0)], m[(1, 1)]]],
-                    sample_time: self.setup.rig.sample_time,
-                })
-            }
-            Candidate::Robust | Candidate::NonRobust => None,
+            designs,
         })
     }
 
-    /// Builds a controller for `reference` with `compensation`, using `setup` (the bench's
-    /// or a perturbed copy).
+    /// The design of `c` on this bench.
+    pub fn design(&self, c: &Controller) -> Result<&Arc<dyn Design>> {
+        self.designs.get(c).ok_or_else(|| {
+            AssessError::from(ControlError::Infeasible {
+                what: format!("controller {}", c.name),
+                detail: "not designed on this bench".into(),
+            })
+        })
+    }
+
+    /// The gains of `c` when it is a linear controller (margins from its transfer
+    /// function), else `None`.
+    pub fn linear_params(&self, c: &Controller) -> Result<Option<PiNotchParams>> {
+        Ok(self.design(c)?.linear().copied())
+    }
+
+    /// Builds `c` for `reference` with `compensation`, using `setup` (the bench's or a
+    /// perturbed copy) for the actuator stage and the delay it predicts over.
     pub fn controller_with(
         &self,
         setup: &Setup,
-        c: Candidate,
+        c: &Controller,
         compensation: Compensation,
         reference: Reference,
     ) -> Result<Box<dyn StageControl>> {
-        let mut actuator = setup.controller.actuator;
-        actuator.compensation = compensation;
-        Ok(match c {
-            Candidate::Robust => setup.controller(Variant::Robust, compensation, reference)?,
-            Candidate::NonRobust => {
-                setup.controller(Variant::NonRobust, compensation, reference)?
-            }
-            Candidate::PidScenario => Box::new(PidController::new(
-                &setup.controller.model,
-                setup.pid,
-                actuator,
-                setup.rig.sample_time,
-                reference,
-            )?),
-            Candidate::PidTuned | Candidate::PiNotch => {
-                let p = self.linear_params(c)?.expect("linear candidate");
-                Box::new(PiNotchController::new(p, actuator, reference)?)
-            }
-        })
+        let actuator = setup.actuator(compensation);
+        Ok(self
+            .design(c)?
+            .build(actuator, setup.controller.delay, reference)?)
     }
 
     /// [`Bench::controller_with`] on the bench's own setup.
     pub fn controller(
         &self,
-        c: Candidate,
+        c: &Controller,
         compensation: Compensation,
         reference: Reference,
     ) -> Result<Box<dyn StageControl>> {
         self.controller_with(&self.setup, c, compensation, reference)
     }
 
+    /// The twin's linear loop, where margins are measured.
+    pub fn probe(&self) -> LinearLoop<'_> {
+        LinearLoop {
+            twin: &self.twin,
+            setup: &self.setup,
+        }
+    }
+
+    /// Margins of a linear candidate computed from its transfer function on the twin's
+    /// sampled loop.
+    pub fn analytic_margins(&self, c: &Controller, delay: usize) -> Result<Option<[Margins; 2]>> {
+        let Some(p) = self.linear_params(c)? else {
+            return Ok(None);
+        };
+        Ok(Some(self.analytic_margins_of(&p, delay)?))
+    }
+
+    /// Margins of the linear controller `p` from its transfer function on the twin's sampled
+    /// loop with `delay` samples.
+    pub fn analytic_margins_of(&self, p: &PiNotchParams, delay: usize) -> Result<[Margins; 2]> {
+        let plant = modal_plant(
+            &self.twin,
+            self.setup.rig.sample_time,
+            delay,
+            &self.setup.rig.sensor,
+        )?;
+        Ok(loop_margins(&plant, p, &self.tuning.margins)?)
+    }
+}
+
+/// The twin's linear loop: the linear rig (ideal amplifier, no PEA, the sensor chain without
+/// noise, no creep or floor) around the twin without its geometric correction, with the
+/// controllers' actuator stage and delay of `setup`. What margins are measured on.
+#[derive(Debug, Clone, Copy)]
+pub struct LinearLoop<'a> {
+    /// The twin.
+    pub twin: &'a Twin,
+    /// The controllers' settings and the rig.
+    pub setup: &'a Setup,
+}
+
+impl LinearLoop<'_> {
     /// The linear loop of the rig with `delay` samples: ideal amplifier, no PEA (x_nom
     /// applied directly), the rig's sensor chain (electronics and anti-aliasing filter)
-    /// without noise, no creep or floor; the twin without its geometric correction. What
-    /// margins are computed on.
+    /// without noise, no creep or floor.
     pub fn linear_rig(&self, delay: usize) -> RigParams {
         let mut r = self.setup.rig.clone();
         r.delay = delay;
@@ -291,29 +199,35 @@ impl Bench {
         r
     }
 
-    /// The linear twin in the linear rig (see [`Bench::linear_rig`]).
+    /// The linear twin in the linear rig (see [`LinearLoop::linear_rig`]).
     pub fn linear_plant(&self, delay: usize) -> Result<RigPlant<TwinStage>> {
         let rig = self.linear_rig(delay);
         let stage = TwinStage::new(&self.twin.modal, None, rig.substep());
         Ok(RigPlant::new(rig, stage)?)
     }
 
-    /// Margins of a linear candidate computed from its transfer function on the twin's
-    /// sampled loop.
-    pub fn analytic_margins(
+    /// `design` built for a zero reference with the ideal actuator stage (x_nom is the
+    /// command), predicting over the controllers' delay.
+    pub fn controller(&self, design: &dyn Design) -> Result<Box<dyn StageControl>> {
+        let r = Reference::new(flexstage_sim::trajectory::Shape::Step { target: [0.0; 2] });
+        let actuator = self.setup.actuator(Compensation::Ideal);
+        Ok(design.build(actuator, self.setup.controller.delay, r)?)
+    }
+}
+
+/// Margins by sine injection with the rig's delay, for designs sized by their margins.
+impl MarginProbe for LinearLoop<'_> {
+    fn margins(
         &self,
-        c: Candidate,
-        delay: usize,
-    ) -> Result<Option<[flexstage_control::margins::Margins; 2]>> {
-        let Some(p) = self.linear_params(c)? else {
-            return Ok(None);
-        };
-        let plant = modal_plant(
-            &self.twin,
-            self.setup.rig.sample_time,
-            delay,
-            &self.setup.rig.sensor,
-        )?;
-        Ok(Some(loop_margins(&plant, &p, &self.tuning.margins)?))
+        design: &dyn Design,
+        params: &MarginParams,
+    ) -> flexstage_control::Result<Option<[Margins; 2]>> {
+        let delay = self.setup.rig.delay;
+        injected_margins(self, design, delay, params, &InjectionParams::default()).map_err(|e| {
+            ControlError::Measurement {
+                what: "margins by sine injection on the twin".into(),
+                detail: e.to_string(),
+            }
+        })
     }
 }

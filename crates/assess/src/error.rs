@@ -6,6 +6,9 @@ pub enum AssessError {
     /// A controller, tuning or margin setting (names the field, value and range).
     #[error(transparent)]
     Control(#[from] flexstage_control::ControlError),
+    /// The simulated stage or a reference (`flexstage-sim`).
+    #[error(transparent)]
+    Sim(#[from] flexstage_sim::SimError),
     /// Building or running the twin.
     #[error(transparent)]
     Twin(#[from] flexstage_twin::TwinError),

@@ -7,13 +7,13 @@
 //! input transformation; for a linear controller it equals the analytic loop-at-a-time
 //! ratio (tests).
 
-use flexstage_control::actuator::Compensation;
 use flexstage_control::margins::{MarginParams, Margins, margin};
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::{Reference, Shape};
+use flexstage_control::registry::Design;
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::rig::StagePlant;
 use nalgebra::Complex;
 
-use crate::bench::{Bench, Candidate};
+use crate::bench::LinearLoop;
 use crate::error::Result;
 
 /// Settings of the injection.
@@ -37,32 +37,29 @@ impl Default for InjectionParams {
     }
 }
 
-/// One closed loop of a candidate on the bench's linear rig, at rest with a zero reference.
+/// One closed loop of `design` on the linear rig with `delay` samples, at rest with a zero
+/// reference.
 fn closed_loop(
-    bench: &Bench,
-    c: Candidate,
+    probe: &LinearLoop<'_>,
+    design: &dyn Design,
     delay: usize,
-) -> Result<(
-    Box<dyn flexstage_control::controller::StageControl>,
-    Box<dyn StagePlant>,
-)> {
-    let r = Reference::new(Shape::Step { target: [0.0; 2] });
-    let ctrl = bench.controller(c, Compensation::Ideal, r)?;
-    let plant = bench.linear_plant(delay)?;
+) -> Result<(Box<dyn StageControl>, Box<dyn StagePlant>)> {
+    let ctrl = probe.controller(design)?;
+    let plant = probe.linear_plant(delay)?;
     Ok((ctrl, Box::new(plant)))
 }
 
 /// The measured return ratio of loop `axis` at `f` \[Hz\]; NaN when the loop diverges.
 pub fn return_ratio(
-    bench: &Bench,
-    c: Candidate,
+    probe: &LinearLoop<'_>,
+    design: &dyn Design,
     delay: usize,
     axis: usize,
     f: f64,
     p: &InjectionParams,
 ) -> Result<Complex<f64>> {
-    let (mut ctrl, mut plant) = closed_loop(bench, c, delay)?;
-    let t = bench.setup.rig.sample_time;
+    let (mut ctrl, mut plant) = closed_loop(probe, design, delay)?;
+    let t = probe.setup.rig.sample_time;
     let settle = ((p.settle + 3.0 / f) / t).ceil() as usize;
     let cycles = (4.0f64).max((p.window * f).ceil());
     let n = (cycles / (f * t)).round() as usize;
@@ -87,15 +84,20 @@ pub fn return_ratio(
     Ok(-a / b)
 }
 
-/// Whether the closed loop of a candidate on the linear rig is asymptotically stable: after
+/// Whether the closed loop of `design` on the linear rig is asymptotically stable: after
 /// a 10 nm kick of both measurements, the output over the last fifth of `duration` \[s\] stays
 /// below a tenth of its peak and below the kick, and does not grow over the last tenth (a
 /// loop held flat by the stroke or voltage clamp is not stable). (A slowly growing mode
 /// can still pass for a short `duration`; [`injected_margins`] also reports a loop that
 /// diverges under injection as unstable.)
-pub fn is_stable(bench: &Bench, c: Candidate, delay: usize, duration: f64) -> Result<bool> {
-    let (mut ctrl, mut plant) = closed_loop(bench, c, delay)?;
-    let t = bench.setup.rig.sample_time;
+pub fn is_stable(
+    probe: &LinearLoop<'_>,
+    design: &dyn Design,
+    delay: usize,
+    duration: f64,
+) -> Result<bool> {
+    let (mut ctrl, mut plant) = closed_loop(probe, design, delay)?;
+    let t = probe.setup.rig.sample_time;
     let n = (duration / t).round() as usize;
     let (mut peak, mut tail, mut last) = (0.0f64, 0.0f64, 0.0f64);
     for k in 0..n {
@@ -126,16 +128,16 @@ pub fn is_stable(bench: &Bench, c: Candidate, delay: usize, duration: f64) -> Re
 /// The kick of [`is_stable`] \[m\].
 const KICK: f64 = 1e-8;
 
-/// Margins of a candidate from measured return ratios; `None` when the closed loop is
+/// Margins of `design` from measured return ratios; `None` when the closed loop is
 /// unstable (no margin to speak of).
 pub fn injected_margins(
-    bench: &Bench,
-    c: Candidate,
+    probe: &LinearLoop<'_>,
+    design: &dyn Design,
     delay: usize,
     m: &MarginParams,
     p: &InjectionParams,
 ) -> Result<Option<[Margins; 2]>> {
-    if !is_stable(bench, c, delay, 1.0)? {
+    if !is_stable(probe, design, delay, 1.0)? {
         return Ok(None);
     }
     let mut out = [None, None];
@@ -143,7 +145,7 @@ pub fn injected_margins(
         let mut err = None;
         let mut diverged = false;
         let r = margin(
-            |f| match return_ratio(bench, c, delay, axis, f, p) {
+            |f| match return_ratio(probe, design, delay, axis, f, p) {
                 Ok(z) => {
                     diverged |= !(z.re.is_finite() && z.im.is_finite());
                     z
@@ -165,45 +167,4 @@ pub fn injected_margins(
         out[axis] = Some(r);
     }
     Ok(Some([out[0].unwrap(), out[1].unwrap()]))
-}
-
-/// Sets the backstepping up from the twin's sampled response
-/// ([`flexstage_control::controller::ControllerParams::for_response`] on the bench's
-/// identified fit, else on the fit of the twin's exact modes: fitted model, the tuned PI +
-/// notch's notches on the measurement) with the largest gain scale of
-/// [`flexstage_control::controller::GAIN_SCALES`] whose robust and non-robust loops keep
-/// the margin targets of the bench's tuning (6 dB / 40°) with the rig's delay, by sine
-/// injection; the smallest scale when none does (the margins table then flags it). Returns
-/// the scale.
-pub fn size_backstepping(bench: &mut Bench) -> Result<f64> {
-    use flexstage_control::controller::GAIN_SCALES;
-    let base = bench.setup.controller.clone();
-    let modes = crate::bench::plant_modes(&bench.twin);
-    let notches = bench.pi_notch.params.axes.map(|a| a.notches);
-    let delay = bench.setup.rig.delay;
-    let (gm, pm) = (bench.tuning.gain_margin_db, bench.tuning.phase_margin_deg);
-    let mut mp = bench.tuning.margins;
-    mp.f_min = 10.0;
-    mp.points = 40;
-    mp.refine = 8;
-    for &scale in &GAIN_SCALES {
-        bench.setup.controller = match &bench.identified {
-            Some(fit) => base.for_response(fit, notches, scale),
-            None => base.for_sampled_plant(&modes, notches, scale),
-        };
-        let mut ok = true;
-        for c in [Candidate::Robust, Candidate::NonRobust] {
-            ok &= match injected_margins(bench, c, delay, &mp, &InjectionParams::default())? {
-                Some(m) => m.iter().all(|m| m.meets(gm, pm)),
-                None => false,
-            };
-            if !ok {
-                break;
-            }
-        }
-        if ok {
-            return Ok(scale);
-        }
-    }
-    Ok(GAIN_SCALES[GAIN_SCALES.len() - 1])
 }

@@ -30,17 +30,18 @@ pub mod montecarlo;
 pub mod sweep;
 pub mod track;
 
-pub use bench::{Bench, BenchGains, Candidate};
+pub use bench::Bench;
 pub use error::{AssessError, Result};
 
-use flexstage_control::trajectory::Reference;
+use flexstage_control::registry::{CONTROLLERS, Controller};
 use flexstage_scenario::{Scenario, Trajectory};
+use flexstage_sim::trajectory::Reference;
 
 /// Settings of a whole assessment.
 #[derive(Debug, Clone, PartialEq)]
 pub struct AssessParams {
-    /// Which candidates.
-    pub candidates: Vec<Candidate>,
+    /// Which controllers (default: every controller of the registry).
+    pub candidates: Vec<&'static Controller>,
     /// Margin targets.
     pub targets: margins::MarginTargets,
     /// Sine injection.
@@ -56,7 +57,7 @@ pub struct AssessParams {
 impl Default for AssessParams {
     fn default() -> Self {
         AssessParams {
-            candidates: Candidate::ALL.to_vec(),
+            candidates: CONTROLLERS.to_vec(),
             targets: Default::default(),
             injection: Default::default(),
             montecarlo: Default::default(),
@@ -72,9 +73,9 @@ pub struct Assessment {
     /// The margins table (rig delay).
     pub margins: Vec<margins::MarginRow>,
     /// Nominal tracking of the scenario's first trajectory: RMS per axis \[m\] per candidate.
-    pub tracking: Vec<(Candidate, [f64; 2])>,
+    pub tracking: Vec<(&'static Controller, [f64; 2])>,
     /// Standstill noise per candidate \[m\].
-    pub standstill: Vec<(Candidate, [f64; 2])>,
+    pub standstill: Vec<(&'static Controller, [f64; 2])>,
     /// The Monte-Carlo study.
     pub montecarlo: montecarlo::MonteCarlo,
     /// The sweep.
@@ -155,7 +156,7 @@ impl Assessment {
                 };
                 s.push_str(&format!(
                     "{:<15} q{}   {}  {:<7}{}\n",
-                    r.candidate.name(),
+                    r.candidate.name,
                     l + 1,
                     m,
                     if r.meets { "met" } else { "FLAGGED" },
@@ -164,5 +165,17 @@ impl Assessment {
             }
         }
         s
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Goal: the assessment covers every controller of the registry by default, in its
+    /// order, so a controller added to the registry is assessed without a change here.
+    #[test]
+    fn the_assessment_covers_the_registry() {
+        assert_eq!(AssessParams::default().candidates, CONTROLLERS.to_vec());
     }
 }

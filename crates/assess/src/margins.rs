@@ -2,8 +2,9 @@
 //! twin's sampled loop with the rig's delay, flagged against the targets.
 
 use flexstage_control::margins::Margins;
+use flexstage_control::registry::Controller;
 
-use crate::bench::{Bench, Candidate};
+use crate::bench::Bench;
 use crate::error::Result;
 use crate::inject::{InjectionParams, injected_margins};
 
@@ -29,7 +30,7 @@ impl Default for MarginTargets {
 #[derive(Debug, Clone, PartialEq)]
 pub struct MarginRow {
     /// The controller.
-    pub candidate: Candidate,
+    pub candidate: &'static Controller,
     /// The rig delay \[samples\].
     pub delay: usize,
     /// How the margins were obtained ("transfer function" or "sine injection").
@@ -63,24 +64,26 @@ impl MarginRow {
 /// The margins of every candidate in `candidates` with `delay` samples of delay.
 pub fn margins_table(
     bench: &Bench,
-    candidates: &[Candidate],
+    candidates: &[&'static Controller],
     delay: usize,
     targets: MarginTargets,
     injection: &InjectionParams,
 ) -> Result<Vec<MarginRow>> {
     let mut rows = Vec::new();
+    let probe = bench.probe();
     for &c in candidates {
-        let (method, m) = if c.is_linear() {
-            let stable = crate::inject::is_stable(bench, c, delay, 1.0)?;
-            let m = bench.analytic_margins(c, delay)?;
-            ("transfer function", if stable { m } else { None })
+        let design = bench.design(c)?;
+        let (method, m) = if let Some(p) = design.linear() {
+            let stable = crate::inject::is_stable(&probe, &**design, delay, 1.0)?;
+            let m = bench.analytic_margins_of(p, delay)?;
+            ("transfer function", stable.then_some(m))
         } else {
             let mut mp = bench.tuning.margins;
             mp.points = 48;
             mp.refine = 10;
             (
                 "sine injection",
-                injected_margins(bench, c, delay, &mp, injection)?,
+                injected_margins(&probe, &**design, delay, &mp, injection)?,
             )
         };
         let meets = m.is_some_and(|m| {

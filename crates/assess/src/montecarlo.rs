@@ -15,11 +15,12 @@
 //! A plant passes when the run does not diverge and the RMS error of each axis is within
 //! [`MonteCarloParams::rms_bound_pct`] of that axis's reference range (peak to peak).
 
-use flexstage_control::trajectory::Reference;
+use flexstage_control::registry::Controller;
 use flexstage_numerics::noise::SplitMix64;
+use flexstage_sim::trajectory::Reference;
 use rayon::prelude::*;
 
-use crate::bench::{Bench, Candidate};
+use crate::bench::Bench;
 use crate::error::{Result, check};
 use crate::track::{diverged, track_on};
 
@@ -126,14 +127,14 @@ pub struct PlantResult {
     /// Delay \[samples\].
     pub delay: usize,
     /// Per candidate: RMS error per axis \[m\] and pass.
-    pub results: Vec<(Candidate, [f64; 2], bool)>,
+    pub results: Vec<(&'static Controller, [f64; 2], bool)>,
 }
 
 /// The study's result.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MonteCarlo {
     /// The candidates, in column order.
-    pub candidates: Vec<Candidate>,
+    pub candidates: Vec<&'static Controller>,
     /// One entry per plant.
     pub plants: Vec<PlantResult>,
 }
@@ -149,7 +150,7 @@ impl MonteCarlo {
 /// Runs the study on `reference` for the `candidates`, plants in parallel.
 pub fn monte_carlo(
     bench: &Bench,
-    candidates: &[Candidate],
+    candidates: &[&'static Controller],
     reference: Reference,
     p: &MonteCarloParams,
 ) -> Result<MonteCarlo> {
@@ -169,7 +170,7 @@ pub fn monte_carlo(
 /// candidate's result on it. [`monte_carlo`] is this for `i` in `0..p.plants`.
 pub fn one_plant(
     bench: &Bench,
-    candidates: &[Candidate],
+    candidates: &[&'static Controller],
     reference: Reference,
     p: &MonteCarloParams,
     i: usize,

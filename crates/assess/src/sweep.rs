@@ -4,10 +4,12 @@
 //! deliver the scan (amplifier range, current, stroke: `Setup::check_reference`); the RMS is
 //! taken over the second half of the run (after the smooth start), also in % of the range.
 
-use flexstage_control::trajectory::{Reference, Shape};
 use flexstage_figures::plot::{Figure, Series};
+use flexstage_sim::trajectory::{Reference, Shape};
 
-use crate::bench::{Bench, Candidate};
+use flexstage_control::registry::Controller;
+
+use crate::bench::Bench;
 use crate::error::{Result, check};
 use crate::track::{diverged, track_on};
 
@@ -39,13 +41,13 @@ pub struct SweepPoint {
     /// Amplitudes used (A1, A2) \[m\].
     pub amplitude: [f64; 2],
     /// Per candidate: steady RMS error per axis \[m\] (∞: diverged), and in % of the range.
-    pub results: Vec<(Candidate, [f64; 2], [f64; 2])>,
+    pub results: Vec<(&'static Controller, [f64; 2], [f64; 2])>,
 }
 
 /// Runs the sweep for `candidates`, starting from the Lissajous amplitudes `amplitude`.
 pub fn sweep(
     bench: &Bench,
-    candidates: &[Candidate],
+    candidates: &[&'static Controller],
     amplitude: [f64; 2],
     p: &SweepParams,
 ) -> Result<Vec<SweepPoint>> {
@@ -109,7 +111,7 @@ pub fn sweep(
 
 /// The figure: RMS error (mean of both axes, % of range, log10) against the fast
 /// component's frequency in % of the first resonance, one line per candidate.
-pub fn figure(points: &[SweepPoint], candidates: &[Candidate]) -> Result<String> {
+pub fn figure(points: &[SweepPoint], candidates: &[&Controller]) -> Result<String> {
     let mut fig = Figure::new(
         "Lissajous 3:1 on the twin: error against scan frequency",
         "fast component [% of first resonance]",
@@ -124,7 +126,7 @@ pub fn figure(points: &[SweepPoint], candidates: &[Candidate]) -> Result<String>
                 v.is_finite().then(|| (100.0 * p.fraction, v.log10()))
             })
             .collect();
-        fig = fig.with(Series::line(c.name(), pts));
+        fig = fig.with(Series::line(c.name, pts));
     }
     Ok(fig.to_svg()?)
 }

@@ -1,12 +1,15 @@
 //! One tracking run of a candidate on the twin in the full rig, and its metrics.
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::{Metrics, Setup, run};
-use flexstage_control::rig::RigParams;
-use flexstage_control::trajectory::{Reference, Shape};
+use flexstage_control::experiment::Setup;
+use flexstage_sim::experiment::{Metrics, run};
+use flexstage_sim::rig::RigParams;
+use flexstage_sim::trajectory::{Reference, Shape};
 use flexstage_twin::Twin;
 
-use crate::bench::{Bench, Candidate};
+use flexstage_control::registry::Controller;
+
+use crate::bench::Bench;
 use crate::error::Result;
 
 /// Runs `c` (built with `setup`) on `twin` in `rig` for `duration` seconds; returns the
@@ -16,7 +19,7 @@ pub fn track_on(
     setup: &Setup,
     twin: &Twin,
     rig: &RigParams,
-    c: Candidate,
+    c: &Controller,
     reference: Reference,
     duration: f64,
 ) -> Result<Metrics> {
@@ -33,7 +36,7 @@ pub fn diverged(m: &Metrics) -> bool {
 
 /// The standstill noise of a candidate: RMS of the true output over the second half of
 /// `duration` with a zero reference in the full rig (sensor noise fed back) \[m\].
-pub fn standstill(bench: &Bench, c: Candidate, duration: f64) -> Result<[f64; 2]> {
+pub fn standstill(bench: &Bench, c: &Controller, duration: f64) -> Result<[f64; 2]> {
     let r = Reference::new(Shape::Step { target: [0.0; 2] });
     let m = track_on(
         bench,

@@ -1,12 +1,15 @@
 //! Verification of the assessment machinery on the twin of the rhombus sample design
 //! (`flexstage_twin::samples::quick_rhombus`).
 
+use flexstage_assess::Bench;
 use flexstage_assess::inject::{InjectionParams, return_ratio};
 use flexstage_assess::montecarlo::{MonteCarloParams, monte_carlo};
-use flexstage_assess::{Bench, Candidate};
 use flexstage_control::experiment::Setup;
-use flexstage_control::trajectory::Reference;
-use flexstage_control::tuning::{LoopPlant, loop_response};
+use flexstage_control::pi_notch::PI_NOTCH_FF;
+use flexstage_control::pid::PID_FF;
+use flexstage_control::tuning::loop_response;
+use flexstage_sim::modal::LoopPlant;
+use flexstage_sim::trajectory::Reference;
 
 fn bench() -> Bench {
     let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
@@ -30,21 +33,15 @@ fn injection_equals_transfer_function_for_the_pi_notch() {
     let plant =
         flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, &b.setup.rig.sensor).unwrap();
     assert!(plant.sample_time() == 1e-4);
-    let p = b.linear_params(Candidate::PiNotch).unwrap().unwrap();
+    let p = b.linear_params(&PI_NOTCH_FF).unwrap().unwrap();
+    let (probe, design) = (b.probe(), b.design(&PI_NOTCH_FF).unwrap());
     for f in [20.0, 150.0, 700.0, 2500.0, 4000.0] {
         for axis in 0..2 {
-            let measured = return_ratio(
-                &b,
-                Candidate::PiNotch,
-                1,
-                axis,
-                f,
-                &InjectionParams::default(),
-            )
-            .unwrap();
+            let measured =
+                return_ratio(&probe, &**design, 1, axis, f, &InjectionParams::default()).unwrap();
             let expect = loop_response(&plant, &p, f)[axis];
             if f == 20.0 {
-                let ideal = flexstage_control::rig::SensorParams::ideal();
+                let ideal = flexstage_sim::rig::SensorParams::ideal();
                 let bare = flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, &ideal).unwrap();
                 let e0 = loop_response(&bare, &p, f)[axis];
                 let d = (measured.arg() - expect.arg()).to_degrees();
@@ -60,8 +57,9 @@ fn injection_equals_transfer_function_for_the_pi_notch() {
             );
         }
     }
-    for t in [&b.pid, &b.pi_notch] {
-        assert!(t.margins.iter().all(|m| m.meets(6.0, 40.0)), "{t:?}");
+    for c in [&PID_FF, &PI_NOTCH_FF] {
+        let m = b.analytic_margins(c, 1).unwrap().unwrap();
+        assert!(m.iter().all(|m| m.meets(6.0, 40.0)), "{c}: {m:?}");
     }
 }
 
@@ -89,13 +87,7 @@ fn zero_perturbation_reproduces_the_nominal_run() {
         ..MonteCarloParams::default()
     };
     for seed in 0..40 {
-        let mc = monte_carlo(
-            &b1,
-            &[Candidate::PiNotch],
-            r,
-            &MonteCarloParams { seed, ..p },
-        )
-        .unwrap();
+        let mc = monte_carlo(&b1, &[&PI_NOTCH_FF], r, &MonteCarloParams { seed, ..p }).unwrap();
         if mc.plants[0].delay != d {
             continue;
         }
@@ -104,7 +96,7 @@ fn zero_perturbation_reproduces_the_nominal_run() {
             &b1.setup,
             &b1.twin,
             &b1.setup.rig,
-            Candidate::PiNotch,
+            &PI_NOTCH_FF,
             r,
             0.05,
         )
@@ -124,8 +116,8 @@ fn zero_perturbation_reproduces_the_nominal_run() {
 /// substeps: measured 1.2e-3 and 0.012° at 700 Hz); open loop, no controller.
 #[test]
 fn rig_sensor_chain_equals_its_sampled_transfer_function() {
-    use flexstage_control::controller::Command;
-    use flexstage_control::rig::{RigPlant, SensorParams, StagePlant};
+    use flexstage_sim::experiment::Command;
+    use flexstage_sim::rig::{RigPlant, SensorParams, StagePlant};
     let mut b = bench();
     b.setup.rig.sensor.anti_alias = 3000.0;
     let sensor = b.setup.rig.sensor;
@@ -135,7 +127,7 @@ fn rig_sensor_chain_equals_its_sampled_transfer_function() {
         flexstage_assess::bench::modal_plant(&b.twin, t, 0, &SensorParams::ideal()).unwrap();
     for f in [20.0, 700.0, 2500.0, 4000.0] {
         let measure = |with_sensor: bool| {
-            let mut rig = b.linear_rig(0);
+            let mut rig = b.probe().linear_rig(0);
             if !with_sensor {
                 rig.sensor = SensorParams::ideal();
             }

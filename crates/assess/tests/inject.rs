@@ -4,9 +4,11 @@
 //! Goal: `inject::is_stable`, the kick test used for the nonlinear controllers, says
 //! "stable" for the first and "unstable" for the second, on the same twin and delay.
 
+use flexstage_assess::Bench;
 use flexstage_assess::inject::is_stable;
-use flexstage_assess::{Bench, Candidate};
+use flexstage_control::controller::{Backstepping, NONROBUST, ROBUST};
 use flexstage_control::experiment::Setup;
+use flexstage_control::pi_notch::PI_NOTCH_FF;
 
 fn bench() -> Bench {
     let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
@@ -18,19 +20,20 @@ fn bench() -> Bench {
 fn is_stable_separates_a_stable_and_an_unstable_loop() {
     let b = bench();
     let d = b.setup.rig.delay;
-    let margins = b.analytic_margins(Candidate::PiNotch, d).unwrap().unwrap();
+    let margins = b.analytic_margins(&PI_NOTCH_FF, d).unwrap().unwrap();
     assert!(margins.iter().all(|m| m.meets(6.0, 40.0)), "{margins:?}");
-    assert!(is_stable(&b, Candidate::PiNotch, d, 0.5).unwrap());
+    let probe = b.probe();
+    let pi_notch = b.design(&PI_NOTCH_FF).unwrap();
+    assert!(is_stable(&probe, &**pi_notch, d, 0.5).unwrap());
     // The scenario's PID with its integral gain 100× too high: the analytic gain margin is
     // negative (closed loop unstable) and the kick test must say so.
-    let mut u = b.clone();
-    u.setup.pid.ki *= 100.0;
-    let m = u
-        .analytic_margins(Candidate::PidScenario, d)
-        .unwrap()
-        .unwrap();
+    let mut pid = b.setup.pid;
+    pid.ki *= 100.0;
+    let t = b.setup.rig.sample_time;
+    let pid = pid.with_model(&b.setup.controller.model, t).unwrap();
+    let m = b.analytic_margins_of(&pid, d).unwrap();
     assert!(m.iter().any(|m| m.gain_db < 0.0), "{m:?}");
-    assert!(!is_stable(&u, Candidate::PidScenario, d, 0.5).unwrap());
+    assert!(!is_stable(&probe, &pid, d, 0.5).unwrap());
 }
 
 /// Reference: the 6 dB / 40° target of issue #18 with one sample of delay, loop-at-a-time by
@@ -48,25 +51,19 @@ fn shipped_backstepping_keeps_the_margins_on_the_twin() {
     mp.f_min = 10.0;
     mp.points = 40;
     mp.refine = 8;
-    for c in [Candidate::Robust, Candidate::NonRobust] {
-        let m = injected_margins(&b, c, d, &mp, &InjectionParams::default())
+    let probe = b.probe();
+    for c in [&ROBUST, &NONROBUST] {
+        let design = b.design(c).unwrap();
+        let m = injected_margins(&probe, &**design, d, &mp, &InjectionParams::default())
             .unwrap()
             .expect("stable");
-        eprintln!("{}: {m:?}", c.name());
-        assert!(m.iter().all(|m| m.meets(6.0, 40.0)), "{}: {m:?}", c.name());
+        eprintln!("{}: {m:?}", c.name);
+        assert!(m.iter().all(|m| m.meets(6.0, 40.0)), "{}: {m:?}", c.name);
     }
     let (s, _) = flexstage_twin::samples::quick_rhombus().unwrap();
-    let mut scenario = b.clone();
-    scenario.setup.controller = Setup::from_scenario(&s).controller;
+    let scenario = Backstepping::new(Setup::from_scenario(&s).controller, true);
     // The scenario's settings do not keep the margins here (unstable, or below 6 dB / 40°).
-    let m = injected_margins(
-        &scenario,
-        Candidate::Robust,
-        d,
-        &mp,
-        &InjectionParams::default(),
-    )
-    .unwrap();
+    let m = injected_margins(&probe, &scenario, d, &mp, &InjectionParams::default()).unwrap();
     eprintln!("scenario settings: {m:?}");
     assert!(
         m.is_none_or(|m| !m.iter().all(|m| m.meets(6.0, 40.0))),

@@ -7,9 +7,10 @@ use std::str::FromStr;
 
 use anyhow::Context;
 use clap::Args;
+use clap::builder::{PossibleValue, PossibleValuesParser};
 use flexstage_pipeline::{
-    DEFAULT_PRESET, PRESETS, PlantKind, RunFolder, Scenario, TwinValidation, Variant, default_root,
-    load_scenario,
+    CONTROLLERS, Controller, DEFAULT_PRESET, PRESETS, PlantKind, RunFolder, Scenario,
+    TwinValidation, default_root, load_scenario,
 };
 
 /// Which scenario: a file, or a built-in preset.
@@ -109,9 +110,32 @@ impl fmt::Display for List {
     }
 }
 
-/// The controllers of `--variant`: one by name, or all.
-pub fn controllers(name: &str) -> Vec<Variant> {
-    Variant::from_name(name).map_or(Variant::ALL.to_vec(), |v| vec![v])
+/// The value of `--variant` that selects the default controllers.
+pub const ALL_VARIANTS: &str = "all";
+
+/// The values of `--variant`: every controller of the registry by name, with its label, and
+/// [`ALL_VARIANTS`].
+pub fn variants() -> PossibleValuesParser {
+    let all = PossibleValue::new(ALL_VARIANTS).help("the controllers that run by default");
+    PossibleValuesParser::new(
+        CONTROLLERS
+            .iter()
+            .map(|c| {
+                let label = if c.default {
+                    c.label.to_string()
+                } else {
+                    format!("{} (only when named)", c.label)
+                };
+                PossibleValue::new(c.name).help(label)
+            })
+            .chain([all]),
+    )
+}
+
+/// The controllers of `--variant` (checked by clap against [`variants`]): one by name, or
+/// the defaults.
+pub fn controllers(name: &str) -> Vec<&'static Controller> {
+    Controller::by_name(name).map_or_else(Controller::defaults, |c| vec![c])
 }
 
 /// The values of `--plant`.

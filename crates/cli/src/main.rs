@@ -302,3 +302,29 @@ fn run(a: RunArgs) -> anyhow::Result<()> {
     out!("{summary}");
     Ok(())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use flexstage_pipeline::{CONTROLLERS, Controller};
+
+    /// Goal: the controllers of `track --variant` are the registry's, in its words: every
+    /// registry entry is accepted by its name and selects exactly itself, `all` selects the
+    /// defaults, and a name outside the registry is refused by the parser.
+    #[test]
+    fn every_registry_controller_is_a_track_variant() {
+        let variant = |name: &str| -> Vec<&'static Controller> {
+            match Cli::try_parse_from(["flexstage", "track", "--variant", name]) {
+                Ok(Cli {
+                    command: Command::Track(a),
+                }) => args::controllers(&a.variant),
+                other => panic!("{name}: {other:?}"),
+            }
+        };
+        for &c in &CONTROLLERS {
+            assert_eq!(variant(c.name), vec![c]);
+        }
+        assert_eq!(variant("all"), Controller::defaults());
+        assert!(Cli::try_parse_from(["flexstage", "track", "--variant", "pid"]).is_err());
+    }
+}

@@ -15,7 +15,8 @@ use flexstage_pipeline::{
 const ACTUATORS: [&str; 2] = ["hysteretic", "linear"];
 
 use crate::args::{
-    List, Pair, TRACK_PLANTS, TWIN_VALIDATIONS, Target, controllers, plant, twin_validation,
+    ALL_VARIANTS, List, Pair, TRACK_PLANTS, TWIN_VALIDATIONS, Target, controllers, plant,
+    twin_validation, variants,
 };
 use crate::bars::Bars;
 use crate::print;
@@ -469,11 +470,9 @@ pub struct TrackArgs {
     /// Trajectory name from the scenario, or "all".
     #[arg(long, default_value = "all")]
     pub trajectory: String,
-    /// Controller: PI + notch + feedforward (tuned on the twin), robust or nonrobust
-    /// backstepping, PID with feedforward (tuned on the twin by the same procedure), or all
-    /// (the default); pid-ff-scenario runs the PID with the scenario's untuned gains.
-    #[arg(long, default_value = "all",
-          value_parser = ["pi-notch-ff", "robust", "nonrobust", "pid-ff", "pid-ff-scenario", "all"])]
+    /// Controller by name (each is listed with what it is), or all (the controllers that run
+    /// by default).
+    #[arg(long, default_value = ALL_VARIANTS, value_parser = variants())]
     pub variant: String,
     /// Hysteresis compensation: inverse (Eq. 21, in the loop) or off (straight line).
     #[arg(long, default_value = names::compensation(TrackOptions::default().compensation),

@@ -16,7 +16,7 @@ fn law() -> PidLaw {
         ki: 1500.0,
         kd: 2e-5,
     };
-    PidLaw::new(gains, [[1.1, 0.05], [0.04, 1.2]], 1e-4, 2e-5).unwrap()
+    PidLaw::new([gains; 2], [[1.1, 0.05], [0.04, 1.2]], 1e-4, 2e-5).unwrap()
 }
 
 fn reference(k: usize) -> [f64; 2] {

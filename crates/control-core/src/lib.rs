@@ -5,9 +5,10 @@
 //! every sample (no owned trajectory), `#![no_std]`, no allocation, no I/O, no floating-point
 //! functions beyond `+ − × ÷` (so no `libm`).
 //!
-//! * [`pid`]: the PID + static feed-forward law of `flexstage-control`'s `PidController`
-//!   (x_nom = G_dc⁻¹ (q_d + k_p e + k_i ∫e + k_d ė), anti-windup by conditional
-//!   integration); a test checks it matches that controller sample by sample;
+//! * [`pid`]: the PID + static feed-forward law, with optional notch sections on each axis
+//!   (x_nom = G_dc⁻¹ (q_d + N(k_p e + k_i ∫e + k_d ė)), anti-windup by conditional
+//!   integration): the one implementation of the law, which `flexstage-control`'s PI + notch
+//!   and PID controllers run in the simulated experiments;
 //! * [`ilc`]: the iterative learning layer for periodic references (reference adjustment:
 //!   the controller sees y − c_j, so the output tracks q_d + c_j), with a zero-phase
 //!   Bartlett Q-filter and a phase-lead learning gain, on caller-provided buffers;
@@ -33,7 +34,7 @@ pub mod ilc;
 pub mod pid;
 
 pub use ilc::{Ilc, IlcBuffers, IlcParams};
-pub use pid::{PidGains, PidLaw};
+pub use pid::{Biquad, PidGains, PidLaw};
 
 /// Errors of the core: a setting outside its range.
 #[derive(Debug, Clone, Copy, PartialEq, thiserror::Error)]

@@ -6,9 +6,12 @@
 
 use divan::{Bencher, black_box};
 use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::{Setup, Variant, experiment};
-use flexstage_control::trajectory::Reference;
+use flexstage_control::controller::{NONROBUST, ROBUST};
+use flexstage_control::experiment::{Setup, experiment};
+use flexstage_control::pid::PID_FF;
+use flexstage_control::registry::Controller;
 use flexstage_scenario::Scenario;
+use flexstage_sim::trajectory::Reference;
 
 fn main() {
     divan::main();
@@ -23,21 +26,15 @@ fn setup() -> (Setup, Reference) {
 /// Measured outputs of a real closed-loop run, replayed into a fresh controller.
 fn measurements(n: usize) -> Vec<[f64; 2]> {
     let (setup, r) = setup();
-    let rec = experiment(
-        &setup,
-        Variant::Robust,
-        Compensation::Inverse,
-        r,
-        n as f64 * 1e-4,
-    )
-    .expect("experiment");
+    let rec =
+        experiment(&setup, &ROBUST, Compensation::Inverse, r, n as f64 * 1e-4).expect("experiment");
     (0..rec.len())
         .map(|k| [rec.measured[0][k], rec.measured[1][k]])
         .collect()
 }
 
-#[divan::bench(args = [Variant::Robust, Variant::NonRobust, Variant::PidFeedforward], sample_size = 1000)]
-fn controller_step(b: Bencher, variant: Variant) {
+#[divan::bench(args = [&ROBUST, &NONROBUST, &PID_FF], sample_size = 1000)]
+fn controller_step(b: Bencher, variant: &Controller) {
     let (setup, r) = setup();
     let y = measurements(4096);
     let mut c = setup
@@ -53,15 +50,7 @@ fn controller_step(b: Bencher, variant: Variant) {
 #[divan::bench(sample_count = 10)]
 fn experiment_one_second(b: Bencher) {
     let (setup, r) = setup();
-    b.bench_local(|| {
-        black_box(experiment(
-            &setup,
-            Variant::Robust,
-            Compensation::Inverse,
-            r,
-            1.0,
-        ))
-    });
+    b.bench_local(|| black_box(experiment(&setup, &ROBUST, Compensation::Inverse, r, 1.0)));
 }
 
 #[divan::bench(sample_count = 10)]
@@ -69,9 +58,8 @@ fn experiment_one_second_two_in_parallel(b: Bencher) {
     let (setup, r) = setup();
     b.bench_local(|| {
         std::thread::scope(|s| {
-            let h =
-                s.spawn(|| experiment(&setup, Variant::NonRobust, Compensation::Inverse, r, 1.0));
-            let a = experiment(&setup, Variant::Robust, Compensation::Inverse, r, 1.0);
+            let h = s.spawn(|| experiment(&setup, &NONROBUST, Compensation::Inverse, r, 1.0));
+            let a = experiment(&setup, &ROBUST, Compensation::Inverse, r, 1.0);
             black_box((a, h.join()))
         })
     });
@@ -80,8 +68,8 @@ fn experiment_one_second_two_in_parallel(b: Bencher) {
 /// One step of the PI + two notches + FF controller (inverse-hysteresis compensation on).
 #[divan::bench(sample_size = 1000)]
 fn pi_notch_step(b: Bencher) {
-    use flexstage_control::controller::StageControl;
     use flexstage_control::pi_notch::{AxisGains, Notch, PiNotchController, PiNotchParams};
+    use flexstage_sim::experiment::StageControl;
     let (setup, r) = setup();
     let y = measurements(4096);
     let notch = |f: f64| {
@@ -115,12 +103,12 @@ fn pi_notch_step(b: Bencher) {
 /// λ = 7, M = 1) and a fractional sensor lag, in its learning periods.
 #[divan::bench(sample_size = 1000)]
 fn learning_step(b: Bencher) {
-    use flexstage_control::controller::StageControl;
     use flexstage_control::learning::{Learning, LearningParams};
+    use flexstage_sim::experiment::StageControl;
     let (setup, r) = setup();
     let y = measurements(4096);
     let c = setup
-        .controller(Variant::Robust, Compensation::Inverse, r)
+        .controller(&ROBUST, Compensation::Inverse, r)
         .expect("controller");
     let params = LearningParams {
         period: 5000,

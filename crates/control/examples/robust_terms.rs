@@ -13,18 +13,20 @@
 //! ```
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::StageControl;
-use flexstage_control::experiment::{Setup, Variant};
+use flexstage_control::controller::{NONROBUST, ROBUST};
+use flexstage_control::experiment::Setup;
 use flexstage_control::observer::DISTURBANCE;
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::Reference;
+use flexstage_control::registry::Controller;
 use flexstage_scenario::{Preset, Scenario};
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::Reference;
 
 /// RMS error per axis over the second half \[m\] and the largest |d̂| per axis after the
 /// first tenth \[m/s²\]; `None` when the run diverges (|error| > 10 µm).
 fn run(
     setup: &Setup,
-    v: Variant,
+    v: &Controller,
     reference: Reference,
     duration: f64,
 ) -> Option<([f64; 2], [f64; 2])> {
@@ -78,14 +80,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ),
         None => println!("{name:<44} diverges"),
     };
-    let base = run(&setup, Variant::NonRobust, reference, duration);
+    let base = run(&setup, &NONROBUST, reference, duration);
     show("non-robust + observer", base);
     show(
         &format!(
             "robust, scenario ρ_η = {:?}",
             setup.controller.law.eta_bound
         ),
-        run(&setup, Variant::Robust, reference, duration),
+        run(&setup, &ROBUST, reference, duration),
     );
     if let Some((_, d)) = base {
         let mut sized = setup.clone();
@@ -95,14 +97,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 "robust, ρ_η = 1.2 max|d̂| = {:.0?}",
                 sized.controller.law.eta_bound
             ),
-            run(&sized, Variant::Robust, reference, duration),
+            run(&sized, &ROBUST, reference, duration),
         );
     }
     let mut blind = setup.clone();
     blind.controller.observer.disturbance_gain = 1.0;
     show(
         "non-robust, no disturbance estimate (κ_d = 1)",
-        run(&blind, Variant::NonRobust, reference, duration),
+        run(&blind, &NONROBUST, reference, duration),
     );
     Ok(())
 }

@@ -5,11 +5,12 @@
 use nalgebra::{Complex, DMatrix};
 
 use crate::actuator::Compensation;
-use crate::controller::{BacksteppingController, ControllerParams, STATE_LEN, StageControl};
+use crate::controller::{BacksteppingController, ControllerParams, STATE_LEN};
 use crate::error::Result;
-use crate::linalg::{c2d, poles};
-use crate::model::StageModel;
-use crate::trajectory::{Reference, Shape};
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::linalg::{c2d, poles};
+use flexstage_sim::model::StageModel;
+use flexstage_sim::trajectory::{Reference, Shape};
 
 /// Size of the closed-loop state: plant z (8) and controller state ([`STATE_LEN`]).
 pub const LOOP_LEN: usize = 8 + STATE_LEN;

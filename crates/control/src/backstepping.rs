@@ -68,9 +68,9 @@
 use nalgebra::{Matrix2, Vector2};
 
 use crate::error::{ControlError, Result, check, non_negative, positive};
-use crate::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
-use crate::model::{Matrix8, StageModel};
-use crate::trajectory::RefSample;
+use flexstage_sim::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
+use flexstage_sim::model::{Matrix8, StageModel};
+use flexstage_sim::trajectory::RefSample;
 
 /// Gains and robust-term settings of the law.
 #[derive(Debug, Clone, Copy, PartialEq)]

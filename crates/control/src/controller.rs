@@ -1,7 +1,8 @@
-//! The real-time controllers: the backstepping robust controller (observer + law + input
-//! transformation + hysteresis compensation, Figure 7) and the PID + inverse-hysteresis
-//! feedforward baseline. Both implement [`StageControl`]: `step(measurement) -> command`,
-//! once per sample, with no allocation, no I/O and no randomness.
+//! The backstepping robust controller (observer + law + input transformation + hysteresis
+//! compensation, Figure 7), robust ([`ROBUST`]) or not ([`NONROBUST`]). It implements
+//! [`StageControl`]: `step(measurement) -> command`, once per sample, with no allocation,
+//! no I/O and no randomness. On a stage with a sampled response it is set up from the
+//! response fit and its gains are sized by its margins ([`sized`]).
 //!
 //! # Input transformation, Eq. (44) corrected
 //! Eq. (44), u = D⁻¹[−(B̂_ξη η̂ + B̂_ξξ ξ̂̇) + v̇], is meant to turn the second line of Eq. (43)
@@ -60,35 +61,16 @@ use crate::actuator::{Actuator, ActuatorParams};
 use crate::backstepping::{Law, LawOutput, LawParams};
 use crate::error::{Result, check};
 use crate::estimator::{KalmanDesign, KalmanParams};
-use crate::model::StageModel;
-use crate::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
 use crate::observer::{DISTURBANCE, FILTER_LEN, KFilter, ObserverDesign, ObserverParams, Vector10};
-use crate::pi_notch::{Biquad, Notch};
-use crate::trajectory::{RefSample, Reference};
-
-/// One sample of controller output.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub struct Command {
-    /// Amplifier voltages \[V\], always finite and inside the range.
-    pub voltage: [f64; 2],
-    /// The x_nom \[m\] the actuator model expects from the voltages (Eq. 36 input).
-    pub x_nom: [f64; 2],
-    /// The reference q_d at this sample \[m\].
-    pub reference: [f64; 2],
-    /// True when the stroke or the amplifier range clipped the command.
-    pub saturated: bool,
-    /// True when the measurement was not finite and the last valid one was used.
-    pub dropout: bool,
-}
-
-/// A sampled position controller: one call per sample.
-pub trait StageControl {
-    /// Takes the measured output y_k = [q_o1, q_o2] \[m\] and returns the command held until
-    /// the next sample.
-    fn step(&mut self, y: [f64; 2]) -> Command;
-    /// The state estimate [ẑ, d̂] \[SI\] (zeros for controllers without an observer).
-    fn estimate(&self) -> [f64; 10];
-}
+use crate::pi_notch::{Notch, notch_section};
+use crate::registry::{Controller, Design, Stage};
+use crate::tuning::{Structure, tuned};
+use flexstage_control_core::Biquad;
+use flexstage_sim::experiment::{Command, StageControl};
+use flexstage_sim::model::StageModel;
+use flexstage_sim::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
+use flexstage_sim::trajectory::{RefSample, Reference};
+use std::sync::Arc;
 
 /// Where the controller takes the output velocity q̇ from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -169,7 +151,7 @@ impl ControllerParams {
             self.delay <= MAX_DELAY,
             "0–2 samples",
         )?;
-        crate::model::validate(&self.model)?;
+        flexstage_sim::model::validate(&self.model)?;
         check(
             "controller.coupling",
             self.coupling,
@@ -186,50 +168,123 @@ impl ControllerParams {
 }
 
 /// The scales of the law's gains k_ε, k_η − 1, k tried, largest first, when the
-/// backstepping is sized by its margins on a sampled plant
-/// ([`ControllerParams::for_sampled_plant`]; `flexstage-assess` picks the largest that keeps
-/// 6 dB / 40° on both loops with the rig's delay).
+/// backstepping is sized by its margins on a stage ([`sized`]: the largest that keeps the
+/// tuning's margin targets, 6 dB / 40°, on both loops of both variants with the rig's delay).
 pub const GAIN_SCALES: [f64; 8] = [1.0, 0.7, 0.5, 0.35, 0.25, 0.18, 0.12, 0.08];
 
-impl ControllerParams {
-    /// The settings for a plant known by its modal response (e.g. the twin's modes), as a
-    /// practitioner would set the backstepping up from a frequency-response
-    /// identification: [`ControllerParams::for_response`] on the fit that identification
-    /// would give below Nyquist ([`crate::model::ResponseFit::from_modes`] with
-    /// [`crate::model::RESPONSE_SHARE`]).
-    pub fn for_sampled_plant(
-        &self,
-        modes: &[crate::tuning::PlantMode],
-        notches: [[Option<Notch>; 2]; 2],
-        gain_scale: f64,
-    ) -> ControllerParams {
-        let nyquist = 0.5 / self.observer.sample_time;
-        let fit =
-            crate::model::ResponseFit::from_modes(modes, nyquist, crate::model::RESPONSE_SHARE);
-        self.for_response(&fit, notches, gain_scale)
-    }
+/// Robust backstepping with the disturbance observer (Figure 9b), set up for the stage
+/// ([`sized`]).
+pub static ROBUST: Controller = Controller {
+    name: "robust",
+    label: "robust backstepping (Figure 9b), fitted to the response, gains sized by margins",
+    default: true,
+    design: design_robust,
+};
 
+/// Backstepping without the robust terms (Figure 9a), set up as [`ROBUST`].
+pub static NONROBUST: Controller = Controller {
+    name: "nonrobust",
+    label: "backstepping without robust terms (Figure 9a), set up as robust",
+    default: true,
+    design: design_nonrobust,
+};
+
+fn design_robust(stage: &Stage<'_>) -> Result<Option<Arc<dyn Design>>> {
+    Ok(Some(Arc::new(Backstepping::new(sized(stage)?, true))))
+}
+
+fn design_nonrobust(stage: &Stage<'_>) -> Result<Option<Arc<dyn Design>>> {
+    Ok(Some(Arc::new(Backstepping::new(sized(stage)?, false))))
+}
+
+/// The backstepping as designed: its settings, with the robust terms on or off.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Backstepping(pub ControllerParams);
+
+impl Backstepping {
+    /// The design of `params` with the robust terms on (`robust`) or off.
+    pub fn new(params: ControllerParams, robust: bool) -> Backstepping {
+        let mut p = params;
+        p.law.robust = robust;
+        Backstepping(p)
+    }
+}
+
+impl Design for Backstepping {
+    fn build(
+        &self,
+        actuator: ActuatorParams,
+        delay: usize,
+        reference: Reference,
+    ) -> Result<Box<dyn StageControl>> {
+        let mut p = self.0.clone();
+        p.actuator = actuator;
+        p.delay = delay;
+        Ok(Box::new(BacksteppingController::new(&p, reference)?))
+    }
+}
+
+/// The backstepping's settings for a stage (once per stage, shared by both variants): the
+/// scenario's as they are where the stage offers no response fit (the lumped plant);
+/// otherwise set up as a practitioner would from the sampled response
+/// ([`ControllerParams::for_response`]: the model fitted to the stage's response fit, the
+/// tuned PI + notch's notches on the measurement) with the largest of [`GAIN_SCALES`] whose
+/// robust and non-robust loops keep the tuning's margin targets (the stage's probe, sine
+/// injection with the rig's delay); the smallest when none does (the margins table then
+/// flags it), the full gains when the stage cannot measure margins.
+pub fn sized(stage: &Stage<'_>) -> Result<ControllerParams> {
+    stage.shared("controller::sized", || {
+        let base = &stage.setup.controller;
+        let Some(fit) = &stage.fit else {
+            return Ok(base.clone());
+        };
+        let notches = tuned(stage, Structure::PiNotch)?
+            .map_or([[None; 2]; 2], |t| t.params.axes.map(|a| a.notches));
+        let Some(probe) = stage.probe else {
+            return Ok(base.for_response(fit, notches, 1.0));
+        };
+        let (gm, pm) = (stage.tuning.gain_margin_db, stage.tuning.phase_margin_deg);
+        let mut mp = stage.tuning.margins;
+        mp.f_min = 10.0;
+        mp.points = 40;
+        mp.refine = 8;
+        let mut p = base.clone();
+        for &scale in &GAIN_SCALES {
+            p = base.for_response(fit, notches, scale);
+            let mut ok = true;
+            for robust in [true, false] {
+                let design = Backstepping::new(p.clone(), robust);
+                ok &= match probe.margins(&design, &mp)? {
+                    Some(m) => m.iter().all(|m| m.meets(gm, pm)),
+                    None => false,
+                };
+                if !ok {
+                    break;
+                }
+            }
+            if ok {
+                break;
+            }
+        }
+        Ok(p)
+    })
+}
+
+impl ControllerParams {
     /// The settings for a plant known by a response fit (identified, or from its modes): the
-    /// model fitted to it ([`crate::model::fit_to_response`]; kept as it is when the fit is
+    /// model fitted to it ([`crate::fit::fit_to_response`]; kept as it is when the fit is
     /// refused) with the coupling that reproduces its static cross terms
-    /// ([`crate::model::fit_coupling`]), the notches of the sampled response's peaks on the
+    /// ([`crate::fit::fit_coupling`]), the notches of the sampled response's peaks on the
     /// measurement (`notches`, e.g. the tuned PI + notch's), and the law's gains scaled by
     /// `gain_scale` (in (0, 1], see [`GAIN_SCALES`]).
     pub fn for_response(
         &self,
-        fit: &crate::model::ResponseFit,
+        fit: &flexstage_identify::response::ResponseFit,
         notches: [[Option<Notch>; 2]; 2],
         gain_scale: f64,
     ) -> ControllerParams {
         let mut p = self.clone();
-        if let Ok(m) = crate::model::fit_to_response(&self.model, fit) {
-            p.model = m;
-        }
-        // The coupling from the same static gain (a symmetric design has none): a coupling
-        // identified on another plant is not this one's.
-        if let Ok(k_c) = crate::model::fit_coupling(&p.model, fit.dc_gain) {
-            p.coupling = k_c;
-        }
+        (p.model, p.coupling) = crate::fit::fitted_model(&self.model, self.coupling, fit);
         p.measurement_notches = notches;
         let g = gain_scale;
         p.law.error_gain = self.law.error_gain.map(|k| g * k);
@@ -339,8 +394,8 @@ impl BacksteppingController {
             }),
             notch: params.measurement_notches.map(|a| {
                 a.map(|n| {
-                    n.map_or_else(Biquad::identity, |n| {
-                        Biquad::notch(&n, params.observer.sample_time)
+                    n.map_or(Biquad::IDENTITY, |n| {
+                        notch_section(&n, params.observer.sample_time)
                     })
                 })
             }),
@@ -580,130 +635,6 @@ impl StageControl for BacksteppingController {
     }
 }
 
-/// Gains of the PID baseline (per axis, on the output error e = q_d − y).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PidParams {
-    /// Proportional gain (dimensionless).
-    pub kp: f64,
-    /// Integral gain [1/s].
-    pub ki: f64,
-    /// Derivative gain \[s\] (on the finite-difference derivative of e).
-    pub kd: f64,
-}
-
-impl PidParams {
-    /// Checks the fields.
-    pub fn validate(&self) -> Result<()> {
-        check("controller.pid[0]", self.kp, self.kp >= 0.0, "kp ≥ 0")?;
-        check("controller.pid[1]", self.ki, self.ki >= 0.0, "ki ≥ 0 [1/s]")?;
-        check("controller.pid[2]", self.kd, self.kd >= 0.0, "kd ≥ 0 [s]")
-    }
-}
-
-/// The industry-default baseline: feedforward of the reference through the static inverse of
-/// the model (x_nom = G_dc⁻¹ q_d), a PID on each output error mapped through the same
-/// inverse, and the same inverse hysteresis compensation and amplifier stage.
-#[derive(Debug, Clone)]
-pub struct PidController {
-    pid: PidParams,
-    g_inv: nalgebra::Matrix2<f64>,
-    actuator: Actuator,
-    reference: Reference,
-    t: f64,
-    k: u64,
-    integral: [f64; 2],
-    e_prev: [f64; 2],
-    y_prev: [f64; 2],
-    have_prev: bool,
-    last: Command,
-}
-
-impl PidController {
-    /// Builds the baseline for the controller's model `model` and sample time `t` \[s\].
-    pub fn new(
-        model: &StageParams,
-        pid: PidParams,
-        actuator: ActuatorParams,
-        t: f64,
-        reference: Reference,
-    ) -> Result<Self> {
-        pid.validate()?;
-        crate::error::positive("simulation.sample_time", t)?;
-        reference.validate()?;
-        let m = StageModel::new(model)?;
-        let g_inv =
-            m.dc_gain()?
-                .try_inverse()
-                .ok_or_else(|| crate::error::ControlError::Singular {
-                    what: "static gain G_dc".into(),
-                })?;
-        Ok(PidController {
-            pid,
-            g_inv,
-            actuator: Actuator::new(actuator)?,
-            reference,
-            t,
-            k: 0,
-            integral: [0.0; 2],
-            e_prev: [0.0; 2],
-            y_prev: [0.0; 2],
-            have_prev: false,
-            last: Command::default(),
-        })
-    }
-}
-
-impl StageControl for PidController {
-    #[inline]
-    fn step(&mut self, y_in: [f64; 2]) -> Command {
-        let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
-        let y = if dropout { self.y_prev } else { y_in };
-        let r = self.reference.sample(self.k as f64 * self.t);
-        let mut w = Vector2::zeros();
-        let mut e = [0.0; 2];
-        for i in 0..2 {
-            e[i] = r.q[i] - y[i];
-            let de = if self.have_prev {
-                (e[i] - self.e_prev[i]) / self.t
-            } else {
-                0.0
-            };
-            w[i] = r.q[i]
-                + self.pid.kp * e[i]
-                + self.pid.ki * (self.integral[i] + 0.5 * self.t * e[i])
-                + self.pid.kd * de;
-        }
-        let u = self.g_inv * w;
-        let mut u = [u[0], u[1]];
-        if !(u[0].is_finite() && u[1].is_finite()) {
-            u = self.last.x_nom;
-        }
-        let act = self.actuator.command(u, self.t);
-        let cmd = Command {
-            voltage: act.voltage,
-            x_nom: act.x_nom,
-            reference: r.q,
-            saturated: act.saturated,
-            dropout,
-        };
-        if !act.saturated {
-            for (i, ei) in e.iter().enumerate() {
-                self.integral[i] += self.t * ei;
-            }
-        }
-        self.e_prev = e;
-        self.y_prev = y;
-        self.have_prev = true;
-        self.k += 1;
-        self.last = cmd;
-        cmd
-    }
-
-    fn estimate(&self) -> [f64; 10] {
-        [0.0; 10]
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -724,7 +655,7 @@ mod tests {
         };
         let analog = 2.0 * (n.pole_damping - n.zero_damping) / (std::f64::consts::TAU * 1000.0);
         let tau = notch_delay(&n, t);
-        let mut b = Biquad::notch(&n, t);
+        let mut b = notch_section(&n, t);
         let f = 5.0;
         let w = std::f64::consts::TAU * f;
         let (mut c, mut s) = (0.0, 0.0);

@@ -9,6 +9,9 @@ pub enum ControlError {
     /// from the scenario).
     #[error(transparent)]
     OutOfRange(#[from] RangeError),
+    /// The simulated stage, its lumped model or a reference (`flexstage-sim`).
+    #[error(transparent)]
+    Sim(#[from] flexstage_sim::SimError),
     /// A matrix that must be invertible is singular (or numerically so).
     #[error("{what} is singular")]
     Singular {
@@ -31,6 +34,14 @@ pub enum ControlError {
         /// By how much, and what to change.
         detail: String,
     },
+    /// A measurement a design asked for (e.g. margins by sine injection on the stage) failed.
+    #[error("measuring {what}: {detail}")]
+    Measurement {
+        /// What was measured.
+        what: String,
+        /// Why it failed.
+        detail: String,
+    },
     /// Matrices of incompatible sizes.
     #[error("{what}: dimension mismatch ({detail})")]
     Dimension {
@@ -39,6 +50,25 @@ pub enum ControlError {
         /// The sizes.
         detail: String,
     },
+}
+
+/// A setting the embeddable core refused (its message names the field and the range).
+impl From<flexstage_control_core::CoreError> for ControlError {
+    fn from(e: flexstage_control_core::CoreError) -> Self {
+        use flexstage_control_core::CoreError;
+        match e {
+            CoreError::Range {
+                field,
+                value,
+                expected,
+            } => RangeError::number(field, value, expected).into(),
+            CoreError::Buffer {
+                field,
+                len,
+                expected,
+            } => RangeError::new(field, len.to_string(), format!("length {expected}")).into(),
+        }
+    }
 }
 
 /// Result alias of this crate.

@@ -53,10 +53,10 @@
 use nalgebra::{DMatrix, Matrix2};
 
 use crate::error::{ControlError, Result, check, non_negative};
-use crate::linalg::{expm, spectral_radius};
-use crate::model::state::{Q_O, Q_O_DOT};
-use crate::model::{StageModel, from_dyn, to_dyn};
 use crate::observer::{DISTURBANCE, Matrix10, Matrix10x2, NX, augmented};
+use flexstage_sim::linalg::{expm, spectral_radius};
+use flexstage_sim::model::state::{Q_O, Q_O_DOT};
+use flexstage_sim::model::{StageModel, from_dyn, to_dyn};
 
 /// Noise levels of the Kalman design (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -239,7 +239,7 @@ pub fn van_loan(
     t: f64,
 ) -> Result<(DMatrix<f64>, DMatrix<f64>, DMatrix<f64>)> {
     let n = a.nrows();
-    let (phi, gamma) = crate::linalg::c2d(a, b, t)?;
+    let (phi, gamma) = flexstage_sim::linalg::c2d(a, b, t)?;
     let mut big = DMatrix::zeros(2 * n, 2 * n);
     big.view_mut((0, 0), (n, n)).copy_from(&(-a * t));
     big.view_mut((0, n), (n, n)).copy_from(&(w * t));

@@ -56,9 +56,9 @@
 use flexstage_control_core::{Ilc, IlcBuffers};
 use flexstage_numerics::RangeError;
 
-use crate::controller::{Command, StageControl};
 use crate::error::Result;
-use crate::rig::StagePlant;
+use flexstage_sim::experiment::{Command, StageControl};
+use flexstage_sim::rig::StagePlant;
 
 pub use flexstage_control_core::ilc::IlcParams as LearningParams;
 
@@ -163,18 +163,6 @@ impl<C: StageControl> StageControl for Learning<C> {
 
     fn estimate(&self) -> [f64; 10] {
         self.inner.estimate()
-    }
-}
-
-/// A boxed controller is a controller (so [`Learning`] wraps what
-/// [`crate::experiment::Setup::controller`] returns).
-impl<T: StageControl + ?Sized> StageControl for Box<T> {
-    #[inline]
-    fn step(&mut self, y: [f64; 2]) -> Command {
-        (**self).step(y)
-    }
-    fn estimate(&self) -> [f64; 10] {
-        (**self).estimate()
     }
 }
 
@@ -435,7 +423,7 @@ pub fn design(plant: &LearningPlant, settings: &DesignParams) -> Result<(Learnin
 }
 
 /// RMS per axis \[m\] of the true-output error of each period of a record (q − q_d, the
-/// `error` columns of [`crate::experiment::Record`]).
+/// `error` columns of [`flexstage_sim::experiment::Record`]).
 pub fn rms_per_period(error: &[Vec<f64>; 2], period: usize) -> Vec<[f64; 2]> {
     let periods = error[0].len() / period;
     (0..periods)

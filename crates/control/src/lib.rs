@@ -1,55 +1,55 @@
-//! # flexstage-control — model, observer, controller and simulated experiment
+//! # flexstage-control — the controllers and their design
 //!
-//! Section 3.2, Section 4 and Appendices C–D of the paper, with the defaults of DECISIONS.md:
+//! Section 3.2, Section 4 and Appendices C–D of the paper, with the defaults of DECISIONS.md.
+//! The simulated world they run in (the rig, the plants, the lumped model of Eq. 36, the
+//! trajectories and the experiment runner) is `flexstage-sim`; a controller meets it through
+//! [`flexstage_sim::experiment::StageControl`].
 //!
-//! * [`model`]: the linear 8-state model of Eq. (36) with B and D of (A13–A14), from a
-//!   [`flexstage_scenario::StageParams`] (Table 4 or the file of `flexstage reduce`);
 //! * [`observer`]: the K-filter of Eq. (37–42), B0 checked with the Lyapunov equation (39),
 //!   discretized exactly for the sample time;
 //! * [`estimator`]: the steady-state discrete Kalman gain of the same filters (sensor noise,
 //!   documented process noise; DARE by structure-preserving doubling), the backstepping's
 //!   default estimate in place of finite differences;
 //! * [`backstepping`]: the robust backstepping law of Section 3.2.2 / Appendix D;
-//! * [`controller`]: the real-time controllers ([`controller::StageControl`]:
-//!   `step(measurement) -> command`, no allocation, no I/O, deterministic): the backstepping
-//!   controller (robust or not) and the PID + inverse-hysteresis feedforward baseline;
-//! * [`actuator`]: preload, inverse hysteresis compensation (inside the loop, Figure 7),
-//!   amplifier range;
-//! * [`rig`]: the loop around a simulated stage as on a rig, in composable parts (delay,
-//!   amplifier bandwidth / slew / current limit, the plant's own Bouc–Wen PEAs with creep,
-//!   floor vibration, sensor bandwidth, white + 1/f noise, quantization); the [`rig::Mechanics`]
-//!   trait for what sits inside and the [`rig::StagePlant`] trait the experiment runner drives;
-//! * [`plant`]: the lumped mechanics of Eq. (36) with the cross terms of Eq. (30)
-//!   ([`plant::LumpedStage`]) and the lumped plant in its minimal loop ([`plant::Plant`]); the
-//!   finite-element twin of the designed stage is `flexstage-twin`;
-//! * [`trajectory`]: Lissajous curves of any ratio, circle, steps and ramps with a smooth
-//!   start; the designed workspace; [`trajectory::feasibility`]: a reference is refused if it
-//!   reaches the Nyquist frequency or needs more stroke, voltage or amplifier current than the
-//!   rig has;
-//! * [`experiment`]: one run of a variant on a plant ([`experiment::experiment_on`] takes any
-//!   [`rig::StagePlant`]: the lumped model in the rig, [`experiment::Setup::lumped_plant`], or
-//!   the twin of `flexstage-twin`), its time series and metrics;
+//! * [`registry`]: the one list of controllers ([`registry::CONTROLLERS`]): a controller is
+//!   one module and one entry (name, label, default or on request, how it is designed for a
+//!   stage; its design says how it steps);
+//! * [`controller`]: the backstepping controller (robust or not), real time
+//!   (`step(measurement) -> command`, no allocation, no I/O, deterministic), and its design
+//!   from a stage's response fit with gains sized by its margins;
+//! * [`actuator`]: inverse hysteresis compensation (inside the loop, Figure 7), amplifier
+//!   range;
+//! * [`fit`]: the controller's lumped model fitted to a measured response (static gain and
+//!   output modes below Nyquist) and the coupling of Eq. (30) from its cross terms;
+//! * [`feasibility`]: a reference is refused if it reaches the Nyquist frequency or needs more
+//!   stroke, voltage or amplifier current than the rig has with the controller's feed-forward;
+//! * [`experiment`]: one run of a controller on a plant ([`experiment::experiment_on`] takes any
+//!   [`flexstage_sim::rig::StagePlant`]: the lumped model in the rig,
+//!   [`experiment::Setup::lumped_plant`], or the twin of `flexstage-twin`);
 //! * [`learning`]: iterative learning on top of any controller for periodic scans, designed
 //!   from the loop's measured frequency response (monotone-convergence check);
-//! * [`pi_notch`]: the industry baseline: per-axis PI(D) with up to two notches, static
-//!   feed-forward through a measured static gain, inverse-hysteresis compensation;
+//! * [`pi_notch`]: the industry baseline and the default controller: per-axis PI(D) with up
+//!   to two notches, static feed-forward through a measured static gain, inverse-hysteresis
+//!   compensation, tuned on the stage's sampled response;
+//! * [`pid`]: the PID + feed-forward baseline (the same law without notches), tuned or with
+//!   the scenario's gains;
 //! * [`margins`]: gain, phase and delay margins of a loop from its frequency response
 //!   (python-control's `margin`), loop-at-a-time for the 2 × 2 loop;
 //! * [`tuning`]: one documented tuning procedure (notches on the peaks of the sampled
 //!   response, largest integral gain with ≥ 6 dB / 40°) applied with equal budget to every
-//!   loop-shaping structure, on an exact ZOH modal plant;
+//!   loop-shaping structure, on a sampled response ([`flexstage_sim::modal::LoopPlant`]);
 //! * [`analysis`]: closed-loop poles of the sampled loop on the nominal linear model;
-//! * [`linalg`]: `expm`, `c2d` (ZOH), `lyap`, `dlyap`, `poles` in python-control style;
-//! * [`samples`]: problems with known answers.
+//! * [`samples`]: settings with known answers.
 //!
 //! ```
-//! use flexstage_control::experiment::{Setup, Variant, experiment};
+//! use flexstage_control::controller::ROBUST;
+//! use flexstage_control::experiment::{Setup, experiment};
 //! use flexstage_control::actuator::Compensation;
-//! use flexstage_control::trajectory::Reference;
+//! use flexstage_sim::trajectory::Reference;
 //! let scenario = flexstage_scenario::Scenario::paper();
 //! let setup = Setup::from_scenario(&scenario);
 //! let (reference, _) = Reference::from_scenario(&scenario.trajectories[0]);
-//! let rec = experiment(&setup, Variant::Robust, Compensation::Inverse, reference, 0.05)?;
+//! let rec = experiment(&setup, &ROBUST, Compensation::Inverse, reference, 0.05)?;
 //! let m = rec.metrics(reference.half_range(0.05, 1e-4));
 //! assert!(m.rms[0] < 1e-6 && m.peak_voltage <= 1000.0);
 //! # Ok::<(), flexstage_control::ControlError>(())
@@ -63,7 +63,7 @@
 //! Each is documented where it is implemented, with the equation number:
 //!
 //! * **Eq. (33)**: the second input plate's damper is C_qo1 (not C_qo2), as in Eq. (35)
-//!   and (A14) ([`model`]).
+//!   and (A14) ([`flexstage_sim::model`]).
 //! * **Eq. (38)**: Table 4's scalar observer gains are read as injection vectors
 //!   k_ei = g_i e_i ([`observer`]).
 //! * **Eq. (40)–(41)**: Ωᵀ already carries D, so ẑ = ζ + Σ Ω_i (not ζ + Ωᵀb) ([`observer`]).
@@ -76,7 +76,7 @@
 //! * **Discretization.** Forward Euler of the observer is unstable at 0.1 ms (pole −9 for
 //!   g = 1e5). The observer is discretized exactly for sampled measurements
 //!   (ε_{k+1} = F ε_k, F = Φ − L C matching e^{B0 T} in the injectable columns), the plant
-//!   with the exact matrix exponential per substep ([`plant`]).
+//!   with the exact matrix exponential per substep ([`flexstage_sim::plant`]).
 //! * **A16, A23**: the output damping (β55, β66) is part of Z.
 //! * **A23, stiffness kept.** Z uses N at the *reference* (q_d, q̇_d) instead of the
 //!   measured output, so the mechanism's own spring and damper act on the error rather than
@@ -105,7 +105,7 @@
 
 //! # Which controller wins where (on the twin of the designed stage)
 //! Measured with `flexstage-assess` on the quick design (README): the PI + notch + FF
-//! ([`experiment::Variant::PiNotch`], the default), tuned by [`tuning`] on the twin's
+//! ([`pi_notch::PI_NOTCH_FF`], the default), tuned by [`tuning`] on the twin's
 //! sampled frequency response, meets 6 dB / 40° on both loops with one sample of delay
 //! (6.0 dB, 69° / 9.5 dB, 58°), tracks the default Lissajous to 10.2/5.9 nm RMS (the sensor
 //! noise floor is 7.8/10.4 nm) and passes 96 % of 100 perturbed twins. It wins because the
@@ -119,13 +119,14 @@
 //! (1570/2324 Hz) are not the twin's (q2 at 3220 Hz; q1 has no mode below Nyquist, its
 //! static gain is three modes above it whose shares cancel), and those modes fold into the
 //! sampled loop (8.99 kHz at 1.01 kHz on q1, 3.6× the static gain) where no lumped model
-//! has them. [`controller::ControllerParams::for_sampled_plant`] sets them up as a
-//! practitioner would from the sampled response: the Kalman estimate
+//! has them. [`controller::sized`] sets them up as a practitioner would from the sampled
+//! response ([`controller::ControllerParams::for_response`]): the Kalman estimate
 //! ([`controller::Estimator::Kalman`], the default), the model fitted to the static gain and
-//! the modes below Nyquist ([`model::fit_to_response`]), the folded peaks notched on the
+//! the modes below Nyquist ([`fit::fit_to_response`]), the folded peaks notched on the
 //! measurement ([`controller::ControllerParams::measurement_notches`]) and the gains scaled
-//! by the margins (`flexstage-assess` picks the largest of [`controller::GAIN_SCALES`]
-//! keeping 6 dB / 40°). On the quick design that is × 0.5: 7.6 dB / 61° (q1) and
+//! by the margins (the largest of [`controller::GAIN_SCALES`] keeping 6 dB / 40°, measured by
+//! the stage's [`registry::MarginProbe`]: sine injection on the twin's linear loop in
+//! `flexstage-assess`). On the quick design that is × 0.5: 7.6 dB / 61° (q1) and
 //! 23.7 dB / 75° (q2) with one sample of delay, 3.8/12.4 nm RMS on the default Lissajous
 //! (the PI + notch: 10.2/5.9 nm; Monte-Carlo pass 67 % against its 96 %). The notches delay
 //! the measurement and (44*)'s mid-sample ξ_d makes the output half a sample early; the law
@@ -151,16 +152,15 @@ pub mod controller;
 mod error;
 pub mod estimator;
 pub mod experiment;
+pub mod feasibility;
+pub mod fit;
 pub mod learning;
-pub mod linalg;
 pub mod margins;
-pub mod model;
 pub mod observer;
 pub mod pi_notch;
-pub mod plant;
-pub mod rig;
+pub mod pid;
+pub mod registry;
 pub mod samples;
-pub mod trajectory;
 pub mod tuning;
 
 pub use error::{ControlError, Result};

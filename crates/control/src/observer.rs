@@ -5,7 +5,7 @@
 //! B0 = B − k_e1 e₁ᵀ − k_e2 e₂ᵀ (Eq. 38). Table 4 gives scalar gains; the injection vectors
 //! are read as k_ei = g_i e_i (each measured position corrects its own estimate), so B0 is B
 //! with −g₁, −g₂ added to its first two diagonal entries. B0 must be Hurwitz; this is verified
-//! as Eq. (39) asks, by solving P B0 + B0ᵀ P = −I ([`crate::linalg::lyap`]) and checking
+//! as Eq. (39) asks, by solving P B0 + B0ᵀ P = −I ([`flexstage_sim::linalg::lyap`]) and checking
 //! P = Pᵀ > 0 ([`ObserverDesign::lyapunov`]). The continuous error obeys ε̇ = B0 ε (Eq. 42).
 //!
 //! # Why not forward Euler
@@ -42,8 +42,10 @@
 use nalgebra::DMatrix;
 
 use crate::error::{ControlError, Result, positive};
-use crate::linalg::{c2d, expm, is_positive_definite, lyap, spectral_abscissa, spectral_radius};
-use crate::model::{StageModel, from_dyn, to_dyn};
+use flexstage_sim::linalg::{
+    c2d, expm, is_positive_definite, lyap, spectral_abscissa, spectral_radius,
+};
+use flexstage_sim::model::{StageModel, from_dyn, to_dyn};
 use nalgebra::{SMatrix, SVector};
 
 /// Size of the observer state: z (8) and the input disturbance d (2).

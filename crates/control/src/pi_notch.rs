@@ -19,16 +19,56 @@
 //!
 //! With `notch: None` and the integral/proportional/derivative gains this is the PID + FF
 //! baseline with a measured static gain; [`crate::tuning`] tunes both by the same procedure.
+//! The law is `flexstage_control_core::PidLaw` (the one implementation, also the embeddable
+//! one), with the notches as its sections; this controller adds the reference, the
+//! inverse-hysteresis compensation and the amplifier range.
 
-use nalgebra::{Complex, Matrix2, Vector2};
+use std::sync::Arc;
+
+use flexstage_control_core::{Biquad, PidGains, PidLaw};
+use nalgebra::{Complex, Matrix2};
 
 use crate::actuator::{Actuator, ActuatorParams};
-use crate::controller::{Command, StageControl};
 use crate::error::{ControlError, Result, check};
-use crate::trajectory::Reference;
+use crate::registry::{Controller, Design, Stage};
+use crate::tuning::{Structure, tuned};
+use flexstage_sim::experiment::{Command, StageControl};
+use flexstage_sim::trajectory::Reference;
+
+/// The default controller: PI + notches + inverse-hysteresis feed-forward, tuned on the
+/// stage's sampled response ([`crate::tuning`], structure [`Structure::PiNotch`]); not
+/// designed where the stage offers no response (the lumped plant).
+pub static PI_NOTCH_FF: Controller = Controller {
+    name: "pi-notch-ff",
+    label: "PI + notches + inverse-hysteresis feed-forward, tuned on the sampled response",
+    default: true,
+    design: design_tuned,
+};
+
+fn design_tuned(stage: &Stage<'_>) -> Result<Option<Arc<dyn Design>>> {
+    Ok(tuned(stage, Structure::PiNotch)?.map(|t| Arc::new(t.params) as Arc<dyn Design>))
+}
+
+/// The PI(D) + notch + FF structure is a design: [`PiNotchController`] with these gains.
+impl Design for PiNotchParams {
+    fn build(
+        &self,
+        actuator: ActuatorParams,
+        _delay: usize,
+        reference: Reference,
+    ) -> Result<Box<dyn StageControl>> {
+        Ok(Box::new(PiNotchController::new(
+            *self, actuator, reference,
+        )?))
+    }
+
+    fn linear(&self) -> Option<&PiNotchParams> {
+        Some(self)
+    }
+}
 
 /// A notch filter N(s) = (s² + 2ζ_z ω s + ω²)/(s² + 2ζ_p ω s + ω²) at f = ω/2π.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Notch {
     /// Centre frequency \[Hz\], 0 < f < f_s/2.
     pub frequency: f64,
@@ -39,7 +79,7 @@ pub struct Notch {
 }
 
 /// Gains of one axis.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AxisGains {
     /// Proportional gain (dimensionless), ≥ 0.
     pub kp: f64,
@@ -52,7 +92,7 @@ pub struct AxisGains {
 }
 
 /// Settings of [`PiNotchController`].
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PiNotchParams {
     /// Gains per axis (q1, q2).
     pub axes: [AxisGains; 2],
@@ -127,76 +167,44 @@ impl PiNotchParams {
             let mut c =
                 a.kp + a.ki * t * (z + one) / (2.0 * (z - one)) + a.kd * (one - one / z) / t;
             for n in a.notches.iter().flatten() {
-                let q = Biquad::notch(n, t);
-                c *= (q.b[0] + q.b[1] / z + q.b[2] / (z * z))
-                    / (one + q.a[0] / z + q.a[1] / (z * z));
+                let q = notch_section(n, t);
+                let (b, a) = (q.numerator(), q.denominator());
+                c *= (b[0] + b[1] / z + b[2] / (z * z)) / (one + a[0] / z + a[1] / (z * z));
             }
             c
         })
     }
 }
 
-/// A second-order section y = (b0 + b1 z⁻¹ + b2 z⁻²)/(1 + a1 z⁻¹ + a2 z⁻²) u, direct form II
-/// transposed.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub(crate) struct Biquad {
-    b: [f64; 3],
-    a: [f64; 2],
-    s: [f64; 2],
-}
-
-impl Biquad {
-    /// The identity.
-    pub(crate) fn identity() -> Biquad {
-        Biquad {
-            b: [1.0, 0.0, 0.0],
-            a: [0.0, 0.0],
-            s: [0.0; 2],
-        }
-    }
-
-    /// Tustin transform of the notch, prewarped at its centre.
-    pub(crate) fn notch(n: &Notch, t: f64) -> Biquad {
-        let w = std::f64::consts::TAU * n.frequency;
-        let c = w / (0.5 * w * t).tan();
-        let c2 = c * c;
-        let w2 = w * w;
-        let num = |zeta: f64| {
-            [
-                c2 + 2.0 * zeta * w * c + w2,
-                2.0 * (w2 - c2),
-                c2 - 2.0 * zeta * w * c + w2,
-            ]
-        };
-        let (bn, an) = (num(n.zero_damping), num(n.pole_damping));
-        Biquad {
-            b: [bn[0] / an[0], bn[1] / an[0], bn[2] / an[0]],
-            a: [an[1] / an[0], an[2] / an[0]],
-            s: [0.0; 2],
-        }
-    }
-
-    #[inline]
-    pub(crate) fn step(&mut self, u: f64) -> f64 {
-        let y = self.b[0] * u + self.s[0];
-        self.s[0] = self.b[1] * u - self.a[0] * y + self.s[1];
-        self.s[1] = self.b[2] * u - self.a[1] * y;
-        y
-    }
+/// The Tustin transform of the notch `n` at sample time `t`, prewarped at its centre (module
+/// docs), as a second-order section of the law.
+pub fn notch_section(n: &Notch, t: f64) -> Biquad {
+    let w = std::f64::consts::TAU * n.frequency;
+    let c = w / (0.5 * w * t).tan();
+    let c2 = c * c;
+    let w2 = w * w;
+    let num = |zeta: f64| {
+        [
+            c2 + 2.0 * zeta * w * c + w2,
+            2.0 * (w2 - c2),
+            c2 - 2.0 * zeta * w * c + w2,
+        ]
+    };
+    let (bn, an) = (num(n.zero_damping), num(n.pole_damping));
+    Biquad::new(
+        [bn[0] / an[0], bn[1] / an[0], bn[2] / an[0]],
+        [an[1] / an[0], an[2] / an[0]],
+    )
 }
 
 /// The PI(D) + notch + feed-forward controller (module docs). No allocation per step.
 #[derive(Debug, Clone)]
 pub struct PiNotchController {
     params: PiNotchParams,
-    g_inv: Matrix2<f64>,
-    notch: [[Biquad; 2]; 2],
+    law: PidLaw,
     actuator: Actuator,
     reference: Reference,
     k: u64,
-    integral: [f64; 2],
-    e_prev: [f64; 2],
-    y_prev: [f64; 2],
     last: Command,
 }
 
@@ -216,20 +224,26 @@ impl PiNotchController {
                 what: "pi_notch.static_gain".into(),
             })?;
         let t = params.sample_time;
-        let notch = params.axes.map(|a| {
-            a.notches
-                .map(|n| n.map_or_else(Biquad::identity, |n| Biquad::notch(&n, t)))
+        let gains = params.axes.map(|a| PidGains {
+            kp: a.kp,
+            ki: a.ki,
+            kd: a.kd,
         });
+        let sections = params.axes.map(|a| {
+            a.notches
+                .map(|n| n.map_or(Biquad::IDENTITY, |n| notch_section(&n, t)))
+        });
+        let g_inv = [
+            [g_inv[(0, 0)], g_inv[(0, 1)]],
+            [g_inv[(1, 0)], g_inv[(1, 1)]],
+        ];
+        let law = PidLaw::new(gains, g_inv, t, actuator.stroke)?.with_sections(sections);
         Ok(PiNotchController {
             params,
-            g_inv,
-            notch,
+            law,
             actuator: Actuator::new(actuator)?,
             reference,
             k: 0,
-            integral: [0.0; 2],
-            e_prev: [0.0; 2],
-            y_prev: [0.0; 2],
             last: Command::default(),
         })
     }
@@ -240,24 +254,8 @@ impl StageControl for PiNotchController {
     fn step(&mut self, y_in: [f64; 2]) -> Command {
         let t = self.params.sample_time;
         let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
-        let y = if dropout { self.y_prev } else { y_in };
         let r = self.reference.sample(self.k as f64 * t);
-        let mut w = Vector2::zeros();
-        let mut e = [0.0; 2];
-        for i in 0..2 {
-            let a = &self.params.axes[i];
-            e[i] = r.q[i] - y[i];
-            let de = if self.k > 0 {
-                (e[i] - self.e_prev[i]) / t
-            } else {
-                0.0
-            };
-            let pid = a.kp * e[i] + a.ki * (self.integral[i] + 0.5 * t * e[i]) + a.kd * de;
-            let c = self.notch[i][0].step(pid);
-            w[i] = r.q[i] + self.notch[i][1].step(c);
-        }
-        let u = self.g_inv * w;
-        let mut u = [u[0], u[1]];
+        let mut u = self.law.command(y_in, r.q);
         if !(u[0].is_finite() && u[1].is_finite()) {
             u = self.last.x_nom;
         }
@@ -269,13 +267,7 @@ impl StageControl for PiNotchController {
             saturated: act.saturated,
             dropout,
         };
-        if !act.saturated {
-            for i in 0..2 {
-                self.integral[i] += t * e[i];
-            }
-        }
-        self.e_prev = e;
-        self.y_prev = y;
+        self.law.end_sample(act.saturated);
         self.k += 1;
         self.last = cmd;
         cmd
@@ -313,10 +305,11 @@ mod tests {
             zero_damping: 0.02,
             pole_damping: 0.5,
         };
-        let q = Biquad::notch(&n, 1e-4);
+        let q = notch_section(&n, 1e-4);
+        let (b, a) = (q.numerator(), q.denominator());
         let h = |f: f64| {
             let z = Complex::from_polar(1.0, std::f64::consts::TAU * f * 1e-4);
-            (q.b[0] + q.b[1] / z + q.b[2] / (z * z)) / (1.0 + q.a[0] / z + q.a[1] / (z * z))
+            (b[0] + b[1] / z + b[2] / (z * z)) / (1.0 + a[0] / z + a[1] / (z * z))
         };
         assert!((h(2700.0).norm() - 0.04).abs() < 1e-9);
         assert!((h(1e-6).norm() - 1.0).abs() < 1e-9);
@@ -329,7 +322,7 @@ mod tests {
     #[test]
     fn simulated_sine_matches_axis_response() {
         use crate::actuator::Compensation;
-        use crate::trajectory::{Reference, Shape};
+        use flexstage_sim::trajectory::{Reference, Shape};
         let p = params(Some(Notch {
             frequency: 1500.0,
             zero_damping: 0.05,

@@ -33,7 +33,8 @@ use nalgebra::Complex;
 use crate::error::{Result, check};
 use crate::margins::{MarginParams, Margins, margin};
 use crate::pi_notch::{AxisGains, Notch, PiNotchParams};
-use crate::rig::SensorParams;
+use crate::registry::Stage;
+use flexstage_sim::modal::LoopPlant;
 
 /// Settings of the tuning procedure (module docs).
 #[derive(Debug, Clone, PartialEq)]
@@ -120,18 +121,6 @@ pub enum Structure {
     PiNotch,
     /// PID without notch (the existing baseline's structure).
     Pid,
-}
-
-/// What the procedure needs to know about the plant.
-pub trait LoopPlant {
-    /// The plant's discrete response x_nom → y (2 × 2, with the rig's delay) at `f` \[Hz\].
-    fn response(&self, f: f64) -> [[Complex<f64>; 2]; 2];
-    /// The static gain x_nom → q.
-    fn static_gain(&self) -> [[f64; 2]; 2];
-    /// Resonances (frequency \[Hz\], damping) in ascending order.
-    fn modes(&self) -> Vec<(f64, f64)>;
-    /// The sample time \[s\].
-    fn sample_time(&self) -> f64;
 }
 
 /// The two loop-at-a-time return ratios (output side: L = P G⁻¹ diag(c)) of a PI-notch
@@ -378,6 +367,21 @@ pub fn tune(plant: &dyn LoopPlant, structure: Structure, p: &TuningParams) -> Re
     })
 }
 
+/// The tuning of `structure` on the stage's sampled response by [`tune`] with the stage's
+/// settings, computed once per stage; `None` when the stage has no response to tune on.
+pub fn tuned(stage: &Stage<'_>, structure: Structure) -> Result<Option<Tuned>> {
+    let Some(plant) = stage.response else {
+        return Ok(None);
+    };
+    let key = match structure {
+        Structure::PiNotch => "tuning::pi_notch",
+        Structure::Pid => "tuning::pid",
+    };
+    stage
+        .shared(key, || tune(plant, structure, &stage.tuning))
+        .map(Some)
+}
+
 /// A plant with one more sample of delay than `.0` (step 3b of the procedure).
 struct OneMoreSample<'a>(&'a dyn LoopPlant);
 
@@ -416,193 +420,14 @@ fn largest(
     Ok(lo)
 }
 
-/// One mode of a [`ModalPlant`]: `η̈ + 2ζωη̇ + ω²η = in·x_nom`, `q = out·η`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PlantMode {
-    /// Natural frequency \[Hz\].
-    pub frequency: f64,
-    /// Damping ratio.
-    pub damping: f64,
-    /// Modal force per unit x_nom1, x_nom2.
-    pub input: [f64; 2],
-    /// Output q1, q2 per unit modal coordinate.
-    pub output: [f64; 2],
-}
-
-/// One partial fraction of a filtered mode: its residue r_j and e^{p_j T}.
-type Residue = (Complex<f64>, Complex<f64>);
-
-/// A modal plant sampled with a zero-order hold and `delay` samples of delay: each mode
-/// discretized exactly (`c2d`), `P(z) = z^{−d} Σ_k out_k in_kᵀ [1 0](zI − Φ_k)⁻¹Γ_k`. This is
-/// the sampled loop the rig runs with an ideal amplifier and sensor.
-///
-/// With the rig's sensor chain H(s) (electronics and anti-aliasing filter,
-/// [`SensorParams`]) between the output and the sampler ([`ModalPlant::with_sensor`]), each
-/// mode's filtered response `G_k(s) = H(s)/(s² + 2ζω s + ω²) = K/Π_j(s − p_j)` (the mode's
-/// pair and the filter's poles, all simple) is sampled exactly by partial fractions:
-/// `G_k(z) = (1 − z⁻¹)·Z{G_k(s)/s} = G_k(0) + (1 − z⁻¹) Σ_j r_j/(1 − e^{p_j T} z⁻¹)`,
-/// `r_j = K/(p_j Π_{i≠j}(p_j − p_i))` (Franklin, Powell & Workman, Digital Control of Dynamic
-/// Systems, 3rd ed., Section 6.2: the ZOH equivalent). The filter does not commute with the
-/// sampler, so this is not P(z)·H(jω); it is what the rig samples.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ModalPlant {
-    modes: Vec<PlantMode>,
-    discrete: Vec<([f64; 4], [f64; 2])>,
-    /// With a sensor chain: per mode, G_k(0) and the pairs (r_j, e^{p_j T}).
-    filtered: Vec<(f64, Vec<Residue>)>,
-    delay: usize,
-    t: f64,
-}
-
-impl ModalPlant {
-    /// The plant of `modes` sampled at `t` \[s\] with `delay` samples of delay and the
-    /// sensor chain `sensor` before the sampler (module docs).
-    pub fn with_sensor(
-        modes: Vec<PlantMode>,
-        t: f64,
-        delay: usize,
-        sensor: &SensorParams,
-    ) -> Result<ModalPlant> {
-        let mut p = ModalPlant::new(modes, t, delay)?;
-        let filter = sensor.poles();
-        if filter.is_empty() {
-            return Ok(p);
-        }
-        let k: Complex<f64> = filter.iter().map(|&q| -q).product();
-        for m in &p.modes {
-            let w = std::f64::consts::TAU * m.frequency;
-            let (re, im) = (-m.damping * w, w * (1.0 - m.damping * m.damping).sqrt());
-            let mut poles = vec![Complex::new(re, im), Complex::new(re, -im)];
-            poles.extend_from_slice(&filter);
-            let terms = (0..poles.len())
-                .map(|j| {
-                    let pj = poles[j];
-                    let den: Complex<f64> = poles
-                        .iter()
-                        .enumerate()
-                        .filter(|&(i, _)| i != j)
-                        .map(|(_, &pi)| pj - pi)
-                        .product();
-                    (k / (pj * den), (pj * t).exp())
-                })
-                .collect();
-            p.filtered.push((1.0 / (w * w), terms));
-        }
-        Ok(p)
-    }
-
-    /// The plant of `modes` sampled at `t` \[s\] with `delay` samples of delay.
-    pub fn new(modes: Vec<PlantMode>, t: f64, delay: usize) -> Result<ModalPlant> {
-        check("sample_time", t, t > 0.0, "> 0 s")?;
-        let mut discrete = Vec::with_capacity(modes.len());
-        for m in &modes {
-            check("mode frequency", m.frequency, m.frequency > 0.0, "> 0 Hz")?;
-            let w = std::f64::consts::TAU * m.frequency;
-            let a =
-                nalgebra::DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -w * w, -2.0 * m.damping * w]);
-            let b = nalgebra::DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
-            let (phi, gam) = crate::linalg::c2d(&a, &b, t)?;
-            discrete.push((
-                [phi[(0, 0)], phi[(0, 1)], phi[(1, 0)], phi[(1, 1)]],
-                [gam[0], gam[1]],
-            ));
-        }
-        Ok(ModalPlant {
-            modes,
-            discrete,
-            filtered: Vec::new(),
-            delay,
-            t,
-        })
-    }
-
-    /// The modes.
-    pub fn plant_modes(&self) -> &[PlantMode] {
-        &self.modes
-    }
-}
-
-impl LoopPlant for ModalPlant {
-    fn response(&self, f: f64) -> [[Complex<f64>; 2]; 2] {
-        let z = Complex::from_polar(1.0, std::f64::consts::TAU * f * self.t);
-        let delay = z.powi(-(self.delay as i32));
-        let mut p = [[Complex::new(0.0, 0.0); 2]; 2];
-        let zi = z.inv();
-        let one = Complex::new(1.0, 0.0);
-        for (k, (m, (phi, gam))) in self.modes.iter().zip(&self.discrete).enumerate() {
-            let eta = if let Some((g0, terms)) = self.filtered.get(k) {
-                let sum: Complex<f64> = terms.iter().map(|&(r, e)| r / (one - e * zi)).sum();
-                (sum * (one - zi) + g0) * delay
-            } else {
-                // [1 0](zI − Φ)⁻¹Γ = ((z − Φ22)Γ1 + Φ12 Γ2) / det.
-                let det = (z - phi[0]) * (z - phi[3]) - phi[1] * phi[2];
-                ((z - phi[3]) * gam[0] + phi[1] * gam[1]) / det * delay
-            };
-            for i in 0..2 {
-                for j in 0..2 {
-                    p[i][j] += eta * (m.output[i] * m.input[j]);
-                }
-            }
-        }
-        p
-    }
-
-    fn static_gain(&self) -> [[f64; 2]; 2] {
-        let mut g = [[0.0; 2]; 2];
-        for m in &self.modes {
-            let w2 = (std::f64::consts::TAU * m.frequency).powi(2);
-            for i in 0..2 {
-                for j in 0..2 {
-                    g[i][j] += m.output[i] * m.input[j] / w2;
-                }
-            }
-        }
-        g
-    }
-
-    fn modes(&self) -> Vec<(f64, f64)> {
-        self.modes
-            .iter()
-            .map(|m| (m.frequency, m.damping))
-            .collect()
-    }
-
-    fn sample_time(&self) -> f64 {
-        self.t
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use flexstage_sim::modal::ModalPlant;
 
-    /// Two decoupled axes, one 1 %-damped mode each (2.7 and 5.7 kHz scaled to unit static
-    /// gain), one sample of delay at 10 kHz.
+    /// [`flexstage_sim::samples::decoupled_modes`] with one sample of delay at 10 kHz.
     fn plant() -> ModalPlant {
-        let mode = |f: f64, axis: usize| {
-            let w2 = (std::f64::consts::TAU * f).powi(2);
-            let mut m = PlantMode {
-                frequency: f,
-                damping: 0.01,
-                input: [0.0; 2],
-                output: [0.0; 2],
-            };
-            m.input[axis] = w2;
-            m.output[axis] = 1.0;
-            m
-        };
-        ModalPlant::new(vec![mode(2700.0, 0), mode(3900.0, 1)], 1e-4, 1).unwrap()
-    }
-
-    /// Reference: at z = 1 the exact ZOH discretization keeps the static gain Σ out inᵀ/ω²
-    /// (here the identity). Goal: the discrete response is the sampled plant.
-    #[test]
-    fn zoh_response_keeps_static_gain() {
-        let p = plant();
-        let g = p.response(1e-6);
-        assert!((g[0][0].re - 1.0).abs() < 1e-6 && (g[1][1].re - 1.0).abs() < 1e-6);
-        assert!(g[0][1].norm() < 1e-12);
-        assert_eq!(p.static_gain(), [[1.0, 0.0], [0.0, 1.0]]);
+        ModalPlant::new(flexstage_sim::samples::decoupled_modes(), 1e-4, 1).unwrap()
     }
 
     /// A static, coupled plant A z^{−d} (no modes): its closed loop with a PI is a polynomial.
@@ -774,71 +599,5 @@ mod tests {
             (n.zero_damping / n.pole_damping * peak - 1.0).abs() < 0.05,
             "{n:?}"
         );
-    }
-
-    /// Reference: the ZOH discretization (`c2d`, Van Loan) of the augmented state space of
-    /// one mode followed by the sensor chain (15 kHz first order, 3 kHz 2nd-order Butterworth),
-    /// evaluated as C(zI − Φ)⁻¹Γ. Goal: the partial-fraction response of
-    /// [`ModalPlant::with_sensor`] equals it to 1e-9 (relative) from 1 Hz to Nyquist; at 20 Hz
-    /// it is the unfiltered response times the filter's analytic H(j2πf) (phase to 0.01°),
-    /// and an ideal sensor leaves the plant unchanged.
-    #[test]
-    fn sampled_sensor_chain_matches_augmented_c2d_and_analytic_phase() {
-        use nalgebra::{DMatrix, DVector};
-        let (f0, zeta, t) = (2700.0, 0.01, 1e-4);
-        let w = std::f64::consts::TAU * f0;
-        let mode = PlantMode {
-            frequency: f0,
-            damping: zeta,
-            input: [w * w, 0.0],
-            output: [1.0, 0.0],
-        };
-        let sensor = SensorParams {
-            bandwidth: 15_000.0,
-            flicker_corner: 0.0,
-            anti_alias: 3000.0,
-        };
-        let p = ModalPlant::with_sensor(vec![mode], t, 0, &sensor).unwrap();
-        let bare = ModalPlant::new(vec![mode], t, 0).unwrap();
-        let (ws, wa) = (
-            std::f64::consts::TAU * 15_000.0,
-            std::f64::consts::TAU * 3000.0,
-        );
-        #[rustfmt::skip]
-        let a = DMatrix::from_row_slice(5, 5, &[
-            0.0, 1.0, 0.0, 0.0, 0.0,
-            -w * w, -2.0 * zeta * w, 0.0, 0.0, 0.0,
-            ws, 0.0, -ws, 0.0, 0.0,
-            0.0, 0.0, 0.0, 0.0, 1.0,
-            0.0, 0.0, wa * wa, -wa * wa, -std::f64::consts::SQRT_2 * wa,
-        ]);
-        let b = DMatrix::from_row_slice(5, 1, &[0.0, w * w, 0.0, 0.0, 0.0]);
-        let (phi, gam) = crate::linalg::c2d(&a, &b, t).unwrap();
-        for f in [1.0, 20.0, 300.0, 2700.0, 4000.0, 4990.0] {
-            let z = Complex::from_polar(1.0, std::f64::consts::TAU * f * t);
-            let m = DMatrix::<Complex<f64>>::identity(5, 5) * z - phi.map(|v| Complex::new(v, 0.0));
-            let g = DVector::from_iterator(5, gam.iter().map(|&v| Complex::new(v, 0.0)));
-            let x = m.lu().solve(&g).unwrap();
-            let expect = x[3];
-            let got = p.response(f)[0][0];
-            assert!(
-                (got - expect).norm() < 1e-9 * expect.norm(),
-                "f {f}: {got} vs {expect}"
-            );
-        }
-        let f = 20.0;
-        let ratio = p.response(f)[0][0] / bare.response(f)[0][0];
-        let h = sensor.response(f);
-        let dphase = (ratio.arg() - h.arg()).to_degrees();
-        assert!(
-            dphase.abs() < 0.01,
-            "{dphase}° off the analytic filter phase"
-        );
-        // Analytic phase of the chain: −atan(f/f_s) − atan2(√2 f/f_a, 1 − (f/f_a)²).
-        let (x, y) = (f / 15_000.0, f / 3000.0);
-        let analytic = -x.atan() - (std::f64::consts::SQRT_2 * y).atan2(1.0 - y * y);
-        assert!((h.arg() - analytic).abs() < 1e-12);
-        let ideal = ModalPlant::with_sensor(vec![mode], t, 0, &SensorParams::ideal()).unwrap();
-        assert_eq!(ideal.response(700.0), bare.response(700.0));
     }
 }

@@ -5,9 +5,9 @@
 //! boundary layer and for the non-robust law.
 
 use flexstage_control::backstepping::{Law, LawParams, sigma, sigma_slope};
-use flexstage_control::model::StageModel;
-use flexstage_control::trajectory::{Reference, Shape};
 use flexstage_scenario::Scenario;
+use flexstage_sim::model::StageModel;
+use flexstage_sim::trajectory::{Reference, Shape};
 
 fn law(robust: bool) -> Law {
     let s = Scenario::paper();

@@ -9,9 +9,9 @@
 //! of P within 10 %; the velocity estimate is less than half as noisy as the finite difference at the default noise levels.
 
 use flexstage_control::estimator::{KalmanDesign, KalmanParams, dare, dare_residual};
-use flexstage_control::model::{StageModel, to_dyn};
 use flexstage_numerics::noise::GaussianNoise;
 use flexstage_scenario::Scenario;
+use flexstage_sim::model::{StageModel, to_dyn};
 use nalgebra::{DMatrix, DVector, SymmetricEigen};
 
 /// Scalar DARE x = a² x r/(r + c² x) + q, positive root of
@@ -101,7 +101,7 @@ fn kalman_gain_solves_the_riccati_equation_on_the_stage_model() {
         ps.amax()
     );
     // F = Φ − L C is Schur, and L = Φ M.
-    let rho = flexstage_control::linalg::spectral_radius(&to_dyn(&k.f)).unwrap();
+    let rho = flexstage_sim::linalg::spectral_radius(&to_dyn(&k.f)).unwrap();
     assert!(rho < 1.0, "spectral radius {rho}");
     assert!((k.l - k.phi * k.m).amax() <= 1e-12 * k.l.amax());
 }

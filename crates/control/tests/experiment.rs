@@ -9,13 +9,17 @@
 //! margins are printed (run with --nocapture).
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::{Metrics, Setup, Variant, experiment};
-use flexstage_control::trajectory::Reference;
+use flexstage_control::controller::{NONROBUST, ROBUST};
+use flexstage_control::experiment::{Setup, experiment};
+use flexstage_control::pid::PID_FF;
+use flexstage_control::registry::Controller;
 use flexstage_scenario::Scenario;
+use flexstage_sim::experiment::Metrics;
+use flexstage_sim::trajectory::Reference;
 
 const DURATION: f64 = 0.5;
 
-fn metrics(variant: Variant, compensation: Compensation) -> Metrics {
+fn metrics(variant: &Controller, compensation: Compensation) -> Metrics {
     let s = Scenario::paper();
     let setup = Setup::from_scenario(&s);
     let (r, _) = Reference::from_scenario(&s.trajectories[0]);
@@ -23,7 +27,7 @@ fn metrics(variant: Variant, compensation: Compensation) -> Metrics {
     let m = rec.metrics(r.half_range(DURATION, 1e-4));
     eprintln!(
         "{:9} {:?}: RMS {:.1} / {:.1} nm, max {:.1} / {:.1} nm, combined RMS {:.2} nm, V {:.0}–{:.0}",
-        variant.name(),
+        variant.name,
         compensation,
         m.rms[0] * 1e9,
         m.rms[1] * 1e9,
@@ -38,9 +42,9 @@ fn metrics(variant: Variant, compensation: Compensation) -> Metrics {
 
 #[test]
 fn robust_matches_non_robust_and_beats_pid_feedforward() {
-    let robust = metrics(Variant::Robust, Compensation::Inverse);
-    let nonrobust = metrics(Variant::NonRobust, Compensation::Inverse);
-    let pid = metrics(Variant::PidFeedforward, Compensation::Inverse);
+    let robust = metrics(&ROBUST, Compensation::Inverse);
+    let nonrobust = metrics(&NONROBUST, Compensation::Inverse);
+    let pid = metrics(&PID_FF, Compensation::Inverse);
     let margin = |other: &Metrics| 100.0 * (1.0 - robust.rms_total() / other.rms_total());
     eprintln!(
         "robust RMS lower by {:.1} % than non-robust, {:.1} % than PID + FF",
@@ -59,12 +63,12 @@ fn robust_matches_non_robust_and_beats_pid_feedforward() {
 
 #[test]
 fn without_hysteresis_compensation_the_error_grows() {
-    for variant in [Variant::Robust, Variant::PidFeedforward] {
+    for variant in [&ROBUST, &PID_FF] {
         let on = metrics(variant, Compensation::Inverse);
         let off = metrics(variant, Compensation::Off);
         eprintln!(
             "{}: compensation off multiplies the RMS error by {:.1}",
-            variant.name(),
+            variant.name,
             off.rms_total() / on.rms_total()
         );
         assert!(off.rms_total() > 2.0 * on.rms_total());

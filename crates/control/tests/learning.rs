@@ -7,14 +7,16 @@
 // error falls period after period, well below the baseline's.
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::controller::StageControl;
-use flexstage_control::experiment::{Setup, Variant, run};
+use flexstage_control::experiment::Setup;
 use flexstage_control::learning::{
     DesignParams, Learning, LearningParams, LearningPlant, convergence_factor, design,
     measure_learning_plant, q_response, rms_per_period, sensor_lag,
 };
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::Reference;
+use flexstage_control::pid::PID_FF;
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::experiment::run;
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::Reference;
 
 #[test]
 fn bartlett_q_response_is_the_fejer_kernel() {
@@ -76,7 +78,7 @@ fn learning_on_pid_converges_monotonically_on_the_lumped_rig() {
     let t = setup.controller.observer.sample_time;
     let period = (0.5 / t).round() as usize; // the 3:1 Lissajous at 2 Hz
     let make = |s: &Setup, r: Reference| {
-        let c = s.controller(Variant::PidFeedforward, Compensation::Inverse, r)?;
+        let c = s.controller(&PID_FF, Compensation::Inverse, r)?;
         let p: Box<dyn StagePlant> = Box::new(s.lumped_plant()?);
         Ok((c, p))
     };
@@ -166,7 +168,7 @@ impl StagePlant for LateSensor {
     fn output(&self) -> [f64; 2] {
         self.inner.output()
     }
-    fn apply(&mut self, cmd: &flexstage_control::controller::Command) {
+    fn apply(&mut self, cmd: &flexstage_sim::experiment::Command) {
         self.inner.apply(cmd)
     }
     fn voltage(&self) -> [f64; 2] {
@@ -191,7 +193,7 @@ fn learning_told_the_sensor_lag_tracks_the_true_output() {
     let t = setup.controller.observer.sample_time;
     let period = (0.5 / t).round() as usize;
     let make = |late: bool| {
-        let c = setup.controller(Variant::PidFeedforward, Compensation::Inverse, reference)?;
+        let c = setup.controller(&PID_FF, Compensation::Inverse, reference)?;
         let inner: Box<dyn StagePlant> = Box::new(setup.lumped_plant()?);
         let p: Box<dyn StagePlant> = if late {
             Box::new(LateSensor { inner, last: None })

@@ -4,10 +4,10 @@
 //! K-filter's error follows its error dynamics ε_{k+1} = F ε_k to 1e-9 on the noise-free
 //! linear plant, with F inheriting e^{B0 T} in the injected columns.
 
-use flexstage_control::linalg::spectral_radius;
-use flexstage_control::model::{StageModel, to_dyn};
 use flexstage_control::observer::{KFilter, NX, ObserverDesign, ObserverParams, Vector10};
 use flexstage_scenario::Scenario;
+use flexstage_sim::linalg::spectral_radius;
+use flexstage_sim::model::{StageModel, to_dyn};
 use nalgebra::SMatrix;
 
 fn design() -> (StageModel, ObserverDesign) {

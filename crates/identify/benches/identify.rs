@@ -45,9 +45,9 @@ fn estimate(bencher: divan::Bencher) {
 /// experiment: 80 periods of the two-band multisine, 615 lines, both outputs).
 #[divan::bench(sample_count = 10)]
 fn response_16s(bencher: divan::Bencher) {
-    use flexstage_control::rig::SensorParams;
     use flexstage_identify::response::{ResponseParams, identify_response, response_excitation};
     use flexstage_identify::{Excitation, Multisine, StageRecord};
+    use flexstage_sim::rig::SensorParams;
     let ts = 2e-5;
     let e = response_excitation(&Excitation::default(), 5000.0);
     let ms = Multisine::new(&e).unwrap();

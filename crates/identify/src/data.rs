@@ -5,10 +5,10 @@
 
 use std::io::Read;
 
-use flexstage_control::actuator::preload;
 use flexstage_numerics::DataError;
 use flexstage_numerics::records::{NumericCsv, RecordError};
 use flexstage_piezo::{BoucWen, BoucWenParams, MICROMETRE};
+use flexstage_sim::pea::preload;
 
 use crate::error::{IdentifyError, Result};
 

@@ -41,9 +41,9 @@ pub enum IdentifyError {
     /// An error of the PEA model (flexstage-piezo).
     #[error(transparent)]
     Piezo(#[from] flexstage_piezo::PiezoError),
-    /// An error of the plant or model (flexstage-control).
+    /// An error of the simulated plant or the lumped model (flexstage-sim).
     #[error(transparent)]
-    Control(#[from] flexstage_control::ControlError),
+    Sim(#[from] flexstage_sim::SimError),
 }
 
 /// Result alias of this crate.

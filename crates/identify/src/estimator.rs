@@ -527,7 +527,7 @@ pub struct Identification {
     /// negative damping estimate replaced by the guess (listed in `warnings`).
     pub params: StageParams,
     /// The cross-axis coupling stiffness k_c of Eq. (30) [N/m] for the controller's model
-    /// (`flexstage_control::model::StageModel::with_coupling(&params, coupling)`): the mean of
+    /// (`flexstage_sim::model::StageModel::with_coupling(&params, coupling)`): the mean of
     /// the q_o1 and q_o2 rows' estimates ([`Physical::coupling`]), 0 when
     /// [`IdentifyParams::coupling`] is off. Keeping it in the model cuts the tracking error
     /// 3–5× at ten times the default scan speed (issue #18).

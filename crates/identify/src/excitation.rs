@@ -20,10 +20,10 @@
 //! x_in (with the same noise and quantization as sensor 1: the plates are assumed measured
 //! by capacitive sensors like the output's), q_o (the plant's sensors).
 
-use flexstage_control::controller::Command;
-use flexstage_control::plant::{Plant, PlantActuator, PlantParams};
-use flexstage_control::rig::{Mechanics, RigPlant, StagePlant};
 use flexstage_numerics::noise::GaussianNoise;
+use flexstage_sim::experiment::Command;
+use flexstage_sim::plant::{Plant, PlantActuator, PlantParams};
+use flexstage_sim::rig::{Mechanics, RigPlant, StagePlant};
 
 use crate::data::StageRecord;
 use crate::error::{Result, check};
@@ -81,7 +81,7 @@ pub const OUTPUT_PREFILTER_NYQUIST: f64 = 0.95;
 /// [`OUTPUT_PREFILTER_NYQUIST`] × Nyquist) \[Hz\]. `None` when `amplitude` is 0 or no mode lies
 /// below the Nyquist frequency.
 pub fn resonance_plan(
-    model: &flexstage_control::model::StageModel,
+    model: &flexstage_sim::model::StageModel,
     sample_time: f64,
     amplitude: f64,
 ) -> Option<(Band, f64)> {
@@ -454,7 +454,7 @@ pub struct RigExperiment {
     pub seed: u64,
 }
 
-/// Runs the excitation on a stage in its rig (`flexstage_control::rig::RigPlant`, e.g. the
+/// Runs the excitation on a stage in its rig (`flexstage_sim::rig::RigPlant`, e.g. the
 /// digital twin) and logs the record at the rig's sample time: at each instant t_k, the PEAs'
 /// x_nom (the rig's, creep included), the plates' x_in (with the plate sensors' noise and
 /// quantization) and the rig's measured q; then the command for the next sample (the voltage

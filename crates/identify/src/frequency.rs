@@ -25,8 +25,8 @@
 //! residual of each row ([`LumpedFit::residual`]) says how well the lumped model can represent
 //! the response at all: 0 for the lumped model itself.
 
-use flexstage_control::model::StageModel;
 use flexstage_scenario::StageParams;
+use flexstage_sim::model::StageModel;
 use nalgebra::{Complex, DMatrix, DVector, SMatrix};
 
 use crate::error::{IdentifyError, Result};

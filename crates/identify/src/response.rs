@@ -1,8 +1,8 @@
 //! Frequency-response identification of what the controller's model takes from a stage: the
 //! static gain x_nom → q and, per output axis, the lowest mode below the controller's Nyquist
 //! frequency that carries a share of the axis's flexibility
-//! ([`flexstage_control::model::ResponseFit`], the quantities
-//! [`flexstage_control::model::fit_to_response`] turns into the lumped parameters).
+//! ([`ResponseFit`], the quantities
+//! `flexstage_control::fit::fit_to_response` turns into the lumped parameters).
 //!
 //! # Why not the time-domain regression on a structure
 //! The regression of Eq. (54)–(56) ([`crate::identify`]) fits the lumped 8-state model to the
@@ -10,16 +10,16 @@
 //! design no lumped parameter set reproduces the response (its modes, the second output mode
 //! above Nyquist, the input-inertia term; [`crate::frequency`]), so its estimates have no
 //! truth to meet. What the controller actually uses on such a plant is the response fit
-//! ([`flexstage_control::controller::ControllerParams::for_sampled_plant`]); this module
+//! (`flexstage_control::controller::sized`); this module
 //! measures exactly that, and its truth is the same fit computed from the plant's exact modes
-//! ([`flexstage_control::model::ResponseFit::from_modes`]).
+//! ([`ResponseFit::from_modes`]).
 //!
 //! # Method (the classical experimental modal analysis of a multisine record)
 //! 1. **Line spectra.** The multisine is periodic in 1/f₀; after `settle` seconds the whole
 //!    periods are averaged into one and its DFT taken at every excited line (Goertzel). The
 //!    lines alternate between the PEAs ([`crate::excitation::Multisine`]), so a line's driver j
 //!    is the PEA with the larger x_nom there, and H_ij = Q_i / X_nom,j / S(f), with S the
-//!    sensor chain's known response ([`flexstage_control::rig::SensorParams::response`]).
+//!    sensor chain's known response ([`flexstage_sim::rig::SensorParams::response`]).
 //! 2. **Static gain.** Below `static_band`, per output i, the low-frequency expansion of a
 //!    modal sum through both PEAs' x_nom, `Q_i = Σ_j (g_ij + a_ij ω² + j b_ij ω) X_j`, is fitted
 //!    by linear least squares (the hysteresis puts a little of each PEA's x_nom on the
@@ -33,21 +33,108 @@
 //!    `(r_i1 ± r_i2)/ω_k² / (g_i1 ± g_i2)` (+ for q_o1, driven by both PEAs alike; − for
 //!    q_o2), as in `ResponseFit::from_modes`.
 //! 4. **Selection.** Per axis, the lowest fitted mode below `nyquist` with a share of at least
-//!    `share` ([`ResponseParams::share`], 0.1 as in `for_sampled_plant`).
+//!    `share` ([`ResponseParams::share`], [`RESPONSE_SHARE`] as in the fit of the exact modes).
 //!
 //! The record must be free of aliasing below the controller's Nyquist frequency: a mode above
 //! it, sampled at the controller's rate, folds into the band and would be fitted as a mode
 //! there. The experiment therefore samples faster than the controller, as a signal analyser
 //! does ([`acquisition_rig`]).
 
-use flexstage_control::model::ResponseFit;
-use flexstage_control::rig::{RigParams, SensorParams};
+use flexstage_numerics::RangeError;
+use flexstage_sim::modal::{PlantMode, static_gain};
+use flexstage_sim::rig::{RigParams, SensorParams};
 use nalgebra::{DMatrix, DVector};
 
 use crate::data::StageRecord;
 use crate::error::{IdentifyError, Result, check};
 use crate::excitation::{Band, Excitation, RESONANCE_AMPLITUDE, RESONANCE_SPACING};
 use crate::frequency::C64;
+
+/// The least share of an axis's static gain a mode carries to be the axis's mode of a
+/// [`ResponseFit`] (what the fit of a plant's exact modes and the response
+/// identification use).
+pub const RESPONSE_SHARE: f64 = 0.1;
+
+/// What a frequency-response identification of the stage gives, to fit the lumped model
+/// to (`flexstage_control::fit::fit_to_response`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ResponseFit {
+    /// Static gain x_nom → q, rows q_o1, q_o2 (dimensionless).
+    pub dc_gain: [[f64; 2]; 2],
+    /// First output mode of q_o1 and of q_o2 \[Hz\], > 0; `None` when the sampled response
+    /// shows none below Nyquist (that axis's stiffness is then kept from the design).
+    pub frequency: [Option<f64>; 2],
+    /// Their damping ratios, in [0, 1) (used only with a frequency).
+    pub damping: [f64; 2],
+}
+
+impl ResponseFit {
+    /// What a frequency-response identification below Nyquist reads off a modal plant
+    /// (e.g. the twin's modes): the static gain Σ out inᵀ/ω², and per output axis the
+    /// lowest mode below `nyquist` \[Hz\] whose share of that axis's static gain is at least
+    /// `share` (in (0, 1]). An axis with no such mode (its flexibility sits in modes above
+    /// Nyquist, which the sampled response shows only folded) gets `None`: its mode is not
+    /// identifiable from the sampled response and is not fitted.
+    pub fn from_modes(modes: &[PlantMode], nyquist: f64, share: f64) -> ResponseFit {
+        let g = static_gain(modes);
+        let mut frequency = [None; 2];
+        let mut damping = [0.0; 2];
+        for i in 0..2 {
+            let axis = |m: &PlantMode| {
+                let w2 = (std::f64::consts::TAU * m.frequency).powi(2);
+                let drive = if i == 0 {
+                    m.input[0] + m.input[1]
+                } else {
+                    m.input[0] - m.input[1]
+                };
+                m.output[i] * drive / w2
+            };
+            let total = g[i][0] + if i == 0 { g[i][1] } else { -g[i][1] };
+            if let Some(m) = modes
+                .iter()
+                .filter(|m| m.frequency < nyquist && axis(m) / total >= share)
+                .min_by(|a, b| a.frequency.total_cmp(&b.frequency))
+            {
+                frequency[i] = Some(m.frequency);
+                damping[i] = m.damping;
+            }
+        }
+        ResponseFit {
+            dc_gain: g,
+            frequency,
+            damping,
+        }
+    }
+
+    /// Checks the fields.
+    pub fn validate(&self) -> std::result::Result<(), RangeError> {
+        use flexstage_numerics::validate::{check, positive};
+        for i in 0..2 {
+            if let Some(f) = self.frequency[i] {
+                positive(&format!("fit.frequency[{i}]"), f)?;
+            }
+            check(
+                &format!("fit.damping[{i}]"),
+                self.damping[i],
+                (0.0..1.0).contains(&self.damping[i]),
+                "a damping ratio in [0, 1)",
+            )?;
+            check(
+                &format!("fit.dc_gain[0][{i}]"),
+                self.dc_gain[0][i],
+                self.dc_gain[0][i] > 0.0 && self.dc_gain[0][i] < 0.5,
+                "a static gain of q_o1 in (0, 0.5) (each PEA drives half the output)",
+            )?;
+            check(
+                &format!("fit.dc_gain[1][{i}]"),
+                self.dc_gain[1][i],
+                self.dc_gain[1][i].is_finite() && self.dc_gain[1][i] != 0.0,
+                "a finite non-zero static gain of q_o2",
+            )?;
+        }
+        Ok(())
+    }
+}
 
 /// Settings of the response identification (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,7 +152,7 @@ pub struct ResponseParams {
     /// The controller's Nyquist frequency \[Hz\], > 0: modes at or above it are not selected.
     pub nyquist: f64,
     /// Least share of an axis's static gain a selected mode carries, in (0, 1]. Default
-    /// [`flexstage_control::model::RESPONSE_SHARE`] (0.1).
+    /// [`RESPONSE_SHARE`] (0.1).
     pub share: f64,
     /// The sensor chain, divided out of the measured response.
     pub sensor: SensorParams,
@@ -80,7 +167,7 @@ impl ResponseParams {
             window: 0.08,
             peak_factor: 3.0,
             nyquist: 0.5 / sample_time,
-            share: flexstage_control::model::RESPONSE_SHARE,
+            share: RESPONSE_SHARE,
             sensor,
         }
     }

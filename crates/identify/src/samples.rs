@@ -1,8 +1,7 @@
 //! Problems with known answers, for tests, examples and benchmarks.
 
-use flexstage_control::experiment::Setup;
-use flexstage_control::plant::{PlantActuator, PlantParams};
 use flexstage_scenario::{Scenario, StageParams};
+use flexstage_sim::plant::{PlantActuator, PlantParams};
 
 use crate::excitation::{Excitation, SimulationParams};
 
@@ -28,8 +27,7 @@ pub fn paper_simulation(duration: f64, linear: bool, noisy: bool) -> SimulationP
 
 /// The simulation of a scenario (see [`paper_simulation`]).
 pub fn simulation(s: &Scenario, duration: f64, linear: bool, noisy: bool) -> SimulationParams {
-    let setup = Setup::from_scenario(s);
-    let mut plant: PlantParams = setup.plant;
+    let mut plant = PlantParams::from_scenario(s);
     if linear {
         plant.actuator = PlantActuator::Ideal;
         plant.coupling = 0.0;
@@ -39,7 +37,7 @@ pub fn simulation(s: &Scenario, duration: f64, linear: bool, noisy: bool) -> Sim
         plant.noise_std = [0.0; 2];
     }
     let h = &plant.hysteresis[0];
-    let slope = flexstage_control::actuator::mean_slope(h, plant.voltage_range);
+    let slope = flexstage_sim::pea::mean_slope(h, plant.voltage_range);
     let excitation = Excitation {
         duration,
         amplitude: 0.9 * s.controller.stroke,

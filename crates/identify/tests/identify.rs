@@ -158,7 +158,7 @@ fn identified_coupling_is_the_plants_cross_stiffness() {
 /// The two-band excitation of the lumped stage (Table 4 truth with the plant's cross terms)
 /// for `seed`: the resonance band of the model's own modes and the output prefilter above it.
 fn two_band(seed: u64, duration: f64) -> (StageParams, f64, flexstage_identify::Identification) {
-    use flexstage_control::model::StageModel;
+    use flexstage_sim::model::StageModel;
     let mut sim = samples::paper_simulation(duration, false, true);
     sim.plant.seed = seed;
     let model = StageModel::with_coupling(&sim.plant.truth, sim.plant.coupling).unwrap();
@@ -211,7 +211,7 @@ fn two_band_excitation_meets_the_issue_18_targets_on_the_lumped_plant() {
 #[test]
 #[ignore = "a measurement, not a check: cargo test --release -p flexstage-identify --test identify explore -- --ignored --nocapture"]
 fn explore_two_band_settings() {
-    use flexstage_control::model::StageModel;
+    use flexstage_sim::model::StageModel;
     let var = |name: &str, default: f64| {
         std::env::var(name)
             .ok()
@@ -275,21 +275,22 @@ fn rig_record_of_the_lumped_stage_identifies_its_truth() {
     // floor vibration, so that the record is the one the twin's path (`simulate_rig`) logs.
     // Goal: `simulate_rig` logs a record from which the two-band identification recovers the
     // stiffnesses within 1 % and the output dampings and k_c within 5 %.
-    use flexstage_control::experiment::Setup;
-    use flexstage_control::model::StageModel;
+    use flexstage_sim::model::StageModel;
+    use flexstage_sim::plant::PlantParams;
+    use flexstage_sim::rig::RigParams;
     let scenario = flexstage_scenario::Scenario::paper();
-    let mut setup = Setup::from_scenario(&scenario);
-    let rig = &mut setup.rig;
+    let truth = PlantParams::from_scenario(&scenario);
+    let mut rig = RigParams::from_scenario(&scenario);
     rig.noise_std = [0.0; 2];
     rig.resolution = [0.0; 2];
     rig.sensor.bandwidth = 0.0;
     rig.sensor.flicker_corner = 0.0;
     rig.floor.velocity_rms = 0.0;
     let sim = samples::paper_simulation(2.0, false, false);
-    let model = StageModel::with_coupling(&setup.plant.truth, setup.plant.coupling).unwrap();
+    let model = StageModel::with_coupling(&truth.truth, truth.coupling).unwrap();
     let (band, cut) = flexstage_identify::resonance_plan(
         &model,
-        setup.rig.sample_time,
+        rig.sample_time,
         flexstage_identify::RESONANCE_AMPLITUDE,
     )
     .unwrap();
@@ -300,11 +301,11 @@ fn rig_record_of_the_lumped_stage_identifies_its_truth() {
         },
         plate_sensor: [0.0; 2],
         slope: sim.slope,
-        bias_voltage: setup.rig.bias_voltage,
-        voltage_range: setup.rig.voltage_range,
+        bias_voltage: rig.bias_voltage,
+        voltage_range: rig.voltage_range,
         seed: 1,
     };
-    let mut plant = setup.lumped_plant().unwrap();
+    let mut plant = truth.in_rig(rig).unwrap();
     let record = flexstage_identify::simulate_rig(&mut plant, &exp).unwrap();
     let params = IdentifyParams {
         output_prefilter: Some(cut),
@@ -312,10 +313,10 @@ fn rig_record_of_the_lumped_stage_identifies_its_truth() {
         ..IdentifyParams::default()
     };
     let id = identify(&record, &samples::table4_guess(), &params).unwrap();
-    let (e, t) = (&id.raw.params, &setup.plant.truth);
+    let (e, t) = (&id.raw.params, &truth.truth);
     let r = |a: f64, b: f64| 100.0 * (a - b) / b;
     let damp = [r(e.c_qo1, t.c_qo1), r(e.c_qo2, t.c_qo2)];
-    let kc = r(id.coupling, setup.plant.coupling);
+    let kc = r(id.coupling, truth.coupling);
     let stiff = stiffness_errors(e, t);
     println!("rig: {stiff:?} c {damp:?} k_c {kc:+.3} %");
     for (name, v) in stiff {

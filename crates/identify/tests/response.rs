@@ -6,13 +6,13 @@
 //! identification recovers that fit, exactly without noise and within the issue-#18
 //! tolerances with sensor noise.
 
-use flexstage_control::model::ResponseFit;
-use flexstage_control::rig::SensorParams;
-use flexstage_control::tuning::PlantMode;
 use flexstage_identify::frequency::C64;
+use flexstage_identify::response::ResponseFit;
 use flexstage_identify::response::{ResponseParams, identify_response, response_excitation};
 use flexstage_identify::{Excitation, Multisine, StageRecord};
 use flexstage_numerics::noise::GaussianNoise;
+use flexstage_sim::modal::PlantMode;
+use flexstage_sim::rig::SensorParams;
 
 const TS: f64 = 1e-5; // 100 kHz acquisition
 const CONTROLLER_TS: f64 = 1e-4;
@@ -249,8 +249,8 @@ fn a_record_without_a_whole_period_or_on_another_grid_is_refused_by_name() {
 /// eigenvalue's (measured: 1e-8 and 1e-4).
 #[test]
 fn the_lumped_model_is_identified_to_its_own_static_gain_and_eigenvalues() {
-    use flexstage_control::model::StageModel;
     use flexstage_identify::{samples, simulate};
+    use flexstage_sim::model::StageModel;
     let mut sim = samples::paper_simulation(2.0, true, false);
     sim.plant.sample_time = TS;
     sim.oversample = 4;

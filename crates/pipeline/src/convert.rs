@@ -146,7 +146,7 @@ pub(crate) fn margin_rows(rows: &[Margins], sample_time: f64) -> Vec<MarginRow> 
         for l in 0..2 {
             let m = r.margins.map(|m| m[l]);
             out.push(MarginRow {
-                controller: r.candidate.name().to_string(),
+                controller: r.candidate.name.to_string(),
                 delay_samples: r.delay,
                 axis: format!("q{}", l + 1),
                 gain_margin_db: m.map(|m| m.gain_db),
@@ -177,7 +177,7 @@ pub(crate) fn montecarlo_rows(mc: &MonteCarlo) -> Vec<MonteCarloRow> {
                 coupling1: p.coupling[0],
                 coupling2: p.coupling[1],
                 delay: p.delay,
-                controller: c.name().to_string(),
+                controller: c.name.to_string(),
                 rms1_nm: rms[0] * 1e9,
                 rms2_nm: rms[1] * 1e9,
                 pass: *pass,
@@ -196,7 +196,7 @@ pub(crate) fn scan_rows(points: &[SweepPoint]) -> Vec<ScanRow> {
                 fast_frequency_hz: p.frequency,
                 amplitude1_m: p.amplitude[0],
                 amplitude2_m: p.amplitude[1],
-                controller: c.name().to_string(),
+                controller: c.name.to_string(),
                 rms1_nm: rms[0] * 1e9,
                 rms2_nm: rms[1] * 1e9,
                 rms1_pct_range: pct[0],

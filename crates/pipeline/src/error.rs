@@ -152,6 +152,9 @@ pub enum PipelineError {
     /// Controllers and the simulated experiment.
     #[error(transparent)]
     Control(#[from] flexstage_control::ControlError),
+    /// The simulated stage, its lumped model or a reference.
+    #[error(transparent)]
+    Sim(#[from] flexstage_sim::SimError),
     /// Margins and tuning of the controllers on the twin.
     #[error(transparent)]
     Assess(#[from] flexstage_assess::AssessError),
@@ -246,15 +249,14 @@ pub(crate) fn require_converged_tracking(rows: &[crate::track::TrackRow]) -> Res
     };
     let names = std::iter::once(first)
         .chain(diverged)
-        .map(|r| format!("{}/{}", r.trajectory, r.controller.name()))
+        .map(|r| format!("{}/{}", r.trajectory, r.controller.name))
         .collect::<Vec<_>>()
         .join(", ");
     let m = &first.metrics;
     Err(PipelineError::Unphysical {
         what: format!(
             "track: {}, {}: max error",
-            first.trajectory,
-            first.controller.name()
+            first.trajectory, first.controller.name
         ),
         value: format!(
             "[{:e}, {:e}] m ({} non-finite samples)",
@@ -276,7 +278,10 @@ pub(crate) fn to_json(value: &impl serde::Serialize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flexstage_control::experiment::{Metrics, Variant};
+    use flexstage_control::controller::ROBUST;
+    use flexstage_control::pid::PID_FF;
+    use flexstage_control::registry::Controller;
+    use flexstage_sim::experiment::Metrics;
 
     #[test]
     fn issue16_area_refused_when_nan_infinite_or_negative() {
@@ -298,21 +303,22 @@ mod tests {
     fn issue16_diverged_tracking_rows_are_named() {
         // Reference: issue #16 ("metrics show a maximum error of 0 when the series is NaN").
         // Goal: a row whose metrics diverged fails the command, naming it; finite rows pass.
-        let row = |t: &str, v: Variant, non_finite: usize, max: f64| crate::track::TrackRow {
-            trajectory: t.into(),
-            controller: v,
-            metrics: Metrics {
-                max: [max, 1e-9],
-                non_finite,
-                ..Metrics::default()
-            },
-            usage: 0.5,
-        };
-        let good = [row("circle", Variant::Robust, 0, 2e-9)];
+        let row =
+            |t: &str, v: &'static Controller, non_finite: usize, max: f64| crate::track::TrackRow {
+                trajectory: t.into(),
+                controller: v,
+                metrics: Metrics {
+                    max: [max, 1e-9],
+                    non_finite,
+                    ..Metrics::default()
+                },
+                usage: 0.5,
+            };
+        let good = [row("circle", &ROBUST, 0, 2e-9)];
         require_converged_tracking(&good).unwrap();
         let bad = [
-            row("circle", Variant::Robust, 0, 2e-9),
-            row("lissajous-2", Variant::PidFeedforward, 7, f64::NAN),
+            row("circle", &ROBUST, 0, 2e-9),
+            row("lissajous-2", &PID_FF, 7, f64::NAN),
         ];
         let m = require_converged_tracking(&bad).unwrap_err().to_string();
         assert!(

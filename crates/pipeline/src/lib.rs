@@ -100,7 +100,10 @@ pub use track::{ModelSource, PlantKind, TrackOptions, TrackSummary, track};
 pub use twin::{TwinOptions, TwinSummary, TwinValidation, write_twin};
 
 /// The stage crates' types that appear in options and summaries.
-pub use flexstage_control::{actuator::Compensation, experiment::Variant};
+pub use flexstage_control::{
+    actuator::Compensation,
+    registry::{CONTROLLERS, Controller},
+};
 pub use flexstage_piezo::WaveShape;
 pub use flexstage_scenario::Scenario;
 pub use flexstage_verify::outline::Unit;

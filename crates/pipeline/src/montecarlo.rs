@@ -9,22 +9,23 @@
 //! [`MonteCarloStudy::inputs`] lists the files it reads, so that another process can rebuild
 //! it in a folder of its own.
 
+use flexstage_assess::Bench;
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, PlantResult, one_plant};
-use flexstage_assess::{Bench, BenchGains, Candidate};
-use flexstage_control::trajectory::Reference;
+use flexstage_control::registry::Controller;
 use flexstage_control::tuning::TuningParams;
 use flexstage_run::layout::{self, PeaIdentification};
+use flexstage_sim::trajectory::Reference;
 
 use crate::error::{PipelineError, Result};
 use crate::folder::RunFolder;
 use crate::progress::Progress;
-use crate::track::{Prepared, Simulated, TrackOptions, candidate, prepare};
+use crate::track::{Prepared, Simulated, TrackOptions, prepare};
 
 /// The Monte-Carlo study of a run's controllers on perturbed twins.
 #[derive(Debug, Clone)]
 pub struct MonteCarloStudy {
     bench: Bench,
-    candidates: Vec<Candidate>,
+    candidates: Vec<&'static Controller>,
     reference: Reference,
     params: MonteCarloParams,
 }
@@ -33,15 +34,10 @@ impl MonteCarloStudy {
     /// Sets the study up from the run folder as `track` does (its [`TrackOptions`]: the
     /// controllers and the controllers' model; the plant must be the twin), on the
     /// scenario's first trajectory.
-    ///
-    /// With `gains` (those of a study set up from the same files, [`MonteCarloStudy::gains`])
-    /// the controllers are not tuned and sized again ([`Bench::with_gains`]): the same study,
-    /// set up in a fraction of the time.
     pub fn of_run(
         folder: &RunFolder,
         options: &TrackOptions,
         params: MonteCarloParams,
-        gains: Option<BenchGains>,
         progress: &dyn Progress,
     ) -> Result<MonteCarloStudy> {
         params.validate()?;
@@ -69,18 +65,12 @@ impl MonteCarloStudy {
             });
         };
         let (reference, _) = Reference::from_scenario(first);
-        let tuning = TuningParams::default();
-        let bench = match gains {
-            Some(g) => Bench::with_gains(setup, *twin, tuning, identified, g)?,
-            None => {
-                crate::progress::check_stop(progress, "the study stopped before tuning", "")?;
-                progress.note("tuning the controllers on the twin's sampled response");
-                Bench::with_identified(setup, *twin, tuning, identified)?
-            }
-        };
+        crate::progress::check_stop(progress, "the study stopped before tuning", "")?;
+        progress.note("designing the controllers on the twin's sampled response");
+        let bench = Bench::with_identified(setup, *twin, TuningParams::default(), identified)?;
         Ok(MonteCarloStudy {
             bench,
-            candidates: options.controllers.iter().map(|&v| candidate(v)).collect(),
+            candidates: options.controllers.clone(),
             reference,
             params,
         })
@@ -99,11 +89,6 @@ impl MonteCarloStudy {
         files
     }
 
-    /// What setting the study up tuned and sized.
-    pub fn gains(&self) -> BenchGains {
-        self.bench.gains()
-    }
-
     /// The number of plants.
     pub fn plants(&self) -> usize {
         self.params.plants
@@ -111,7 +96,7 @@ impl MonteCarloStudy {
 
     /// The controllers compared, in column order (their `track` names).
     pub fn candidates(&self) -> Vec<&'static str> {
-        self.candidates.iter().map(|c| c.name()).collect()
+        self.candidates.iter().map(|c| c.name).collect()
     }
 
     /// The study's settings.

@@ -94,7 +94,7 @@ pub fn read_stage_params(path: &Path) -> Result<StageParams> {
 }
 
 /// A controller's model read from a parameter file: the stage parameters and the cross-axis
-/// coupling stiffness k_c of Eq. (30) (`flexstage_control::model::StageModel::with_coupling`).
+/// coupling stiffness k_c of Eq. (30) (`flexstage_sim::model::StageModel::with_coupling`).
 #[derive(Debug, Clone, PartialEq)]
 pub struct ModelParams {
     /// The stage parameters.

@@ -4,8 +4,9 @@
 //! `scan_frequency.csv` and `scan_frequency.svg` (the report's figure). Only on the twin: the
 //! sweep's frequencies are fractions of the twin's first resonance.
 
+use flexstage_assess::Bench;
 use flexstage_assess::sweep::{self, SweepParams, SweepPoint};
-use flexstage_assess::{Bench, Candidate};
+use flexstage_control::registry::Controller;
 use flexstage_run::RunDir;
 use flexstage_run::format::Rows;
 use flexstage_run::layout::Tracking;
@@ -19,7 +20,7 @@ pub struct ScanFrequency {
     /// The points, each with one result per candidate.
     pub points: Vec<SweepPoint>,
     /// The candidates.
-    pub candidates: Vec<Candidate>,
+    pub candidates: Vec<&'static Controller>,
 }
 
 /// The amplitudes the sweep starts from: those of the scenario's first trajectory (a
@@ -36,7 +37,7 @@ pub fn start_amplitude(s: &Scenario) -> Option<[f64; 2]> {
 pub fn scan_frequency(
     bench: &Bench,
     scenario: &Scenario,
-    candidates: &[Candidate],
+    candidates: &[&'static Controller],
 ) -> Result<Option<ScanFrequency>> {
     let Some(amplitude) = start_amplitude(scenario) else {
         return Ok(None);

@@ -13,7 +13,7 @@
 //! * **On the twin** (`--plant twin`): no lumped parameter set is the twin (its modes, its
 //!   second output mode above Nyquist, the plates inside the structure), so the regression's
 //!   estimates have nothing to meet. What the controller takes from such a plant is the
-//!   response fit (`flexstage_control::model::ResponseFit`: static gain, the output modes
+//!   response fit (`flexstage_identify::response::ResponseFit`: static gain, the output modes
 //!   below the controller's Nyquist frequency), and that is what is identified, by the
 //!   frequency-response method of `flexstage_identify::response` on a multisine record
 //!   acquired 5× faster than the controller samples (free of folded modes), with a band up
@@ -32,11 +32,11 @@ use flexstage_scenario::RecordEstimate;
 use std::path::PathBuf;
 
 use flexstage_control::experiment::Setup;
-use flexstage_control::model::{ResponseFit, StageModel, fit_coupling, fit_to_response};
-use flexstage_control::plant::PlantActuator;
+use flexstage_control::fit::{fit_coupling, fit_to_response};
 use flexstage_figures::plot::{Figure, Series};
 use flexstage_identify::frequency::{C64, Response};
 use flexstage_identify::regression::paper_theta;
+use flexstage_identify::response::ResponseFit;
 use flexstage_identify::response::{
     ACQUISITION_FACTOR, ResponseIdentification, ResponseParams, acquisition_rig, identify_response,
     response_excitation,
@@ -52,6 +52,8 @@ use flexstage_run::format::Rows;
 use flexstage_run::layout::{self, stage as files};
 use flexstage_run::{RunDir, Table};
 use flexstage_scenario::StageParams;
+use flexstage_sim::model::StageModel;
+use flexstage_sim::plant::PlantActuator;
 
 use crate::error::{PipelineError, Result, require};
 use crate::folder::RunFolder;
@@ -508,7 +510,7 @@ pub fn identify_twin_response(
     let guess = &scenario.stage.truth;
     let params = fit_to_response(guess, &response.fit)?;
     let coupling = fit_coupling(&params, response.fit.dc_gain)?;
-    let modes = flexstage_assess::bench::plant_modes(twin);
+    let modes = twin.modal.plant_modes();
     let exact = ResponseFit::from_modes(&modes, nyquist, rp.share);
     let truth_params = fit_to_response(guess, &exact)?;
     let truth = Truth {

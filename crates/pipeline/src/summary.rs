@@ -298,7 +298,7 @@ impl fmt::Display for StageIdSummary {
                 )?;
             }
             for i in 0..2 {
-                let mode = |fit: &flexstage_control::model::ResponseFit| {
+                let mode = |fit: &flexstage_identify::response::ResponseFit| {
                     fit.frequency[i].map_or("none".to_string(), |fr| {
                         format!("{fr:.1} Hz, ζ {:.4}", fit.damping[i])
                     })
@@ -480,9 +480,7 @@ impl fmt::Display for TrackSummary {
                 "{:<14} {:<10} {rms1:>8.1}/{rms2:<8.1} {rms1_pct:>7.3}/{rms2_pct:<7.3} \
                  {max1:>8.1}/{max2:<8.1} {max1_pct:>7.3}/{max2_pct:<7.3} {settling:>9.4} \
                  {peak:>8.0} {:>5}",
-                r.trajectory,
-                r.controller.name(),
-                r.metrics.saturated
+                r.trajectory, r.controller.name, r.metrics.saturated
             )?;
         }
         writeln!(

@@ -31,24 +31,24 @@ use flexstage_scenario::RecordEstimate;
 use std::path::{Path, PathBuf};
 
 use crate::scan::{ScanFrequency, scan_frequency};
+use flexstage_assess::Bench;
 use flexstage_assess::inject::InjectionParams;
 use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, monte_carlo};
-use flexstage_assess::{Bench, Candidate};
 use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::{
-    Metrics, Record, Setup, Variant, experiment_on, experiment_with_progress,
-};
-use flexstage_control::model::ResponseFit;
-use flexstage_control::trajectory::Reference;
+use flexstage_control::experiment::{Setup, experiment_on, experiment_with_progress};
+use flexstage_control::registry::{Controller, Designs, Stage};
 use flexstage_control::tuning::TuningParams;
 use flexstage_figures::plot::{Figure, Series};
+use flexstage_identify::response::ResponseFit;
 use flexstage_piezo::BoucWenParams;
 use flexstage_run::files::pea::PeaEstimates;
 use flexstage_run::files::stage::{ResponseFitFile, StageParamsFile};
 use flexstage_run::format::Rows;
 use flexstage_run::layout::{self, Tracking};
 use flexstage_run::{RunDir, Table};
+use flexstage_sim::experiment::{Metrics, Record};
+use flexstage_sim::trajectory::Reference;
 use rayon::prelude::*;
 
 use crate::error::{PipelineError, Result, require};
@@ -97,8 +97,8 @@ pub struct TrackOptions {
     pub plant: PlantKind,
     /// One trajectory of the scenario by name; `None`: all.
     pub trajectory: Option<String>,
-    /// The controllers to run. Default all ([`Variant::ALL`]).
-    pub controllers: Vec<Variant>,
+    /// The controllers to run. Default: the registry's defaults ([`Controller::defaults`]).
+    pub controllers: Vec<&'static Controller>,
     /// Hysteresis compensation. Default [`Compensation::Inverse`] (Eq. 21, in the loop).
     pub compensation: Compensation,
     /// The controller's model (a `StageParams` TOML); `None`: the run's identified parameters
@@ -116,7 +116,7 @@ impl Default for TrackOptions {
         TrackOptions {
             plant: PlantKind::Twin,
             trajectory: None,
-            controllers: Variant::ALL.to_vec(),
+            controllers: Controller::defaults(),
             compensation: Compensation::Inverse,
             params: None,
             allow_foreign_params: false,
@@ -228,7 +228,7 @@ pub struct TrackRow {
     /// Trajectory name.
     pub trajectory: String,
     /// Controller.
-    pub controller: Variant,
+    pub controller: &'static Controller,
     /// Errors against the true output.
     pub metrics: Metrics,
     /// Largest fraction of the designed workspace the reference uses.
@@ -308,7 +308,7 @@ impl TrackSummary {
                 };
                 s.push_str(&format!(
                     "{:<16} q{}   {m}{mc}{flag}\n",
-                    r.candidate.name(),
+                    r.candidate.name,
                     l + 1
                 ));
             }
@@ -317,42 +317,43 @@ impl TrackSummary {
     }
 }
 
-/// The assessment candidate of a variant.
-pub(crate) fn candidate(v: Variant) -> Candidate {
-    match v {
-        Variant::Robust => Candidate::Robust,
-        Variant::NonRobust => Candidate::NonRobust,
-        Variant::PidFeedforward => Candidate::PidTuned,
-        Variant::PidScenario => Candidate::PidScenario,
-        Variant::PiNotch => Candidate::PiNotch,
-    }
-}
+/// The controllers designed for the simulated stage, their margins and robustness.
+type Designed = (
+    Designs,
+    Vec<MarginRow>,
+    Option<MonteCarlo>,
+    Option<ScanFrequency>,
+);
 
-/// On the twin: tunes the PI + notch and the PID on its sampled frequency response with the
-/// rig's delay and sensor chain (`flexstage_control::tuning`, sets [`Setup::pi_notch`] and
-/// [`Setup::pid_tuned`]), measures every selected controller's margins and runs the
-/// Monte-Carlo study (`flexstage_assess::montecarlo`, default settings, on the scenario's
-/// first trajectory), whose pass rates go into the margin rows, and the error against scan
-/// frequency ([`crate::scan`]). On the lumped plant nothing
-/// is tuned: the PI + notch is skipped with a warning and `pid-ff` runs the scenario's gains.
+/// On the twin: designs every controller of the registry on its sampled frequency response
+/// with the rig's delay and sensor chain (`flexstage_assess::Bench`: the loop-shaping ones
+/// tuned by `flexstage_control::tuning`, the backstepping fitted to the response and sized by
+/// its margins; the controllers' model in `setup` becomes the one fitted to the response),
+/// measures every selected controller's margins and runs the Monte-Carlo study
+/// (`flexstage_assess::montecarlo`, default settings, on the scenario's first trajectory),
+/// whose pass rates go into the margin rows, and the error against scan frequency
+/// ([`crate::scan`]). On the lumped plant the controllers are designed from the scenario's
+/// settings alone: one that needs the twin's response is skipped with a warning, and
+/// `pid-ff` runs the scenario's gains.
 fn tune_and_margins(
     setup: &mut Setup,
     identified: Option<ResponseFit>,
     sim: &Simulated,
-    controllers: &[Variant],
+    controllers: &[&'static Controller],
     scenario: &flexstage_scenario::Scenario,
     progress: &dyn Progress,
     warnings: &mut Vec<String>,
-) -> Result<(Vec<MarginRow>, Option<MonteCarlo>, Option<ScanFrequency>)> {
+) -> Result<Designed> {
     let Simulated::Twin(twin) = sim else {
-        if controllers.contains(&Variant::PiNotch) {
-            warnings.push(
-                "pi-notch-ff is tuned on the twin's frequency response and is not run on the \
-                 lumped plant"
-                    .into(),
-            );
+        let designs = Designs::for_stage(&Stage::scenario(setup))?;
+        for c in controllers.iter().filter(|c| designs.get(c).is_none()) {
+            warnings.push(format!(
+                "{} is tuned on the twin's frequency response and is not run on the lumped \
+                 plant",
+                c.name
+            ));
         }
-        return Ok((Vec::new(), None, None));
+        return Ok((designs, Vec::new(), None, None));
     };
     let bench = Bench::with_identified(
         setup.clone(),
@@ -360,44 +361,41 @@ fn tune_and_margins(
         TuningParams::default(),
         identified,
     )?;
-    setup.pi_notch = Some(bench.pi_notch.params);
-    setup.pid_tuned = Some(bench.pid.params);
     setup.controller = bench.setup.controller.clone();
-    let candidates: Vec<Candidate> = controllers.iter().map(|&v| candidate(v)).collect();
     let mut rows = margins_table(
         &bench,
-        &candidates,
+        controllers,
         setup.rig.delay,
         MarginTargets::default(),
         &InjectionParams::default(),
     )?;
     let Some(first) = scenario.trajectories.first() else {
-        return Ok((rows, None, None));
+        return Ok((bench.designs, rows, None, None));
     };
     let (reference, _) = Reference::from_scenario(first);
     let t0 = std::time::Instant::now();
     let mp = MonteCarloParams::default();
-    let mc = monte_carlo(&bench, &candidates, reference, &mp)?;
+    let mc = monte_carlo(&bench, controllers, reference, &mp)?;
     progress.note(&format!(
         "Monte-Carlo: {} perturbed twins × {} controller(s) in {:.1} s",
         mp.plants,
-        candidates.len(),
+        controllers.len(),
         t0.elapsed().as_secs_f64()
     ));
     for (j, r) in rows.iter_mut().enumerate() {
         r.montecarlo_pass = Some(mc.pass_rate(j));
     }
     let t0 = std::time::Instant::now();
-    let scan = scan_frequency(&bench, scenario, &candidates)?;
+    let scan = scan_frequency(&bench, scenario, controllers)?;
     if let Some(sc) = &scan {
         progress.note(&format!(
             "error against scan frequency: {} frequencies × {} controller(s) in {:.1} s",
             sc.points.len(),
-            candidates.len(),
+            controllers.len(),
             t0.elapsed().as_secs_f64()
         ));
     }
-    Ok((rows, Some(mc), scan))
+    Ok((bench.designs, rows, Some(mc), scan))
 }
 
 /// One planned run.
@@ -405,7 +403,7 @@ struct Job<'a> {
     trajectory: &'a str,
     reference: Reference,
     duration: f64,
-    controller: Variant,
+    controller: &'static Controller,
 }
 
 /// The stage a `track` call simulates.
@@ -506,7 +504,7 @@ pub fn try_build(folder: &RunFolder, progress: &dyn Progress) -> Result<TwinBuil
     }
 }
 
-/// What `track` sets up before it tunes and runs: the run's plant, the controllers' setup
+/// What `track` sets up before it designs and runs: the run's plant, the controllers' setup
 /// (model, identified PEAs), the simulated stage and the identified response fit.
 pub(crate) struct Prepared {
     pub plant: Plant,
@@ -608,7 +606,7 @@ pub fn track_on(
         Simulated::Twin(_) => PlantKind::Twin,
         Simulated::Lumped => PlantKind::Lumped,
     };
-    let (margins, montecarlo, scan) = tune_and_margins(
+    let (designs, margins, montecarlo, scan) = tune_and_margins(
         &mut setup,
         identified,
         &sim,
@@ -618,7 +616,14 @@ pub fn track_on(
         &mut warnings,
     )?;
     crate::progress::check_stop(progress, "track stopped after tuning", STOPPED_HINT)?;
-    let jobs = plan(&plant.scenario, &setup, &sim, options, &mut warnings)?;
+    let jobs = plan(
+        &plant.scenario,
+        &setup,
+        &designs,
+        &sim,
+        options,
+        &mut warnings,
+    )?;
     for w in &warnings {
         progress.note(&format!("warning: {w}"));
     }
@@ -627,7 +632,7 @@ pub fn track_on(
     progress.start("track", samples.round() as u64);
     let records: Vec<Result<Record>> = jobs
         .par_iter()
-        .map(|(j, _)| run_job(&setup, &sim, options.compensation, j, progress))
+        .map(|(j, _)| run_job(&setup, &designs, &sim, options.compensation, j, progress))
         .collect();
     progress.finish();
     let out = Tracking::variant(&options.conditions(folder));
@@ -674,18 +679,22 @@ pub fn track_on(
 /// One (trajectory, controller) run on the simulated stage.
 fn run_job(
     setup: &Setup,
+    designs: &Designs,
     sim: &Simulated,
     compensation: Compensation,
     j: &Job,
     progress: &dyn Progress,
 ) -> Result<Record> {
     let advance = |n: usize| progress.advance(n as u64);
+    let design = &**designs
+        .get(j.controller)
+        .expect("planned jobs are designed");
     Ok(match sim {
         Simulated::Twin(twin) => {
             let mut p = twin.plant(&setup.rig)?;
             experiment_on(
                 setup,
-                j.controller,
+                design,
                 compensation,
                 j.reference,
                 j.duration,
@@ -695,7 +704,7 @@ fn run_job(
         }
         Simulated::Lumped => experiment_with_progress(
             setup,
-            j.controller,
+            design,
             compensation,
             j.reference,
             j.duration,
@@ -709,6 +718,7 @@ fn run_job(
 fn plan<'a>(
     s: &'a flexstage_scenario::Scenario,
     setup: &Setup,
+    designs: &Designs,
     sim: &Simulated,
     options: &TrackOptions,
     warnings: &mut Vec<String>,
@@ -752,7 +762,7 @@ fn plan<'a>(
             ));
         }
         for &controller in &options.controllers {
-            if controller == Variant::PiNotch && setup.pi_notch.is_none() {
+            if designs.get(controller).is_none() {
                 continue;
             }
             jobs.push((
@@ -820,7 +830,7 @@ fn write_results(
     let mut paths = Vec::with_capacity(jobs.len());
     for ((job, usage), rec) in jobs.iter().zip(records) {
         let rec = rec?;
-        let (t, v) = (job.trajectory, job.controller.name());
+        let (t, v) = (job.trajectory, job.controller.name);
         // Written, not stored: the series is large, and its paths stay in memory for
         // Figure 11.
         let table = Table::of(&Record::header(), &rec.columns());
@@ -924,14 +934,22 @@ mod tests {
             amplitude[0] *= 5.0;
         }
         let setup = Setup::from_scenario(&s);
+        let designs = Designs::for_stage(&Stage::scenario(&setup)).unwrap();
         let options = TrackOptions {
             trajectory: Some(name.clone()),
             ..TrackOptions::default()
         };
         let mut warnings = Vec::new();
-        let e = plan(&s, &setup, &Simulated::Lumped, &options, &mut warnings)
-            .err()
-            .expect("refused");
+        let e = plan(
+            &s,
+            &setup,
+            &designs,
+            &Simulated::Lumped,
+            &options,
+            &mut warnings,
+        )
+        .err()
+        .expect("refused");
         let m = e.to_string();
         assert!(
             m.contains(&name) && m.contains("stroke") && m.contains("µm"),
@@ -941,7 +959,18 @@ mod tests {
         let all = TrackOptions::default();
         let s = crate::folder::preset("quick").unwrap();
         let setup = Setup::from_scenario(&s);
-        assert!(plan(&s, &setup, &Simulated::Lumped, &all, &mut warnings).is_ok());
+        let designs = Designs::for_stage(&Stage::scenario(&setup)).unwrap();
+        assert!(
+            plan(
+                &s,
+                &setup,
+                &designs,
+                &Simulated::Lumped,
+                &all,
+                &mut warnings
+            )
+            .is_ok()
+        );
     }
 
     #[test]

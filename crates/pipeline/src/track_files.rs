@@ -1,12 +1,12 @@
 //! The tables and figures of a tracking folder that span several runs: `metrics.csv` (merged
 //! by trajectory and controller) and the 2D paths of Figure 11.
 
-use flexstage_control::trajectory::Reference;
 use flexstage_figures::plot::{Figure, Series};
 use flexstage_run::files::track::MetricsRow;
 use flexstage_run::format::Rows;
 use flexstage_run::layout::Tracking;
 use flexstage_run::{RunDir, RunError, Table};
+use flexstage_sim::trajectory::Reference;
 
 use crate::error::Result;
 use crate::track::{Path2D, TrackRow, record_paths};
@@ -16,7 +16,7 @@ fn row(r: &TrackRow, compensation: &str, model: &str, plant: &str) -> MetricsRow
     let m = &r.metrics;
     MetricsRow {
         trajectory: r.trajectory.clone(),
-        variant: r.controller.name().to_string(),
+        variant: r.controller.name.to_string(),
         compensation: compensation.to_string(),
         model: model.to_string(),
         plant: plant.to_string(),
@@ -134,9 +134,11 @@ pub(crate) fn write_paths(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use flexstage_control::experiment::{Metrics, Variant};
+    use flexstage_control::controller::{NONROBUST, ROBUST};
+    use flexstage_control::registry::Controller;
+    use flexstage_sim::experiment::Metrics;
 
-    fn row(controller: Variant, rms: f64) -> TrackRow {
+    fn row(controller: &'static Controller, rms: f64) -> TrackRow {
         TrackRow {
             trajectory: "circle".into(),
             controller,
@@ -155,13 +157,13 @@ mod tests {
         let root = std::env::temp_dir().join(format!("flexstage-metrics-{}", std::process::id()));
         let run = RunDir::create(&root).unwrap();
         let out = Tracking::main();
-        let all = [row(Variant::Robust, 1e-9), row(Variant::NonRobust, 2e-9)];
+        let all = [row(&ROBUST, 1e-9), row(&NONROBUST, 2e-9)];
         let w = &mut Vec::new();
         write_metrics(&run, &out, &all, "inverse", "guess", "twin", w).unwrap();
         let keys = write_metrics(
             &run,
             &out,
-            &[row(Variant::Robust, 3e-9)],
+            &[row(&ROBUST, 3e-9)],
             "inverse",
             "guess",
             "twin",
@@ -185,7 +187,7 @@ mod tests {
         let keys = write_metrics(
             &run,
             &out,
-            &[row(Variant::Robust, 4e-9)],
+            &[row(&ROBUST, 4e-9)],
             "inverse",
             "x.toml",
             "twin",
@@ -196,7 +198,7 @@ mod tests {
         let keys = write_metrics(
             &run,
             &out,
-            &[row(Variant::NonRobust, 5e-9)],
+            &[row(&NONROBUST, 5e-9)],
             "inverse",
             "x.toml",
             "lumped",

@@ -14,11 +14,11 @@
 //! (120 × 60) meshes. Run: `cargo bench -p flexstage-twin`.
 
 use divan::{Bencher, black_box};
-use flexstage_control::controller::Command;
-use flexstage_control::experiment::Setup;
-use flexstage_control::rig::{Mechanics, RigParams, StagePlant};
 use flexstage_fem::{Transient, TransientParams};
 use flexstage_scenario::{Preset, Scenario};
+use flexstage_sim::experiment::Command;
+use flexstage_sim::plant::PlantParams;
+use flexstage_sim::rig::{Mechanics, RigParams, StagePlant};
 use flexstage_twin::{StageFe, Twin, TwinParams, samples};
 
 fn main() {
@@ -110,9 +110,10 @@ fn twin_mechanics_one_second(b: Bencher, preset: Preset) {
 /// The same second on the lumped 8-state plant in the same rig.
 #[divan::bench(sample_count = 10)]
 fn lumped_plant_one_second(b: Bencher) {
-    let setup = Setup::from_scenario(&Scenario::paper());
+    let s = Scenario::paper();
+    let (plant, rig) = (PlantParams::from_scenario(&s), RigParams::from_scenario(&s));
     let cmds = drive(10_000);
-    b.with_inputs(|| setup.lumped_plant().unwrap())
+    b.with_inputs(|| plant.in_rig(rig.clone()).unwrap())
         .bench_local_values(|mut p| {
             for c in &cmds {
                 black_box(p.measure());

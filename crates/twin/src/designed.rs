@@ -1,6 +1,6 @@
 //! The designed stage as the examples and assessments simulate it: the scenario whose
-//! controller model and simulated truth are both the reduced model of the design, its control
-//! setup, and the twin of the same design.
+//! controller model and simulated truth are both the reduced model of the design, and the
+//! twin of the same design.
 //!
 //! This is the "perfect model knowledge" setting (guess = truth = the design's reduced
 //! model, `flexstage_reduce::reduce` without modal analysis or validity map): what remains
@@ -9,7 +9,6 @@
 //! `track` take a different split (Actuators 2022, 11(7), 179, Section 4.2: only the mass and
 //! α are known, stiffnesses and dampings are identified).
 
-use flexstage_control::experiment::Setup;
 use flexstage_reduce::{ReduceParams, reduce, reduction_problem};
 use flexstage_scenario::{Scenario, StageParams};
 
@@ -21,8 +20,6 @@ pub struct DesignedStage {
     pub scenario: Scenario,
     /// The reduced (lumped) model of the design.
     pub reduced: StageParams,
-    /// The controllers' setup on that scenario (`Setup::from_scenario`).
-    pub setup: Setup,
     /// The twin of the design in the scenario's `[twin]` group.
     pub twin: Twin,
 }
@@ -30,18 +27,16 @@ pub struct DesignedStage {
 impl DesignedStage {
     /// Reduces the design `rho` (physical densities in fem element order, e.g.
     /// `DesignFile::rho`) on `scenario`, sets guess and truth to the reduced model, and builds
-    /// the control setup and the twin of the same design.
+    /// the twin of the same design.
     pub fn new(scenario: &Scenario, rho: &[f64]) -> Result<DesignedStage> {
         let reduced = reduced_model(scenario, rho)?;
         let mut s = scenario.clone();
         s.stage.guess = reduced.clone();
         s.stage.truth = reduced.clone();
-        let setup = Setup::from_scenario(&s);
         let twin = Twin::from_scenario(&s, rho)?;
         Ok(DesignedStage {
             scenario: s,
             reduced,
-            setup,
             twin,
         })
     }

@@ -52,7 +52,7 @@ pub enum TwinError {
     Topopt(#[from] flexstage_topopt::TopoptError),
     /// The rig or the lumped model rejected its parameters.
     #[error("rig: {0}")]
-    Control(#[from] flexstage_control::ControlError),
+    Sim(#[from] flexstage_sim::SimError),
     /// The reduced matrices are not usable (e.g. a massless interface).
     #[error("reduced model: {0}")]
     Reduced(String),

@@ -4,7 +4,7 @@
 //! when the plant is the controller's own 8-state model (Eq. 36, A13–A14). This crate builds a
 //! structural-dynamics model of the **designed** mechanism from its finite-element model,
 //! verifies it against the full nonlinear transient of that model, and runs it inside the loop
-//! of a real rig (`flexstage_control::rig`): the plant `track` and `run` simulate on.
+//! of a real rig (`flexstage_sim::rig`): the plant `track` and `run` simulate on.
 //!
 //! ## What the twin is
 //!
@@ -78,7 +78,7 @@
 //!
 //! ## The existing controllers on the twin (issue #15, reported as measured)
 //!
-//! `cargo run --release -p flexstage-twin --example track -- quick|paper DESIGN.json`, with the
+//! `cargo run --release -p flexstage-assess --example track -- quick|paper DESIGN.json`, with the
 //! controller's model the design's reduced lumped model (`flexstage reduce`, i.e. a perfect
 //! identification of the lumped parameters) and the default 3:1 Lissajous (8/16 µm, 2 Hz):
 //!
@@ -104,20 +104,24 @@
 //! ## Use
 //!
 //! ```no_run
-//! use flexstage_control::experiment::{Setup, Variant, experiment_on};
-//! use flexstage_control::actuator::Compensation;
-//! use flexstage_control::trajectory::Reference;
+//! use flexstage_sim::experiment::Command;
+//! use flexstage_sim::rig::StagePlant;
 //! # fn main() -> Result<(), Box<dyn std::error::Error>> {
 //! let scenario = flexstage_scenario::Scenario::preset(flexstage_scenario::Preset::Quick);
 //! let rho: Vec<f64> = vec![0.5; 48 * 24]; // a design's physical densities (DesignFile::rho)
 //! let (twin, mut plant) = flexstage_twin::plant(&scenario, &rho)?;
-//! let setup = Setup::from_scenario(&scenario);
-//! let (reference, duration) = Reference::from_scenario(&scenario.trajectories[0]);
-//! setup.check_reference(&reference, duration, Some(twin.dc_gain()))?;
-//! let record = experiment_on(&setup, Variant::PidFeedforward, Compensation::Inverse,
-//!                            reference, duration, &mut plant, |_| {})?;
-//! # let _ = record; Ok(()) }
+//! // 10 ms of PEA1 at 600 V and PEA2 at the 500 V bias, through the rig's amplifiers.
+//! let step = Command { voltage: [600.0, 500.0], ..Command::default() };
+//! for _ in 0..100 {
+//!     let _measured = plant.measure();
+//!     plant.apply(&step);
+//! }
+//! println!("q = {:?} m, first resonance {:.0} Hz", plant.output(), twin.first_resonance());
+//! # Ok(()) }
 //! ```
+//!
+//! The controllers run on the twin through `flexstage_sim::experiment::run`
+//! (`flexstage-control` builds them; `flexstage-assess` checks them on the twin).
 //!
 //! The report's data: the modes against the FE modal analysis ([`reference::mode_check`]),
 //! the Bode data beside the lumped model ([`report::Bode`]: named columns and SVG figures via

@@ -18,6 +18,7 @@
 //! ellipse: energy is conserved to round-off.
 
 use flexstage_fem::RayleighDamping;
+use flexstage_sim::modal::{PlantMode, static_gain};
 use nalgebra::DMatrix;
 
 use crate::craig_bampton::CraigBampton;
@@ -97,18 +98,23 @@ impl ModalStage {
         })
     }
 
+    /// The modes as the rig's sampled loop sees them: the PEA inputs x_nom and the outputs q
+    /// only (no base acceleration, no plates).
+    pub fn plant_modes(&self) -> Vec<PlantMode> {
+        self.modes
+            .iter()
+            .map(|m| PlantMode {
+                frequency: m.frequency,
+                damping: m.damping,
+                input: [m.input[0], m.input[1]],
+                output: m.output,
+            })
+            .collect()
+    }
+
     /// Static gain x_nom → q (2 × 2), `Σ_k out_k in_kᵀ / ω_k²`.
     pub fn dc_gain(&self) -> [[f64; 2]; 2] {
-        let mut g = [[0.0; 2]; 2];
-        for m in &self.modes {
-            let w2 = (std::f64::consts::TAU * m.frequency).powi(2);
-            for i in 0..2 {
-                for j in 0..2 {
-                    g[i][j] += m.output[i] * m.input[j] / w2;
-                }
-            }
-        }
-        g
+        static_gain(&self.plant_modes())
     }
 
     /// Frequency response x_nom → q at `f` \[Hz\]: `G(jω) = Σ_k out_k in_kᵀ / (ω_k² − ω² +

@@ -21,9 +21,9 @@
 //! is reported as well ([`CaseResult`] "fast step"), with its larger error, as the twin's
 //! documented limit.
 
-use flexstage_control::rig::Mechanics;
 use flexstage_fem::{Transient, TransientParams, TransientStats};
 use flexstage_reduce::{ModalParams, PointMass, modal_analysis};
+use flexstage_sim::rig::Mechanics;
 use serde::Serialize;
 
 use crate::error::{Result, check};

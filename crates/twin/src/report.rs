@@ -9,8 +9,8 @@
 //! and for the lumped 8-state model (Eq. 36) the controller is designed on; the CSV has the
 //! four entries of both 2 × 2 matrices.
 
-use flexstage_control::model::StageModel;
 use flexstage_figures::plot::{Figure, Series};
+use flexstage_sim::model::StageModel;
 use nalgebra::{Complex, DMatrix};
 use serde::Serialize;
 

@@ -9,7 +9,7 @@
 //! dispatched once to the CPU's widest instruction set (`multiversion`). Fused multiply-adds
 //! keep the results identical on every target. `cargo bench -p flexstage-twin`.
 
-use flexstage_control::rig::{Mechanics, floor_at};
+use flexstage_sim::rig::{Mechanics, floor_at};
 use multiversion::multiversion;
 
 use crate::modal::{DiscreteMode, ModalStage};

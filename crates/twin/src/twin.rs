@@ -1,9 +1,9 @@
 //! The twin of a design: build it ([`Twin::build`], [`Twin::from_scenario`]) and turn it into a
 //! ready plant inside the scenario's rig ([`Twin::plant`], [`plant`]).
 
-use flexstage_control::rig::{RigParams, RigPlant};
 use flexstage_fem::RayleighDamping;
 use flexstage_scenario::Scenario;
+use flexstage_sim::rig::{RigParams, RigPlant};
 use serde::Serialize;
 
 use crate::craig_bampton::{CraigBampton, craig_bampton};

@@ -5,8 +5,8 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use flexstage_control::controller::Command;
-use flexstage_control::rig::{RigParams, StagePlant};
+use flexstage_sim::experiment::Command;
+use flexstage_sim::rig::{RigParams, StagePlant};
 use flexstage_twin::{Twin, samples};
 
 struct Counting;

@@ -12,8 +12,8 @@
 // Loops over the two axes index several arrays at once.
 #![allow(clippy::needless_range_loop)]
 
-use flexstage_control::controller::Command;
-use flexstage_control::rig::{RigParams, StagePlant};
+use flexstage_sim::experiment::Command;
+use flexstage_sim::rig::{RigParams, StagePlant};
 use flexstage_twin::{Twin, samples};
 
 /// Voltages per sample.

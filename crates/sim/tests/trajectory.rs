@@ -1,10 +1,8 @@
 //! Reference: Section 4.2 (Lissajous 3:1, 2:1, circle; Figures 9–11) and the smooth
 //! start. Goal: the reference derivatives q̇_d, q̈_d, q⃛_d used by the law are exact (central
-//! differences), the start has no jump, and the default curves sit inside the workspace.
+//! differences), the start has no jump.
 
-use flexstage_control::experiment::Setup;
-use flexstage_control::trajectory::{Reference, Shape};
-use flexstage_scenario::Scenario;
+use flexstage_sim::trajectory::{Reference, Shape};
 
 #[test]
 fn derivatives_match_central_differences_and_start_is_smooth() {
@@ -58,16 +56,5 @@ fn derivatives_match_central_differences_and_start_is_smooth() {
                 check(c.dddq[i], (p.ddq[i] - m.ddq[i]) / (2.0 * h), "q⃛");
             }
         }
-    }
-}
-
-#[test]
-fn default_trajectories_are_inside_the_workspace() {
-    let s = Scenario::paper();
-    let ws = Setup::from_scenario(&s).workspace().unwrap();
-    for t in &s.trajectories {
-        let (r, d) = Reference::from_scenario(t);
-        let u = ws.max_usage(&r, d, 1e-4);
-        assert!(u > 0.1 && u < 0.9, "{}: usage {u}", t.name());
     }
 }

@@ -1,25 +1,21 @@
-//! Reference: the closed forms of each rig part (module docs of `flexstage_control::rig`):
+//! Reference: the closed forms of each rig part (module docs of `flexstage_sim::rig`):
 //! a d-sample delay, the first-order amplifier `U(t) = U_f + (U_0 − U_f)e^{−2πf_a t}`, the
 //! current-limited ramp `dU/dt = I/C` (PI piezo tutorial, Eq. 4-15), PI's logarithmic creep
 //! `Δx(t) = Δx(0.1 s)(1 + γ lg(t/0.1 s))` (Eq. 4-2), a first-order sensor, a white + 1/f
 //! spectrum `S(f) = S_w(1 + f_c/f)`, the VC-C floor level (12.5 µm/s RMS per 1/3-octave band,
 //! Gordon 1991), and the legacy lumped plant (the rig with every effect off must reproduce it
-//! bit for bit); the feasibility check against the Nyquist frequency, the amplifier range and
-//! its current.
+//! bit for bit).
 //! Goal: each part, driven through a mechanics that passes x_nom straight to the output,
-//! matches its closed form; the checks refuse what the rig cannot do with a message that
-//! names the limit.
+//! matches its closed form.
 
-use flexstage_control::actuator::deliverable_stroke;
-use flexstage_control::controller::Command;
-use flexstage_control::experiment::Setup;
-use flexstage_control::plant::{LumpedStage, Plant};
-use flexstage_control::rig::{
+use flexstage_scenario::Scenario;
+use flexstage_sim::experiment::Command;
+use flexstage_sim::pea::deliverable_stroke;
+use flexstage_sim::plant::{LumpedStage, Plant, PlantParams};
+use flexstage_sim::rig::{
     AmplifierParams, CreepParams, FloorParams, Mechanics, PlantActuator, RigParams, RigPlant,
     SensorParams, StagePlant,
 };
-use flexstage_control::trajectory::{Reference, Shape};
-use flexstage_scenario::Scenario;
 
 /// Mechanics whose output is x_nom (or the floor acceleration) at the end of the substep.
 #[derive(Debug, Clone)]
@@ -46,7 +42,7 @@ impl Mechanics for Direct {
 
 /// The paper's rig with every effect off.
 fn quiet() -> RigParams {
-    let mut r = Setup::from_scenario(&Scenario::paper()).plant.rig();
+    let mut r = PlantParams::from_scenario(&Scenario::paper()).rig();
     r.noise_std = [0.0; 2];
     r.resolution = [0.0; 2];
     r
@@ -288,10 +284,10 @@ fn floor_vibration_has_the_vc_c_level_per_band() {
 
 #[test]
 fn lumped_plant_in_a_rig_without_effects_is_the_legacy_plant() {
-    let setup = Setup::from_scenario(&Scenario::paper());
-    let mut legacy = Plant::new(setup.plant.clone()).unwrap();
-    let rig = setup.plant.rig();
-    let mech = LumpedStage::new(&setup.plant.truth, setup.plant.coupling, rig.substep()).unwrap();
+    let plant = PlantParams::from_scenario(&Scenario::paper());
+    let mut legacy = Plant::new(plant.clone()).unwrap();
+    let rig = plant.rig();
+    let mech = LumpedStage::new(&plant.truth, plant.coupling, rig.substep()).unwrap();
     let mut rigged = RigPlant::new(rig, mech).unwrap();
     for k in 0..300 {
         let u = 500.0 + 200.0 * (k as f64 * 0.05).sin();
@@ -307,8 +303,7 @@ fn lumped_plant_in_a_rig_without_effects_is_the_legacy_plant() {
 #[test]
 fn deliverable_stroke_is_less_than_the_nominal_30_um() {
     let s = Scenario::paper();
-    let setup = Setup::from_scenario(&s);
-    let a = &setup.controller.actuator;
+    let a = PlantParams::from_scenario(&s);
     for p in &a.hysteresis {
         let [up, down] = deliverable_stroke(p, a.voltage_range, a.bias_voltage, 0.25);
         println!("deliverable: +{:.2} / -{:.2} µm", up * 1e6, down * 1e6);
@@ -316,56 +311,4 @@ fn deliverable_stroke_is_less_than_the_nominal_30_um() {
         // The default controller stroke fits inside it.
         assert!(s.controller.stroke <= down.min(up));
     }
-}
-
-#[test]
-fn feasibility_accepts_the_defaults_and_refuses_what_the_rig_cannot_do() {
-    let s = Scenario::paper();
-    let setup = Setup::from_scenario(&s);
-    for t in &s.trajectories {
-        let (r, d) = Reference::from_scenario(t);
-        let f = setup.check_reference(&r, d, None).unwrap();
-        println!("{}: {f:?}", t.name());
-        assert!(f.stroke_usage < 0.7 && f.controller_stroke_usage < 1.0);
-    }
-    let lissajous = |amplitude: [f64; 2], frequency: f64| {
-        Reference::new(Shape::Lissajous {
-            ratio: 3.0,
-            amplitude,
-            frequency,
-        })
-    };
-    // 93 % of the nominal ±30 µm: beyond the controller's stroke.
-    let e = setup
-        .check_reference(&lissajous([14e-6, 27.9e-6], 2.0), 1.0, None)
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("controller.stroke"), "{e}");
-    // With the controller allowed ±30 µm, the amplifier range is what fails.
-    let mut wide = setup.clone();
-    wide.controller.actuator.stroke = 30e-6;
-    let e = wide
-        .check_reference(&lissajous([14e-6, 27.9e-6], 2.0), 1.0, None)
-        .unwrap_err()
-        .to_string();
-    assert!(
-        e.contains("amplifier range") && e.contains("scale the amplitude"),
-        "{e}"
-    );
-    // Above the Nyquist frequency.
-    let e = setup
-        .check_reference(&lissajous([1e-6, 1e-6], 2000.0), 0.01, None)
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("Nyquist"), "{e}");
-    // Too fast for 0.1 A into 1.5 µF.
-    let circle = Reference::new(Shape::Circle {
-        radius: 8e-6,
-        frequency: 200.0,
-    });
-    let e = setup
-        .check_reference(&circle, 0.02, None)
-        .unwrap_err()
-        .to_string();
-    assert!(e.contains("current"), "{e}");
 }

@@ -9,7 +9,7 @@ use nalgebra::{Complex, DMatrix};
 
 use flexstage_numerics::RangeError;
 
-use crate::error::{ControlError, Result};
+use crate::error::{Result, SimError};
 
 /// The matrix exponential e^A (scaling and squaring with a Padé approximant, nalgebra's
 /// implementation). Tested against closed forms in `tests/linalg.rs`.
@@ -27,7 +27,7 @@ pub fn expm(a: &DMatrix<f64>) -> Result<DMatrix<f64>> {
 pub fn c2d(a: &DMatrix<f64>, b: &DMatrix<f64>, t: f64) -> Result<(DMatrix<f64>, DMatrix<f64>)> {
     let n = square(a, "c2d")?;
     if b.nrows() != n {
-        return Err(ControlError::Dimension {
+        return Err(SimError::Dimension {
             what: "c2d".into(),
             detail: format!("A is {n}×{n}, B has {} rows", b.nrows()),
         });
@@ -73,7 +73,7 @@ pub fn dlyap(a: &DMatrix<f64>, q: &DMatrix<f64>) -> Result<DMatrix<f64>> {
 pub fn poles(a: &DMatrix<f64>) -> Result<Vec<Complex<f64>>> {
     square(a, "poles")?;
     if a.iter().any(|v| !v.is_finite()) {
-        return Err(ControlError::Dimension {
+        return Err(SimError::Dimension {
             what: "poles".into(),
             detail: "the matrix has non-finite entries".into(),
         });
@@ -107,7 +107,7 @@ fn square(a: &DMatrix<f64>, what: &str) -> Result<usize> {
     if a.nrows() == a.ncols() && a.nrows() > 0 {
         Ok(a.nrows())
     } else {
-        Err(ControlError::Dimension {
+        Err(SimError::Dimension {
             what: what.into(),
             detail: format!(
                 "expected a non-empty square matrix, got {}×{}",
@@ -122,7 +122,7 @@ fn same_size(q: &DMatrix<f64>, n: usize, what: &str) -> Result<()> {
     if q.nrows() == n && q.ncols() == n {
         Ok(())
     } else {
-        Err(ControlError::Dimension {
+        Err(SimError::Dimension {
             what: what.into(),
             detail: format!("A is {n}×{n}, Q is {}×{}", q.nrows(), q.ncols()),
         })
@@ -135,9 +135,9 @@ fn solve_vec(k: DMatrix<f64>, q: &DMatrix<f64>, n: usize, what: &str) -> Result<
     let x = k
         .lu()
         .solve(&rhs)
-        .ok_or_else(|| ControlError::Singular { what: what.into() })?;
+        .ok_or_else(|| SimError::Singular { what: what.into() })?;
     if x.iter().any(|v| !v.is_finite()) {
-        return Err(ControlError::Singular { what: what.into() });
+        return Err(SimError::Singular { what: what.into() });
     }
     Ok(DMatrix::from_column_slice(n, n, x.as_slice()))
 }

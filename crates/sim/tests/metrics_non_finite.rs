@@ -4,7 +4,7 @@
 //! axis, voltage extremes) is non-finite and the record is marked diverged; a finite record
 //! gives the hand-computed values and is not marked (so the check can fail both ways).
 
-use flexstage_control::experiment::Record;
+use flexstage_sim::experiment::Record;
 
 fn record(error: [Vec<f64>; 2]) -> Record {
     let n = error[0].len();

@@ -9,15 +9,15 @@
 //!   optional first-order lag, the Bouc–Wen PEAs, white sensor noise and quantization, no
 //!   delay. It is the plant of the identification experiment and of the controller's
 //!   ideal-loop tests. The same mechanics in a realistic rig is
-//!   `RigPlant::new(rig, LumpedStage::new(..))` ([`crate::experiment::Setup::lumped_plant`]).
+//!   [`PlantParams::in_rig`].
 //! * Time: continuous. Each sample is split into `substeps` so that the ≈ 12 kHz PEA mode is
 //!   resolved although the controller samples at 10 kHz (DECISIONS.md).
 
 use flexstage_piezo::BoucWenParams;
-use flexstage_scenario::StageParams;
+use flexstage_scenario::{Scenario, StageParams};
 
-use crate::controller::Command;
 use crate::error::{Result, check, non_negative, positive};
+use crate::experiment::Command;
 use crate::linalg::c2d;
 use crate::model::{Matrix8, Matrix8x2, StageModel, Vector8, from_dyn};
 pub use crate::rig::PlantActuator;
@@ -56,6 +56,38 @@ pub struct PlantParams {
 }
 
 impl PlantParams {
+    /// The lumped plant of a scenario: `stage.truth` with the cross terms of
+    /// `stage.coupling` (k_c = coupling·√(2 K_qo1 K_qo2)), the PEAs and amplifier range of
+    /// `[hysteresis]` with the bias in its middle, `[sensors]`, and the timing, amplifier
+    /// bandwidth and seed of `[simulation]`.
+    pub fn from_scenario(s: &Scenario) -> PlantParams {
+        let h = &s.hysteresis;
+        let t = s.stage.truth.clone();
+        let coupling = s.stage.coupling * (2.0 * t.k_qo1 * t.k_qo2).sqrt();
+        PlantParams {
+            truth: t,
+            coupling,
+            hysteresis: [BoucWenParams::from(&h.pea1), BoucWenParams::from(&h.pea2)],
+            voltage_range: [h.voltage_min, h.voltage_max],
+            bias_voltage: 0.5 * (h.voltage_min + h.voltage_max),
+            amplifier_bandwidth: s.simulation.amplifier_bandwidth,
+            resolution: s.sensors.resolution,
+            noise_std: s.sensors.noise_std,
+            seed: s.simulation.seed,
+            sample_time: s.simulation.sample_time,
+            substeps: s.simulation.substeps,
+            actuator: PlantActuator::Hysteretic,
+        }
+    }
+
+    /// The lumped stage of these settings (truth parameters and cross terms) inside the rig
+    /// `rig`: delay, amplifier limits, the rig's own PEAs with creep, sensor dynamics and
+    /// noise, floor vibration.
+    pub fn in_rig(&self, rig: RigParams) -> Result<RigPlant<LumpedStage>> {
+        let mech = LumpedStage::new(&self.truth, self.coupling, rig.substep())?;
+        RigPlant::new(rig, mech)
+    }
+
     /// Checks the fields.
     pub fn validate(&self) -> Result<()> {
         crate::model::validate(&self.truth)?;

@@ -2,10 +2,8 @@
 //! `samples`. Goal: the textbook helpers used to build the observer and check the loop are
 //! exact on problems with known answers.
 
-use flexstage_control::linalg::{
-    c2d, dlyap, expm, is_positive_definite, lyap, poles, spectral_radius,
-};
-use flexstage_control::samples::{
+use flexstage_sim::linalg::{c2d, dlyap, expm, is_positive_definite, lyap, poles, spectral_radius};
+use flexstage_sim::samples::{
     diagonal_lyapunov, double_integrator, first_order, oscillator, oscillator_exp,
 };
 use nalgebra::DMatrix;

@@ -33,9 +33,9 @@ use std::f64::consts::{FRAC_1_SQRT_2, TAU};
 use flexstage_piezo::{BoucWen, BoucWenParams, GaussianNoise, MICROMETRE};
 use nalgebra::Complex;
 
-use crate::actuator::preload;
-use crate::controller::Command;
-use crate::error::{ControlError, Result, check, non_negative, positive};
+use crate::error::{Result, SimError, check, non_negative, positive};
+use crate::experiment::Command;
+use crate::pea::preload;
 
 /// How the plant's actuators are driven.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -387,7 +387,7 @@ impl RigParams {
         self.amplifier.validate()?;
         for (i, p) in self.hysteresis.iter().enumerate() {
             p.validate().map_err(|e| {
-                ControlError::from(flexstage_numerics::RangeError::new(
+                SimError::from(flexstage_numerics::RangeError::new(
                     format!("rig.pea{}", i + 1),
                     e.to_string(),
                     "valid Bouc–Wen parameters",

@@ -6,19 +6,22 @@
 //! off) shows which effect the controllers are sensitive to.
 //!
 //! ```text
-//! cargo run --release -p flexstage-twin --example track -- quick runs/quick/design/design.json
+//! cargo run --release -p flexstage-assess --example track -- quick runs/quick/design/design.json
 //! ```
 //!
 //! Prints one row per plant, trajectory and controller: RMS and maximum error per axis in nm
 //! and in % of the range, the peak voltage, saturated samples and whether the run diverged.
 
 use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::{Setup, Variant, experiment, experiment_on};
-use flexstage_control::rig::StagePlant;
-use flexstage_control::trajectory::Reference;
+use flexstage_control::controller::ROBUST;
+use flexstage_control::experiment::{Setup, experiment, experiment_on};
+use flexstage_control::pid::PID_FF;
+use flexstage_control::registry::Controller;
 use flexstage_run::Format;
 use flexstage_run::files::design::DesignFile;
 use flexstage_scenario::{Preset, Scenario};
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::Reference;
 use flexstage_twin::{DesignedStage, Twin};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -31,28 +34,21 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let seconds: Option<f64> = args.get(3).map(|s| s.parse()).transpose()?;
     let t0 = std::time::Instant::now();
     let DesignedStage {
-        scenario: s,
-        setup,
-        twin,
-        ..
+        scenario: s, twin, ..
     } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
+    let setup = Setup::from_scenario(&s);
     println!(
         "twin: {} modes (f1 = {:.0} Hz), reduced and built in {:.1} s; lumped model f = {:?} Hz",
         twin.modal.modes.len(),
         twin.first_resonance(),
         t0.elapsed().as_secs_f64(),
-        flexstage_control::model::StageModel::with_coupling(
-            &setup.plant.truth,
-            setup.plant.coupling
-        )?
-        .natural_frequencies()
-        .map(|f| f.round())
+        flexstage_sim::model::StageModel::with_coupling(&setup.plant.truth, setup.plant.coupling)?
+            .natural_frequencies()
+            .map(|f| f.round())
     );
-    let lumped = flexstage_control::model::StageModel::with_coupling(
-        &setup.plant.truth,
-        setup.plant.coupling,
-    )?
-    .dc_gain()?;
+    let lumped =
+        flexstage_sim::model::StageModel::with_coupling(&setup.plant.truth, setup.plant.coupling)?
+            .dc_gain()?;
     println!(
         "static gain x_nom → q: twin {:?}, lumped [[{:.4}, {:.4}], [{:.4}, {:.4}]]",
         twin.dc_gain().map(|r| r.map(|x| (x * 1e4).round() / 1e4)),
@@ -87,8 +83,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             ),
             Err(e) => println!("{}: refused: {e}", t.name()),
         }
-        // The PI + notch is tuned on the twin's response by `flexstage-assess`.
-        for variant in Variant::ALL.into_iter().filter(|&v| v != Variant::PiNotch) {
+        // The controllers set up from the scenario alone (the PI + notch is tuned on the
+        // twin's response by `flexstage-assess`, so it is not among them).
+        for (variant, design) in Controller::defaults()
+            .into_iter()
+            .filter_map(|c| Some((c, setup.design(c).ok()?)))
+        {
             for plant in ["twin", "lumped", "ideal"] {
                 let rec = if plant == "ideal" {
                     experiment(&setup, variant, Compensation::Inverse, reference, duration)?
@@ -99,7 +99,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         Box::new(setup.lumped_plant()?)
                     };
                     let c = Compensation::Inverse;
-                    experiment_on(&setup, variant, c, reference, duration, p.as_mut(), |_| {})?
+                    let d = &*design;
+                    experiment_on(&setup, d, c, reference, duration, p.as_mut(), |_| {})?
                 };
                 let m = rec.metrics(half);
                 let diverged = !m.rms[0].is_finite() || m.max[0] > 1e-4 || m.max[1] > 1e-4;
@@ -107,7 +108,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     "{:<7} {:<13} {:<10} {:>10.1}/{:<10.1} {:>8.3}/{:<8.3} {:>10.1}/{:<10.1} {:>8.0} {:>5} {}",
                     plant,
                     t.name(),
-                    variant.name(),
+                    variant.name,
                     m.rms[0] * 1e9,
                     m.rms[1] * 1e9,
                     m.rms_pct[0],
@@ -138,11 +139,11 @@ fn ablation(
     let ideal = {
         let mut q = s.clone();
         q.rig = flexstage_scenario::Rig::ideal(&s.hysteresis);
-        flexstage_control::rig::RigParams::from_scenario(&q)
+        flexstage_sim::rig::RigParams::from_scenario(&q)
     };
     let full = setup.rig.clone();
-    let mut cases: Vec<(&str, flexstage_control::rig::RigParams)> = vec![("none", ideal.clone())];
-    let mut one = |name: &'static str, f: &dyn Fn(&mut flexstage_control::rig::RigParams)| {
+    let mut cases: Vec<(&str, flexstage_sim::rig::RigParams)> = vec![("none", ideal.clone())];
+    let mut one = |name: &'static str, f: &dyn Fn(&mut flexstage_sim::rig::RigParams)| {
         let mut r = ideal.clone();
         f(&mut r);
         cases.push((name, r));
@@ -159,11 +160,11 @@ fn ablation(
         s.trajectories[0].name()
     );
     for (name, rig) in cases {
-        for variant in [Variant::Robust, Variant::PidFeedforward] {
+        for variant in [&ROBUST, &PID_FF] {
             let mut p = twin.plant(&rig)?;
             let rec = experiment_on(
                 setup,
-                variant,
+                &*setup.design(variant)?,
                 Compensation::Inverse,
                 reference,
                 duration,
@@ -174,7 +175,7 @@ fn ablation(
             println!(
                 "  {:<10} {:<10} RMS {:>9.1}/{:<9.1} nm  max {:>9.1}/{:<9.1} nm",
                 name,
-                variant.name(),
+                variant.name,
                 m.rms[0] * 1e9,
                 m.rms[1] * 1e9,
                 m.max[0] * 1e9,

@@ -4,14 +4,14 @@
 //! delay and sensor noise). Nothing in the loop allocates. After 10 periods of the 3:1
 //! Lissajous the learning layer is frozen and the RMS error of the last period is printed.
 //!
-//! `cargo run --release -p flexstage-control-core --example embed`
+//! `cargo run --release -p flexstage-control --example embed`
 
 use flexstage_control::actuator::{Actuator, Compensation};
-use flexstage_control::controller::Command;
 use flexstage_control::experiment::Setup;
-use flexstage_control::model::StageModel;
-use flexstage_control::rig::StagePlant;
 use flexstage_control_core::{Controller, Ilc, IlcBuffers, IlcParams, PidGains, PidLaw};
+use flexstage_sim::experiment::Command;
+use flexstage_sim::model::StageModel;
+use flexstage_sim::rig::StagePlant;
 
 /// Samples per period: the 3:1 Lissajous at 2 Hz, 10 kHz.
 const N: usize = 5000;
@@ -37,7 +37,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     };
     let stroke = setup.controller.actuator.stroke;
     let law = PidLaw::new(
-        gains,
+        [gains; 2],
         [[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]],
         t,
         stroke,

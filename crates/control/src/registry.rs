@@ -1,0 +1,293 @@
+//! The controllers, in one list ([`CONTROLLERS`]). A controller is one module of this crate
+//! and one entry here: a [`Controller`] with its name (in `flexstage track --variant`, file
+//! names and tables), its label for people, whether it runs by default, and how it is designed
+//! for a stage ([`Controller::design`]); the design it returns says how it steps
+//! ([`Design::build`]) and whether it is linear ([`Design::linear`]: margins from its
+//! transfer function, else by sine injection). `track`, the assessment and the CLI take
+//! their choices from this list and never match on a name.
+//!
+//! A design takes only what the [`Stage`] offers: the scenario's settings ([`Setup`]), the
+//! stage's sampled response when there is one to tune on (a [`LoopPlant`]: the twin's exact
+//! modal response today, a measured response later), what a response identification gives
+//! of it ([`ResponseFit`]) and, for a design sized by its margins, a [`MarginProbe`] that
+//! measures them on the stage's linear loop. Intermediate results that several designs use
+//! (the PI + notch's notches, the backstepping's gain scale) are computed once per stage
+//! ([`Stage::shared`]).
+//!
+//! # Adding a controller
+//! Write its module (the controller, implementing `StageControl`; its design, implementing
+//! [`Design`]; a `pub static` [`Controller`] entry with a design function) and add that entry
+//! to [`CONTROLLERS`]. Nothing else changes: `track --variant` accepts its name, `track`
+//! and the assessment run it (when [`Controller::default`]), `metrics.csv`, `margins.csv`,
+//! `montecarlo.csv` and the sweep get its rows under its name, and the report shows them.
+
+use std::any::Any;
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::rc::Rc;
+use std::sync::Arc;
+
+use flexstage_identify::response::ResponseFit;
+use flexstage_scenario::StageParams;
+use flexstage_sim::experiment::StageControl;
+use flexstage_sim::modal::LoopPlant;
+use flexstage_sim::trajectory::Reference;
+
+use crate::actuator::ActuatorParams;
+use crate::error::Result;
+use crate::experiment::Setup;
+use crate::margins::{MarginParams, Margins};
+use crate::pi_notch::PiNotchParams;
+use crate::tuning::TuningParams;
+
+/// Every controller, in report order (the default controller first). One line per
+/// controller.
+pub static CONTROLLERS: [&Controller; 5] = [
+    &crate::pi_notch::PI_NOTCH_FF,
+    &crate::controller::ROBUST,
+    &crate::controller::NONROBUST,
+    &crate::pid::PID_FF,
+    &crate::pid::PID_FF_SCENARIO,
+];
+
+/// The default controller (DECISIONS.md, "Default controller").
+pub static DEFAULT: &Controller = &crate::pi_notch::PI_NOTCH_FF;
+
+/// A controller `track`, the assessment and the report know (module docs).
+pub struct Controller {
+    /// Its name in `flexstage track --variant`, file names and tables (unique).
+    pub name: &'static str,
+    /// Its label for people.
+    pub label: &'static str,
+    /// Whether `track` and the assessment run it when no controller is named; otherwise it
+    /// runs only when asked for by name.
+    pub default: bool,
+    /// How it is set up or tuned for a stage: its design, or `None` when the stage does not
+    /// give what the design needs (it is then not run there).
+    pub design: DesignFn,
+}
+
+/// A controller's design procedure: its design for a stage, or `None` when the stage does not
+/// give what the design needs ([`Controller::design`]).
+pub type DesignFn = fn(&Stage<'_>) -> Result<Option<Arc<dyn Design>>>;
+
+impl Controller {
+    /// The controller named `name` ([`Controller::name`]).
+    pub fn by_name(name: &str) -> Option<&'static Controller> {
+        CONTROLLERS.iter().copied().find(|c| c.name == name)
+    }
+
+    /// The controllers that run by default, in report order.
+    pub fn defaults() -> Vec<&'static Controller> {
+        CONTROLLERS.iter().copied().filter(|c| c.default).collect()
+    }
+}
+
+impl PartialEq for Controller {
+    fn eq(&self, other: &Self) -> bool {
+        self.name == other.name
+    }
+}
+
+impl Eq for Controller {}
+
+impl std::fmt::Debug for Controller {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}", self.name)
+    }
+}
+
+impl std::fmt::Display for Controller {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name)
+    }
+}
+
+/// A controller designed for a stage: how it steps.
+pub trait Design: std::fmt::Debug + Send + Sync {
+    /// The controller following `reference`, with the actuator stage `actuator` (the
+    /// compensator's Bouc–Wen model, the compensation mode, the stroke and the amplifier
+    /// range) and predicting over `delay` samples of rig delay (a controller that does not
+    /// predict ignores it).
+    fn build(
+        &self,
+        actuator: ActuatorParams,
+        delay: usize,
+        reference: Reference,
+    ) -> Result<Box<dyn StageControl>>;
+
+    /// Its gains as the linear PI(D) + notch + feed-forward structure when the controller is
+    /// that (margins from its transfer function); `None` for a nonlinear controller
+    /// (margins by sine injection).
+    fn linear(&self) -> Option<&PiNotchParams> {
+        None
+    }
+}
+
+/// Measures a designed controller's margins on a stage's linear loop (sine injection on the
+/// running loop with the rig's delay), for designs sized by their margins.
+pub trait MarginProbe {
+    /// Loop-at-a-time margins of `design` searched with `params`; `None` when its closed
+    /// loop is unstable.
+    fn margins(&self, design: &dyn Design, params: &MarginParams) -> Result<Option<[Margins; 2]>>;
+}
+
+/// What a design may use (module docs).
+pub struct Stage<'a> {
+    /// The scenario's settings: the backstepping's, the scenario's PID gains, the actuator
+    /// stage, the rig.
+    pub setup: &'a Setup,
+    /// The stage's sampled response x_nom → measurement with the rig's delay and sensor
+    /// chain, to tune on; `None` when the stage offers none (the lumped plant).
+    pub response: Option<&'a dyn LoopPlant>,
+    /// What a response identification gives of the stage (static gain, output modes below
+    /// Nyquist); `None` without a response.
+    pub fit: Option<ResponseFit>,
+    /// Margins measured on the stage's linear loop; `None` when they cannot be measured.
+    pub probe: Option<&'a dyn MarginProbe>,
+    /// The tuning procedure's settings (margin targets, search budget).
+    pub tuning: TuningParams,
+    shared: RefCell<HashMap<&'static str, Rc<dyn Any>>>,
+}
+
+impl<'a> Stage<'a> {
+    /// A stage known only by the scenario's settings (no response, no probe): every
+    /// controller with its scenario settings, none tuned.
+    pub fn scenario(setup: &'a Setup) -> Stage<'a> {
+        Stage::new(setup, None, None, None, TuningParams::default())
+    }
+
+    /// A stage with a sampled response `response`, its response fit `fit` and a margin
+    /// probe, tuned with `tuning`.
+    pub fn new(
+        setup: &'a Setup,
+        response: Option<&'a dyn LoopPlant>,
+        fit: Option<ResponseFit>,
+        probe: Option<&'a dyn MarginProbe>,
+        tuning: TuningParams,
+    ) -> Stage<'a> {
+        Stage {
+            setup,
+            response,
+            fit,
+            probe,
+            tuning,
+            shared: RefCell::new(HashMap::new()),
+        }
+    }
+
+    /// The controllers' lumped model on this stage and its coupling k_c: the scenario's
+    /// controller model (Table 4's guess, or identified parameters) fitted to the stage's
+    /// response fit when there is one ([`crate::fit::fitted_model`]).
+    pub fn controller_model(&self) -> (StageParams, f64) {
+        let c = &self.setup.controller;
+        match &self.fit {
+            Some(fit) => crate::fit::fitted_model(&c.model, c.coupling, fit),
+            None => (c.model.clone(), c.coupling),
+        }
+    }
+
+    /// A result that several designs use, computed by `f` the first time `key` is asked
+    /// for on this stage (each module keeps its keys private).
+    pub fn shared<T: Clone + 'static>(
+        &self,
+        key: &'static str,
+        f: impl FnOnce() -> Result<T>,
+    ) -> Result<T> {
+        if let Some(v) = self.shared.borrow().get(key) {
+            let v = v.downcast_ref::<T>().expect("one type per key");
+            return Ok(v.clone());
+        }
+        let v = f()?;
+        self.shared.borrow_mut().insert(key, Rc::new(v.clone()));
+        Ok(v)
+    }
+}
+
+/// The controllers designed for one stage, in report order.
+#[derive(Debug, Clone)]
+pub struct Designs {
+    designs: Vec<(&'static Controller, Arc<dyn Design>)>,
+    /// The controllers whose design needs what the stage does not offer.
+    pub not_designed: Vec<&'static Controller>,
+}
+
+impl Designs {
+    /// Designs every controller of [`CONTROLLERS`] for `stage`.
+    pub fn for_stage(stage: &Stage<'_>) -> Result<Designs> {
+        let mut d = Designs {
+            designs: Vec::new(),
+            not_designed: Vec::new(),
+        };
+        for &c in &CONTROLLERS {
+            match (c.design)(stage)? {
+                Some(design) => d.designs.push((c, design)),
+                None => d.not_designed.push(c),
+            }
+        }
+        Ok(d)
+    }
+
+    /// The design of `c`, if it was designed for this stage.
+    pub fn get(&self, c: &Controller) -> Option<&Arc<dyn Design>> {
+        self.designs.iter().find(|(k, _)| *k == c).map(|(_, d)| d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Goal: the list is a usable index: names unique and plain (file and CLI names),
+    /// found by name, the default controller first and run by default, and each
+    /// controller's design from the scenario alone either given or refused for want of a
+    /// response (never an error).
+    #[test]
+    fn the_registry_is_one_consistent_list() {
+        for (i, c) in CONTROLLERS.iter().enumerate() {
+            assert!(
+                !c.name.is_empty()
+                    && c.name
+                        .chars()
+                        .all(|ch| ch.is_ascii_lowercase() || ch.is_ascii_digit() || ch == '-'),
+                "{c}"
+            );
+            assert!(!c.label.is_empty());
+            assert_eq!(Controller::by_name(c.name), Some(*c));
+            assert!(
+                CONTROLLERS[..i].iter().all(|k| k.name != c.name),
+                "{c} twice"
+            );
+        }
+        assert_eq!(CONTROLLERS[0], DEFAULT);
+        assert!(DEFAULT.default);
+        assert_eq!(Controller::by_name("all"), None);
+        let setup = Setup::from_scenario(&flexstage_scenario::Scenario::paper());
+        let stage = Stage::scenario(&setup);
+        let designs = Designs::for_stage(&stage).unwrap();
+        for c in CONTROLLERS {
+            assert!(designs.get(c).is_some() != designs.not_designed.contains(&c));
+        }
+        // Without a response the PI + notch cannot be tuned.
+        assert!(designs.not_designed.contains(&DEFAULT));
+        // With one (two decoupled 1 %-damped modes, one sample of delay), every controller
+        // is designed.
+        let modes = flexstage_sim::samples::decoupled_modes();
+        let fit = ResponseFit::from_modes(&modes, 5000.0, 0.1);
+        let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
+        let stage = Stage::new(
+            &setup,
+            Some(&plant),
+            Some(fit),
+            None,
+            TuningParams::default(),
+        );
+        let designs = Designs::for_stage(&stage).unwrap();
+        assert!(
+            designs.not_designed.is_empty(),
+            "{:?}",
+            designs.not_designed
+        );
+        assert!(designs.get(DEFAULT).unwrap().linear().is_some());
+    }
+}
