@@ -250,7 +250,7 @@ class TrackCase:
 
     @property
     def error(self) -> Tuple[np.ndarray, np.ndarray]:
-        """Tracking error against the true output, q1, q2 [m]."""
+        """Tracking error, true output − reference, q1, q2 [m]."""
         return self._pair("error")
 
     @property
