@@ -27,6 +27,9 @@ use crate::work::blocking;
 /// What a stage call returns: its summary text, warnings and written paths.
 type Outcome = (String, Vec<String>, Vec<PathBuf>);
 
+/// What `run` returns: its summary text, the report's path and the headline rows.
+type RunOutcome = (String, PathBuf, Vec<(String, String)>);
+
 fn outcome(s: &impl Summary) -> Outcome {
     let (written, _) = s.written();
     (
@@ -146,6 +149,7 @@ impl PyRun {
     }
 
     #[pyo3(signature = (reporter, force, resume, max_iterations, checkpoint_every, snapshot_every))]
+    #[allow(clippy::too_many_arguments)]
     fn design(
         &self,
         py: Python<'_>,
@@ -494,7 +498,7 @@ impl PyRun {
         py: Python<'_>,
         reporter: Option<Bound<'_, PyAny>>,
         restart: bool,
-    ) -> PyResult<(String, PathBuf, Vec<(String, String)>)> {
+    ) -> PyResult<RunOutcome> {
         let folder = self.folder()?;
         let options = RunOptions {
             restart,
