@@ -1,4 +1,4 @@
-//! Backstepping on the twin (issue #18): why the controller as shipped with the design
+//! Backstepping on the twin: why the controller as shipped with the design
 //! guess is unstable, what makes it stable, the gains sized by the margins, ρ_η sized from
 //! the twin's measured disturbance, and what each part buys.
 //!

@@ -1,6 +1,6 @@
 //! # flexstage-assess — the controllers on the twin, as a practitioner would check them
 //!
-//! Issue #18 (items 1, 2, 4, 5): every controller of `flexstage-control` on the digital twin
+//! Every controller of `flexstage-control` on the digital twin
 //! of the designed stage (`flexstage-twin`), checked the way a rig would be:
 //!
 //! * [`margins`]: gain, phase and delay margins of each loop with the other loop closed, on

@@ -8,7 +8,7 @@ use crate::bench::Bench;
 use crate::error::Result;
 use crate::inject::{InjectionParams, injected_margins};
 
-/// Targets a shipped controller must meet (issue #18): 6 dB and 40°.
+/// Targets a shipped controller must meet: 6 dB and 40°.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MarginTargets {
     /// Gain margin \[dB\].

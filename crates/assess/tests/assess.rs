@@ -23,7 +23,7 @@ fn bench() -> Bench {
 /// loop (the method used for the nonlinear controllers) measures the same ratio, within 1 %,
 /// from 20 Hz to 4 kHz; at 20 Hz its phase is the model's to 0.05°, 3° away from the loop
 /// without the sensor filter (the filter acts on the modes above Nyquist before they fold
-/// down: the "3° at 20 Hz", issue #18); and the tuned baselines meet 6 dB / 40°. The rig
+/// down: the "3° at 20 Hz" of the first twin study); and the tuned baselines meet 6 dB / 40°. The rig
 /// runs 80 substeps: its sensor chain interpolates the output within a substep at O(h³),
 /// and at the default 20 it is 3 % off the exact ratio at 2.5 kHz (|L| = 0.08), 5e-4 at 80.
 #[test]

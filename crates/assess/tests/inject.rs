@@ -36,7 +36,7 @@ fn is_stable_separates_a_stable_and_an_unstable_loop() {
     assert!(!is_stable(&probe, &pid, d, 0.5).unwrap());
 }
 
-/// Reference: the 6 dB / 40° target of issue #18 with one sample of delay, loop-at-a-time by
+/// Reference: the 6 dB / 40° target with one sample of delay, loop-at-a-time by
 /// sine injection (the method `margins_table` uses for the nonlinear controllers). Goal: the
 /// backstepping as `Bench::new` ships it (model fitted to the twin's sampled response,
 /// measurement notches, Kalman estimate, gains × 0.5) is stable on the twin and keeps the

@@ -22,6 +22,7 @@ use flexstage_pipeline::{
     DEFAULT_PRESET, PRESETS, RunFolder, RunOptions, Scenario, default_root, default_run,
 };
 
+use anyhow::Context;
 use args::ScenarioArgs;
 
 /// flexstage: design, reduce, identify and control a piezo-driven compliant positioning stage.
@@ -155,7 +156,7 @@ same command again resumes after the last finished stage (run_state.json). Ends 
 summary and the path of <run>/report.html (self-contained, opens offline).
 
 Examples:
-  flexstage run                      # quick preset, runs/quick, a few seconds
+  flexstage run                      # quick preset, runs/quick, about half a minute
   flexstage run --preset paper       # the paper's settings (Tables 1, 3, 4, A1)
   flexstage run my.toml --out runs/mine --restart"
     )]
@@ -185,7 +186,9 @@ struct RunArgs {
 }
 
 fn main() -> ExitCode {
-    let result = dispatch(Cli::parse().command);
+    let command = Cli::parse().command;
+    bars::plain_when_not_a_terminal(command.name());
+    let result = dispatch(command);
     // A reader that went away (`| head`) ends the printing, never the command.
     let stdout_failure = out::finish();
     match (result, stdout_failure) {
@@ -200,6 +203,25 @@ fn main() -> ExitCode {
         (Err(e), _) => {
             errln!("error: {e:#}");
             ExitCode::FAILURE
+        }
+    }
+}
+
+impl Command {
+    /// The subcommand's name, for progress lines.
+    fn name(&self) -> &'static str {
+        match self {
+            Command::Init { .. } => "init",
+            Command::Check(_) => "check",
+            Command::Analyze(_) => "analyze",
+            Command::Design(_) => "design",
+            Command::Reduce(_) => "reduce",
+            Command::Identify { .. } => "identify",
+            Command::Pea { .. } => "pea",
+            Command::Track(_) => "track",
+            Command::Export(_) => "export",
+            Command::Run(_) => "run",
+            Command::Report { .. } => "report",
         }
     }
 }
@@ -249,7 +271,17 @@ fn init(path: &std::path::Path, name: &str, force: bool) -> anyhow::Result<()> {
 
 fn check(scenario: &ScenarioArgs) -> anyhow::Result<()> {
     let s: Scenario = scenario.load()?;
+    flexstage_pipeline::design::check_problem(&s).context("invalid scenario")?;
     outln!("{}: valid", scenario.describe());
+    let e = flexstage_pipeline::DesignEstimate::of(&s);
+    let estimate = format!(
+        "design estimate: {:.2} GiB of memory (allocated at the peak, limit {:.0} GiB), {:.1e} \
+         flop (limit {:.0e})",
+        e.bytes / GIB,
+        flexstage_pipeline::limit::DESIGN_BYTES / GIB,
+        e.flops,
+        flexstage_pipeline::limit::DESIGN_FLOPS
+    );
     let mesh = format!(
         "mesh {} x {} elements over {} x {} mm",
         s.mesh.nl,
@@ -274,6 +306,7 @@ fn check(scenario: &ScenarioArgs) -> anyhow::Result<()> {
             s.regions.len(),
             default_root(&s).display()
         );
+        outln!("  {estimate}");
         return Ok(());
     }
     outln!(
@@ -288,8 +321,11 @@ fn check(scenario: &ScenarioArgs) -> anyhow::Result<()> {
         s.trajectories.len(),
         default_root(&s).display()
     );
+    outln!("  {estimate}");
     Ok(())
 }
+
+const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 
 fn run(a: RunArgs) -> anyhow::Result<()> {
     let s = a.scenario.load()?;

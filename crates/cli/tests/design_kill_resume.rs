@@ -1,4 +1,4 @@
-//! Reference: issue #5 "Checkpoint and resume": "After a `kill -9`, `flexstage design --resume
+//! Reference: the checkpoint-and-resume requirement: "After a `kill -9`, `flexstage design --resume
 //! RUN_DIR` continues and reaches the same result." Goal: a quick-preset design run killed with
 //! SIGKILL (`Child::kill`) right after its first checkpoint appears, resumed with `--resume`,
 //! ends with the same density as an uninterrupted run: bitwise in practice (printed), asserted

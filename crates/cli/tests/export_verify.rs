@@ -1,4 +1,4 @@
-//! Reference: issue #19 items 4–5. Goal: `flexstage export` prints the verification of the
+//! Reference: the design-quality requirements. Goal: `flexstage export` prints the verification of the
 //! exported outline and its verdict as the last line; it writes the files either way; with
 //! `--require-safe` a design that is not verified safe exits with status 2, a safe one with 0.
 

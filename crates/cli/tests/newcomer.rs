@@ -1,4 +1,4 @@
-//! Reference: issue #17 "A pipeline library, a thin CLI, and a newcomer's path that never
+//! Reference: the pipeline-library requirements "A pipeline library, a thin CLI, and a newcomer's path that never
 //! surprises". Goal: the README's subcommand path on a fresh folder keeps every result in the
 //! one run folder of the default scenario (`runs/quick`), analyses the run's design, gives
 //! variants their own folders, refuses to replace a finished design without `--force`, refuses

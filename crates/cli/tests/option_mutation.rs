@@ -1,4 +1,4 @@
-//! Reference: issue #16, "Every rejected input names the field or option, the value and the
+//! Reference: the input-bounds and fault-handling requirements, "Every rejected input names the field or option, the value and the
 //! accepted range" and "zero panics, zero hangs … under a broad mutation of … CLI options".
 //! Goal: every numeric option of every subcommand, given each hostile class of value — 0,
 //! negative, NaN, ±inf, huge (1e308, 4e9), tiny (1e-308) and a non-number — is refused before

@@ -1,7 +1,7 @@
-//! Reference: issue #10 "`flexstage run`, an HTML report, CAD outline export". Goal: the
+//! Reference: the run-and-report requirements "`flexstage run`, an HTML report, CAD outline export". Goal: the
 //! README's main command runs every stage on the quick preset (made small: `tiny_scenario`), writes a self-contained
 //! `report.html` with every section and its figures (no network needed), the outline files,
-//! and running it again resumes (every stage skipped). Issue #17: both PEAs and Table 4's
+//! and running it again resumes (every stage skipped). The newcomer's path: both PEAs and Table 4's
 //! gains are in the report.
 
 use std::path::PathBuf;
@@ -24,7 +24,7 @@ const SECTIONS: [&str; 9] = [
     "export",
 ];
 
-/// The quick preset as `flexstage init` writes it, made small for CI (issue #16): a 24 × 12
+/// The quick preset as `flexstage init` writes it, made small for CI: a 24 × 12
 /// mesh, 8 stroke samples, 10 design iterations. Every stage and report section still runs.
 fn tiny_scenario(dir: &std::path::Path) -> PathBuf {
     let path = dir.with_extension("toml");

@@ -1,5 +1,5 @@
 //! Per-step cost of the controllers and the cost of the simulated experiment.
-//! Budgets (issue #8): one backstepping controller step (observer + law + input
+//! Budgets: one backstepping controller step (observer + law + input
 //! transformation + inverse hysteresis compensation) ≤ 1 µs with no allocation; the simulated
 //! experiment ≥ 50× faster than real time on 2 cores (≤ 40 ms per simulated second when two
 //! experiments run side by side).
@@ -98,7 +98,7 @@ fn pi_notch_step(b: Bencher) {
     });
 }
 
-/// One step of a controller with the learning layer (issue #18: ≤ 1 µs including it): the
+/// One step of a controller with the learning layer (≤ 1 µs including it): the
 /// robust backstepping (Kalman estimate) under learning with the twin's design (γ = 0.7,
 /// λ = 7, M = 1) and a fractional sensor lag, in its learning periods.
 #[divan::bench(sample_size = 1000)]

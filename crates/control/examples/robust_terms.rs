@@ -1,4 +1,4 @@
-//! What each part of the backstepping controller buys (issue #18, item 2): on the lumped
+//! What each part of the backstepping controller buys: on the lumped
 //! plant of a scenario inside the scenario's rig (delay, amplifier, the plant's own PEAs,
 //! noise; the controller predicts over the delay), the default Lissajous run with
 //!

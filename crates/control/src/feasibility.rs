@@ -148,11 +148,13 @@ pub fn feasibility(
         return Err(ControlError::Infeasible {
             what: "trajectory amplitude".into(),
             detail: format!(
-                "PEA{} would need a voltage outside the amplifier range [{lo}, {hi}] V at \
+                "PEA{} would need a voltage outside the amplifier range [{}, {}] V at \
                  t = {t:.4} s (x_nom = {:.1} µm); the range delivers +{:.1}/−{:.1} µm around \
                  the bias and the reference needs {:.0} % of it: scale the amplitude by at \
                  most {:.2}",
                 i + 1,
+                flexstage_numerics::compact(lo),
+                flexstage_numerics::compact(hi),
                 x * 1e6,
                 reach[i][0] * 1e6,
                 reach[i][1] * 1e6,
@@ -167,8 +169,8 @@ pub fn feasibility(
             what: "trajectory speed".into(),
             detail: format!(
                 "it needs |dU/dt| up to {:.3e} V/s (a PEA current of {:.3} A with C = {:.2e} F); \
-                 the amplifier delivers {:.3e} V/s (slew {:.2e} V/s, current {:.3} A): lower the \
-                 frequency or the amplitude by a factor {:.2}",
+                 the amplifier delivers {:.3e} V/s (slew {:.2e} V/s, current {:.3e} A): lower \
+                 the frequency or the amplitude by a factor {:.3e}",
                 f.peak_rate,
                 f.peak_current,
                 amplifier.capacitance,

@@ -104,7 +104,7 @@
 //! modes have ≈ 2 % damping; 1000 s⁻¹ is unstable).
 
 //! # Which controller wins where (on the twin of the designed stage)
-//! Measured with `flexstage-assess` on the quick design (README): the PI + notch + FF
+//! Measured with `flexstage-assess` on the quick design (docs/verification.md): the PI + notch + FF
 //! ([`pi_notch::PI_NOTCH_FF`], the default), tuned by [`tuning`] on the twin's
 //! sampled frequency response, meets 6 dB / 40° on both loops with one sample of delay
 //! (6.0 dB, 69° / 9.5 dB, 58°), tracks the default Lissajous to 10.2/5.9 nm RMS (the sensor

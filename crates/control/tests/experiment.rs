@@ -4,7 +4,7 @@
 //! Goal: on the full simulated plant with the default scenario and 3:1 Lissajous curve, the
 //! robust controller's RMS error is within 10 % of the non-robust one's (the scenario's
 //! ρ_η = 0.1 m/s² is tiny next to what the disturbance observer leaves, so Figure 9's gap
-//! is not reproduced: issue #18, DECISIONS.md) and well below the PID + feedforward
+//! is not reproduced: DECISIONS.md) and well below the PID + feedforward
 //! baseline's, and switching the hysteresis compensation off makes the error grow. The
 //! margins are printed (run with --nocapture).
 

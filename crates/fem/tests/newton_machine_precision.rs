@@ -1,4 +1,4 @@
-//! Reference: issue #16, "a *linear* solve whose increment is 1e-16 runs 330 iterations and
+//! Reference: the input-bounds and fault-handling requirements, "a *linear* solve whose increment is 1e-16 runs 330 iterations and
 //! reports NotConverged"; the stopping rule of Newton's method at round-off (Dennis &
 //! Schnabel, "Numerical Methods for Unconstrained Optimization and Nonlinear Equations",
 //! 1996, §7.2: stop when the step is below the achievable relative precision).

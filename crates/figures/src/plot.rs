@@ -522,7 +522,7 @@ mod tests {
 
     #[test]
     fn every_text_is_at_least_min_text_px() {
-        // Goal: issue #17 asks for text ≥ 11 px at 100 % zoom; at its own size every text of
+        // Goal: the report needs text ≥ 11 px at 100 % zoom; at its own size every text of
         // a figure and of small multiples is ≥ MIN_TEXT_PX (13.7 px), so any display at
         // ≥ 80 % of that size keeps it ≥ 11 px.
         let fig = Figure::new("title", "x [s]", "y [nm]")

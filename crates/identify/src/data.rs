@@ -19,7 +19,8 @@ pub const MIN_SAMPLES: usize = 200;
 /// A uniformly sampled record of the stage.
 ///
 /// Invariants (checked by [`StageRecord::new`]): equal lengths, at least [`MIN_SAMPLES`]
-/// samples, every value finite, time strictly increasing and uniform within the tolerance.
+/// samples, every value finite and within ±1 m (displacements), ±1e5 V (voltages), 1e9 s
+/// (time), time strictly increasing and uniform within the tolerance.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StageRecord {
     /// Time \[s\].
@@ -81,6 +82,25 @@ impl StageRecord {
                 return Err(DataError::new(
                     "stage record",
                     format!("{name}[{k}] = {} is not a finite number", c[k]),
+                )
+                .into());
+            }
+            // Magnitudes beyond any stage (displacements ±1 m, voltages ±1e5 V, times 1e9 s)
+            // are a unit error: x_nom1 × 1e300 left the x_in1 regression at its guess.
+            let (limit, unit) = match name.as_bytes()[0] {
+                b't' => (1e9, "s"),
+                b'U' => (1e5, "V"),
+                _ => (1.0, "m"),
+            };
+            if let Some(k) = c.iter().position(|v| v.abs() > limit) {
+                return Err(DataError::new(
+                    "stage record",
+                    format!(
+                        "{name}[{k}] = {:e} is beyond ±{} {unit} (displacements in m, \
+                         voltages in V, time in s)",
+                        c[k],
+                        flexstage_numerics::compact(limit)
+                    ),
                 )
                 .into());
             }

@@ -530,7 +530,7 @@ pub struct Identification {
     /// (`flexstage_sim::model::StageModel::with_coupling(&params, coupling)`): the mean of
     /// the q_o1 and q_o2 rows' estimates ([`Physical::coupling`]), 0 when
     /// [`IdentifyParams::coupling`] is off. Keeping it in the model cuts the tracking error
-    /// 3–5× at ten times the default scan speed (issue #18).
+    /// 3–5× at ten times the default scan speed.
     pub coupling: f64,
     /// Condition numbers of the four rows ([`StageIdentifier::conditioning`]).
     pub conditioning: [f64; 4],
@@ -540,6 +540,14 @@ pub struct Identification {
     pub warnings: Vec<String>,
 }
 
+/// The regression rows, in the order of [`Theta`]'s rows: the output rows and the plates'.
+const ROWS: [&str; 4] = [
+    "q_o1 (k_qo1, c_qo1)",
+    "q_o2 (k_qo2, c_qo2)",
+    "x_in1 (k_in1, k_pea1, c_in1)",
+    "x_in2 (k_in2, k_pea2, c_in2)",
+];
+
 /// Largest factor by which an identified stiffness may differ from its guess (either way).
 /// The guess comes from the reduced model of the design (Section 3.2.1), which predicts the
 /// stiffnesses within tens of percent; an estimate a thousand times off means the record does
@@ -547,9 +555,9 @@ pub struct Identification {
 pub const PLAUSIBLE_FACTOR: f64 = 1e3;
 
 /// The exit guard of [`identify`]: every estimate finite; every stiffness positive and within
-/// [`PLAUSIBLE_FACTOR`] of its guess; and θ not stuck at its initial value (every component
-/// equal to the guess's within round-off, 1e-12 relative), which means the record carried no
-/// information the estimator could use.
+/// [`PLAUSIBLE_FACTOR`] of its guess; and no row of θ stuck at its initial value (equal to
+/// the guess's within round-off, 1e-12 relative), which means the record carried no
+/// information the estimator could use for that row.
 fn check_estimate(
     raw: &Physical,
     guess: &StageParams,
@@ -576,19 +584,30 @@ fn check_estimate(
                 .into(),
         });
     }
-    // Stuck: every row's θ within round-off of its start, ‖θ − θ₀‖ ≤ 1e-12 ‖θ₀‖.
+    // Stuck: a row's θ within round-off of its start, ‖θ − θ₀‖ ≤ 1e-12 ‖θ₀‖. One stuck row
+    // is enough to refuse: its parameters would be reported as estimates while they are the
+    // guess (a column 1e300 times too large left the x_in1 row at its start).
     let norm = |v: &mut dyn Iterator<Item = f64>| v.map(|x| x * x).sum::<f64>().sqrt();
-    let stuck = now.iter().zip(&start).all(|(a, b)| {
-        norm(&mut a.iter().zip(b).map(|(x, y)| x - y)) <= 1e-12 * norm(&mut b.iter().copied())
-    });
-    if stuck {
+    let stuck: Vec<&str> = now
+        .iter()
+        .zip(&start)
+        .zip(ROWS)
+        .filter(|((a, b), _)| {
+            norm(&mut a.iter().zip(*b).map(|(x, y)| x - y)) <= 1e-12 * norm(&mut b.iter().copied())
+        })
+        .map(|(_, name)| name)
+        .collect();
+    if !stuck.is_empty() {
         return Err(IdentifyError::Estimate {
             what: "stage identification".into(),
-            reason: "every estimate equals its initial guess to round-off (1e-12 relative): the \
-                     record carried no information the estimator used (a constant or too short \
-                     record, inputs that do not move the stage, or an initial covariance too \
-                     small to let the estimates move)"
-                .into(),
+            reason: format!(
+                "the estimates of the {} regression(s) equal their initial guess to round-off \
+                 (1e-12 relative): the record carried no information the estimator used for \
+                 them (a constant or too short record, inputs that do not move the stage, \
+                 columns in the wrong units, or an initial covariance too small to let the \
+                 estimates move)",
+                stuck.join(", ")
+            ),
         });
     }
     for (name, v, g) in [
@@ -640,7 +659,7 @@ fn check_estimate(
 /// Identifies the stage parameters from a record, starting from `guess` (masses and α
 /// fixed, see [`StageIdentifier::new`]). Errors when a regressor is not excited, an estimate
 /// is not finite, a stiffness is not positive or more than [`PLAUSIBLE_FACTOR`] from its
-/// guess, or the estimate is stuck at the guess; warns when the information matrix is ill-conditioned.
+/// guess, or a row of the estimate is stuck at the guess; warns when the information matrix is ill-conditioned.
 pub fn identify(
     record: &StageRecord,
     guess: &StageParams,

@@ -53,7 +53,7 @@
 //!   force); it is reported, not scored. Negative values are replaced by the guess in the
 //!   parameter set.
 //!
-//! # Resonance band (issue #18; measured, tests/identify.rs)
+//! # Resonance band (measured, tests/identify.rs)
 //! Defaults: 8 s record, low band 5–150 Hz, resonance band 0.5× the lowest to 1.3× the
 //! highest natural frequency below 0.9× Nyquist, lines every 10 Hz, 2 µm peak per PEA; plate
 //! rows prefiltered at 150 Hz, output rows at 1.2× the band's top; Numerov regressors with the
@@ -70,7 +70,7 @@
 //! On the twin of a design the lumped model does not hold ([`frequency::fit`]'s residual says
 //! how far off it is); there the stage is identified by its response ([`response`]).
 //!
-//! # Excitation length, prefilter, decimation (low band alone; measured before issue #18)
+//! # Excitation length, prefilter, decimation (low band alone; measured before the resonance band existed)
 //! Default multisine 5–150 Hz, 27 µm peak per PEA, Numerov regressors, 300 Hz prefilter,
 //! no decimation, λ_f = 1:
 //!

@@ -1,4 +1,4 @@
-// Reference: issue #9 ("bad data gets clear errors"). Goal: stage records are read from CSV
+// Reference: the bad-data requirement ("bad data gets clear errors"). Goal: stage records are read from CSV
 // with the columns t, x_nom1/x_nom2 (or U1/U2), x_in1, x_in2, q1, q2, and too few samples,
 // non-uniform sampling and malformed cells are rejected with messages naming the problem.
 

@@ -1,7 +1,7 @@
 //! Reference: recursive least squares (Ljung, *System Identification*, 2nd ed., §11.2): with
 //! an initial covariance P₀ → 0 the gain P φ/(1 + φᵀPφ) vanishes and θ never leaves θ₀; a
 //! record in the wrong unit (µm read as m) scales every stiffness estimate by the unit factor.
-//! Goal (issue #16): an identification stuck at its guess, non-finite or outside physical
+//! Goal: an identification stuck at its guess, non-finite or outside physical
 //! bounds (a stiffness more than `PLAUSIBLE_FACTOR` from its guess) is refused with a message,
 //! never written; the same record identified normally passes (so the guards can fail).
 
@@ -75,4 +75,35 @@ fn ljung_non_finite_estimate_is_refused() {
             || msg.contains("guess"),
         "{msg}"
     );
+}
+
+/// The second hardening review: stage identification on a record whose x_nom1 is 1e300 times too large returned
+/// k_in1, k_pea1 and c_in1 exactly at the guess with exit 0 (only the x_in1 row was stuck; the
+/// guard needed every row stuck). The record itself is now refused by its range, and a row
+/// stuck at the guess is refused by name even when the others moved.
+#[test]
+fn ljung_one_row_stuck_at_the_guess_is_refused_by_name() {
+    let mut record = simulate(&samples::paper_simulation(0.5, true, false)).unwrap();
+    record.x_nom[0].iter_mut().for_each(|v| *v *= 1e300);
+    let msg = message(identify(
+        &record,
+        &samples::table4_guess(),
+        &IdentifyParams::default(),
+    ));
+    assert!(
+        msg.contains("x_in1") && msg.contains("initial guess"),
+        "{msg}"
+    );
+    assert!(!msg.contains("q_o1") && !msg.contains("x_in2"), "{msg}");
+    let e = flexstage_identify::StageRecord::new(
+        record.t.clone(),
+        record.x_nom.clone(),
+        record.x_in.clone(),
+        record.q.clone(),
+        None,
+        1e-3,
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("x_nom1[0]") && e.contains("beyond ±1 m"), "{e}");
 }

@@ -1,4 +1,4 @@
-// Reference: paper Section 4.2 (Eq. 54–56, Table 4), issue #9. Goal: the online RLS
+// Reference: paper Section 4.2 (Eq. 54–56, Table 4), the bad-data requirement. Goal: the online RLS
 // identification recovers every stiffness of a simulated stage with known truth — within
 // 1 % on noise-free data of the linear model (Eq. 36), within 5 % with the default sensor
 // noise and quantization — and, in the paper's scenario (guess = Table 4 guesses, truth =
@@ -184,7 +184,7 @@ fn two_band_excitation_meets_the_issue_18_targets_on_the_lumped_plant() {
     // Reference: the simulated lumped stage's truth (Table 4 estimates, cross terms 5 % of
     // √(2K_qo1K_qo2)), Bouc–Wen PEAs, the default sensor noise and quantization, 8 s records
     // (the default), default estimator settings plus the resonance plan.
-    // Goal (issue #18, item 6): with the resonance band derived from the model's output modes,
+    // Goal: with the resonance band derived from the model's output modes,
     // every stiffness within 3 % and the output dampings c_qo1, c_qo2 within 10 % of the
     // truth, for each of four noise seeds; the coupling k_c within 10 %.
     for seed in [1u64, 2, 3, 4] {
@@ -265,7 +265,7 @@ fn explore_two_band_settings() {
 }
 
 #[test]
-#[ignore = "open defect (issue #18): the rig holds one voltage per sample and its 3 kHz \
+#[ignore = "open defect: the rig holds one voltage per sample and its 3 kHz \
             amplifier moves the plates within the sample, which the sampled regression does not \
             see; measured K_qo1 +2.3 %, K_in1 −13 %, c_qo1 +59 %, c_qo2 +20 % (K_qo2 −0.5 %, \
             k_c +0.1 %). Needs a hold-aware discretization of the regression."]

@@ -3,7 +3,7 @@
 //! Reference: the exact steady-state response of a modal plant to the multisine (each line
 //! through `Σ_k out_k in_kᵀ / (ω_k² − ω² + 2jζ_kω_kω)` and the sensor chain), and the fit the
 //! controller would take from the plant's exact modes (`ResponseFit::from_modes`). Goal: the
-//! identification recovers that fit, exactly without noise and within the issue-#18
+//! identification recovers that fit, exactly without noise and within the stated
 //! tolerances with sensor noise.
 
 use flexstage_identify::frequency::C64;

@@ -319,8 +319,11 @@ impl Mma {
     /// * `dfdx`: constraint gradients, `m × n` row-major: `dfdx[i * n + j] = ∂fᵢ/∂xⱼ`.
     ///
     /// # Errors
-    /// [`MmaError::DimensionMismatch`], [`MmaError::NonFinite`] or [`MmaError::OutOfBounds`];
-    /// `x` and the internal state are left unchanged then.
+    /// [`MmaError::DimensionMismatch`], [`MmaError::NonFinite`] or [`MmaError::OutOfBounds`]
+    /// for bad input; `x` and the internal state are left unchanged then.
+    /// [`MmaError::NonFinite`] naming `x (new iterate)`, an asymptote or a multiplier when the
+    /// update itself produced NaN or ∞ (checked where it is produced): the new state is then
+    /// unusable (restore a saved [`MmaState`] or start over).
     pub fn update(
         &mut self,
         x: &mut [f64],
@@ -378,7 +381,33 @@ impl Mma {
                 self.primal_dual(x, &k)
             }
         };
+        self.check_new_state(x)?;
         Ok(report)
+    }
+
+    /// `Ok` when the new iterate, the asymptotes and the multipliers of the update are all
+    /// finite, else [`MmaError::NonFinite`] naming the first that is not.
+    fn check_new_state(&self, x: &[f64]) -> Result<(), MmaError> {
+        let (n, par, stride) = (self.n, self.sub.parallel, self.sub.stride);
+        check_finite("x (new iterate)", x, par)?;
+        for (name, col) in [("low (asymptotes)", LOW), ("upp (asymptotes)", UPP)] {
+            let at = |j: usize| self.sub.nodes[idx(j, col, stride)];
+            if !all_ok(n, par, |j| at(j).is_finite()) {
+                let index = (0..n).find(|&j| !at(j).is_finite()).unwrap_or(0);
+                return Err(MmaError::NonFinite {
+                    name,
+                    index,
+                    value: at(index),
+                });
+            }
+        }
+        check_finite("xsi (bound multipliers)", &self.xsi, par)?;
+        check_finite("eta (bound multipliers)", &self.eta, par)?;
+        check_finite("lam (constraint multipliers)", &self.sub.lam, false)?;
+        check_finite("y (artificial variables)", &self.sub.y, false)?;
+        check_finite("mu (multipliers of y)", &self.sub.mu, false)?;
+        check_finite("s (slacks)", &self.sub.s, false)?;
+        check_finite("z, zet", &[self.sub.z, self.sub.zet], false)
     }
 
     /// Builds the subproblem without p/q and solves it with the dual solver; `None` (with

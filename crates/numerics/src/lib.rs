@@ -48,4 +48,4 @@ pub mod samples;
 pub mod validate;
 
 pub use error::Error;
-pub use validate::{DataError, RangeError};
+pub use validate::{DataError, RangeError, compact};

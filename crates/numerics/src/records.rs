@@ -15,7 +15,7 @@
 //! # Ok::<(), flexstage_numerics::records::RecordError>(())
 //! ```
 
-use std::io::{BufRead, BufReader, Lines, Read};
+use std::io::{BufRead, BufReader, Read};
 
 use crate::validate::DataError;
 
@@ -38,7 +38,7 @@ pub enum RecordError {
     },
     /// A line is malformed: a missing or non-numeric cell, NaN or infinity, time that does
     /// not increase; line 0 stands for the record as a whole.
-    #[error("{origin}, line {line}: {reason}")]
+    #[error("{origin}{}: {reason}", at_line(*.line))]
     Line {
         /// File name or other origin.
         origin: String,
@@ -47,6 +47,15 @@ pub enum RecordError {
         /// What is wrong with the line.
         reason: String,
     },
+}
+
+/// ", line N" for a line, nothing for the whole record (line 0).
+fn at_line(line: u64) -> String {
+    if line == 0 {
+        String::new()
+    } else {
+        format!(", line {line}")
+    }
 }
 
 impl RecordError {
@@ -65,10 +74,16 @@ impl RecordError {
 /// extra columns ignored, blank lines and `#` comment lines skipped, cells trimmed (and
 /// unquoted: `"t"` is `t`). Line numbers count every line of the file, comments included.
 ///
+/// Records are strict: every row has as many fields as the header (a missing or an extra
+/// field is refused with its line, also in a column that is not read), and every row ends
+/// with a line end, so a file cut off in its last row is refused rather than read short.
+///
 /// The format is plain comma-separated numbers, so no quoting rules beyond that are
 /// needed; reading is streamed line by line.
 pub struct NumericCsv<R> {
-    lines: Lines<BufReader<R>>,
+    reader: BufReader<R>,
+    /// The text of the line being read (reused).
+    buf: String,
     /// 1-based number of the last line read.
     line: u64,
     headers: Vec<String>,
@@ -80,32 +95,51 @@ impl<R: Read> NumericCsv<R> {
     /// comment); `origin` (usually the file name) prefixes every error message.
     pub fn open(reader: R, origin: &str) -> Result<Self, RecordError> {
         let mut table = NumericCsv {
-            lines: BufReader::new(reader).lines(),
+            reader: BufReader::new(reader),
+            buf: String::new(),
             line: 0,
             headers: Vec::new(),
             origin: origin.to_string(),
         };
-        if let Some(header) = table.next_row()? {
-            table.headers = cells(&header).map(str::to_string).collect();
+        if table.next_row()? {
+            table.headers = cells(&table.buf).map(str::to_string).collect();
         }
         Ok(table)
     }
 
-    /// The next line that is neither blank nor a comment, or `None` at the end.
-    fn next_row(&mut self) -> Result<Option<String>, RecordError> {
-        for text in self.lines.by_ref() {
+    /// Reads the next line that is neither blank nor a comment into `buf` (without its line
+    /// end); `false` at the end of the file. A line without a line end (the last one of a file
+    /// cut off while it was written) is refused.
+    fn next_row(&mut self) -> Result<bool, RecordError> {
+        loop {
+            self.buf.clear();
+            let n = self.reader.read_line(&mut self.buf);
             self.line += 1;
-            let text = text.map_err(|e| RecordError::Line {
+            let bad = |reason: String| RecordError::Line {
                 origin: self.origin.clone(),
                 line: self.line,
-                reason: format!("cannot read the line: {e}"),
-            })?;
-            let t = text.trim();
-            if !(t.is_empty() || t.starts_with('#')) {
-                return Ok(Some(text));
+                reason,
+            };
+            if n.map_err(|e| bad(format!("cannot read the line: {e}")))? == 0 {
+                return Ok(false);
             }
+            let ended = self.buf.ends_with('\n');
+            let text = self.buf.trim_end_matches(['\n', '\r']);
+            let t = text.trim();
+            if t.is_empty() || t.starts_with('#') {
+                continue;
+            }
+            if !ended {
+                return Err(bad(
+                    "the last line has no line end: the file may have been cut off while it \
+                     was written (a complete record ends every line with a newline)"
+                        .into(),
+                ));
+            }
+            let len = text.len();
+            self.buf.truncate(len);
+            return Ok(true);
         }
-        Ok(None)
     }
 
     /// The index of the column called `name` (case-insensitive), if present.
@@ -152,20 +186,33 @@ impl<R: Read> NumericCsv<R> {
     pub fn read(mut self, cols: &[usize], names: &[&str]) -> Result<Vec<Vec<f64>>, RecordError> {
         let mut data = vec![Vec::new(); cols.len()];
         let mut prev_t: Option<(f64, u64)> = None;
-        while let Some(text) = self.next_row()? {
+        let width = self.headers.len();
+        while self.next_row()? {
             let line = self.line;
             let bad = |reason: String| RecordError::Line {
                 origin: self.origin.clone(),
                 line,
                 reason,
             };
-            let row: Vec<&str> = cells(&text).collect();
+            let row: Vec<&str> = cells(&self.buf).collect();
+            if row.len() != width {
+                return Err(bad(format!(
+                    "{} fields, but the header has {width} ({}): a row {} (every row has one \
+                     value per column)",
+                    row.len(),
+                    self.found(),
+                    if row.len() < width {
+                        "cut short"
+                    } else {
+                        "with an extra field"
+                    }
+                )));
+            }
             for (i, &c) in cols.iter().enumerate() {
-                let cell = row.get(c).ok_or_else(|| {
+                let cell = *row.get(c).ok_or_else(|| {
                     bad(format!(
-                        "missing value for column {} (the row has {} fields)",
-                        names[i],
-                        row.len()
+                        "missing value for column {} (column {c})",
+                        names[i]
                     ))
                 })?;
                 let v: f64 = cell
@@ -251,6 +298,31 @@ mod tests {
         let data = read("# made by a logger\n\n\"t\",\"x\"\r\n0,1\r\n\r\n1,2\r\n").unwrap();
         assert_eq!(data, vec![vec![0.0, 1.0], vec![1.0, 2.0]]);
         assert_eq!(line_of(read("t,x\n\n\n0,1\n1,z\n").unwrap_err()), 5);
+    }
+
+    /// Reference: the second hardening review, "a CSV with a truncated last row or one extra field is read
+    /// silently". Goal: a row with a field too few or too many (also in a column not read)
+    /// and a last line without its line end are refused with their line.
+    #[test]
+    fn rows_are_strict_and_a_cut_off_last_line_is_refused() {
+        let e = read("t,x,u\n0,1,2\n1,2\n").unwrap_err();
+        assert!(
+            e.to_string().contains("2 fields, but the header has 3"),
+            "{e}"
+        );
+        assert!(e.to_string().contains("cut short"), "{e}");
+        assert_eq!(line_of(e), 3);
+        let e = read("t,x\n0,1\n1,2,3\n2,3\n").unwrap_err();
+        assert!(e.to_string().contains("an extra field"), "{e}");
+        assert_eq!(line_of(e), 3);
+        let e = read("t,x\n0,1\n1,2\n2,3").unwrap_err();
+        assert!(e.to_string().contains("no line end"), "{e}");
+        assert_eq!(line_of(e), 4);
+        // A comment or blank line at the end needs no line end; CRLF ends a line.
+        assert_eq!(
+            read("t,x\r\n0,1\r\n# end").unwrap(),
+            vec![vec![0.0], vec![1.0]]
+        );
     }
 
     #[test]

@@ -59,6 +59,25 @@ impl RangeError {
     }
 }
 
+/// A number as messages print it: exact (the shortest text that reads back to the same
+/// `f64`) and short at any magnitude, `{}` for 0 and 1e-4 ≤ |x| < 1e6, `{:e}` otherwise
+/// (`1e308`, not 309 digits).
+///
+/// ```
+/// use flexstage_numerics::compact;
+/// assert_eq!(compact(0.235), "0.235");
+/// assert_eq!(compact(1e308), "1e308");
+/// assert_eq!(compact(-2.5e-9), "-2.5e-9");
+/// assert_eq!(compact(f64::NAN), "NaN");
+/// ```
+pub fn compact(x: f64) -> String {
+    if x == 0.0 || !x.is_finite() || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}
+
 /// Input data that do not fit together: lengths that differ, too few samples, data that do
 /// not determine the unknowns.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]

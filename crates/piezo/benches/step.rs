@@ -1,6 +1,6 @@
 //! Per-step costs for the 10 kHz loop: one model step, one model + compensation step, one
 //! parallel-RLS sample (summed regression, moments update and two 5×5 solves). Budgets
-//! (issue #7): model + compensation ≤ 200 ns, parallel-RLS sample ≤ 300 ns; none allocates.
+//!: model + compensation ≤ 200 ns, parallel-RLS sample ≤ 300 ns; none allocates.
 //! The generic RLS update is benchmarked in `flexstage-numerics`.
 
 use divan::{Bencher, black_box};

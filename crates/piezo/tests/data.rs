@@ -1,4 +1,4 @@
-// Reference: issue #7 (CLI input `t, U, x` CSV; bad CSV must give a clear error with the line
+// Reference: the PEA-identification requirements (CLI input `t, U, x` CSV; bad CSV must give a clear error with the line
 // number: missing columns, non-monotonic time, NaN).
 // Goal: records round-trip through CSV exactly, and each kind of bad input is rejected with
 // a message naming the line and the problem.

@@ -1,6 +1,6 @@
 // Reference: paper Appendix B (Eq. A8–A12, Algorithm A1, Table A1), DECISIONS.md "PEA
 // hysteresis" (on noise-free synthetic data the estimators must recover known parameters),
-// issue #7 ("noise-free synthetic data recovers the true parameters within 1 %; with sensor
+// the PEA-identification requirements ("noise-free synthetic data recovers the true parameters within 1 %; with sensor
 // noise of 10 nm, within 5 %").
 // Goal: on synthetic records of PEA1 and PEA2 (Table A1, 10 kHz, the decaying 1 Hz drive),
 // the online parallel RLS of Algorithm A1 (summed regression, src/identify.rs) from Table A1's

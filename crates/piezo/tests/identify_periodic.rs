@@ -1,5 +1,5 @@
 // Reference: Actuators 2022, 11(7), 179, Appendix B (Eq. A8–A12, Algorithm A1, Table A1);
-// issue #18 item 6 ("parallel RLS robust on noisy triangle and sine drives; the batch fit
+// the requirement ("parallel RLS robust on noisy triangle and sine drives; the batch fit
 // correct on single-amplitude drives; PEA parameters (both) within 5 % on triangle and sine
 // drives over 10 seeds").
 // Goal: on single-amplitude 0–1000 V triangle and sine drives (1 Hz, 10 periods, 10 kHz) with

@@ -49,7 +49,11 @@ impl AnalyzeOptions {
             require(
                 p.iter().all(|x| x.is_finite() && x.abs() <= MAX_INPUT),
                 "analyze.inputs",
-                format!("({} µm, {} µm)", p[0] * 1e6, p[1] * 1e6),
+                format!(
+                    "({} µm, {} µm)",
+                    flexstage_numerics::compact(p[0] * 1e6),
+                    flexstage_numerics::compact(p[1] * 1e6)
+                ),
                 "strokes in [-1000, 1000] µm",
             )?;
         }

@@ -16,7 +16,7 @@ use flexstage_run::files::design::{
     DESIGN_VERSION, DesignFile, DesignSummaryFile, SUMMARY_VERSION,
 };
 use flexstage_run::{RunDir, Table, layout::design as files};
-use flexstage_scenario::Scenario;
+use flexstage_scenario::{DesignEstimate, Scenario};
 use flexstage_topopt::check::{CheckSetup, check_gradients};
 use flexstage_topopt::summary::{FinalAnalysis, final_analysis};
 use flexstage_topopt::{
@@ -91,6 +91,12 @@ pub enum DesignStart {
     Resume,
 }
 
+/// A constraint whose normalized value g (≤ 0 feasible) ends above this is reported as
+/// violated: 5 %, well above the quick preset's stress constraint at its iteration cap
+/// (1.6 %), far below what an unusable design shows (a start almost void ended at g = 3 on
+/// the volume).
+pub const INFEASIBLE_ABOVE: f64 = 0.05;
+
 /// What the design stage produced.
 #[derive(Debug, Clone)]
 pub struct DesignSummary {
@@ -119,6 +125,9 @@ pub struct DesignSummary {
     pub constraints: Vec<(&'static str, f64)>,
     /// Load cases that needed a cutback retry, summed over iterations.
     pub retried_load_cases: usize,
+    /// What the user must know about the result: each constraint violated by more than
+    /// [`INFEASIBLE_ABOVE`] at the last iteration.
+    pub warnings: Vec<String>,
     /// The stage folder.
     pub dir: PathBuf,
 }
@@ -131,6 +140,7 @@ pub fn design(
     progress: &dyn Progress,
 ) -> Result<DesignSummary> {
     options.validate()?;
+    fits_address_space(folder.scenario(), options)?;
     let run = folder.dir();
     match start {
         DesignStart::Fresh { force } => prepare_fresh(folder, force)?,
@@ -153,6 +163,19 @@ pub fn design(
         DesignStart::Fresh { .. } => Optimizer::new(&problem, params)?,
         DesignStart::Resume => {
             let path = run.path(files::CHECKPOINT);
+            if !path.exists() {
+                return Err(PipelineError::Missing {
+                    what: "checkpoint",
+                    path,
+                    hint: format!(
+                        "there is nothing to resume: the design stopped before its first \
+                         checkpoint (one every {} iterations, --checkpoint-every) or never \
+                         started; start it over with `flexstage design --out {}`",
+                        options.checkpoint_every,
+                        folder.root().display()
+                    ),
+                });
+            }
             let bytes = crate::error::read_bytes(&path)?;
             let payload = crate::envelope::payload_for(&path, &bytes, folder.scenario())?;
             let o = Optimizer::resume(&problem, params, payload)?;
@@ -181,6 +204,51 @@ pub fn design(
     )?;
     let seconds = t0.elapsed().as_secs_f64();
     finish(&s, &problem, &opt, folder, stop, seconds, resumed_at)
+}
+
+/// The design problem's own checks, without solving anything: the scenario's selectors on the
+/// FE mesh, the mirror symmetry of the passive regions, supports, springs and ports, the
+/// constraints' settings ([`Problem::validate`]). `flexstage check` runs them, so that it
+/// refuses what `design` would (a passive region whose mirror image is designed passed
+/// `check` and stopped `design`).
+pub fn check_problem(s: &Scenario) -> Result<()> {
+    Problem::from_scenario(s, None)?.validate()?;
+    Ok(())
+}
+
+/// Refuses a design whose memory estimate ([`DesignEstimate`]: allocated at the peak) exceeds
+/// the address space this process may allocate (`ulimit -v`, the soft `RLIMIT_AS` as Linux's
+/// `/proc/self/limits` shows it): it would abort in an allocation, possibly hours in.
+fn fits_address_space(s: &Scenario, options: &DesignOptions) -> Result<()> {
+    let Some(cap) = address_space_limit() else {
+        return Ok(());
+    };
+    let mut s = s.clone();
+    if let Some(n) = options.max_iterations {
+        s.optimization.max_iterations = n;
+    }
+    let need = DesignEstimate::of(&s).bytes;
+    if need <= cap {
+        return Ok(());
+    }
+    let gib = |b: f64| format!("{:.1} GiB", b / 1024f64.powi(3));
+    Err(PipelineError::Resources {
+        what: "the design (memory allocated at its peak, `flexstage check` prints the estimate)",
+        need: gib(need),
+        available: format!(
+            "the {} of address space this process may allocate (ulimit -v)",
+            gib(cap)
+        ),
+        hint: "it would abort in an allocation. Raise the limit, or lower optimization.samples \
+               or the mesh",
+    })
+}
+
+/// The soft limit of the address space \[bytes\], if there is one and it can be read.
+fn address_space_limit() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let line = text.lines().find(|l| l.starts_with("Max address space"))?;
+    line.split_whitespace().nth(3)?.parse().ok()
 }
 
 /// Refuses to replace an earlier design unless forced; clears `design/` for a new one.
@@ -369,6 +437,7 @@ fn finish(
             .zip(last.constraints.iter().copied())
             .collect(),
         retried_load_cases: h.iter().map(|r| r.retried_cases.len()).sum(),
+        warnings: infeasible(&opt.constraint_names(), &last.constraints),
         dir: run.path(files::DIR),
     };
     let file = DesignFile {
@@ -612,8 +681,45 @@ pub(crate) fn two_pea_stage(s: &Scenario, stage: &str) -> Result<()> {
     Ok(())
 }
 
+/// A warning naming the constraints the last iteration violates by more than
+/// [`INFEASIBLE_ABOVE`] (`history.csv` has their columns `g_<name>`), if any.
+fn infeasible(names: &[&str], g: &[f64]) -> Vec<String> {
+    let violated: Vec<String> = names
+        .iter()
+        .zip(g)
+        .filter(|(_, g)| g.is_nan() || **g > INFEASIBLE_ABOVE)
+        .map(|(name, g)| format!("g_{name} = {}", flexstage_report::html::fmt_num(*g)))
+        .collect();
+    if violated.is_empty() {
+        return Vec::new();
+    }
+    vec![format!(
+        "the design ends infeasible: {} (≤ 0 is feasible; design/history.csv): it does not meet \
+         these constraints (give it more iterations, or start nearer the bounds: \
+         optimization.initial_density)",
+        violated.join(", ")
+    )]
+}
+
 #[cfg(test)]
 mod tests {
+    /// The second hardening review: a design from a start almost void ended at three times the
+    /// volume bound and twice the stress bound with exit 0 and no word. Goal: every constraint
+    /// above [`super::INFEASIBLE_ABOVE`] is named in one warning; none below it.
+    #[test]
+    fn a_design_ending_infeasible_is_flagged() {
+        let names = ["worst_eroded", "stress", "volume", "energy"];
+        let w = super::infeasible(&names, &[0.0, 1.039, 2.975, 0.049]);
+        assert_eq!(w.len(), 1, "{w:?}");
+        assert!(
+            w[0].contains("g_stress = 1.039") && w[0].contains("g_volume = 2.975"),
+            "{w:?}"
+        );
+        assert!(!w[0].contains("energy") && !w[0].contains("worst"), "{w:?}");
+        assert!(super::infeasible(&names, &[0.0, 0.016, -0.1, -0.9]).is_empty());
+        assert_eq!(super::infeasible(&["volume"], &[f64::NAN]).len(), 1);
+    }
+
     use super::*;
 
     #[test]

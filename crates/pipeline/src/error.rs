@@ -134,6 +134,18 @@ pub enum PipelineError {
         /// The likely cause and how to go on.
         hint: String,
     },
+    /// The work needs more of a resource than the process may use.
+    #[error("{what} needs an estimated {need}, more than {available}; {hint}")]
+    Resources {
+        /// The work and the resource.
+        what: &'static str,
+        /// The estimate, formatted.
+        need: String,
+        /// What the process may use, formatted.
+        available: String,
+        /// How to go on.
+        hint: &'static str,
+    },
     /// Scenario errors (also of the derived plant).
     #[error(transparent)]
     Scenario(#[from] flexstage_scenario::ScenarioError),
@@ -201,7 +213,8 @@ pub(crate) fn read_bytes(path: &std::path::Path) -> Result<Vec<u8>> {
 }
 
 /// `Ok` when `ok`, else [`PipelineError::Option`] naming the option, the value and the
-/// accepted range. Non-finite floats never pass (callers include `value.is_finite()`).
+/// accepted range. Non-finite floats never pass (callers include `value.is_finite()`). A
+/// value that is one number is shown compactly (`1e308`, not 309 digits).
 pub(crate) fn require(
     ok: bool,
     option: &'static str,
@@ -209,14 +222,16 @@ pub(crate) fn require(
     expected: &str,
 ) -> Result<()> {
     if ok {
-        Ok(())
-    } else {
-        Err(PipelineError::Option {
-            option,
-            value: value.to_string(),
-            expected: expected.to_string(),
-        })
+        return Ok(());
     }
+    let value = value.to_string();
+    Err(PipelineError::Option {
+        option,
+        value: value
+            .parse::<f64>()
+            .map_or(value, flexstage_numerics::compact),
+        expected: expected.to_string(),
+    })
 }
 
 /// `Ok` when the workspace `area` \[m²\] of `what` (e.g. `analyze`) is finite and ≥ 0, else
@@ -284,8 +299,8 @@ mod tests {
     use flexstage_sim::experiment::Metrics;
 
     #[test]
-    fn issue16_area_refused_when_nan_infinite_or_negative() {
-        // Reference: issue #16 ("`analyze` on it exits 0 with a negative area", "a 1 × 1 mesh
+    fn area_refused_when_nan_infinite_or_negative() {
+        // Reference: the input-bounds and fault-handling requirements ("`analyze` on it exits 0 with a negative area", "a 1 × 1 mesh
         // gives a NaN area with exit 0"). Goal: only a finite area ≥ 0 passes.
         for ok in [0.0, 1e-12, 3.5e-9] {
             require_area("analyze", ok).unwrap();
@@ -300,8 +315,8 @@ mod tests {
     }
 
     #[test]
-    fn issue16_diverged_tracking_rows_are_named() {
-        // Reference: issue #16 ("metrics show a maximum error of 0 when the series is NaN").
+    fn diverged_tracking_rows_are_named() {
+        // Reference: the input-bounds and fault-handling requirements ("metrics show a maximum error of 0 when the series is NaN").
         // Goal: a row whose metrics diverged fails the command, naming it; finite rows pass.
         let row =
             |t: &str, v: &'static Controller, non_finite: usize, max: f64| crate::track::TrackRow {

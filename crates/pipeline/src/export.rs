@@ -12,7 +12,7 @@ use flexstage_topopt::Problem;
 use flexstage_verify::outline::{Outline, Unit};
 use flexstage_verify::{Verification, VerifyParams};
 
-use crate::error::{Result, require};
+use crate::error::{PipelineError, Result, require};
 use crate::folder::RunFolder;
 use crate::source::{DesignSource, load_design};
 
@@ -102,8 +102,28 @@ impl ExportOptions {
             "a length in [0, 0.01] m",
         )?;
         if let Some(v) = &self.verify {
+            // The overrides by their option names (SI units, as the other options).
             v.params(&flexstage_scenario::Limits::default())
-                .validate()?;
+                .validate()
+                .map_err(|e| match e {
+                    flexstage_verify::VerifyError::OutOfRange {
+                        field,
+                        value,
+                        range,
+                    } => PipelineError::Option {
+                        option: match field {
+                            "VerifyParams::fatigue_strength" => "export.fatigue_strength",
+                            "VerifyParams::safety_factor" => "export.safety_factor",
+                            "VerifyParams::min_ligament" => "export.min_ligament",
+                            "VerifyParams::min_gap" => "export.min_gap",
+                            "VerifyParams::start_hole_diameter" => "export.start_hole_diameter",
+                            other => other,
+                        },
+                        value: flexstage_numerics::compact(value),
+                        expected: format!("a value in {range}"),
+                    },
+                    e => e.into(),
+                })?;
         }
         Ok(())
     }

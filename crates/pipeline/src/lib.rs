@@ -5,7 +5,7 @@
 //!
 //! ```text
 //! design ─► export ─► reduce ─► twin ─► pea (simulate + identify, ─► identify stage ─► track ─► report
-//! (Alg. 1)  (§4.1)    (§3.2.1)   (#15)    both PEAs; App. B, Eq. 21)   (Eq. 54–56)       (§4)
+//! (Alg. 1)  (§4.1)    (§3.2.1)   (twin)     both PEAs; App. B, Eq. 21)   (Eq. 54–56)       (§4)
 //! ```
 //!
 //! * **One scenario per run, in memory.** [`RunFolder`] opens `runs/<scenario name>/` (or a
@@ -105,6 +105,6 @@ pub use flexstage_control::{
     registry::{CONTROLLERS, Controller},
 };
 pub use flexstage_piezo::WaveShape;
-pub use flexstage_scenario::Scenario;
+pub use flexstage_scenario::{DesignEstimate, Scenario, limit};
 pub use flexstage_verify::outline::Unit;
 pub use flexstage_verify::{Verification, VerifyParams};

@@ -119,10 +119,7 @@ impl RunLock {
     /// Takes the lock of the run folder `root` (creating the folder if needed): refuses with
     /// [`PipelineError::Locked`] while another live process holds it, takes over a stale one.
     pub fn acquire(root: &Path) -> Result<RunLock> {
-        fs::create_dir_all(root).map_err(|source| flexstage_run::RunError::Write {
-            path: root.to_path_buf(),
-            source,
-        })?;
+        flexstage_run::create_folder(root)?;
         let path = root.join(layout::LOCK);
         let holder = LockHolder::this_process();
         let text = holder.to_text();

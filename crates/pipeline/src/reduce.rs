@@ -69,8 +69,20 @@ impl ReduceOptions {
             format!("{} scales", self.scales.len()),
             "at most 20 scales",
         )?;
-        self.params().validate()?;
-        Ok(())
+        // The reduction's parameters by their option names.
+        self.params().validate().map_err(|e| match e {
+            flexstage_reduce::ReduceError::OutOfRange(mut r) => {
+                r.field = match r.field.as_str() {
+                    "ReduceParams::operating_point" => "reduce.operating_point",
+                    "ValidityParams::scales" => "reduce.scales",
+                    "ModalParams::modes" => "reduce.modes",
+                    other => other,
+                }
+                .to_string();
+                flexstage_reduce::ReduceError::OutOfRange(r).into()
+            }
+            e => e.into(),
+        })
     }
 
     /// The reduction's parameters.

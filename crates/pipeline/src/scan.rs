@@ -1,4 +1,4 @@
-//! Error against scan frequency (issue #18, item 5): every controller of a `track` call on the
+//! Error against scan frequency: every controller of a `track` call on the
 //! Lissajous 3:1 whose fast component runs from 1 % to 30 % of the twin's first resonance
 //! ([`flexstage_assess::sweep`]), written beside the tracking results as
 //! `scan_frequency.csv` and `scan_frequency.svg` (the report's figure). Only on the twin: the

@@ -53,6 +53,9 @@ impl Summary for DesignSummary {
     fn written(&self) -> (Vec<&Path>, bool) {
         (vec![&self.dir], false)
     }
+    fn warnings(&self) -> &[String] {
+        &self.warnings
+    }
 }
 
 impl fmt::Display for AnalyzeSummary {
@@ -534,6 +537,7 @@ impl Summary for StageSummary {
     fn warnings(&self) -> &[String] {
         match self {
             StageSummary::IdentifyStage(i) => i.warnings(),
+            StageSummary::Design(d) => d.warnings(),
             _ => &[],
         }
     }

@@ -287,7 +287,7 @@ pub struct TrackSummary {
 
 impl TrackSummary {
     /// The margins as a table: per controller and loop the gain margin, phase margin, gain
-    /// crossover and delay margin, `FLAGGED` below 6 dB / 40° (issue #18); empty when none
+    /// crossover and delay margin, `FLAGGED` below 6 dB / 40°; empty when none
     /// were measured.
     pub fn margins_table(&self) -> String {
         if self.margins.is_empty() {
@@ -926,7 +926,7 @@ mod tests {
 
     #[test]
     fn a_trajectory_beyond_the_stroke_is_refused_before_the_run_naming_it() {
-        // Reference: issue #15 item 4 — refused with the trajectory, the value and the limit.
+        // Reference: the digital-twin requirements: refused with the trajectory, the value and the limit.
         let mut s = crate::folder::preset("quick").unwrap();
         let name = s.trajectories[0].name().to_string();
         if let flexstage_scenario::Trajectory::Lissajous { amplitude, .. } = &mut s.trajectories[0]

@@ -1,4 +1,4 @@
-//! Reference: issue #16, "a 200-row PEA record yields Γ = −8.2 as an 'estimate'" and "CSV
+//! Reference: the input-bounds and fault-handling requirements, "a 200-row PEA record yields Γ = −8.2 as an 'estimate'" and "CSV
 //! records (rows cut, NaN, non-monotonic time, huge values, few rows)". Goal: identification
 //! of a record too short to show hysteresis is an error naming the record, never an
 //! estimate; mutated records (proptest) never panic, finish in bounded time, and either

@@ -1,4 +1,4 @@
-//! Reference: issue #16, "kill -9 at any point of `run`, then rerun: bitwise-identical final
+//! Reference: the input-bounds and fault-handling requirements, "kill -9 at any point of `run`, then rerun: bitwise-identical final
 //! design and identical report numbers". Goal: `run` on a tiny version of the quick preset
 //! (`common::tiny`, `common::short`: 16 design iterations with a checkpoint every 3, a
 //! one-scale validity map, short identification and tracking) is killed with SIGKILL in every

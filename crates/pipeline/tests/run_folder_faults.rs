@@ -1,4 +1,4 @@
-//! Reference: issue #16, "Two `run`s on one folder mix their results", "Random bit flips in
+//! Reference: the input-bounds and fault-handling requirements, "Two `run`s on one folder mix their results", "Random bit flips in
 //! `checkpoint.bin` resume with exit 0", "A killed run resumes a checkpoint made under a
 //! different scenario". Goal: on a real interrupted `run` (tiny quick preset, killed with SIGKILL
 //! once its design has written a checkpoint), (1) a second `run` on a folder that another

@@ -1,5 +1,5 @@
-//! Reference: issue #17 (the pipeline library keeps `flexstage run` resumable), issue #10
-//! ("running it again resumes") and issue #16 (a mismatch refuses to resume, saying what
+//! Reference: the pipeline-library requirements (the pipeline library keeps `flexstage run` resumable), the run-and-report requirements
+//! ("running it again resumes") and the input-bounds and fault-handling requirements (a mismatch refuses to resume, saying what
 //! changed). Goal: on a short version of the quick scenario, `run` finishes every stage; a
 //! second call with the same scenario skips all seven; a changed scenario is refused with the
 //! changed field and leaves the folder as it was (on the tiny quick preset of `common`); other options are refused; `restart` starts
@@ -116,7 +116,7 @@ fn run_resumes_and_refuses_another_scenario_until_restarted() {
     std::fs::remove_dir_all(&root).unwrap();
 }
 
-/// Reference: issue #32 ("`run` trusts its state file, not its files"). Goal: after a
+/// Reference: the second hardening round ("`run` trusts its state file, not its files"). Goal: after a
 /// finished run, each damage the issue names makes the next `run` redo the stage that wrote
 /// the file (saying so, with every later stage) and skip the ones before, and the redone
 /// files equal the first run's byte for byte; `report` refuses a folder whose scenario.toml

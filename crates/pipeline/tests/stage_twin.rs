@@ -1,4 +1,4 @@
-//! Stage identification on the twin of the default design (issue #18).
+//! Stage identification on the twin of the default design.
 //!
 //! Reference: the response fit the controller's model takes from the twin's exact modes
 //! (`ResponseFit::from_modes`, then `fit_to_response`), the truth of `identify stage --plant

@@ -12,6 +12,40 @@ use std::sync::{Arc, Mutex, PoisonError};
 use crate::format::Format;
 use crate::{Result, RunError};
 
+/// Creates the folder `path` and its parents ([`fs::create_dir_all`]); when that fails, says
+/// what is in the way: a symbolic link whose target does not exist (`create_dir_all` reports
+/// "File exists" for it), or a file where a folder should be.
+pub fn create_folder(path: &Path) -> Result<()> {
+    let Err(source) = fs::create_dir_all(path) else {
+        return Ok(());
+    };
+    let in_the_way = path.ancestors().find_map(|p| {
+        let meta = fs::symlink_metadata(p).ok()?;
+        if meta.file_type().is_symlink() && fs::metadata(p).is_err() {
+            let target = fs::read_link(p).map_or_else(|_| "?".into(), |t| t.display().to_string());
+            Some(format!(
+                "{} is a symbolic link to {target}, which does not exist (create that folder, \
+                 remove the link, or choose another folder)",
+                p.display()
+            ))
+        } else if !meta.is_dir() && !meta.file_type().is_symlink() {
+            Some(format!("{} is a file, not a folder", p.display()))
+        } else {
+            None
+        }
+    });
+    Err(match in_the_way {
+        Some(reason) => RunError::Folder {
+            path: path.to_path_buf(),
+            reason,
+        },
+        None => RunError::Write {
+            path: path.to_path_buf(),
+            source,
+        },
+    })
+}
+
 /// Writes `bytes` to `path` atomically: temporary file in the same folder
 /// ([`temporary_name`]), `fsync`, rename, `fsync` of the folder (so the rename itself
 /// survives a power cut). Creates the parent folder if needed. A process killed in the middle
@@ -26,7 +60,7 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> Result<()> {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
     };
-    fs::create_dir_all(&dir).map_err(err)?;
+    create_folder(&dir)?;
     let name = path
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -107,10 +141,7 @@ impl RunDir {
     /// Opens (creating if needed) the run folder at `root`.
     pub fn create(root: impl Into<PathBuf>) -> Result<RunDir> {
         let root = root.into();
-        fs::create_dir_all(&root).map_err(|source| RunError::Write {
-            path: root.clone(),
-            source,
-        })?;
+        create_folder(&root)?;
         Ok(RunDir {
             root,
             session: Arc::default(),
@@ -314,6 +345,29 @@ pub const TEMPORARY_SEARCH_DEPTH: usize = 4;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Reference: the second hardening review, "a dangling `--out` symlink gives 'File exists'". Goal: a folder
+    /// behind a dangling symbolic link, or under a file, is refused saying what is in the way.
+    #[cfg(unix)]
+    #[test]
+    fn a_dangling_link_or_a_file_in_the_way_is_named() {
+        let dir = std::env::temp_dir().join(format!("flexstage-folder-{}", std::process::id()));
+        fs::create_dir_all(&dir).unwrap();
+        let link = dir.join("link");
+        std::os::unix::fs::symlink(dir.join("missing"), &link).unwrap();
+        let e = RunDir::create(&link).unwrap_err().to_string();
+        assert!(
+            e.contains("symbolic link") && e.contains("does not exist"),
+            "{e}"
+        );
+        let file = dir.join("file");
+        fs::write(&file, b"x").unwrap();
+        let e = write_atomic(&file.join("a.txt"), b"x")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("is a file, not a folder"), "{e}");
+        fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn atomic_write_replaces_and_leaves_no_temporary() {

@@ -29,7 +29,8 @@ pub mod layout;
 pub mod state;
 
 pub use dir::{
-    RunDir, TEMPORARY_SEARCH_DEPTH, WrittenFile, temporary_name, temporary_pid, write_atomic,
+    RunDir, TEMPORARY_SEARCH_DEPTH, WrittenFile, create_folder, temporary_name, temporary_pid,
+    write_atomic,
 };
 pub use format::{Format, Table};
 pub use state::RunState;
@@ -50,6 +51,14 @@ pub enum RunError {
         /// The I/O error.
         #[source]
         source: std::io::Error,
+    },
+    /// A folder cannot be created because of what is in its place.
+    #[error("cannot create the folder {path}: {reason}")]
+    Folder {
+        /// The folder asked for.
+        path: PathBuf,
+        /// What is in the way, in words.
+        reason: String,
     },
     /// A file could not be read.
     #[error("cannot read {path}")]

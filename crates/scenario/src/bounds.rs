@@ -8,6 +8,9 @@
 //! `(i·dx, j·dy)`, nearest node by rounding, boxes inclusive with a tolerance of 1e-9 element
 //! sizes; elements by centroid), so `flexstage check` refuses what `run` would refuse later.
 
+// `!(x <= bound)` on purpose: a NaN fails every bound.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 use crate::design::{Edge, Fix, Selector};
 use crate::error::{RangeError, Result, ScenarioError};
 use crate::{ObjectiveKind, Scenario, Trajectory};
@@ -18,8 +21,9 @@ pub mod limit {
     pub const NAME_CHARS: usize = 64;
     /// Elements of the design mesh (the fine preset has 28 800).
     pub const ELEMENTS: usize = 250_000;
-    /// Estimated memory of the design stage \[bytes\] (8 GiB).
-    pub const DESIGN_BYTES: f64 = 8.0 * 1024.0 * 1024.0 * 1024.0;
+    /// Estimated memory of the design stage, allocated at its peak \[bytes\] (16 GiB; the
+    /// fine preset allocates about 9 GiB, of which about 2.2 GB is resident).
+    pub const DESIGN_BYTES: f64 = 16.0 * 1024.0 * 1024.0 * 1024.0;
     /// Estimated linear-solve work of the design stage [floating-point operations]
     /// (about a day at 10 GFLOP/s).
     pub const DESIGN_FLOPS: f64 = 1e15;
@@ -35,7 +39,7 @@ pub mod limit {
     pub const MAX_AMPLITUDE: f64 = 1e-3;
     /// Modal work of one record on the digital twin (`samples × substeps × modes`, modes at
     /// least `twin.min_modes`): about five minutes at the twin's measured 3·10⁷ mode-steps a
-    /// second (16 modes, 20 substeps, 10 kHz: 98 ms per simulated second, README).
+    /// second (16 modes, 20 substeps, 10 kHz: 98 ms per simulated second, docs/performance.md).
     pub const TWIN_MODE_STEPS: f64 = 1e10;
     /// Estimated memory of one simulated record (its columns, 8 bytes a value) \[bytes\]
     /// (2 GiB).
@@ -49,7 +53,7 @@ pub const LIMITS: [(&str, &str); 11] = [
         "1 to 64 letters, digits, '-', '_'",
     ),
     ("design mesh elements nl × nw", "≤ 250 000, each side ≥ 4"),
-    ("design memory estimate", "≤ 8 GiB"),
+    ("design memory estimate (allocated at the peak)", "≤ 16 GiB"),
     ("design work estimate", "≤ 1e15 flop"),
     (
         "samples of one record (tracking, stage identification)",
@@ -78,47 +82,124 @@ pub const LIMITS: [(&str, &str); 11] = [
     ),
 ];
 
-/// Memory and work of the design stage, estimated from the mesh and the load cases.
+/// Memory and work of the design stage, estimated from the mesh, the load cases and the
+/// filter before any work starts.
+///
+/// The memory is what the design allocates at its peak, an upper bound of what it keeps
+/// resident (pages allocated zeroed and never written are not resident). Everything that grows
+/// is counted: each realization's FE workspace keeps, per load case, a tangent matrix, the
+/// Anderson history, the equilibrium and adjoint solve blocks (five responses), the block-PCG
+/// buffers and the warm starts, `VECTORS_PER_CASE` vectors of the DOFs in all, and the
+/// element forces (64 bytes an element); per workspace a preconditioner and one fallback
+/// factor per group (`FACTORS_PER_SET`, 12 bytes a non-zero of L) with their element
+/// buffers; the final analysis keeps as many sets again while the optimizer's are alive
+/// ([`DesignEstimate::sets`]); the density filter holds 12 bytes per pair of elements within
+/// its radius; and the process itself (`RUNTIME_BYTES`: threads, allocator arenas, code).
+/// Measured against `VmPeak` (allocated) and `VmHWM` (resident) of `flexstage design
+/// --max-iterations 2` for 16–800 samples on 48 × 24 and 96 × 48 meshes, robust and not:
+/// within +3 % to +15 % of the allocated peak, and above the resident one
+/// (docs/DECISIONS.md, "Input bounds and fault handling").
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DesignEstimate {
     /// Degrees of freedom, 2 (nl + 1)(nw + 1).
     pub dofs: f64,
     /// Non-zeros of the Cholesky factor (nested-dissection fill of a 2D grid, 8·n·log2 n).
     pub factor_nonzeros: f64,
-    /// Load cases solved per iteration (samples × 3 realizations when robust).
+    /// Load cases solved per iteration (samples × 3 realizations when robust, with the
+    /// projection that it needs).
     pub load_cases: f64,
-    /// Memory \[bytes\]: the factor (12 bytes a non-zero), 16 vectors per load case and 100
-    /// bytes of element data per element. (Measured: 3.0 GB resident, still growing, for
-    /// 12 000 load cases on the quick mesh, about 13 vectors a case; 6 under-counted it.)
+    /// Filter radius in element sizes: `optimization.filter_radius`, or with `robust` the
+    /// radius that the minimum sizes of `[limits]` need (flexstage-topopt's length scale).
+    pub filter_radius: f64,
+    /// Element pairs of the density filter (elements within the radius of each element).
+    pub filter_entries: f64,
+    /// Memory \[bytes\] (allocated at the peak; see the type's docs).
     pub bytes: f64,
     /// Work \[flop\]: per iteration and load case, 3 Newton steps of one factorization
-    /// (nnz(L)^1.5 / n flop, nested dissection) and a solve.
+    /// (nnz(L)^1.5 / n flop, nested dissection) and a solve; building the filter (each
+    /// element visits the square around its radius) and applying it (twice an iteration per
+    /// realization).
     pub flops: f64,
 }
+
+/// Vectors of the DOFs an FE workspace allocates per load case: the tangent's lower triangle
+/// (≈ 9.5), residual and start (2), Anderson history (13), the equilibrium and adjoint blocks
+/// (10), block PCG (20), warm starts (≤ 6) and the solver's scratch.
+pub const VECTORS_PER_CASE: f64 = 62.0;
+
+/// Factorizations per workspace: the preconditioner and one fallback per group of cases.
+pub const FACTORS_PER_SET: f64 = 3.0;
+
+/// What the process allocates whatever the problem: threads and their allocator arenas,
+/// code, the scenario \[bytes\] (256 MiB; measured 230–270 MB of `VmPeak` for the smallest
+/// designs).
+pub const RUNTIME_BYTES: f64 = 256.0 * 1024.0 * 1024.0;
+
+/// `m(0.75)`: the smallest blueprint member of a threshold 0.75 in units of the filter radius
+/// (flexstage-topopt's length scale, Qian & Sigmund 2013): the robust formulation's radius is at
+/// least `min_size / m(0.75)`.
+const MIN_SIZE_AT_MAX_OFFSET: f64 = 0.943;
 
 impl DesignEstimate {
     /// The estimate of a scenario's design stage.
     pub fn of(s: &Scenario) -> DesignEstimate {
         let (nl, nw) = (s.mesh.nl as f64, s.mesh.nw as f64);
+        let ne = nl * nw;
         let dofs = 2.0 * (nl + 1.0) * (nw + 1.0);
         let factor_nonzeros = 8.0 * dofs * dofs.log2().max(1.0);
         let o = &s.optimization;
-        let per_case = match o.objective {
+        let samples = match o.objective {
             ObjectiveKind::Workspace => o.samples as f64,
             ObjectiveKind::Displacement => 1.0,
         };
-        let load_cases = per_case * if o.robust { 3.0 } else { 1.0 };
-        let bytes = 12.0 * factor_nonzeros + 128.0 * dofs * load_cases + 100.0 * nl * nw;
+        let robust = Self::robust(s);
+        let realizations = if robust { 3.0 } else { 1.0 };
+        let load_cases = samples * realizations;
+        let (dx, dy) = s.mesh.element_size();
+        let h = (dx * dy).sqrt();
+        let sizes = s.limits.min_hinge_thickness.max(s.limits.min_slot_width);
+        let filter_radius = if robust {
+            o.filter_radius
+                .clamp(1.5, 20.0)
+                .max(sizes / MIN_SIZE_AT_MAX_OFFSET / h)
+        } else {
+            o.filter_radius
+        };
+        let reach = (filter_radius.ceil() / (dx.min(dy) / h)).ceil();
+        let window = ((2.0 * reach + 1.0).min(nl) * (2.0 * reach + 1.0).min(nw)).max(1.0);
+        let filter_entries = ne
+            * (std::f64::consts::PI * filter_radius * filter_radius)
+                .max(1.0)
+                .min(window);
+        let per_case = 8.0 * VECTORS_PER_CASE * dofs + 64.0 * ne;
+        let per_set = FACTORS_PER_SET * (12.0 * factor_nonzeros + 600.0 * ne);
+        let bytes =
+            Self::sets(s) * (per_set + samples * per_case) + 12.0 * filter_entries + RUNTIME_BYTES;
         let factor = factor_nonzeros.powf(1.5) / dofs;
-        let flops =
-            (o.max_iterations.max(1) as f64) * load_cases * 3.0 * (factor + 4.0 * factor_nonzeros);
+        let iterations = o.max_iterations.max(1) as f64;
+        let flops = iterations * load_cases * 3.0 * (factor + 4.0 * factor_nonzeros)
+            + ne * window
+            + iterations * realizations * 4.0 * filter_entries;
         DesignEstimate {
             dofs,
             factor_nonzeros,
             load_cases,
+            filter_radius,
+            filter_entries,
             bytes,
             flops,
         }
+    }
+
+    /// Sets of FE workspaces alive at the peak: one per realization of the optimizer, and as
+    /// many again in the final analysis of the blueprint, eroded and dilated designs.
+    pub fn sets(s: &Scenario) -> f64 {
+        if Self::robust(s) { 6.0 } else { 2.0 }
+    }
+
+    /// Whether the robust formulation is on (it needs the projection).
+    fn robust(s: &Scenario) -> bool {
+        s.optimization.robust && s.optimization.projection.enabled
     }
 }
 
@@ -226,6 +307,7 @@ const GIB: f64 = 1024.0 * 1024.0 * 1024.0;
 /// Every check of this module.
 pub(crate) fn validate(s: &Scenario) -> Result<()> {
     mesh_size(s)?;
+    stiffness_contrast(s)?;
     if s.ports.is_empty() {
         ports(s)?;
         rigid_body_modes(s)?;
@@ -246,30 +328,88 @@ fn mesh_size(s: &Scenario) -> Result<()> {
         .into());
     }
     let e = DesignEstimate::of(s);
-    if e.bytes > limit::DESIGN_BYTES {
+    if !(e.bytes <= limit::DESIGN_BYTES) {
         return Err(RangeError::new(
-            "mesh.nl, mesh.nw, optimization.samples",
+            "mesh.nl, mesh.nw, optimization.samples, optimization.robust, filter radius",
             format!(
-                "{} × {} elements, {} load cases: an estimated {:.1} GiB",
+                "{} × {} elements, {} samples × {} realization(s), a filter of {} elements' \
+                 radius: an estimated {:.1} GiB",
                 s.mesh.nl,
                 s.mesh.nw,
-                e.load_cases,
-                e.bytes / 1024f64.powi(3)
+                s.optimization.samples,
+                if DesignEstimate::robust(s) { 3 } else { 1 },
+                crate::compact(e.filter_radius),
+                e.bytes / GIB
             ),
             format!(
-                "at most {:.0} GiB of memory",
-                limit::DESIGN_BYTES / 1024f64.powi(3)
+                "at most {:.0} GiB of memory (allocated at the peak: per load case and \
+                 realization {} vectors of the {} DOFs, {} sets of FE workspaces, factors, \
+                 the filter; docs/DECISIONS.md)",
+                limit::DESIGN_BYTES / GIB,
+                VECTORS_PER_CASE,
+                e.dofs,
+                DesignEstimate::sets(s)
             ),
         )
         .into());
     }
-    if e.flops > limit::DESIGN_FLOPS {
+    if !(e.flops <= limit::DESIGN_FLOPS) {
         return Err(RangeError::new(
-            "mesh.nl, mesh.nw, optimization.samples, optimization.max_iterations",
-            format!("an estimated {:.1e} flop of linear solves", e.flops),
+            "mesh.nl, mesh.nw, optimization.samples, optimization.max_iterations, filter radius",
+            format!(
+                "an estimated {:.1e} flop of linear solves and filtering",
+                e.flops
+            ),
             format!("at most {:.0e} flop (about a day)", limit::DESIGN_FLOPS),
         )
         .into());
+    }
+    Ok(())
+}
+
+/// Margin of [`stiffness_contrast`] over the solver's round-off level.
+const CONTRAST_MARGIN: f64 = 10.0;
+
+/// The stiffnesses the FE solver can resolve together. Its factorization refuses a pivot at
+/// or below `n·ε·max a_ii` (a floating structure's zero pivot after round-off; flexstage-fem's
+/// `singular_pivot_threshold`), and a void region's pivots are about `E_min·t` while the
+/// largest diagonal is about `E0·t` plus the stiffest spring. So that only a floating
+/// structure trips that test, `E0·t` and each spring must stay below half of
+/// `E_min·t / (10·n·ε)`: a solid or a spring stiffer than that was refused as "the structure
+/// floats" (`E0 = 1e308`, `output_spring = 1e308`), and is refused here by its own range.
+fn stiffness_contrast(s: &Scenario) -> Result<()> {
+    let m = &s.material;
+    let dofs = 2.0 * (s.mesh.nl as f64 + 1.0) * (s.mesh.nw as f64 + 1.0);
+    let t = s.mesh.thickness;
+    let cap = m.min_modulus * t / (CONTRAST_MARGIN * dofs * f64::EPSILON) / 2.0;
+    let why = |unit: &str, limit: f64| {
+        format!(
+            "at most {limit:.3e} {unit}: half the stiffness the solver resolves against the \
+             void (material.min_modulus × mesh.thickness / (10·n·ε), n = {dofs} DOFs)"
+        )
+    };
+    if !(m.youngs_modulus * t <= cap) {
+        return Err(RangeError::number(
+            "material.youngs_modulus",
+            m.youngs_modulus,
+            why("Pa", cap / t),
+        )
+        .into());
+    }
+    let mut springs = vec![(
+        "optimization.output_spring".to_string(),
+        s.optimization.output_spring,
+    )];
+    if s.ports.is_empty() {
+        springs.push(("actuators.stiffness".into(), s.actuators.stiffness));
+    }
+    for (i, p) in s.ports.iter().enumerate() {
+        springs.push((format!("ports[{i}].spring"), p.spring));
+    }
+    for (field, k) in springs {
+        if !(k <= cap) {
+            return Err(RangeError::number(field, k, why("N/m", cap)).into());
+        }
     }
     Ok(())
 }
@@ -448,7 +588,11 @@ fn ports(s: &Scenario) -> Result<()> {
                         "[{:e}, {:e}] .. [{:e}, {:e}]",
                         min[0], min[1], max[0], max[1]
                     ),
-                    "a box that holds at least one element centroid",
+                    format!(
+                        "a box that holds at least one element centroid (elements of {:e} × \
+                         {:e} m: mesh.length / mesh.nl × mesh.width / mesh.nw)",
+                        grid.dx, grid.dy
+                    ),
                 )
                 .into());
             }

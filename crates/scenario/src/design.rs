@@ -56,7 +56,9 @@ impl Mesh {
 pub struct Material {
     /// Young's modulus E0 of the solid \[Pa\]. Table 3: 73e9 (aluminium 6061).
     pub youngs_modulus: f64,
-    /// Young's modulus E_min given to void \[Pa\], 0 < E_min < E0. Table 3: 1e3.
+    /// Young's modulus E_min given to void \[Pa\], 0 < E_min < E0, and E0 (like every
+    /// spring) at most what the solver resolves against it (a contrast of about
+    /// 1e11 on the quick mesh; `flexstage check` names the bound). Table 3: 1e3.
     pub min_modulus: f64,
     /// Poisson ratio ν, in (−1, 0.5). Table 3: 0.33.
     pub poisson_ratio: f64,
@@ -95,6 +97,7 @@ pub enum Selector {
     /// The node nearest to a point \[m\].
     Nearest {
         /// (x, y) \[m\].
+        #[serde(deserialize_with = "crate::strict::array")]
         point: [f64; 2],
     },
     /// Every node on one edge of the domain.
@@ -105,8 +108,10 @@ pub enum Selector {
     /// Every node (or element centroid) inside an axis-aligned box \[m\].
     Box {
         /// Lower-left corner (x, y) \[m\].
+        #[serde(deserialize_with = "crate::strict::array")]
         min: [f64; 2],
         /// Upper-right corner (x, y) \[m\].
+        #[serde(deserialize_with = "crate::strict::array")]
         max: [f64; 2],
     },
 }
@@ -189,6 +194,9 @@ pub enum Configuration {
     Reversed,
 }
 
+/// The smallest stroke amplitude \[m\] (1 nm).
+pub const MIN_STROKE: f64 = 1e-9;
+
 /// The two piezo actuators (Table 1, Eq. 2–3, DECISIONS.md).
 ///
 /// Each PEA acts on its input node as a grounded spring `stiffness` along x plus the force
@@ -198,11 +206,12 @@ pub enum Configuration {
 pub struct Actuators {
     /// PEA stiffness K_pea [N/m]. Table 1: 250 N/µm = 2.5e8.
     pub stiffness: f64,
-    /// Maximum nominal stroke max x_nom \[m\]. Table 1: 60e-6.
+    /// Maximum nominal stroke max x_nom \[m\], in [2e-9, 1]. Table 1: 60e-6.
     pub max_stroke: f64,
     /// Blocking force f_block \[N\]. Table 1: 1.5e4.
     pub blocking_force: f64,
-    /// Half range of the preloaded nominal stroke \[m\]: x_nom ∈ [−a, a]. Section 4.1: 30e-6.
+    /// Half range of the preloaded nominal stroke \[m\]: x_nom ∈ [−a, a], a in
+    /// [1e-9, max_stroke/2]. Section 4.1: 30e-6.
     pub stroke_amplitude: f64,
     /// Table 2 configuration.
     pub configuration: Configuration,
@@ -216,14 +225,22 @@ impl Actuators {
     /// Checks every field.
     pub fn validate(&self, mesh: &Mesh) -> Result<()> {
         positive("actuators.stiffness", self.stiffness)?;
-        positive("actuators.max_stroke", self.max_stroke)?;
+        // A stroke below a nanometre is below any sensor of Section 4.1 (7.5 nm); its
+        // workspace, ∝ a², underflowed to 0 at a = 1e-308 (area 0, "NaN × the input stroke
+        // square"). A metre is beyond any piezo actuator.
+        within(
+            "actuators.max_stroke",
+            self.max_stroke,
+            2.0 * MIN_STROKE,
+            1.0,
+        )?;
         positive("actuators.blocking_force", self.blocking_force)?;
         check(
             "actuators.stroke_amplitude",
             self.stroke_amplitude,
-            self.stroke_amplitude > 0.0 && 2.0 * self.stroke_amplitude <= self.max_stroke,
+            self.stroke_amplitude >= MIN_STROKE && 2.0 * self.stroke_amplitude <= self.max_stroke,
             &format!(
-                "a number in (0, max_stroke/2 = {:e}] m",
+                "a number in [{MIN_STROKE:e}, max_stroke/2 = {:e}] m",
                 0.5 * self.max_stroke
             ),
         )?;
@@ -243,7 +260,11 @@ pub struct Output {
     /// Direction `d` of the output displacement to maximize (`objective = "displacement"`):
     /// any non-zero finite vector, normalized on use. Unset: `(sin θ, cos θ)` of `tilt_deg`
     /// (negated in the reversed configuration). Required with `[[ports]]`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "crate::strict::option_array"
+    )]
     pub direction: Option<[f64; 2]>,
 }
 
@@ -302,6 +323,7 @@ pub struct Port {
     /// The input node (exactly one).
     pub at: Selector,
     /// Direction of the load, along x or y (`[±1, 0]` or `[0, ±1]`).
+    #[serde(deserialize_with = "crate::strict::array")]
     pub direction: [f64; 2],
     /// Input spring `k_in` \[N/m\], > 0: the source's stiffness.
     pub spring: f64,
@@ -667,8 +689,10 @@ impl Limits {
 
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
-        positive("limits.fatigue_strength", self.fatigue_strength)?;
-        positive("limits.yield_strength", self.yield_strength)?;
+        // The ranges export's verification accepts (flexstage-verify): from a pascal (far
+        // below any material; a subnormal strength made the allowable stress 0) to 10 GPa.
+        within("limits.fatigue_strength", self.fatigue_strength, 1.0, 1e10)?;
+        within("limits.yield_strength", self.yield_strength, 1.0, 1e10)?;
         if self.fatigue_strength > self.yield_strength {
             return Err(ScenarioError::Inconsistent {
                 fields: "limits.fatigue_strength, limits.yield_strength".into(),
@@ -685,18 +709,14 @@ impl Limits {
             1.0,
             10.0,
         )?;
-        check(
+        // From a micrometre to the 5 cm export's verification accepts.
+        within(
             "limits.min_hinge_thickness",
             self.min_hinge_thickness,
-            self.min_hinge_thickness > 0.0 && self.min_hinge_thickness <= 0.1,
-            "a length in (0, 0.1] m",
+            1e-6,
+            0.05,
         )?;
-        check(
-            "limits.min_slot_width",
-            self.min_slot_width,
-            self.min_slot_width > 0.0 && self.min_slot_width <= 0.1,
-            "a length in (0, 0.1] m",
-        )
+        within("limits.min_slot_width", self.min_slot_width, 1e-6, 0.05)
     }
 }
 

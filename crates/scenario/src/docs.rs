@@ -5,22 +5,34 @@
 pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ("name", "Name of the scenario, used in run-folder names."),
     ("mesh", "Design domain and Q4 mesh (paper Table 3)."),
-    ("mesh.length", "Domain length l along x [m]. Table 3: 0.12."),
-    ("mesh.width", "Domain width w along y [m]. Table 3: 0.06."),
+    (
+        "mesh.length",
+        "Domain length l along x [m], in [1e-4, 10]. Table 3: 0.12.",
+    ),
+    (
+        "mesh.width",
+        "Domain width w along y [m], in [1e-4, 10]. Table 3: 0.06.",
+    ),
     (
         "mesh.thickness",
-        "Out-of-plane thickness t [m]. Table 3: 0.01.",
+        "Out-of-plane thickness t [m], in [1e-6, 1]. Table 3: 0.01.",
     ),
-    ("mesh.nl", "Elements along x, n_l ≥ 1. Table 3: 120."),
-    ("mesh.nw", "Elements along y, n_w ≥ 1. Table 3: 60."),
+    (
+        "mesh.nl",
+        "Elements along x, n_l in [4, 4000], n_l·n_w ≤ 250 000. Table 3: 120.",
+    ),
+    (
+        "mesh.nw",
+        "Elements along y, n_w in [4, 4000]. Table 3: 60.",
+    ),
     ("material", "Solid material, aluminium 6061 (Table 3)."),
     (
         "material.youngs_modulus",
-        "Young's modulus E0 [Pa], > 0. Table 3: 73e9.",
+        "Young's modulus E0 [Pa], > 0, and E0 × mesh.thickness at most half of min_modulus × thickness / (10·n·ε), n the DOFs (what the solver resolves against the void; `flexstage check` names the bound). Table 3: 73e9.",
     ),
     (
         "material.min_modulus",
-        "Modulus E_min given to void [Pa], 0 < E_min < E0. Table 3: 1e3.",
+        "Modulus E_min given to void [Pa], 0 < E_min < E0 (see youngs_modulus). Table 3: 1e3.",
     ),
     (
         "material.poisson_ratio",
@@ -36,11 +48,11 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "actuators.stiffness",
-        "PEA stiffness K_pea [N/m], > 0. Table 1: 250 N/µm.",
+        "PEA stiffness K_pea [N/m], > 0 and at most half of min_modulus × thickness / (10·n·ε) (see material.youngs_modulus). Table 1: 250 N/µm.",
     ),
     (
         "actuators.max_stroke",
-        "Maximum nominal stroke max x_nom [m], > 0. Table 1: 60 µm.",
+        "Maximum nominal stroke max x_nom [m], in [2e-9, 1]. Table 1: 60 µm.",
     ),
     (
         "actuators.blocking_force",
@@ -48,7 +60,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "actuators.stroke_amplitude",
-        "Preloaded stroke half-range a: x_nom in [-a, a] [m], 0 < a ≤ max_stroke/2. Section 4.1: 30 µm.",
+        "Preloaded stroke half-range a: x_nom in [-a, a] [m], 1e-9 ≤ a ≤ max_stroke/2. Section 4.1: 30 µm.",
     ),
     (
         "actuators.configuration",
@@ -212,7 +224,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "optimization.output_spring",
-        "Stiffness [N/m] of the load the output drives, ≥ 0; 0 = none. Acts on u_oy and on u_ox − ½(u_in1 + u_in2), the motion relative to the moving frame of Eq. 22. Default 4e6, the paper's measured output stiffness (Table 4, K_qo): the design must transmit force, not only motion.",
+        "Stiffness [N/m] of the load the output drives, ≥ 0 and at most half of min_modulus × thickness / (10·n·ε) (see material.youngs_modulus); 0 = none. Acts on u_oy and on u_ox − ½(u_in1 + u_in2), the motion relative to the moving frame of Eq. 22. Default 4e6, the paper's measured output stiffness (Table 4, K_qo): the design must transmit force, not only motion.",
     ),
     (
         "optimization.strain_energy_limit",
@@ -289,11 +301,11 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "limits.fatigue_strength",
-        "Fatigue strength [Pa], > 0: fully reversed stress amplitude survived for the design life. Al 6061-T6: 96.5e6 (5e8 cycles, R. R. Moore; ASM Handbook Vol. 2).",
+        "Fatigue strength [Pa], in [1, 1e10]: fully reversed stress amplitude survived for the design life. Al 6061-T6: 96.5e6 (5e8 cycles, R. R. Moore; ASM Handbook Vol. 2).",
     ),
     (
         "limits.yield_strength",
-        "Tensile yield strength [Pa], ≥ fatigue_strength. Al 6061-T6: 276e6 (ASM Handbook Vol. 2).",
+        "Tensile yield strength [Pa], in [fatigue_strength, 1e10]. Al 6061-T6: 276e6 (ASM Handbook Vol. 2).",
     ),
     (
         "limits.safety_factor",
@@ -305,11 +317,11 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "limits.min_hinge_thickness",
-        "Smallest solid member (hinge) thickness [m], in (0, 0.1]. Default 0.5 mm. Sets the robust formulation's erosion threshold and filter radius.",
+        "Smallest solid member (hinge) thickness [m], in [1e-6, 0.05]. Default 0.5 mm. Sets the robust formulation's erosion threshold and filter radius.",
     ),
     (
         "limits.min_slot_width",
-        "Smallest void (slot) width [m], in (0, 0.1], e.g. the wire-EDM kerf. Default 0.4 mm. Sets the dilation threshold.",
+        "Smallest void (slot) width [m], in [1e-6, 0.05], e.g. the wire-EDM kerf. Default 0.4 mm. Sets the dilation threshold.",
     ),
     (
         "hysteresis",
@@ -321,7 +333,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "hysteresis.voltage_max",
-        "Highest amplifier voltage [V], > voltage_min. DECISIONS.md: 1000.",
+        "Highest amplifier voltage [V], in [voltage_min + 1, 2000]. DECISIONS.md: 1000.",
     ),
     ("hysteresis.pea1", "PEA1, Table A1 estimates."),
     ("hysteresis.pea2", "PEA2, Table A1 estimates."),
@@ -687,11 +699,11 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "trajectories.amplitude",
-        "Amplitudes (A1, A2) [m], ≥ 0. Paper silent; default 8 and 16 µm: at most 65 % of what the amplifier range delivers (the rest is headroom for the controller), checked before a run.",
+        "Amplitudes (A1, A2) [m], each 0 or ≥ 1e-9. Paper silent; default 8 and 16 µm: at most 65 % of what the amplifier range delivers (the rest is headroom for the controller), checked before a run.",
     ),
     (
         "trajectories.radius",
-        "Circle radius [m], > 0. Paper silent; default 8 µm, sized like the Lissajous amplitudes.",
+        "Circle radius [m], ≥ 1e-9. Paper silent; default 8 µm, sized like the Lissajous amplitudes.",
     ),
     (
         "trajectories.frequency",

@@ -3,6 +3,7 @@
 use std::path::PathBuf;
 
 pub use flexstage_numerics::RangeError;
+pub(crate) use flexstage_numerics::compact;
 
 /// Everything that can be wrong with a scenario.
 ///

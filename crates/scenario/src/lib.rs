@@ -52,6 +52,7 @@ pub use docs::field_doc;
 mod error;
 mod rig;
 mod stage;
+mod strict;
 
 use std::path::Path;
 
@@ -62,6 +63,7 @@ pub use design::{
     Actuators, Additive, Configuration, Edge, Fix, KinematicsKind, Limits, Material, Mesh,
     ObjectiveKind, Optimization, Output, Port, Projection, Region, RegionKind, Selector, Support,
 };
+pub(crate) use error::compact;
 pub use error::{RangeError, Result, ScenarioError};
 pub use rig::{Amplifier, Creep, FloorVibration, Rig, SensorDynamics, Twin};
 pub use stage::{
@@ -420,7 +422,7 @@ impl Scenario {
                 reason: format!(
                     "a tilted output (tilt_deg = {}) is not mirror-symmetric: set \
                      optimization.mirror_symmetry = false",
-                    self.output.tilt_deg
+                    compact(self.output.tilt_deg)
                 ),
             });
         }

@@ -62,6 +62,7 @@ pub struct FloorVibration {
     /// RMS velocity per 1/3-octave band [m/s]; 0 = off.
     pub velocity_rms: f64,
     /// Lowest and highest 1/3-octave band centre \[Hz\].
+    #[serde(deserialize_with = "crate::strict::array")]
     pub bands: [f64; 2],
 }
 

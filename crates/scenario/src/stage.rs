@@ -65,11 +65,12 @@ impl Hysteresis {
             self.voltage_min >= -2000.0,
             "a number ≥ -2000 V",
         )?;
+        // A span below a volt drives no PEA (Table A1's d_p: 0.06 µm/V).
         check(
             "hysteresis.voltage_max",
             self.voltage_max,
-            self.voltage_max > self.voltage_min && self.voltage_max <= 2000.0,
-            "a number in (voltage_min, 2000] V",
+            self.voltage_max >= self.voltage_min + 1.0 && self.voltage_max <= 2000.0,
+            "a number in [voltage_min + 1, 2000] V",
         )?;
         self.pea1.validate("hysteresis.pea1")?;
         self.pea2.validate("hysteresis.pea2")
@@ -204,27 +205,39 @@ impl Stage {
 #[serde(deny_unknown_fields)]
 pub struct Controller {
     /// K-filter observer gains k_e1, k_e2 (Eq. 37–38). Table 4: 1e5.
+    #[serde(deserialize_with = "crate::strict::array")]
     pub observer_gain: [f64; 2],
     /// Error gains k_ε1, k_ε2 of s = ε̇ + k_ε ε. Table 4: 2e4, 1.5e4 (retuned to 3e3 for the
     /// sampled loop).
+    #[serde(deserialize_with = "crate::strict::array")]
     pub error_gain: [f64; 2],
     /// Feedback gains k1, k2 of Eq. (A34). Table 4: 1.2e4, 1.2e3 (retuned to 3e3).
+    #[serde(deserialize_with = "crate::strict::array")]
     pub feedback_gain: [f64; 2],
     /// Bandwidth κ_d of the observer's estimate of the model error Δ_η [1/s] (flexstage-control
     /// docs).
     #[serde(default = "default_disturbance_gain")]
     pub disturbance_gain: f64,
     /// Linear feedback gains k_η1, k_η2 > 1 of Eq. (A21) [1/s] (not in Table 4).
-    #[serde(default = "default_eta_gain")]
+    #[serde(
+        default = "default_eta_gain",
+        deserialize_with = "crate::strict::array"
+    )]
     pub eta_gain: [f64; 2],
     /// Disturbance bounds max|Δ_η| of Eq. (A22, A25) [m/s²].
-    #[serde(default = "default_eta_bound")]
+    #[serde(
+        default = "default_eta_bound",
+        deserialize_with = "crate::strict::array"
+    )]
     pub eta_bound: [f64; 2],
     /// Disturbance bounds max|Δ_ε| of Eq. (A36–A37) [m/s].
-    #[serde(default = "default_a_bound")]
+    #[serde(default = "default_a_bound", deserialize_with = "crate::strict::array")]
     pub a_bound: [f64; 2],
     /// Boundary layers (φ_s [m/s], φ_a \[m\]) of the robust terms; 0 selects sgn().
-    #[serde(default = "default_boundary_layer")]
+    #[serde(
+        default = "default_boundary_layer",
+        deserialize_with = "crate::strict::array"
+    )]
     pub boundary_layer: [f64; 2],
     /// Take q̇ from the observer instead of finite differences of the positions.
     #[serde(default)]
@@ -233,7 +246,7 @@ pub struct Controller {
     #[serde(default = "default_stroke")]
     pub stroke: f64,
     /// PID baseline gains [kp, ki [1/s], kd \[s\]] on the output error.
-    #[serde(default = "default_pid")]
+    #[serde(default = "default_pid", deserialize_with = "crate::strict::array")]
     pub pid: [f64; 3],
 }
 
@@ -305,8 +318,10 @@ impl Controller {
 #[serde(deny_unknown_fields)]
 pub struct Sensors {
     /// Quantization step of the q1 and q2 sensors \[m\]. Section 4.1: 7.5e-9, 10e-9.
+    #[serde(deserialize_with = "crate::strict::array")]
     pub resolution: [f64; 2],
     /// Standard deviation of white measurement noise \[m\].
+    #[serde(deserialize_with = "crate::strict::array")]
     pub noise_std: [f64; 2],
 }
 
@@ -361,6 +376,7 @@ pub enum Trajectory {
         /// Frequency ratio r of q1 to q2 (3 and 2 in the paper).
         ratio: f64,
         /// Amplitudes (A1, A2) \[m\].
+        #[serde(deserialize_with = "crate::strict::array")]
         amplitude: [f64; 2],
         /// Base frequency f \[Hz\].
         frequency: f64,
@@ -390,6 +406,21 @@ impl Trajectory {
 
     /// Checks every field; `field` is the TOML path of this entry.
     pub fn validate(&self, field: &str) -> Result<()> {
+        /// A trajectory amplitude: 0 (a still axis, if `zero`) or at least a nanometre, below
+        /// every sensor's resolution (a subnormal amplitude gave an error of ∞ % of range).
+        fn amplitude_range(field: &str, a: f64, zero: bool) -> Result<()> {
+            let min = crate::design::MIN_STROKE;
+            if zero {
+                check(
+                    field,
+                    a,
+                    a == 0.0 || a >= min,
+                    &format!("0 or a number ≥ {min:e} m"),
+                )
+            } else {
+                check(field, a, a >= min, &format!("a number ≥ {min:e} m"))
+            }
+        }
         let name_ok = |name: &str| file_name(&format!("{field}.name"), name);
         match self {
             Trajectory::Lissajous {
@@ -401,8 +432,9 @@ impl Trajectory {
             } => {
                 name_ok(name)?;
                 positive(&format!("{field}.ratio"), *ratio)?;
-                non_negative(&format!("{field}.amplitude[0]"), amplitude[0])?;
-                non_negative(&format!("{field}.amplitude[1]"), amplitude[1])?;
+                for (i, a) in amplitude.iter().enumerate() {
+                    amplitude_range(&format!("{field}.amplitude[{i}]"), *a, true)?;
+                }
                 positive(&format!("{field}.frequency"), *frequency)?;
                 positive(&format!("{field}.duration"), *duration)
             }
@@ -413,7 +445,7 @@ impl Trajectory {
                 duration,
             } => {
                 name_ok(name)?;
-                positive(&format!("{field}.radius"), *radius)?;
+                amplitude_range(&format!("{field}.radius"), *radius, false)?;
                 positive(&format!("{field}.frequency"), *frequency)?;
                 positive(&format!("{field}.duration"), *duration)
             }

@@ -1,4 +1,4 @@
-//! Reference: issue #16, "Accepted absurd values" and "Unbounded work" — the scenario mutants
+//! Reference: the input-bounds and fault-handling requirements, "Accepted absurd values" and "Unbounded work" — the scenario mutants
 //! that passed `flexstage check` and failed, hung or gave garbage later. Goal: each is refused
 //! by `Scenario::validate` (so by `check`, before any work) with a message that names the
 //! field, the value and the accepted range; the built-in presets still pass.
@@ -131,7 +131,14 @@ fn a_huge_mesh_is_refused_with_its_estimate() {
         s.mesh.nw = 500;
         s.optimization.samples = 4000;
     });
-    has(&e, &["optimization.samples", "GiB", "at most 8 GiB"]);
+    has(&e, &["optimization.samples", "GiB", "at most 16 GiB"]);
+    // The second hardening review: 4000 samples on the quick mesh passed `check` (an estimate of 1.4 GiB) and
+    // aborted allocating past 4 and 9.5 GB caps.
+    let e = refused(|s| s.optimization.samples = 4000);
+    has(
+        &e,
+        &["optimization.samples", "4000 samples × 3", "at most 16 GiB"],
+    );
 }
 
 #[test]
@@ -173,4 +180,123 @@ fn trajectories_beyond_nyquist_stroke_or_record_limits_are_refused() {
     has(&e, &["trajectories[2].duration", "samples"]);
     let e = refused(|s| s.simulation.sample_time = 1e-308);
     has(&e, &["simulation.sample_time = 1e-308", "[1e-7, 0.1]"]);
+}
+
+/// Reference: the second hardening review, "Lenient parsing" (`pid = [1, 2, 3, 4]`, a 3-element
+/// `observer_gain`, 3 `rig.floor.bands` were accepted). Goal: every fixed-length array of the
+/// scenario (the quick preset's and the mechanism example's `output.direction`,
+/// `ports[].direction`), one element longer or shorter, is refused by the parser with its line
+/// and the expected length.
+#[test]
+fn fixed_length_arrays_take_exactly_their_length() {
+    let quick = toml::from_str::<toml::Value>(&quick().to_toml()).unwrap();
+    let inverter: toml::Value = toml::from_str(
+        &std::fs::read_to_string(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../examples/scenarios/inverter.toml"
+        ))
+        .unwrap(),
+    )
+    .unwrap();
+    let mut checked = 0;
+    for base in [quick, inverter] {
+        let mut arrays = Vec::new();
+        numeric_arrays(&base, &mut Vec::new(), &mut arrays);
+        for path in arrays {
+            for longer in [true, false] {
+                let mut v = base.clone();
+                let a = path
+                    .iter()
+                    .fold(&mut v, |v, k| match k.parse::<usize>() {
+                        Ok(i) => &mut v.as_array_mut().unwrap()[i],
+                        Err(_) => v.as_table_mut().unwrap().get_mut(k).unwrap(),
+                    })
+                    .as_array_mut()
+                    .unwrap();
+                let n = a.len();
+                if longer {
+                    a.push(a[0].clone());
+                } else {
+                    a.pop();
+                }
+                let len = a.len();
+                let text = toml::to_string(&v).unwrap();
+                let e = match Scenario::from_toml_str(&text, "mutant.toml") {
+                    Ok(_) => panic!("{} with {len} elements was accepted", path.join(".")),
+                    Err(e) => chain(&e),
+                };
+                has(
+                    &e,
+                    &[
+                        "line",
+                        &format!("invalid length {len}"),
+                        &format!("exactly {n} elements"),
+                    ],
+                );
+                checked += 1;
+            }
+        }
+    }
+    // 13 arrays of the quick preset's controller, sensors, rig and selectors, plus trajectories
+    // and the inverter's directions: the walk must have found them.
+    assert!(checked >= 2 * 25, "only {checked} mutants");
+}
+
+/// Paths of the arrays of numbers (arrays of tables are walked into, by index).
+fn numeric_arrays(v: &toml::Value, path: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
+    match v {
+        toml::Value::Table(t) => {
+            for (k, x) in t {
+                path.push(k.clone());
+                numeric_arrays(x, path, out);
+                path.pop();
+            }
+        }
+        toml::Value::Array(a) if a.iter().all(|x| x.is_float() || x.is_integer()) => {
+            out.push(path.clone());
+        }
+        toml::Value::Array(a) => {
+            for (i, x) in a.iter().enumerate() {
+                path.push(i.to_string());
+                numeric_arrays(x, path, out);
+                path.pop();
+            }
+        }
+        _ => {}
+    }
+}
+
+/// The message of an error and its sources.
+fn chain(e: &dyn std::error::Error) -> String {
+    let mut m = e.to_string();
+    let mut s = e.source();
+    while let Some(x) = s {
+        m.push_str(": ");
+        m.push_str(&x.to_string());
+        s = x.source();
+    }
+    m
+}
+
+/// The second hardening review, "Messages": `E0 = 1e308` or `output_spring = 1e308` were
+/// refused as "the structure floats" (by the solver's round-off pivot test, after the element
+/// stiffness overflowed or the spring swamped every pivot), and `stroke_amplitude = 1e-308`
+/// designed to an area of 0 ("NaN × the input stroke square"). Goal: each is refused by
+/// `check`, by the field's own range.
+#[test]
+fn a_modulus_spring_or_stroke_beyond_what_the_solver_resolves_is_refused_by_its_range() {
+    let e = refused(|s| s.material.youngs_modulus = 1e308);
+    has(
+        &e,
+        &["material.youngs_modulus = 1e308", "at most", "min_modulus"],
+    );
+    assert!(!e.contains("floats"), "{e}");
+    let e = refused(|s| s.optimization.output_spring = 1e308);
+    has(&e, &["optimization.output_spring = 1e308", "at most"]);
+    let e = refused(|s| s.actuators.stiffness = 1e300);
+    has(&e, &["actuators.stiffness = 1e300", "at most"]);
+    let e = refused(|s| s.material.min_modulus = 1e-6);
+    has(&e, &["material.youngs_modulus", "min_modulus"]);
+    let e = refused(|s| s.actuators.stroke_amplitude = 1e-308);
+    has(&e, &["actuators.stroke_amplitude = 1e-308", "[1e-9, "]);
 }

@@ -1,4 +1,4 @@
-//! Issue #19 item 6: general mechanism problems (`[[ports]]`, `output.direction`) parse from
+//! General mechanism problems (`[[ports]]`, `output.direction`) parse from
 //! the shipped example scenarios, and every bad new field is refused with a message naming
 //! the field, the value and the accepted range (or the contradicting fields).
 

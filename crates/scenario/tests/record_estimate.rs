@@ -1,4 +1,4 @@
-//! Reference: issue #16, "memory and time are estimated up front (… sample counts, record
+//! Reference: the input-bounds and fault-handling requirements, "memory and time are estimated up front (… sample counts, record
 //! lengths) and refused over a documented limit with a message giving the estimate".
 //! Goal: a record's samples, plant steps, twin mode-steps and memory are the products they are
 //! documented as (hand-computed below); each limit refuses just above it and passes just below

@@ -1,4 +1,4 @@
-//! Issue #15: the `[rig]` and `[twin]` groups. Old scenario files without them still load
+//! The `[rig]` and `[twin]` groups. Old scenario files without them still load
 //! (with the realistic rig and the default twin), and a bad value in either group is rejected
 //! with a message naming the field and the accepted range.
 

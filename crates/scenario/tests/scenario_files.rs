@@ -1,4 +1,4 @@
-//! Issue #2 acceptance: the commented default scenario round-trips, and bad values are
+//! Acceptance: the commented default scenario round-trips, and bad values are
 //! rejected with messages that name the field (one bad value per parameter group).
 
 use flexstage_scenario::{Preset, Scenario, ScenarioError};

@@ -1,5 +1,5 @@
 //! Reference: IEEE 754 — NaN compares false and `f64::max(a, NaN) = a`, so a fold with `max`
-//! silently drops NaN samples (the defect of issue #16: "max error 0" for a NaN series).
+//! silently drops NaN samples (a defect the fault-handling work fixed: "max error 0" for a NaN series).
 //! Goal: every metric of a record with a NaN or ∞ sample (RMS, max, % of range, settling, per
 //! axis, voltage extremes) is non-finite and the record is marked diverged; a finite record
 //! gives the hand-computed values and is not marked (so the check can fail both ways).

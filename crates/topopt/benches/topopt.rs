@@ -3,7 +3,7 @@
 //! `fine` preset (240 × 120) and the `quick` preset, after a few warm-up iterations; and the
 //! linear inverter at 120 × 60. Allocations are counted (divan's allocation profiler).
 //! Run: `cargo bench -p flexstage-topopt`. Peak memory of whole runs: `/usr/bin/time -v`
-//! (README, performance table).
+//! (docs/performance.md).
 
 use divan::Bencher;
 use flexstage_scenario::{Preset, Scenario};

@@ -136,6 +136,10 @@ fn min_local_thickness(
     nx: usize,
     ny: usize,
 ) -> Option<(f64, usize)> {
+    if inside.iter().all(|&s| s) {
+        // Nothing outside (a design solid everywhere): no member has a finite thickness.
+        return None;
+    }
     let d2 = distance_to_outside(inside, nx, ny);
     let at = |x: isize, y: isize| -> f64 {
         if x < 0 || y < 0 || x >= nx as isize || y >= ny as isize {

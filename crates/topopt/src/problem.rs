@@ -446,7 +446,8 @@ impl Problem {
         let mirror_dof = |d: usize| 2 * mirror_node(d / 2) + d % 2;
         let asym = |what: &str| {
             TopoptError::Problem(format!(
-                "mirror symmetry: the {what} is not symmetric about x = l/2; make it symmetric                  or set optimization.mirror_symmetry = false"
+                "mirror symmetry: the {what} is not symmetric about x = l/2; make it symmetric \
+                 or set optimization.mirror_symmetry = false"
             ))
         };
         let bcs = self.model.bcs();

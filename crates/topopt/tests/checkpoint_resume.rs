@@ -1,4 +1,4 @@
-//! Reference: issue #5 "Checkpoint and resume": after a crash, resuming from the last
+//! Reference: the checkpoint-and-resume requirement: after a crash, resuming from the last
 //! checkpoint reaches the same result. Goal: N iterations uninterrupted vs k iterations,
 //! checkpoint bytes, a fresh optimizer resumed from them, then N − k more iterations give
 //! the same designs and histories to 1e-12 (nonlinear, additive material and β continuation

@@ -1,4 +1,4 @@
-//! Reference: issue #19, "Designs an expert would sign off", targets checked on the default
+//! Reference: the design-quality requirements, "Designs an expert would sign off", targets checked on the default
 //! scenario: the paper's weighed mass (Table 4: 46 g, ±10 %), a mirror-symmetric density
 //! (max |ρ − ρ_mirror| ≤ 1e-6), the output direction within 1° of θ, eroded and dilated
 //! designs each keeping ≥ 85 % of the blueprint's workspace, no one-node hinges, the thinnest

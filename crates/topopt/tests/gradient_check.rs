@@ -3,7 +3,7 @@
 //! 2011), for every response of the eroded, blueprint and dilated designs of the robust
 //! formulation, including the aggregated qp-relaxed von Mises stress (Le et al. 2010) and the
 //! volume, with mirror-symmetric design variables.
-//! Goal (issues #5, #19): relative error ≤ 1e-5 between the adjoint gradients and central
+//! Goal: relative error ≤ 1e-5 between the adjoint gradients and central
 //! finite differences, on small nonlinear meshes: a tilted reversed set-up (tilt, no symmetry)
 //! with the additive Yeoh material on, and the robust, symmetric, stress-constrained default
 //! without it.

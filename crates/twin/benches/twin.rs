@@ -1,4 +1,4 @@
-//! Cost of the twin. Target (issue #15): the twin with ≥ 6 modes runs ≥ 20× faster than real
+//! Cost of the twin. Target: the twin with ≥ 6 modes runs ≥ 20× faster than real
 //! time at 10 kHz on one core (≤ 50 ms per simulated second, rig included), allocation-free per
 //! step (`tests/allocation.rs`): `twin_plant_one_second` (the twin in the scenario's rig),
 //! beside it `twin_mechanics_one_second` (the twin's modes alone, as the rig drives them) and

@@ -67,16 +67,16 @@
 //! The twin runs inside the rig at the scenario's 20 substeps per 10 kHz sample; one simulated
 //! second of the 16-mode quick or paper twin in the full rig costs ≈ 15 ms of CPU time and
 //! 28–57 ms wall (median of `cargo bench -p flexstage-twin`, which depends strongly on the
-//! machine's load; README, Performance), against the issue's ≤ 50 ms. The modes take ≈ 70 % of
+//! machine's load; docs/performance.md), against the issue's ≤ 50 ms. The modes take ≈ 70 % of
 //! it ([`TwinStage`]: four modes per AVX2 register, output sums fused into the update, one
 //! dispatched loop per sample through `Mechanics::advance_sample`), the amplifier, Bouc–Wen
 //! and creep ≈ 20 %, the sensor filter and noise the rest.
 //!
-//! On the designs of `flexstage design` (README, Performance) the same checks give, for the
+//! On the designs of `flexstage design` (docs/performance.md) the same checks give, for the
 //! quick preset, modes within 0.005 % and 0.07 % / 0.02 % of range (step / sine), and for the
-//! paper preset the figures recorded in the README.
+//! paper preset the figures recorded in docs/verification.md.
 //!
-//! ## The existing controllers on the twin (issue #15, reported as measured)
+//! ## The existing controllers on the twin (the digital-twin requirements, reported as measured)
 //!
 //! `cargo run --release -p flexstage-assess --example track -- quick|paper DESIGN.json`, with the
 //! controller's model the design's reduced lumped model (`flexstage reduce`, i.e. a perfect

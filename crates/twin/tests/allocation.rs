@@ -1,4 +1,4 @@
-//! Reference: the real-time requirement (#15): the twin's step allocates nothing.
+//! Reference: the real-time requirement: the twin's step allocates nothing.
 //! Goal: with a counting global allocator, 2000 samples of the twin in the scenario's
 //! realistic rig (measure + apply) make zero allocations.
 

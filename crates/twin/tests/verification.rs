@@ -3,10 +3,10 @@
 //! * the FE statics of the assembled stage (Craig–Bampton reproduces boundary-load statics
 //!   exactly: Craig & Bampton 1968),
 //! * the FE modal analysis (shift-invert Lanczos) of the same assembled stage: every mode the
-//!   twin claims within 0.5 % (issue #15),
+//!   twin claims within 0.5 %,
 //! * the full nonlinear transient (Total Lagrangian, Newmark average acceleration, Newton per
 //!   step) under a step and a 200 Hz sine at the PEA inputs over 20 ms: the output within 1 %
-//!   of its range on both axes (issue #15),
+//!   of its range on both axes,
 //! * the nonlinear FE statics at points off the fit grid (the polynomial correction), and the
 //!   modes of the FE tangent at an operating point (first-order eigenvalue perturbation: the
 //!   twin's stiffening term),

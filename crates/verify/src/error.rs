@@ -7,7 +7,7 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum VerifyError {
     /// A parameter is outside its accepted range.
-    #[error("parameter `{field}` = {value} is outside the accepted range {range}")]
+    #[error("parameter `{field}` = {} is outside the accepted range {range}", flexstage_numerics::compact(*.value))]
     OutOfRange {
         /// Field name.
         field: &'static str,

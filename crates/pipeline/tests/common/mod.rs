@@ -1,5 +1,5 @@
 //! Shared by the tests that do whole `run`s: a tiny scenario and short stage options, so that
-//! one `run` costs a few seconds of CPU (issue #16: CI must fit in 20 minutes).
+//! one `run` costs a few seconds of CPU (CI must fit in 20 minutes).
 //!
 //! The scenario is the quick preset on a 24 × 12 mesh (the quick preset's ports, supports and
 //! passive regions, each still at least one element) with 8 stroke samples; the options keep

@@ -125,7 +125,7 @@ pub(super) fn tracking(b: &mut Builder) {
 
 /// Which controller wins where, from `metrics.csv` and `margins.csv`: per trajectory the
 /// controller with the smallest planar RMS error √(RMS₁² + RMS₂²) among those that keep the
-/// margins (≥ 6 dB / 40° with the rig's delay, issue #18) and did not diverge, then the
+/// margins (≥ 6 dB / 40° with the rig's delay) and did not diverge, then the
 /// runners-up; controllers below the margins are named apart, whatever their error, because
 /// a practitioner would not ship them. Without margins (the lumped plant) every controller
 /// competes and the text says so.

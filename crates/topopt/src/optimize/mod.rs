@@ -23,7 +23,12 @@
 //! `f0 = −s_obj·τ` and one constraint `τ − Φ_r/|Φ⁰| ≤ 0` per realization. Before every MMA
 //! update the bound is set to its optimum for the current densities, the worst case
 //! `τ = min_r Φ_r/|Φ⁰|`, in the unit `T = 2τ` (ξ = ½), and MMA's history of ξ (previous
-//! iterates, asymptotes, bound multipliers) is expressed in that unit. The worst realization's
+//! iterates, asymptotes, bound multipliers) is expressed in that unit. The bound is kept at or
+//! above `BOUND_FLOOR` = 10⁻³ times the largest worst case so far (at least |Φ⁰|): a worst
+//! case at or below zero (a realization whose output polygon turns inside out, seen when the
+//! start is almost void) would give a unit of zero and rescale the history to infinity. Above
+//! the floor the worst realization's constraint is violated, and MMA restores it; the rescale
+//! stays within a factor 10³ per iteration. The worst realization's
 //! constraint is then active at the start of every subproblem, so the densities always see its
 //! gradient; a bound left behind by the move limit (the worst case grows ~50-fold from the
 //! uniform start) would leave them without any objective gradient. The volume bound acts on the dilated design, with
@@ -94,6 +99,10 @@ use crate::responses::{PerResponse, ResponseKind};
 /// Constraints below this value at the last design enter MMA with a zero gradient (module
 /// docs, "Inactive constraints").
 pub const INACTIVE_BELOW: f64 = -0.5;
+
+/// Floor of the robust bound τ, as a fraction of the largest worst case so far (module docs,
+/// "Objective and constraints"): a worst case at or below zero cannot set the bound's unit.
+pub const BOUND_FLOOR: f64 = 1e-3;
 
 /// One line of the history (CSV/JSON).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -408,7 +417,7 @@ impl<'p> Optimizer<'p> {
                 }
                 e => e,
             })?;
-        self.init_state(&ev);
+        self.init_state(&ev)?;
         let sc = self.scaled(&ev);
         if !sc.f0.is_finite() || sc.g.iter().any(|v| !v.is_finite()) {
             return Err(TopoptError::NonFinite {
@@ -454,7 +463,7 @@ impl<'p> Optimizer<'p> {
 
     /// Scales, the stress normalization, the volume target and the bound variable at the first
     /// iteration.
-    fn init_state(&mut self, ev: &Evaluation) {
+    fn init_state(&mut self, ev: &Evaluation) -> Result<()> {
         let problem = self.evaluator.problem;
         let bp = ev.blueprint();
         if self.scales.is_none() {
@@ -468,8 +477,9 @@ impl<'p> Optimizer<'p> {
             let phi0 = bp.values[ResponseKind::Objective]
                 .abs()
                 .max(f64::MIN_POSITIVE);
-            // The bound starts at the worst case with ξ = ½ (a feasible start).
-            let worst = (self.worst(ev) / phi0).max(f64::MIN_POSITIVE);
+            // The bound starts at the worst case with ξ = ½ (a feasible start), in a unit kept
+            // above the floor of the module docs ("Objective and constraints").
+            let worst = (self.worst(ev) / phi0).max(BOUND_FLOOR);
             let bound = if self.params.robust.is_some() {
                 2.0 * worst
             } else {
@@ -486,8 +496,15 @@ impl<'p> Optimizer<'p> {
                 self.x[n] = 0.5;
             }
         } else {
-            let worst = self.worst(ev) / self.scales.map_or(1.0, |s| s.objective);
-            self.reset_bound(worst);
+            let phi0 = self.scales.map_or(1.0, |s| s.objective);
+            // The largest worst case so far, in units of |Φ⁰| (at least 1, the start's scale).
+            let best = self
+                .history
+                .iter()
+                .map(|r| r.objective / phi0)
+                .fold(1.0, f64::max);
+            let worst = self.worst(ev) / phi0;
+            self.reset_bound(worst.max(BOUND_FLOOR * best))?;
         }
         if problem.stress.is_some() && self.stress_norm.is_none() {
             self.stress_norm = Some(stress_ratio(ev.get(Realization::Eroded).unwrap_or(bp)));
@@ -499,23 +516,27 @@ impl<'p> Optimizer<'p> {
         ) {
             self.volume_target = Some(volume_target(vf, d, bp));
         }
+        Ok(())
     }
 
-    /// Sets the bound to the worst case of the current design, τ = min_r Φ_r/|Φ⁰| (its optimum
-    /// for the current densities), in the unit `T = 2τ` that puts ξ = ½, and expresses MMA's
-    /// history of ξ in the new unit (module docs).
-    fn reset_bound(&mut self, worst: f64) {
+    /// Sets the bound to `tau`, the worst case of the current design τ = min_r Φ_r/|Φ⁰| (its
+    /// optimum for the current densities) kept above the floor of the module docs, in the unit
+    /// `T = 2τ` that puts ξ = ½, and expresses MMA's history of ξ in the new unit.
+    ///
+    /// # Errors
+    /// [`TopoptError::NonFinite`] if the rescaled history is not finite.
+    fn reset_bound(&mut self, tau: f64) -> Result<()> {
         let n = self.evaluator.n();
         let Some(sc) = self.scales.as_mut().filter(|s| s.bound > 0.0) else {
-            return;
+            return Ok(());
         };
-        let t_new = 2.0 * worst.max(f64::MIN_POSITIVE);
+        let t_new = 2.0 * tau;
         // Old ξ values in the new unit: ξ' = ξ·T/T'.
         let f = sc.bound / t_new;
         sc.bound = t_new;
         self.x[n] = 0.5;
         if self.mma.iteration() == 0 {
-            return;
+            return Ok(());
         }
         let mut st = self.mma.state();
         for v in [&mut st.xold1, &mut st.xold2, &mut st.low, &mut st.upp] {
@@ -529,9 +550,11 @@ impl<'p> Optimizer<'p> {
             (st.low[n], st.upp[n]) = (0.5 - d, 0.5 + d);
             (st.xold1[n], st.xold2[n]) = (0.5, 0.5);
         }
-        self.mma
-            .restore(&st)
-            .expect("a rescaled state of the same dimensions");
+        let iteration = self.iteration;
+        self.mma.restore(&st).map_err(|_| TopoptError::NonFinite {
+            what: "MMA history of the robust bound, rescaled to its new unit",
+            iteration,
+        })
     }
 
     /// The worst objective over the realizations (the blueprint's without robustness).
