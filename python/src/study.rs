@@ -155,7 +155,8 @@ impl PyStudy {
         plant_dict(py, &p)
     }
 
-    /// Every plant on this process's threads (Ctrl-C stops it).
+    /// Every plant on this process's threads (a Ctrl-C raises `KeyboardInterrupt` once they
+    /// are done: the plants do not poll for it).
     #[pyo3(signature = (reporter = None))]
     fn run<'py>(
         &self,

@@ -123,7 +123,7 @@ def test_tracking_case_and_zero_copy_series(tracked):
     case = tracked.case("circle", "pi-notch-ff")
     t = case.t
     assert t.ndim == 1 and len(t) > 100 and np.all(np.diff(t) > 0)
-    for col in case.series.values():
+    for col in [t, *case.error, *case.reference, *case.true_output, *case.series.values()]:
         assert isinstance(col.base, _native.Buffer) and not col.flags.owndata
         assert col.__array_interface__["data"][0] == col.base.address
         assert not col.flags.writeable and len(col) == len(t)
