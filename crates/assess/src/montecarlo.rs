@@ -165,7 +165,10 @@ pub fn monte_carlo(
     })
 }
 
-fn one_plant(
+/// Plant `i` of the study: its perturbation (drawn from `p.seed` and `i` alone, so a plant is
+/// the same whichever process or thread computes it, and in whatever order) and every
+/// candidate's result on it. [`monte_carlo`] is this for `i` in `0..p.plants`.
+pub fn one_plant(
     bench: &Bench,
     candidates: &[&'static Controller],
     reference: Reference,

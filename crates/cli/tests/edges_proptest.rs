@@ -182,7 +182,9 @@ fn cli_options() -> Vec<CliOption> {
     fn simulation(o: &mut StageIdOptions) -> &mut flexstage_pipeline::Simulation {
         match &mut o.data {
             StageData::Simulate(s) => s,
-            StageData::Record(_) => unreachable!("the default simulates"),
+            StageData::Record(_) | StageData::Columns { .. } => {
+                unreachable!("the default simulates")
+            }
         }
     }
     fn pea(f: impl Fn(&mut PeaOptions)) -> bool {

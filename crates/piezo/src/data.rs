@@ -23,6 +23,11 @@ pub struct PeaData {
 }
 
 impl PeaData {
+    /// The three columns t \[s\], U \[V\], x \[µm\], moved out.
+    pub fn into_columns(self) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        (self.t, self.u, self.x)
+    }
+
     /// Checks and wraps the three columns.
     pub fn new(t: Vec<f64>, u: Vec<f64>, x: Vec<f64>) -> Result<Self> {
         if t.len() != u.len() || t.len() != x.len() {

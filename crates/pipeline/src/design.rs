@@ -339,11 +339,25 @@ fn optimize(
         if let Some(stop) = stopped {
             break stop;
         }
-        if opt.iteration() % options.checkpoint_every == 0 {
+        let stop = progress.stop_requested();
+        if opt.iteration() % options.checkpoint_every == 0 || stop {
             // Sealed with the scenario's hash and a CRC (crate::envelope).
             let sealed = crate::envelope::seal(folder.scenario(), &opt.checkpoint());
             run.write(files::CHECKPOINT, &sealed)?;
             run.store(files::HISTORY_CSV, history_table(&names, opt.history()))?;
+        }
+        if stop {
+            progress.finish();
+            return Err(PipelineError::Interrupted {
+                what: format!(
+                    "design stopped after iteration {} (checkpoint written)",
+                    rec.iteration
+                ),
+                hint: format!(
+                    "continue it with `flexstage design --resume {}`",
+                    folder.root().display()
+                ),
+            });
         }
     };
     progress.finish();

@@ -103,6 +103,14 @@ pub enum PipelineError {
         /// The run folder written to.
         target: PathBuf,
     },
+    /// The caller asked the stage to stop ([`crate::Progress::stop_requested`]).
+    #[error("interrupted: {what}; {hint}")]
+    Interrupted {
+        /// What was stopped, and where.
+        what: String,
+        /// How to go on.
+        hint: String,
+    },
     /// The adjoint gradients disagree with central differences.
     #[error("gradient check failed: {failed} of {checked} responses above {tolerance:e}")]
     GradientCheck {

@@ -60,6 +60,7 @@ mod figures;
 pub mod folder;
 pub mod front;
 pub mod lock;
+pub mod montecarlo;
 pub mod names;
 pub mod pea;
 mod pea_files;
@@ -87,6 +88,7 @@ pub use export::{ExportOptions, ExportSummary, LimitOverrides, export};
 pub use folder::{DEFAULT_PRESET, PRESETS, RunFolder, default_root, default_run, load_scenario};
 pub use front::{FrontDesign, FrontOptions, FrontSummary, front};
 pub use lock::{LockHolder, RunLock};
+pub use montecarlo::MonteCarloStudy;
 pub use pea::{
     PeaIdOptions, PeaIdSummary, PeaOptions, PeaRecord, identify_pea, simulate_pea, write_pea_csv,
     write_pea_record,
@@ -94,7 +96,7 @@ pub use pea::{
 pub use plant::{Plant, PlantSource};
 pub use progress::{Progress, RunEvent, Silent, StartOver};
 pub use reduce::{ReduceOptions, ReduceSummary, reduce};
-pub use run::{RunOptions, RunSummary, Stage, StageSummary, write_report};
+pub use run::{RunOptions, RunSummary, Stage, StageSummary, run_in, write_report};
 pub use source::DesignSource;
 pub use stage_id::{Simulation, StageData, StageIdOptions, StageIdSummary, identify_stage};
 pub use state::RunState;

@@ -329,8 +329,9 @@ pub fn identify_pea(folder: &RunFolder, options: &PeaIdOptions) -> Result<PeaIdS
     identify_pea_data(folder, options, &path, &data)
 }
 
-/// [`identify_pea`] on a record in memory, read from (or written to) `path`.
-fn identify_pea_data(
+/// [`identify_pea`] on a record in memory (e.g. arrays from Python); `path` names it in
+/// messages and in the summary (the file it was read from, or a description).
+pub fn identify_pea_data(
     folder: &RunFolder,
     options: &PeaIdOptions,
     path: &Path,

@@ -1,6 +1,7 @@
 //! Progress reporting: the pipeline never prints; it tells a [`Progress`] what happens and the
 //! caller decides how to show it (the CLI draws `indicatif` bars on standard error).
 
+use crate::error::{PipelineError, Result};
 use crate::run::{Stage, StageSummary};
 
 /// Receives progress from the stages. Every method has a do-nothing default, so an
@@ -22,6 +23,25 @@ pub trait Progress: Sync {
     fn note(&self, _line: &str) {}
     /// A step of `flexstage run` ([`crate::run::run`]).
     fn event(&self, _event: &RunEvent) {}
+    /// Whether the caller asks the stage to stop (e.g. Ctrl-C in a Python session). Stages
+    /// ask between steps (a design iteration, a tracking phase, a stage of `run`) and then
+    /// end with [`PipelineError::Interrupted`], leaving the folder as an interrupted process
+    /// would (a design writes its checkpoint first). Default: never.
+    fn stop_requested(&self) -> bool {
+        false
+    }
+}
+
+/// `Err(`[`PipelineError::Interrupted`]`)` when `progress` asks to stop, naming what was
+/// stopped (`what`) and how to go on (`hint`).
+pub(crate) fn check_stop(progress: &dyn Progress, what: &str, hint: &str) -> Result<()> {
+    if progress.stop_requested() {
+        return Err(PipelineError::Interrupted {
+            what: what.to_string(),
+            hint: hint.to_string(),
+        });
+    }
+    Ok(())
 }
 
 /// Shows nothing.

@@ -157,6 +157,22 @@ impl Outputs<'_> {
             vec![k, m.frequencies.clone(), m.residuals.clone()],
         );
         self.run.store(files::MODES_CSV, table)?;
+        // The shapes as data (mass-normalized, unscaled), for notebooks and other tools.
+        let mesh = self.problem.mesh();
+        let mut header = vec!["x_m".to_string(), "y_m".to_string()];
+        let mut columns = vec![
+            (0..mesh.n_nodes()).map(|n| mesh.node_coords(n)[0]).collect::<Vec<f64>>(),
+            (0..mesh.n_nodes()).map(|n| mesh.node_coords(n)[1]).collect(),
+        ];
+        for (k, phi) in m.shapes.iter().enumerate() {
+            for (axis, name) in ["ux", "uy"].iter().enumerate() {
+                header.push(format!("{name}_{}", k + 1));
+                columns.push(phi.iter().skip(axis).step_by(2).copied().collect());
+            }
+        }
+        let header: Vec<&str> = header.iter().map(String::as_str).collect();
+        self.run
+            .store(files::MODE_SHAPES_CSV, Table::new(&header, columns))?;
         Ok(())
     }
 }

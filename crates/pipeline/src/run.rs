@@ -188,12 +188,26 @@ pub fn run(
 ) -> Result<RunSummary> {
     options.validate()?;
     crate::design::two_pea_stage(&scenario, "run")?;
-    let t0 = Instant::now();
     let folder = RunFolder::locked(scenario, root.to_path_buf())?;
+    run_in(&folder, options, progress)
+}
+
+/// [`run`] in a run folder the caller holds open (with its scenario): records the scenario in
+/// it (refusing a folder of another scenario's finished stages, as [`run`]) and runs, resumes
+/// or redoes every stage.
+pub fn run_in(
+    folder: &RunFolder,
+    options: &RunOptions,
+    progress: &dyn Progress,
+) -> Result<RunSummary> {
+    options.validate()?;
+    crate::design::two_pea_stage(folder.scenario(), "run")?;
+    let t0 = Instant::now();
+    let root = folder.root();
     for line in folder.notices() {
         progress.note(line);
     }
-    let (mut state, resume) = start_state(&folder, options, progress)?;
+    let (mut state, resume) = start_state(folder, options, progress)?;
     state.save(folder.dir())?;
     // The twin of the design, built once by the twin stage and used by identify-stage and
     // track (a run resumed after the twin stage builds it in identify-stage or track).
@@ -215,10 +229,15 @@ pub fn run(
                 }
             }
         }
+        crate::progress::check_stop(
+            progress,
+            &format!("run stopped before its {} stage", stage.name()),
+            "run again to resume after the last finished stage",
+        )?;
         progress.event(&RunEvent::Started(stage));
         let ts = Instant::now();
         folder.dir().begin_journal();
-        let summary = run_stage(stage, &folder, options, resume, &mut twin, progress)?;
+        let summary = run_stage(stage, folder, options, resume, &mut twin, progress)?;
         let files = folder.dir().end_journal();
         let seconds = ts.elapsed().as_secs_f64();
         progress.event(&RunEvent::Finished {

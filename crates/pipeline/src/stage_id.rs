@@ -124,6 +124,18 @@ pub enum StageData {
     /// A CSV with columns t \[s\], x_nom1, x_nom2 \[m\] (or U1, U2 \[V\]), x_in1, x_in2, q1, q2 \[m\],
     /// uniformly sampled.
     Record(PathBuf),
+    /// The same columns in memory (e.g. arrays from Python), checked as a record file's;
+    /// `origin` names them in messages and in the parameter file.
+    Columns {
+        /// Time \[s\], uniformly sampled.
+        t: Vec<f64>,
+        /// x_nom1, x_nom2 \[m\] or U1, U2 \[V\].
+        input: flexstage_identify::data::Input,
+        /// x_in1, x_in2, q1, q2 \[m\].
+        columns: flexstage_identify::data::Columns,
+        /// What the columns are, for messages.
+        origin: String,
+    },
 }
 
 impl Default for StageData {
@@ -292,10 +304,25 @@ pub fn identify_stage_on(
             (s.record.clone(), Some(s))
         }
         StageData::Record(path) => (read_record(folder, path, &estimator)?, None),
+        StageData::Columns {
+            t, input, columns, ..
+        } => {
+            let setup = Setup::from_scenario(folder.scenario());
+            let record = StageRecord::from_input(
+                t.clone(),
+                input.clone(),
+                columns.clone(),
+                &setup.plant.hysteresis,
+                setup.plant.bias_voltage,
+                estimator.sampling_tolerance,
+            )?;
+            (record, None)
+        }
     };
     let source = match &options.data {
         StageData::Simulate(_) => "a simulated record on the lumped model".to_string(),
         StageData::Record(p) => p.display().to_string(),
+        StageData::Columns { origin, .. } => origin.clone(),
     };
     let id = flexstage_identify::identify(&record, &guess, &estimator)?;
     warnings.extend(id.warnings.iter().cloned());

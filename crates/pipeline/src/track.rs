@@ -410,7 +410,7 @@ struct Job<'a> {
 }
 
 /// The stage a `track` call simulates.
-enum Simulated {
+pub(crate) enum Simulated {
     /// The twin of the run's design (built once, a fresh rig plant per run).
     Twin(Box<flexstage_twin::Twin>),
     /// The lumped model in its minimal loop.
@@ -507,23 +507,25 @@ pub fn try_build(folder: &RunFolder, progress: &dyn Progress) -> Result<TwinBuil
     }
 }
 
-/// Runs `track` (building the twin of the design when it simulates on the twin).
-pub fn track(
-    folder: &RunFolder,
-    options: &TrackOptions,
-    progress: &dyn Progress,
-) -> Result<TrackSummary> {
-    track_on(folder, options, progress, None)
+/// What `track` sets up before it designs and runs: the run's plant, the controllers' setup
+/// (model, identified PEAs), the simulated stage and the identified response fit.
+pub(crate) struct Prepared {
+    pub plant: Plant,
+    pub setup: Setup,
+    pub model: ModelSource,
+    pub compensator: [String; 2],
+    pub warnings: Vec<String>,
+    pub sim: Simulated,
+    pub identified: Option<ResponseFit>,
 }
 
-/// Runs `track` with the twin `run` built in its twin stage (`None`: builds it, as [`track`]).
-/// The twin is used only when `options.plant` is the twin and the run has a finished design.
-pub fn track_on(
+/// The set-up of `track` ([`Prepared`]), read from the run folder.
+pub(crate) fn prepare(
     folder: &RunFolder,
     options: &TrackOptions,
     progress: &dyn Progress,
     prebuilt: Option<TwinBuild>,
-) -> Result<TrackSummary> {
+) -> Result<Prepared> {
     options.validate()?;
     let plant = Plant::of_run(folder)?;
     if let Some(d) = options.duration {
@@ -547,10 +549,6 @@ pub fn track_on(
     let compensator = identified_peas(folder, &mut setup)?;
     let mut warnings = Vec::new();
     let sim = simulated(folder, options, progress, prebuilt, &mut warnings)?;
-    let kind = match sim {
-        Simulated::Twin(_) => PlantKind::Twin,
-        Simulated::Lumped => PlantKind::Lumped,
-    };
     // The response fit identified on the twin (else the fit of its exact modes).
     let identified = match folder
         .dir()
@@ -568,6 +566,49 @@ pub fn track_on(
             layout::stage::RESPONSE_FIT
         ));
     }
+    Ok(Prepared {
+        plant,
+        setup,
+        model,
+        compensator,
+        warnings,
+        sim,
+        identified,
+    })
+}
+
+/// Runs `track` (building the twin of the design when it simulates on the twin).
+pub fn track(
+    folder: &RunFolder,
+    options: &TrackOptions,
+    progress: &dyn Progress,
+) -> Result<TrackSummary> {
+    track_on(folder, options, progress, None)
+}
+
+/// Runs `track` with the twin `run` built in its twin stage (`None`: builds it, as [`track`]).
+/// The twin is used only when `options.plant` is the twin and the run has a finished design.
+pub fn track_on(
+    folder: &RunFolder,
+    options: &TrackOptions,
+    progress: &dyn Progress,
+    prebuilt: Option<TwinBuild>,
+) -> Result<TrackSummary> {
+    let Prepared {
+        plant,
+        mut setup,
+        model,
+        compensator,
+        mut warnings,
+        sim,
+        identified,
+    } = prepare(folder, options, progress, prebuilt)?;
+    const STOPPED_HINT: &str = "its earlier results are unchanged; run track again";
+    crate::progress::check_stop(progress, "track stopped before tuning", STOPPED_HINT)?;
+    let kind = match sim {
+        Simulated::Twin(_) => PlantKind::Twin,
+        Simulated::Lumped => PlantKind::Lumped,
+    };
     let (designs, margins, montecarlo, scan) = tune_and_margins(
         &mut setup,
         identified,
@@ -577,6 +618,7 @@ pub fn track_on(
         progress,
         &mut warnings,
     )?;
+    crate::progress::check_stop(progress, "track stopped after tuning", STOPPED_HINT)?;
     let jobs = plan(
         &plant.scenario,
         &setup,

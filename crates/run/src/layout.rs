@@ -14,7 +14,7 @@
 //!             summary.json checkpoint.bin
 //! analyze/<variant>/   cases.csv deformed.vtu summary.json workspace.svg
 //! export/     outline.{dxf,svg,stl} verification.{json,txt} body_fitted.vtu
-//! reduce/     params.toml summary.{toml,json} modes.{vtu,csv} mode<K>.png
+//! reduce/     params.toml summary.{toml,json} modes.{vtu,csv} mode_shapes.csv mode<K>.png
 //!             validity{,_scale}.{csv,svg}
 //! twin/       modes.csv bode.csv bode_{magnitude,phase}.svg validity.json
 //! front/      front.{json,csv,svg} d<K>/{design.json, outline.svg, modes.vtu, mode<M>.png}
@@ -164,6 +164,9 @@ pub mod reduce {
     pub const MODES_VTU: &str = "reduce/modes.vtu";
     /// Natural frequencies.
     pub const MODES_CSV: &str = "reduce/modes.csv";
+    /// Mode shapes as data: node coordinates `x_m`, `y_m`, then `ux_<k>`, `uy_<k>` of each
+    /// mode k (from 1), mass-normalized (φᵀMφ = 1).
+    pub const MODE_SHAPES_CSV: &str = "reduce/mode_shapes.csv";
     /// The most mode shapes drawn as pictures ([`mode_png`]).
     pub const MODE_PNGS: usize = 4;
 

@@ -728,8 +728,10 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ("trajectories.duration", "Duration [s], > 0."),
 ];
 
-/// The comment of a TOML path (array indices removed), if any.
-pub(crate) fn doc_of(path: &str) -> Option<&'static str> {
+/// The documentation of a scenario field (meaning, unit, source) by its TOML path without
+/// array indices (`mesh.nl`, `trajectories.frequency`), as `flexstage init` comments it;
+/// `None` for a path the built-in scenarios do not have.
+pub fn field_doc(path: &str) -> Option<&'static str> {
     FIELD_DOCS.iter().find(|(p, _)| *p == path).map(|(_, d)| *d)
 }
 
@@ -749,7 +751,7 @@ pub(crate) fn annotate(toml_text: &str) -> String {
             if !out.is_empty() && !out.ends_with("\n\n") {
                 out.push('\n');
             }
-            if let Some(doc) = doc_of(&table) {
+            if let Some(doc) = field_doc(&table) {
                 push_comment(&mut out, doc);
             }
         } else if let Some((key, _)) = trimmed.split_once('=') {
@@ -759,7 +761,7 @@ pub(crate) fn annotate(toml_text: &str) -> String {
             } else {
                 format!("{table}.{key}")
             };
-            if let Some(doc) = doc_of(&path) {
+            if let Some(doc) = field_doc(&path) {
                 push_comment(&mut out, doc);
             }
         }

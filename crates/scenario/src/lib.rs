@@ -48,6 +48,7 @@
 mod bounds;
 mod design;
 mod docs;
+pub use docs::field_doc;
 mod error;
 mod rig;
 mod stage;

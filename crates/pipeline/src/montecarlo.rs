@@ -1,0 +1,134 @@
+//! The Monte-Carlo study of `track` on its own, one plant at a time, so that a caller can
+//! spread the plants over processes or machines (the Python package sends them to a Dask
+//! cluster) and gather the same results as [`MonteCarloStudy::run`], bitwise: plant `i`
+//! depends on the study's seed and `i` alone (`flexstage_assess::montecarlo`).
+//!
+//! A study is set up from a run folder as `track` sets up its own study on the twin: the
+//! controllers tuned on the twin's sampled response, the backstepping from the identified
+//! response fit, the compensator from the identified PEAs ([`crate::track`]).
+//! [`MonteCarloStudy::inputs`] lists the files it reads, so that another process can rebuild
+//! it in a folder of its own.
+
+use flexstage_assess::Bench;
+use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, PlantResult, one_plant};
+use flexstage_control::registry::Controller;
+use flexstage_control::tuning::TuningParams;
+use flexstage_run::layout::{self, PeaIdentification};
+use flexstage_sim::trajectory::Reference;
+
+use crate::error::{PipelineError, Result};
+use crate::folder::RunFolder;
+use crate::progress::Progress;
+use crate::track::{Prepared, Simulated, TrackOptions, prepare};
+
+/// The Monte-Carlo study of a run's controllers on perturbed twins.
+#[derive(Debug, Clone)]
+pub struct MonteCarloStudy {
+    bench: Bench,
+    candidates: Vec<&'static Controller>,
+    reference: Reference,
+    params: MonteCarloParams,
+}
+
+impl MonteCarloStudy {
+    /// Sets the study up from the run folder as `track` does (its [`TrackOptions`]: the
+    /// controllers and the controllers' model; the plant must be the twin), on the
+    /// scenario's first trajectory.
+    pub fn of_run(
+        folder: &RunFolder,
+        options: &TrackOptions,
+        params: MonteCarloParams,
+        progress: &dyn Progress,
+    ) -> Result<MonteCarloStudy> {
+        params.validate()?;
+        let Prepared {
+            setup,
+            sim,
+            identified,
+            plant,
+            ..
+        } = prepare(folder, options, progress, None)?;
+        let Simulated::Twin(twin) = sim else {
+            return Err(PipelineError::Missing {
+                what: "twin of the design",
+                path: folder.dir().path(layout::design::DESIGN),
+                hint: "the Monte-Carlo study perturbs the twin of the run's finished design \
+                       (run `design` first)"
+                    .into(),
+            });
+        };
+        let Some(first) = plant.scenario.trajectories.first() else {
+            return Err(PipelineError::Option {
+                option: "trajectories",
+                value: "none".into(),
+                expected: "at least one trajectory (the study tracks the first)".into(),
+            });
+        };
+        let (reference, _) = Reference::from_scenario(first);
+        crate::progress::check_stop(progress, "the study stopped before tuning", "")?;
+        progress.note("designing the controllers on the twin's sampled response");
+        let bench = Bench::with_identified(setup, *twin, TuningParams::default(), identified)?;
+        Ok(MonteCarloStudy {
+            bench,
+            candidates: options.controllers.clone(),
+            reference,
+            params,
+        })
+    }
+
+    /// The run-folder files [`MonteCarloStudy::of_run`] reads with the default options
+    /// (relative paths): a folder holding these and the scenario sets up the same study.
+    pub fn inputs() -> Vec<String> {
+        let mut files = vec![
+            layout::PLANT.to_string(),
+            layout::design::DESIGN.to_string(),
+            layout::stage::PARAMS.to_string(),
+            layout::stage::RESPONSE_FIT.to_string(),
+        ];
+        files.extend([1, 2].map(|pea| PeaIdentification { pea }.estimates()));
+        files
+    }
+
+    /// The number of plants.
+    pub fn plants(&self) -> usize {
+        self.params.plants
+    }
+
+    /// The controllers compared, in column order (their `track` names).
+    pub fn candidates(&self) -> Vec<&'static str> {
+        self.candidates.iter().map(|c| c.name).collect()
+    }
+
+    /// The study's settings.
+    pub fn params(&self) -> &MonteCarloParams {
+        &self.params
+    }
+
+    /// Plant `i` (in `0..plants()`) and every controller's result on it.
+    pub fn plant(&self, i: usize) -> Result<PlantResult> {
+        if i >= self.params.plants {
+            return Err(PipelineError::Option {
+                option: "montecarlo.plant",
+                value: i.to_string(),
+                expected: format!("an index in [0, {})", self.params.plants),
+            });
+        }
+        Ok(one_plant(
+            &self.bench,
+            &self.candidates,
+            self.reference,
+            &self.params,
+            i,
+        )?)
+    }
+
+    /// Every plant, in parallel on this process's threads.
+    pub fn run(&self) -> Result<MonteCarlo> {
+        Ok(flexstage_assess::montecarlo::monte_carlo(
+            &self.bench,
+            &self.candidates,
+            self.reference,
+            &self.params,
+        )?)
+    }
+}

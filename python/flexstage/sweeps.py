@@ -1,0 +1,79 @@
+"""Sweeps on a Dask cluster: one task per design or per plant, results gathered as the same
+objects as the serial calls, bitwise, whatever the number of workers.
+
+* :func:`designs`: a list of scenarios (e.g. the resonance bounds of a workspace–resonance
+  front), one design each. A design is deterministic (parallel sums in fixed chunks, in
+  order), so a worker computes the same bits as this process.
+* :func:`monte_carlo`: the Monte-Carlo study of a run (:class:`flexstage.MonteCarloStudy`),
+  one task per plant. The study's recipe is sent to every worker once
+  (``client.scatter(..., broadcast=True)``); each worker sets the study up once and keeps it.
+
+Give a ``dask.distributed.Client`` you already run; without one (``client=None``) the same
+tasks run here, one after the other. Dask is needed only when a client is given.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Any, Dict, List, Optional, Sequence
+
+from .results import Design
+from .run import Run
+from .scenario import Scenario
+from .study import MonteCarlo, MonteCarloStudy, PlantResult
+
+
+def design_task(scenario: Scenario, folder: Optional[str] = None,
+                options: Optional[Dict[str, Any]] = None) -> Design:
+    """One design of a sweep: in ``folder`` (replacing an earlier design there), or in a
+    temporary folder removed afterwards. Runs in a Dask worker or here."""
+    tmp = None
+    if folder is None:
+        tmp = tempfile.mkdtemp(prefix="flexstage-sweep-")
+        folder = os.path.join(tmp, scenario.name)
+    try:
+        with Run(scenario, folder, replace=True) as run:
+            return run.design(force=True, progress=False, **(options or {}))
+    finally:
+        if tmp is not None:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def designs(scenarios: Sequence[Scenario], client: Any = None, *,
+            root: Optional[Any] = None, **options: Any) -> List[Design]:
+    """Designs every scenario, one task each on ``client`` (else here, in order); results in
+    the scenarios' order. ``root``: keep each design in ``root/<scenario name>`` (names must
+    then differ; on a cluster, a folder every worker can write), else temporary folders.
+    ``options`` go to :meth:`flexstage.Run.design` (``max_iterations``, …)."""
+    folders: List[Optional[str]] = [None] * len(scenarios)
+    if root is not None:
+        names = [s.name for s in scenarios]
+        if len(set(names)) != len(names):
+            raise ValueError(f"scenario names must differ to share root {root}: {names}")
+        folders = [str(Path(root) / n) for n in names]
+    if client is None:
+        return [design_task(s, f, options) for s, f in zip(scenarios, folders)]
+    futures = client.map(design_task, list(scenarios), folders, options=options or None,
+                         pure=False)
+    return client.gather(futures)
+
+
+def plant_task(i: int, study: MonteCarloStudy) -> PlantResult:
+    """Plant ``i`` of ``study`` (set up once per process). Runs in a Dask worker or here."""
+    return study.plant(i)
+
+
+def monte_carlo(study: MonteCarloStudy, client: Any = None) -> MonteCarlo:
+    """The study, one task per plant on ``client`` (else here, one plant after the other;
+    :meth:`MonteCarloStudy.run` uses this process's threads instead)."""
+    n = study.plants
+    if client is None:
+        plants = [plant_task(i, study) for i in range(n)]
+    else:
+        [shared] = client.scatter([study], broadcast=True)
+        futures = client.map(plant_task, range(n), study=shared, pure=False)
+        plants = client.gather(futures)
+    return MonteCarlo(controllers=study.controllers, plants=sorted(plants, key=lambda p: p.index))

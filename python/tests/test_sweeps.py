@@ -1,0 +1,74 @@
+"""Sweeps through Dask: a 2-worker LocalCluster gives the serial results bitwise."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+import flexstage as fs
+from flexstage import sweeps
+
+from conftest import quick
+
+distributed = pytest.importorskip("distributed")
+
+
+@pytest.fixture(scope="module")
+def client():
+    cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
+    c = distributed.Client(cluster)
+    yield c
+    c.close()
+    cluster.close()
+
+
+@pytest.fixture(scope="module")
+def study(run):
+    return fs.MonteCarloStudy.of_run(run, controllers=["pi-notch-ff", "pid-ff"], plants=6,
+                                     duration=0.1, progress=False)
+
+
+def test_same_compares_bits():
+    a = np.array([1.0, 2.0])
+    b = a.copy()
+    assert fs.same({"x": a, "t": 1.0}, {"x": b, "t": 1.0})
+    b[1] = np.nextafter(2.0, 3.0)
+    assert not fs.same(a, b)
+    assert not fs.same(0.0, -0.0)
+    assert fs.same(float("nan"), float("nan"))
+    assert fs.same({"seconds": 1.0, "x": 1}, {"seconds": 2.0, "x": 1})
+
+
+def test_design_sweep_on_two_workers_equals_serial(client):
+    scenarios = []
+    for i, nl in enumerate((40, 44, 48)):
+        s = quick(5)
+        s.update({"name": f"sweep{i}", "mesh.nl": nl})
+        scenarios.append(s)
+    serial = sweeps.designs(scenarios)
+    spread = sweeps.designs(scenarios, client)
+    assert [d.density.shape for d in spread] == [(40, 24), (44, 24), (48, 24)]
+    assert all(fs.same(a, b) for a, b in zip(serial, spread))
+
+
+def test_study_recipe_pickles(study):
+    again = pickle.loads(pickle.dumps(study))
+    assert again.key == study.key and again.plants == 6
+    with pytest.raises(TypeError, match="nosuch"):
+        fs.MonteCarloStudy(study.scenario_json, study.files, study.controllers, {"nosuch": 1})
+
+
+def test_monte_carlo_on_two_workers_equals_serial(study, client):
+    threads = study.run(progress=False)
+    one_by_one = sweeps.monte_carlo(study)
+    spread = sweeps.monte_carlo(study, client)
+    assert [p.index for p in spread.plants] == list(range(6))
+    assert fs.same(threads, one_by_one) and fs.same(threads, spread)
+    p = spread.plants[0]
+    assert p.rms.shape == (2, 2) and p.passed.shape == (2,)
+    assert 0.0 <= spread.pass_rate("pi-notch-ff") <= 1.0
+    # Plants differ from each other (the seed draws each one).
+    assert not fs.same(spread.plants[0].stiffness, spread.plants[1].stiffness)
