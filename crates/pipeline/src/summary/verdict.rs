@@ -459,6 +459,15 @@ fn limits(v: &Verdict, metrics: &[MetricsRow]) -> Vec<String> {
             saturated.join(", ")
         ));
     }
+    for r in metrics
+        .iter()
+        .filter(|r| !matches!(r.status.as_str(), "" | "ok" | "saturated"))
+    {
+        out.push(format!(
+            "{} on {}: {} ({})",
+            r.variant, r.trajectory, r.status, r.status_detail
+        ));
+    }
     out
 }
 
@@ -696,6 +705,8 @@ mod tests {
             saturated_samples: saturated,
             dropouts: 0,
             workspace_usage: 0.5,
+            status: "ok".into(),
+            status_detail: String::new(),
         }
     }
 
