@@ -46,10 +46,7 @@ fn bad_files_name_the_line() {
         "{e}"
     );
     let e = parse("t,U,x\n0,1,2\n0.1,2\n").unwrap_err();
-    assert!(
-        e.contains("line 3") && e.contains("cut short"),
-        "{e}"
-    );
+    assert!(e.contains("line 3") && e.contains("cut short"), "{e}");
     let e = parse("t,U,x\n0,1,2\n").unwrap_err();
     assert!(e.contains("at least 3 samples"), "{e}");
 }

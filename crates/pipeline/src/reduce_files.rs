@@ -161,8 +161,12 @@ impl Outputs<'_> {
         let mesh = self.problem.mesh();
         let mut header = vec!["x_m".to_string(), "y_m".to_string()];
         let mut columns = vec![
-            (0..mesh.n_nodes()).map(|n| mesh.node_coords(n)[0]).collect::<Vec<f64>>(),
-            (0..mesh.n_nodes()).map(|n| mesh.node_coords(n)[1]).collect(),
+            (0..mesh.n_nodes())
+                .map(|n| mesh.node_coords(n)[0])
+                .collect::<Vec<f64>>(),
+            (0..mesh.n_nodes())
+                .map(|n| mesh.node_coords(n)[1])
+                .collect(),
         ];
         for (k, phi) in m.shapes.iter().enumerate() {
             for (axis, name) in ["ux", "uy"].iter().enumerate() {
