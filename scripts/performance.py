@@ -104,7 +104,8 @@ def run_benches():
 
 def run_commands():
     subprocess.run(["cargo", "build", "--release", "-q", "-p", "flexstage"], cwd=ROOT, check=True)
-    binary = os.path.join(ROOT, "target", "release", "flexstage")
+    target = os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target"))
+    binary = os.path.join(target, "release", "flexstage")
     out = []
     with tempfile.TemporaryDirectory() as tmp:
         for what, argv in COMMANDS:
