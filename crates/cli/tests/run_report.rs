@@ -80,7 +80,7 @@ fn run_writes_a_self_contained_report_with_every_section_and_resumes() {
     let (stdout, _) = run(&dir);
     assert!(stdout.contains("report: "), "prints where the report is");
     assert!(stdout.contains("workspace area"), "prints the summary");
-    assert!(stdout.contains("tracking RMS"), "prints the tracking RMS");
+    assert!(stdout.contains("use: "), "prints which controller to use");
 
     let html = std::fs::read_to_string(dir.join(layout::REPORT)).unwrap();
     // Every section present, in order, and none reported as not run.
@@ -139,10 +139,14 @@ fn run_writes_a_self_contained_report_with_every_section_and_resumes() {
         html.contains("k_e1") && html.contains("k_ε1"),
         "Table 4 shows the gains"
     );
-    // No network: no external URL in any src/href (the nav links are fragments); the one
+    // No network: no external URL in any src/href (the nav links are fragments, a picture's
+    // link to its full size is embedded); the one
     // script (click to enlarge) loads nothing.
     for h in attribute_values(&html, "href") {
-        assert!(h.starts_with('#'), "external link {h}");
+        assert!(
+            h.starts_with('#') || h.starts_with("data:image/"),
+            "external link {h}"
+        );
     }
     assert!(!html.contains("src=\"http"), "external image");
     assert_eq!(html.matches("<script").count(), 1, "one inline script");

@@ -254,7 +254,10 @@ pub fn run_in(
     Ok(RunSummary {
         root: root.to_path_buf(),
         seconds: t0.elapsed().as_secs_f64(),
-        verdict: Verdict::of(folder.dir())?,
+        verdict: Verdict::of(
+            folder.dir(),
+            &layout::Tracking::variant(&options.track.conditions(&folder)),
+        )?,
         identified: table.map(|t| table_rows(&t)).unwrap_or_default(),
         report: std::fs::canonicalize(&report).unwrap_or(report),
     })

@@ -62,10 +62,11 @@ fn identify(root: &Path, csv: &str) -> Result<flexstage_pipeline::PeaIdSummary, 
 fn a_record_too_short_to_show_hysteresis_is_refused() {
     let lines = record_lines();
     let root = dir("short");
-    let full = identify(&root, &lines.join("\n")).expect("the whole record identifies");
+    // A complete record ends every line (the strict reader refuses a cut-off last line).
+    let full = identify(&root, &(lines.join("\n") + "\n")).expect("the whole record identifies");
     assert!(full.compensation.width_after_pct < full.compensation.width_before_pct);
     // The first 200 rows of a simulated record: the reproducer.
-    let e = identify(&root, &lines[..201].join("\n")).unwrap_err();
+    let e = identify(&root, &(lines[..201].join("\n") + "\n")).unwrap_err();
     assert!(e.contains("lab-record.csv"), "{e}");
     let _ = std::fs::remove_dir_all(&root);
 }

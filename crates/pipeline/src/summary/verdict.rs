@@ -148,13 +148,13 @@ pub struct Verdict {
 }
 
 impl Verdict {
-    /// The verdict of the run folder `dir` from its typed results.
-    pub fn of(dir: &RunDir) -> Result<Verdict> {
+    /// The verdict of the run folder `dir` from its typed results, with the tracking results
+    /// of `track` (the folder of the conditions the run tracked under, `track/` by default).
+    pub fn of(dir: &RunDir, track: &Tracking) -> Result<Verdict> {
         let summary = dir.load::<DesignSummaryFile>(layout::design::SUMMARY)?;
         let verification = dir.load::<VerificationFile>(layout::export::VERIFICATION_JSON)?;
         let reduce = dir.load::<ReduceSummaryJson>(layout::reduce::SUMMARY_JSON)?;
         let twin = dir.load::<TwinValidity>(layout::twin::VALIDITY)?;
-        let track = Tracking::main();
         let metrics = dir.load::<Rows<MetricsRow>>(&track.metrics())?;
         let margins = dir.load::<Rows<MarginRow>>(&track.margins())?;
         let scan = dir.load::<Rows<ScanRow>>(&track.scan_frequency_csv())?;
