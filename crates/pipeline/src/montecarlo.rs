@@ -5,7 +5,7 @@
 //!
 //! A study is set up from a run folder as `track` sets up its own study on the twin: the
 //! controllers tuned on the twin's sampled response, the backstepping from the identified
-//! response fit, the compensator from the identified PEAs ([`crate::track`]).
+//! response fit, the compensator from the identified PEAs ([`mod@crate::track`]).
 //! [`MonteCarloStudy::inputs`] lists the files it reads, so that another process can rebuild
 //! it in a folder of its own.
 

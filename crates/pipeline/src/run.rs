@@ -256,7 +256,7 @@ pub fn run_in(
         seconds: t0.elapsed().as_secs_f64(),
         verdict: Verdict::of(
             folder.dir(),
-            &layout::Tracking::variant(&options.track.conditions(&folder)),
+            &layout::Tracking::variant(&options.track.conditions(folder)),
         )?,
         identified: table.map(|t| table_rows(&t)).unwrap_or_default(),
         report: std::fs::canonicalize(&report).unwrap_or(report),
