@@ -96,17 +96,46 @@ impl FrontDesign {
 pub struct ScanError {
     /// The controller (`track`'s name).
     pub controller: String,
-    /// RMS error per axis \[m\] (∞: diverged).
+    /// RMS error per axis \[m\] (∞: diverged; JSON has no ∞, so it is written as `null`).
+    #[serde(deserialize_with = "null_is_diverged")]
     pub rms: [f64; 2],
-    /// The same in % of each axis's range.
+    /// The same in % of each axis's range (∞ / `null`: diverged).
+    #[serde(deserialize_with = "null_is_diverged")]
     pub percent: [f64; 2],
     /// The Lissajous amplitudes the rig could deliver at that speed \[m\].
     pub amplitude: [f64; 2],
+}
+
+/// A pair of errors as JSON writes them: a number, or `null` for the ∞ of a diverged run
+/// (serde_json writes every non-finite number as `null`).
+fn null_is_diverged<'de, D: serde::Deserializer<'de>>(d: D) -> Result<[f64; 2], D::Error> {
+    let pair = <[Option<f64>; 2] as serde::Deserialize>::deserialize(d)?;
+    Ok(pair.map(|x| x.unwrap_or(f64::INFINITY)))
 }
 
 impl ScanError {
     /// The worse axis's error \[% of range\].
     pub fn worst(&self) -> f64 {
         self.percent[0].max(self.percent[1])
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A diverged controller's ∞ errors are written as JSON `null` and read back as ∞.
+    #[test]
+    fn a_diverged_scan_error_reads_back() {
+        let e = ScanError {
+            controller: "robust".into(),
+            rms: [f64::INFINITY, 1e-9],
+            percent: [f64::INFINITY, 0.5],
+            amplitude: [1e-6, 2e-6],
+        };
+        let text = serde_json::to_string(&e).unwrap();
+        assert!(text.contains("null"), "{text}");
+        let back: ScanError = serde_json::from_str(&text).unwrap();
+        assert_eq!(back, e);
     }
 }
