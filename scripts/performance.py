@@ -18,7 +18,6 @@ markers of docs/performance.md; the prose around them is kept.
 
 import os
 import re
-import resource
 import subprocess
 import sys
 import tempfile
@@ -111,16 +110,19 @@ def run_commands():
         for what, argv in COMMANDS:
             args = [a.replace("{tmp}", tmp) for a in argv]
             before = load()
-            r0 = resource.getrusage(resource.RUSAGE_CHILDREN)
             t0 = time.monotonic()
-            subprocess.run([binary] + args, cwd=tmp, check=True, stdout=subprocess.DEVNULL,
-                           stderr=subprocess.DEVNULL)
+            child = subprocess.Popen([binary] + args, cwd=tmp, stdout=subprocess.DEVNULL,
+                                     stderr=subprocess.DEVNULL)
+            # This child's own usage (RUSAGE_CHILDREN would hold the largest of every child
+            # so far, the benchmarks included).
+            _, status, usage = os.wait4(child.pid, 0)
+            child.returncode = os.waitstatus_to_exitcode(status)
             wall = time.monotonic() - t0
-            r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
             after = load()
-            cpu = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
-            # ru_maxrss of the children is the largest child so far, in KiB on Linux.
-            rss_mb = r1.ru_maxrss / 1024
+            if child.returncode != 0:
+                raise SystemExit(f"performance: {' '.join(args)} exited {child.returncode}")
+            cpu = usage.ru_utime + usage.ru_stime
+            rss_mb = usage.ru_maxrss / 1024  # KiB on Linux
             shown = "flexstage " + " ".join(a.replace(tmp, "DIR") for a in args)
             out.append((what, f"{wall:.1f} s", f"{cpu:.1f} s", f"{rss_mb:.0f} MB", shown,
                         max(before, after)))
