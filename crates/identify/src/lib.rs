@@ -21,6 +21,10 @@
 //! * [`response`]: the frequency-response identification of what the controller's model
 //!   takes from a structure (static gain, the output modes below Nyquist), for the digital
 //!   twin, where no lumped parameter set is the truth.
+//! * [`measured`]: the loop as a lab measures it, at the controller's sample time: what a
+//!   rig logs ([`measured::LabLog`]), the 2 × 2 response command → reading with coherence
+//!   and uncertainty from a periodic multisine or by H1 ([`measured::MeasuredResponse`]),
+//!   its z-domain fit as a loop model ([`measured::ZFit`]) and the files of both.
 //! * [`samples`]: the paper's scenario (guess = Table 4 guess, truth = Table 4 estimates).
 //!
 //! ```
@@ -99,6 +103,7 @@ mod error;
 pub mod estimator;
 pub mod excitation;
 pub mod frequency;
+pub mod measured;
 pub mod regression;
 pub mod response;
 pub mod samples;
