@@ -251,6 +251,30 @@ fn fit_of_a_noiseless_response_is_the_sampled_plant_with_its_folded_mode() {
     }
 }
 
+/// Reference: the shares of the static gains by hand. q_o1 (both PEAs alike): g11 + g12 =
+/// 1 + 0.5·0.4 + 0.5·0.2 = 1.3, of which the 2.7 kHz mode 1 (0.77) and the folded 8.99 kHz
+/// mode 0.3 (0.23); q_o2 (PEAs opposed): g21 − g22 = −1.06, the 3.9 kHz mode −1 (0.94), the
+/// folded mode −0.3·0.2 = −0.06 (0.057). Goal: the response fit of the loop model selects
+/// per axis the lowest mode with at least the asked share, as the sampled loop sees it:
+/// share 0.1 → q_o1 the folded mode, q_o2 3.9 kHz; share 0.5 → q_o1 2.7 kHz.
+#[test]
+fn response_fit_of_the_loop_model_takes_the_modes_by_their_share() {
+    let r = multisine(&plan(3), 0.0, 1);
+    let fit = ZFit::fit(&r, &FitParams::default()).unwrap();
+    let rf = fit.response_fit(0.1);
+    let f = rf.frequency.map(Option::unwrap);
+    assert!(
+        (f[0] - 1027.65).abs() < 0.01 && (f[1] - 3900.0).abs() < 1e-6,
+        "{f:?}"
+    );
+    assert!((rf.damping[1] - 0.01).abs() < 1e-6, "{:?}", rf.damping);
+    let half = fit.response_fit(0.5).frequency.map(Option::unwrap);
+    assert!((half[0] - 2700.0).abs() < 1e-6, "{half:?}");
+    assert!((fit.response_fit(0.24).frequency[0].unwrap() - 2700.0).abs() < 1e-6);
+    assert!((fit.response_fit(0.22).frequency[0].unwrap() - 1027.65).abs() < 0.01);
+    assert!(fit.response_fit(0.95).frequency[1].is_none());
+}
+
 /// Goal: with noise, the fit agrees with the measured lines within their uncertainty:
 /// χ²/dof ≤ 1.3, and no entry off by more than 5σ.
 #[test]

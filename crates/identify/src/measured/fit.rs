@@ -26,6 +26,7 @@ use nalgebra::{DMatrix, DVector};
 use crate::error::{IdentifyError, Result, check};
 use crate::frequency::C64;
 use crate::measured::MeasuredResponse;
+use crate::response::ResponseFit;
 
 /// Settings of the z-domain fit (module docs).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -180,6 +181,52 @@ impl ZFit {
             }
         }
         worst
+    }
+
+    /// What a response fit of the lumped model takes from this loop model
+    /// ([`ResponseFit`]): the static gain H(1), and per output axis the lowest mode (a pole
+    /// pair, at the frequency the sampled loop sees it, [`LoopPlant::modes`]) whose share of
+    /// that axis's static gain is at least `share` (in (0, 1]). A pair's share of axis i is
+    /// its partial fractions' value at z = 1, `2 Re(R_ij/(1 − p))` with the residue R_ij at
+    /// the pole p of H_ij without its delay (z^{−d} is 1 at z = 1), combined over the PEAs as in [`ResponseFit::from_modes`] (+ for
+    /// q_o1, − for q_o2); for the ZOH sampling of a mode this is exactly its out·in/ω².
+    pub fn response_fit(&self, share: f64) -> ResponseFit {
+        let g = self.static_gain();
+        let n = self.order();
+        let mut best: [Option<(f64, f64)>; 2] = [None; 2];
+        for (k, &p) in self.poles.iter().enumerate() {
+            if !(p.im > 0.0) {
+                continue;
+            }
+            let den: C64 = self
+                .poles
+                .iter()
+                .enumerate()
+                .filter(|&(j, _)| j != k)
+                .map(|(_, &q)| p - q)
+                .product();
+            // The delay is 1 at z = 1: the partial fractions of B(z⁻¹)/A(z⁻¹) =
+            // zⁿB(z⁻¹)/Π(z − p_j), residue at p: pⁿ B(p⁻¹) / Π_{j≠k}(p − p_j).
+            let dc = |e: usize| {
+                let r = poly(&self.b[e / 2][e % 2], p.inv(), 1) * p.powi(n as i32) / den;
+                2.0 * (r / (C64::new(1.0, 0.0) - p)).re
+            };
+            let s = p.ln() / self.sample_time;
+            let (f, zeta) = (s.norm() / std::f64::consts::TAU, -s.re / s.norm());
+            for i in 0..2 {
+                let sign = if i == 0 { 1.0 } else { -1.0 };
+                let part = dc(2 * i) + sign * dc(2 * i + 1);
+                let total = g[i][0] + sign * g[i][1];
+                if part / total >= share && best[i].is_none_or(|b| f < b.0) {
+                    best[i] = Some((f, zeta));
+                }
+            }
+        }
+        ResponseFit {
+            dc_gain: g,
+            frequency: best.map(|b| b.map(|m| m.0)),
+            damping: best.map(|b| b.map_or(0.0, |m| m.1)),
+        }
     }
 
     /// The model at z⁻¹ = `zi`, entry e = 2i + j.
