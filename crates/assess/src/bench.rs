@@ -100,6 +100,42 @@ impl Bench {
         })
     }
 
+    /// Every controller designed from a lab measurement of the twin in its rig at the
+    /// controller's sample time ([`crate::lab::measure`]) and from nothing of its truth: the
+    /// PI + notch and the PID tuned on the measured loop model
+    /// (`flexstage_identify::measured::ZFit`), the backstepping's model fitted to that loop
+    /// model's response fit (`ZFit::response_fit`). The backstepping's gains are not sized
+    /// by margins here (the only probe, [`LinearLoop`], runs on the twin's exact linear
+    /// loop): it keeps the full gains. The twin stays on the bench to score the designs.
+    pub fn measured(
+        mut setup: Setup,
+        twin: Twin,
+        tuning: TuningParams,
+        lab: &crate::lab::LabParams,
+    ) -> Result<(Bench, crate::lab::LabMeasurement)> {
+        let measured = crate::lab::measure(&twin, &setup, lab)?;
+        let fit = measured.model.response_fit(RESPONSE_SHARE);
+        let stage = Stage::new(
+            &setup,
+            Some(&measured.model),
+            Some(fit),
+            None,
+            tuning.clone(),
+        );
+        let designs = Designs::for_stage(&stage)?;
+        let (model, coupling) = stage.controller_model();
+        drop(stage);
+        (setup.controller.model, setup.controller.coupling) = (model, coupling);
+        let bench = Bench {
+            setup,
+            twin,
+            tuning,
+            identified: Some(fit),
+            designs,
+        };
+        Ok((bench, measured))
+    }
+
     /// The design of `c` on this bench.
     pub fn design(&self, c: &Controller) -> Result<&Arc<dyn Design>> {
         self.designs.get(c).ok_or_else(|| {

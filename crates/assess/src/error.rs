@@ -12,6 +12,9 @@ pub enum AssessError {
     /// Building or running the twin.
     #[error(transparent)]
     Twin(#[from] flexstage_twin::TwinError),
+    /// An error of the measured response (flexstage-identify).
+    #[error(transparent)]
+    Identify(#[from] flexstage_identify::IdentifyError),
     /// Drawing a figure.
     #[error(transparent)]
     Plot(#[from] flexstage_figures::plot::PlotError),

@@ -11,6 +11,9 @@
 //! * [`bench`](mod@bench): the candidates, including the PID + FF and PI + notch + FF baselines tuned
 //!   on the twin's frequency response by one documented procedure with equal search budget
 //!   ([`flexstage_control::tuning`]).
+//! * [`lab`]: the twin measured as a lab measures its stage (multisine through the full rig
+//!   at the controller's rate, the measured response and its z-domain loop model), from which
+//!   [`Bench::measured`] designs the controllers.
 //! * [`montecarlo`]: pass rate over ≥ 100 perturbed twins (K, M, α ± 20 %, damping 0.5–3 %,
 //!   coupling 0–15 %, compensator Bouc–Wen ± 20 %, delay 0–2 samples), in parallel.
 //! * [`sweep`]: RMS error of each candidate on the Lissajous 3:1 from 1 % to 30 % of the
@@ -25,6 +28,7 @@
 pub mod bench;
 mod error;
 pub mod inject;
+pub mod lab;
 pub mod margins;
 pub mod montecarlo;
 pub mod sweep;

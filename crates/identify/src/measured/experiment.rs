@@ -32,7 +32,8 @@ pub struct MultisinePlan {
 
 impl MultisinePlan {
     /// The default plan at `sample_time`: f₀ = 5 Hz lines from 5 Hz to just below Nyquist,
-    /// 4 µm peak, 2 settling and 12 measured periods per input
+    /// 0.3 µm peak (the amplifier stays below its current limit: a PEA is a capacitor and
+    /// the multisine reaches Nyquist), 2 settling and 12 measured periods per input
     /// (`docs/DECISIONS.md`, "The measured response").
     pub fn new(sample_time: f64) -> MultisinePlan {
         let period = (1.0 / (5.0 * sample_time)).round().max(8.0) as usize;
@@ -40,7 +41,7 @@ impl MultisinePlan {
             sample_time,
             period,
             lines: (1..period.div_ceil(2)).collect(),
-            amplitude: 4e-6,
+            amplitude: 0.3e-6,
             settle: 2,
             periods: 12,
         }
