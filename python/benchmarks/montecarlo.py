@@ -1,0 +1,156 @@
+"""The Monte-Carlo study of a run (100 plants × 4 controllers by default) from its recipe,
+serially (``study.run()``: this process's threads, rayon on every core) against a Dask
+``LocalCluster`` of 2 single-threaded worker processes on the same cores
+(``flexstage.sweeps.monte_carlo``), in pairs.
+
+Each measurement is a fresh process that loads the pickled recipe, imports flexstage and
+(Dask) starts the cluster and imports flexstage in its workers, then times from the recipe
+to the gathered result: the study's set-up (twin, controllers designed on it) is inside the
+timing in both modes, once in the serial process and once in each worker. Printed: wall
+seconds, the CPU seconds of every process involved (the measuring one and its children:
+workers, nannies), and the 1-minute load average before each run (others share the
+machine: wall times depend on it, CPU times much less). Pairs alternate which mode runs
+first. Every Dask result is checked bitwise against the serial one.
+
+    python3 python/benchmarks/montecarlo.py RUN_FOLDER [--plants 100] [--pairs 5]
+
+``RUN_FOLDER`` holds a finished design (``flexstage design --out RUN_FOLDER``); the recipe is
+written beside it as ``montecarlo-<plants>.pickle`` on first use.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pickle
+import statistics
+import subprocess
+import sys
+import time
+from typing import Any, Dict, List
+
+CONTROLLERS = ("pi-notch-ff", "robust", "nonrobust", "pid-ff")
+
+
+def _cpu_tree() -> float:
+    """User + system seconds of this process and of its live children (recursively)."""
+    import psutil
+
+    me = psutil.Process()
+    total = 0.0
+    for p in [me, *me.children(recursive=True)]:
+        try:
+            t = p.cpu_times()
+        except psutil.NoSuchProcess:
+            continue
+        total += t.user + t.system
+    return total
+
+
+def _import_flexstage() -> str:
+    import flexstage
+
+    return flexstage.__file__
+
+
+def child(recipe: str, mode: str, out: str) -> None:
+    """One measurement in this (fresh) process; its figures as JSON on the last line."""
+    import flexstage as fs
+    from flexstage import sweeps
+
+    with open(recipe, "rb") as f:
+        study = pickle.load(f)
+    if mode == "serial":
+        c0, t0 = _cpu_tree(), time.perf_counter()
+        result = study.run(progress=False)
+        seconds, cpu = time.perf_counter() - t0, _cpu_tree() - c0
+    else:
+        from distributed import Client, LocalCluster
+
+        with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                          dashboard_address=None) as cluster, Client(cluster) as client:
+            client.run(_import_flexstage)
+            c0, t0 = _cpu_tree(), time.perf_counter()
+            result = sweeps.monte_carlo(study, client)
+            seconds, cpu = time.perf_counter() - t0, _cpu_tree() - c0
+    equal = None
+    if os.path.exists(out):
+        with open(out, "rb") as f:
+            equal = fs.same(pickle.load(f), result)
+    if mode == "serial":
+        with open(out, "wb") as f:
+            pickle.dump(result, f)
+    print(json.dumps({"mode": mode, "wall": seconds, "cpu": cpu, "equal_to_serial": equal,
+                      "pass_rates": {c: result.pass_rate(c) for c in result.controllers}}))
+
+
+def recipe_of(folder: str, plants: int) -> str:
+    """The pickled recipe of the study of ``folder`` (written on first use)."""
+    import flexstage as fs
+
+    path = os.path.join(folder, f"montecarlo-{plants}.pickle")
+    if not os.path.exists(path):
+        with fs.Run.open(folder) as run:
+            scenario_json, files = run._n.study_recipe()
+        study = fs.MonteCarloStudy(scenario_json, files, CONTROLLERS, {"plants": plants})
+        with open(path, "wb") as f:
+            pickle.dump(study, f)
+    return path
+
+
+def measure(recipe: str, mode: str, out: str) -> Dict[str, Any]:
+    load = os.getloadavg()[0]
+    done = subprocess.run([sys.executable, __file__, os.path.dirname(recipe), "--child", mode,
+                           recipe, out], capture_output=True, text=True)
+    if done.returncode != 0:
+        sys.exit(f"{mode} failed:\n{done.stderr}")
+    figures = json.loads(done.stdout.strip().splitlines()[-1])
+    figures["load"] = load
+    return figures
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("folder")
+    ap.add_argument("--plants", type=int, default=100)
+    ap.add_argument("--pairs", type=int, default=5)
+    ap.add_argument("--child", nargs=3, metavar=("MODE", "RECIPE", "OUT"), help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        mode, recipe, out = args.child
+        child(recipe, mode, out)
+        return
+    recipe = recipe_of(args.folder, args.plants)
+    out = os.path.join(args.folder, f"montecarlo-{args.plants}-serial.pickle")
+    if os.path.exists(out):
+        os.remove(out)
+    measure(recipe, "serial", out)  # warm-up: the serial reference result, file caches
+    ratios: List[float] = []
+    rows: List[Dict[str, Any]] = []
+    for k in range(args.pairs):
+        order = ("serial", "dask") if k % 2 == 0 else ("dask", "serial")
+        pair = {m: measure(recipe, m, out) for m in order}
+        if not pair["dask"]["equal_to_serial"]:
+            sys.exit("the Dask result differs from the serial one")
+        ratio = pair["dask"]["wall"] / pair["serial"]["wall"]
+        ratios.append(ratio)
+        for m in order:
+            f = pair[m]
+            rows.append(f)
+            print(f"pair {k + 1} {m:6}: {f['wall']:6.2f} s wall {f['cpu']:6.2f} s CPU "
+                  f"(load {f['load']:.2f})", flush=True)
+        print(f"pair {k + 1} dask / serial wall {ratio:.3f}, CPU "
+              f"{pair['dask']['cpu'] / pair['serial']['cpu']:.3f}", flush=True)
+    for m in ("serial", "dask"):
+        walls = [r["wall"] for r in rows if r["mode"] == m]
+        cpus = [r["cpu"] for r in rows if r["mode"] == m]
+        print(f"{m:6}: wall median {statistics.median(walls):.2f} s "
+              f"[{min(walls):.2f}, {max(walls):.2f}], CPU median {statistics.median(cpus):.2f} s")
+    print(f"dask / serial wall per pair: {', '.join(f'{r:.3f}' for r in ratios)}; median "
+          f"{statistics.median(ratios):.3f}; loads {min(r['load'] for r in rows):.2f}–"
+          f"{max(r['load'] for r in rows):.2f}; results bitwise equal: yes")
+
+
+if __name__ == "__main__":
+    main()
