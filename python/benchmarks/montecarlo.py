@@ -6,9 +6,11 @@ serially (``study.run()``: this process's threads, rayon on every core) against 
 Each measurement is a fresh process that loads the pickled recipe, imports flexstage and
 (Dask) starts the cluster and imports flexstage in its workers, then times from the recipe
 to the gathered result: the study's set-up (twin, controllers designed on it) is inside the
-timing in both modes, once in the serial process and once in each worker. Printed: wall
+timing in both modes, once in the serial process and once in each worker. Then the same
+study again in the same process and cluster ("warm": set up already everywhere), which is
+what the plants alone cost. Printed: wall
 seconds, the CPU seconds of every process involved (the measuring one and its children:
-workers, nannies), and the 1-minute load average before each run (others share the
+workers, nannies), and the 1-minute load average before and after each run (others share the
 machine: wall times depend on it, CPU times much less). Pairs alternate which mode runs
 first. Every Dask result is checked bitwise against the serial one.
 
@@ -55,25 +57,30 @@ def _import_flexstage() -> str:
 
 
 def child(recipe: str, mode: str, out: str) -> None:
-    """One measurement in this (fresh) process; its figures as JSON on the last line."""
+    """One measurement in this (fresh) process, its figures as JSON on the last line: the
+    study from its recipe (``wall``, ``cpu``: the set-up inside), then the same study again
+    (``warm_wall``, ``warm_cpu``: set up already, in this process or in every worker)."""
     import flexstage as fs
     from flexstage import sweeps
 
     with open(recipe, "rb") as f:
         study = pickle.load(f)
     if mode == "serial":
-        c0, t0 = _cpu_tree(), time.perf_counter()
-        result = study.run(progress=False)
-        seconds, cpu = time.perf_counter() - t0, _cpu_tree() - c0
+        def once() -> Any:
+            return study.run(progress=False)
+
+        figures, result = _timed(once)
     else:
         from distributed import Client, LocalCluster
 
         with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                           dashboard_address=None) as cluster, Client(cluster) as client:
             client.run(_import_flexstage)
-            c0, t0 = _cpu_tree(), time.perf_counter()
-            result = sweeps.monte_carlo(study, client)
-            seconds, cpu = time.perf_counter() - t0, _cpu_tree() - c0
+
+            def once() -> Any:
+                return sweeps.monte_carlo(study, client)
+
+            figures, result = _timed(once)
     equal = None
     if os.path.exists(out):
         with open(out, "rb") as f:
@@ -81,8 +88,24 @@ def child(recipe: str, mode: str, out: str) -> None:
     if mode == "serial":
         with open(out, "wb") as f:
             pickle.dump(result, f)
-    print(json.dumps({"mode": mode, "wall": seconds, "cpu": cpu, "equal_to_serial": equal,
-                      "pass_rates": {c: result.pass_rate(c) for c in result.controllers}}))
+    figures.update(mode=mode, equal_to_serial=equal,
+                   pass_rates={c: result.pass_rate(c) for c in result.controllers})
+    print(json.dumps(figures))
+
+
+def _timed(once: Any) -> Any:
+    """Wall and CPU seconds of ``once()`` cold and warm, and the (identical) result."""
+    c0, t0 = _cpu_tree(), time.perf_counter()
+    result = once()
+    seconds, cpu = time.perf_counter() - t0, _cpu_tree() - c0
+    c0, t0 = _cpu_tree(), time.perf_counter()
+    again = once()
+    warm, warm_cpu = time.perf_counter() - t0, _cpu_tree() - c0
+    import flexstage as fs
+
+    if not fs.same(result, again):
+        sys.exit("the second run of the study differs from the first")
+    return {"wall": seconds, "cpu": cpu, "warm_wall": warm, "warm_cpu": warm_cpu}, result
 
 
 def recipe_of(folder: str, plants: int) -> str:
@@ -106,7 +129,7 @@ def measure(recipe: str, mode: str, out: str) -> Dict[str, Any]:
     if done.returncode != 0:
         sys.exit(f"{mode} failed:\n{done.stderr}")
     figures = json.loads(done.stdout.strip().splitlines()[-1])
-    figures["load"] = load
+    figures["load"], figures["load_after"] = load, os.getloadavg()[0]
     return figures
 
 
@@ -127,6 +150,7 @@ def main() -> None:
         os.remove(out)
     measure(recipe, "serial", out)  # warm-up: the serial reference result, file caches
     ratios: List[float] = []
+    warm: List[float] = []
     rows: List[Dict[str, Any]] = []
     for k in range(args.pairs):
         order = ("serial", "dask") if k % 2 == 0 else ("dask", "serial")
@@ -138,17 +162,23 @@ def main() -> None:
         for m in order:
             f = pair[m]
             rows.append(f)
-            print(f"pair {k + 1} {m:6}: {f['wall']:6.2f} s wall {f['cpu']:6.2f} s CPU "
-                  f"(load {f['load']:.2f})", flush=True)
+            print(f"pair {k + 1} {m:6}: {f['wall']:6.2f} s wall {f['cpu']:6.2f} s CPU; warm "
+                  f"{f['warm_wall']:6.2f} s wall {f['warm_cpu']:6.2f} s CPU "
+                  f"(load {f['load']:.2f} → {f['load_after']:.2f})", flush=True)
+        warm.append(pair["dask"]["warm_wall"] / pair["serial"]["warm_wall"])
         print(f"pair {k + 1} dask / serial wall {ratio:.3f}, CPU "
-              f"{pair['dask']['cpu'] / pair['serial']['cpu']:.3f}", flush=True)
+              f"{pair['dask']['cpu'] / pair['serial']['cpu']:.3f}; warm wall {warm[-1]:.3f}",
+              flush=True)
     for m in ("serial", "dask"):
         walls = [r["wall"] for r in rows if r["mode"] == m]
         cpus = [r["cpu"] for r in rows if r["mode"] == m]
+        warms = [r["warm_wall"] for r in rows if r["mode"] == m]
         print(f"{m:6}: wall median {statistics.median(walls):.2f} s "
-              f"[{min(walls):.2f}, {max(walls):.2f}], CPU median {statistics.median(cpus):.2f} s")
+              f"[{min(walls):.2f}, {max(walls):.2f}], CPU median {statistics.median(cpus):.2f} s;"
+              f" warm wall median {statistics.median(warms):.2f} s")
     print(f"dask / serial wall per pair: {', '.join(f'{r:.3f}' for r in ratios)}; median "
-          f"{statistics.median(ratios):.3f}; loads {min(r['load'] for r in rows):.2f}–"
+          f"{statistics.median(ratios):.3f}; warm: {', '.join(f'{r:.3f}' for r in warm)}, "
+          f"median {statistics.median(warm):.3f}; loads {min(r['load'] for r in rows):.2f}–"
           f"{max(r['load'] for r in rows):.2f}; results bitwise equal: yes")
 
 
