@@ -1,13 +1,13 @@
-"""Sweeps on a Dask cluster: one task per design or per plant, results gathered as the same
-objects as the serial calls, bitwise, whatever the number of workers.
+"""Sweeps on a Dask cluster: one task per design or per batch of plants, results gathered as
+the same objects as the serial calls, bitwise, whatever the number of workers.
 
 * :func:`designs`: a list of scenarios (e.g. the resonance bounds of a workspace–resonance
   front), one design each. A design is deterministic (parallel sums in fixed chunks, in
   order), so a worker computes the same bits as this process.
 * :func:`monte_carlo`: the Monte-Carlo study of a run (:class:`flexstage.MonteCarloStudy`),
   one task per batch of consecutive plants (four batches per worker thread by default: a
-  task costs the scheduler and the worker a round trip, a plant of the quick design 30 ms). The
-  study's recipe is sent to every worker once (``client.scatter(..., broadcast=True)``);
+  task costs the scheduler and the worker a round trip, a plant of the quick design 30 ms).
+  The study's recipe is sent to every worker once (``client.scatter(..., broadcast=True)``);
   each worker sets the study up once and keeps it. Plant ``i`` depends on the seed and
   ``i`` alone, so neither the batches nor the number of workers change a bit.
 
@@ -71,9 +71,10 @@ def plants_task(first: int, stop: int, study: MonteCarloStudy) -> List[PlantResu
 
 
 def batches(plants: int, workers: int, per_worker: int = 4) -> List[Tuple[int, int]]:
-    """``plants`` cut into consecutive ``(first, stop)`` batches, about ``per_worker`` per
-    worker thread (``workers`` of them; at least one plant each): few enough that the cluster's per-task cost stays
-    small beside the plants, enough that a worker that set up late still gets its share."""
+    """``plants`` cut into consecutive ``(first, stop)`` batches, about ``per_worker`` for
+    each of ``workers`` worker threads (at least one plant each): few enough that the
+    cluster's per-task cost stays small beside the plants, enough that a worker that set up
+    late still gets its share."""
     if plants < 0 or workers < 1 or per_worker < 1:
         raise ValueError(f"batches of {plants} plants over {workers} workers, {per_worker} "
                          "per worker: plants must be ≥ 0, workers and per_worker ≥ 1")
@@ -84,8 +85,9 @@ def batches(plants: int, workers: int, per_worker: int = 4) -> List[Tuple[int, i
 def monte_carlo(study: MonteCarloStudy, client: Any = None, *,
                 per_worker: int = 4) -> MonteCarlo:
     """The study on ``client``, ``per_worker`` batches of consecutive plants per worker
-    thread (else here, one plant after the other; :meth:`MonteCarloStudy.run` uses this process's
-    threads instead). The result is the same, bitwise, whatever the batches and workers."""
+    thread (else here, one plant after the other; :meth:`MonteCarloStudy.run` uses this
+    process's threads instead). The result is the same, bitwise, whatever the batches and
+    workers."""
     n = study.plants
     if client is None:
         plants = plants_task(0, n, study)
@@ -95,5 +97,5 @@ def monte_carlo(study: MonteCarloStudy, client: Any = None, *,
         [shared] = client.scatter([study], broadcast=True)
         futures = client.map(plants_task, [a for a, _ in cuts], [b for _, b in cuts],
                              study=shared, pure=False)
-        plants = [p for batch in client.gather(futures) for p in batch]
-    return MonteCarlo(controllers=study.controllers, plants=sorted(plants, key=lambda p: p.index))
+        plants = [p for batch in client.gather(futures) for p in batch]  # in plant order
+    return MonteCarlo(controllers=study.controllers, plants=plants)
