@@ -8,13 +8,15 @@ Each measurement is a fresh process that loads the pickled recipe, imports flexs
 to the gathered result: the study's set-up (twin, controllers designed on it) is inside the
 timing in both modes, once in the serial process and once in each worker. Then the same
 study again in the same process and cluster ("warm": set up already everywhere), which is
-what the plants alone cost. Printed: wall
-seconds, the CPU seconds of every process involved (the measuring one and its children:
-workers, nannies), and the 1-minute load average before and after each run (others share the
-machine: wall times depend on it, CPU times much less). Pairs alternate which mode runs
+what the plants alone cost. Printed: wall seconds, the CPU seconds of every process involved
+(the measuring one and its children: the workers), and the 1-minute load average before and
+after each run (others share the machine: wall times depend on it, CPU times much less). Pairs alternate which mode runs
 first. Every Dask result is checked bitwise against the serial one.
 
-    python3 python/benchmarks/montecarlo.py RUN_FOLDER [--plants 100] [--pairs 5]
+    python3 python/benchmarks/montecarlo.py RUN_FOLDER [--plants 100] [--pairs 5] [--per-worker 4]
+
+``--per-worker``: batches of plants per worker thread (``sweeps.monte_carlo``'s; 50 gives a
+task per plant, as before batching).
 
 ``RUN_FOLDER`` holds a finished design (``flexstage design --out RUN_FOLDER``); the recipe is
 written beside it as ``montecarlo-<plants>.pickle`` on first use.
@@ -56,7 +58,7 @@ def _import_flexstage() -> str:
     return flexstage.__file__
 
 
-def child(recipe: str, mode: str, out: str) -> None:
+def child(recipe: str, mode: str, out: str, per_worker: int) -> None:
     """One measurement in this (fresh) process, its figures as JSON on the last line: the
     study from its recipe (``wall``, ``cpu``: the set-up inside), then the same study again
     (``warm_wall``, ``warm_cpu``: set up already, in this process or in every worker)."""
@@ -78,7 +80,7 @@ def child(recipe: str, mode: str, out: str) -> None:
             client.run(_import_flexstage)
 
             def once() -> Any:
-                return sweeps.monte_carlo(study, client)
+                return sweeps.monte_carlo(study, client, per_worker=per_worker)
 
             figures, result = _timed(once)
     equal = None
@@ -122,10 +124,11 @@ def recipe_of(folder: str, plants: int) -> str:
     return path
 
 
-def measure(recipe: str, mode: str, out: str) -> Dict[str, Any]:
+def measure(recipe: str, mode: str, out: str, per_worker: int) -> Dict[str, Any]:
     load = os.getloadavg()[0]
     done = subprocess.run([sys.executable, __file__, os.path.dirname(recipe), "--child", mode,
-                           recipe, out], capture_output=True, text=True)
+                           recipe, out, "--per-worker", str(per_worker)],
+                          capture_output=True, text=True)
     if done.returncode != 0:
         sys.exit(f"{mode} failed:\n{done.stderr}")
     figures = json.loads(done.stdout.strip().splitlines()[-1])
@@ -138,23 +141,25 @@ def main() -> None:
     ap.add_argument("folder")
     ap.add_argument("--plants", type=int, default=100)
     ap.add_argument("--pairs", type=int, default=5)
+    ap.add_argument("--per-worker", type=int, default=4)
     ap.add_argument("--child", nargs=3, metavar=("MODE", "RECIPE", "OUT"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         mode, recipe, out = args.child
-        child(recipe, mode, out)
+        child(recipe, mode, out, args.per_worker)
         return
     recipe = recipe_of(args.folder, args.plants)
     out = os.path.join(args.folder, f"montecarlo-{args.plants}-serial.pickle")
     if os.path.exists(out):
         os.remove(out)
-    measure(recipe, "serial", out)  # warm-up: the serial reference result, file caches
+    # Warm-up: the serial reference result, the file caches.
+    measure(recipe, "serial", out, args.per_worker)
     ratios: List[float] = []
     warm: List[float] = []
     rows: List[Dict[str, Any]] = []
     for k in range(args.pairs):
         order = ("serial", "dask") if k % 2 == 0 else ("dask", "serial")
-        pair = {m: measure(recipe, m, out) for m in order}
+        pair = {m: measure(recipe, m, out, args.per_worker) for m in order}
         if not pair["dask"]["equal_to_serial"]:
             sys.exit("the Dask result differs from the serial one")
         ratio = pair["dask"]["wall"] / pair["serial"]["wall"]
