@@ -10,8 +10,9 @@ timing in both modes, once in the serial process and once in each worker. Then t
 study again in the same process and cluster ("warm": set up already everywhere), which is
 what the plants alone cost. Printed: wall seconds, the CPU seconds of every process involved
 (the measuring one and its children: the workers), and the 1-minute load average before and
-after each run (others share the machine: wall times depend on it, CPU times much less). Pairs alternate which mode runs
-first. Every Dask result is checked bitwise against the serial one.
+after each run (others share the machine: wall times depend on it, CPU times much less).
+Pairs alternate which mode runs first. Every Dask result is checked bitwise against the
+serial one.
 
     python3 python/benchmarks/montecarlo.py RUN_FOLDER [--plants 100] [--pairs 5] [--per-worker 4]
 
