@@ -272,7 +272,9 @@ class Tracking(StageResult):
     conditions: str = ""
     #: RMS and maximum errors per trajectory and controller [nm, % of range], peak voltage.
     metrics: Records = field(default_factory=list)
-    #: Gain, phase and delay margins per controller and loop (on the twin).
+    #: Gain, phase and delay margins per controller and loop (on the twin), numbers as
+    #: floats: ``gain_margin_dB`` is None for an unstable loop (``unstable`` in the file; with
+    #: pandas on the file itself, ``read_csv(..., na_values=["unstable"])``).
     margins: Optional[Records] = None
     #: The Monte-Carlo study of ``track`` (pass per plant and controller).
     montecarlo: Optional[Records] = None

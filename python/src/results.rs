@@ -319,6 +319,24 @@ pub fn stage_identification<'py>(
     Ok(Some(d))
 }
 
+/// `margins.csv` as [`rows`], its gain margin a float too: the file writes an unstable
+/// loop's as `unstable`, which keeps the column text for a generic reader; here it is `None`
+/// (no margin), as an empty optional cell of the other columns.
+fn margin_rows<'py>(
+    py: Python<'py>,
+    dir: &RunDir,
+    rel: &str,
+) -> PyResult<Option<Bound<'py, PyList>>> {
+    let Some(file) = load::<Rows<MarginRow>>(dir, rel)? else {
+        return Ok(None);
+    };
+    let list = rows(py, &file.0)?;
+    for (d, r) in list.iter().zip(&file.0) {
+        d.set_item("gain_margin_dB", r.gain_margin_db)?;
+    }
+    Ok(Some(list))
+}
+
 /// `track/[<conditions>/]`: metrics, margins, Monte-Carlo, scan, and every time series.
 pub fn tracking<'py>(
     py: Python<'py>,
@@ -331,7 +349,7 @@ pub fn tracking<'py>(
     };
     let d = PyDict::new(py);
     d.set_item("metrics", rows(py, &metrics.0)?)?;
-    d.set_item("margins", rows_file::<MarginRow>(py, dir, &out.margins())?)?;
+    d.set_item("margins", margin_rows(py, dir, &out.margins())?)?;
     d.set_item(
         "montecarlo",
         rows_file::<MonteCarloRow>(py, dir, &out.montecarlo())?,

@@ -146,3 +146,27 @@ def test_twin_frequency_response(run, tracked):
     assert abs(abs(h[0]) / abs(h2[0]) - 1.0) < 0.1
     with pytest.raises(KeyError):
         tw.frequency_response(3, 1)
+
+
+def test_margins_are_floats_and_an_unstable_loop_has_none(run, tracked, tmp_path):
+    """Goal: ``margins.csv`` reaches Python with every margin a float (pandas makes float
+    columns of it), the gain margin too, although the file writes an unstable loop's gain
+    margin as the word ``unstable``: that one reads as None."""
+    rows = tracked.margins
+    assert rows and all(isinstance(r["gain_margin_dB"], float) for r in rows)
+    assert all(isinstance(r["phase_margin_deg"], float) for r in rows)
+    copy = tmp_path / "unstable"
+    shutil.copytree(run.path, copy, ignore=shutil.ignore_patterns("run.lock"))  # held by run
+    margins = copy / "track" / "margins.csv"
+    lines = margins.read_text().splitlines(keepends=True)
+    header = lines[0].rstrip("\n").split(",")
+    col = header.index("gain_margin_dB")
+    cells = lines[1].rstrip("\n").split(",")
+    kept = float(lines[2].rstrip("\n").split(",")[col])
+    cells[col] = "unstable"
+    lines[1] = ",".join(cells) + "\n"
+    margins.write_text("".join(lines))
+    with fs.Run.open(copy) as again:
+        read = again.load_tracking().margins
+    assert read[0]["gain_margin_dB"] is None
+    assert read[1]["gain_margin_dB"] == kept and isinstance(read[1]["gain_margin_dB"], float)

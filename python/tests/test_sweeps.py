@@ -54,6 +54,17 @@ def test_design_sweep_on_two_workers_equals_serial(client):
     assert all(fs.same(a, b) for a, b in zip(serial, spread))
 
 
+def test_batches_cover_every_plant_once_in_order():
+    for plants, workers, per_worker in [(100, 2, 4), (6, 4, 4), (7, 3, 1), (1, 8, 4), (0, 2, 4)]:
+        cuts = sweeps.batches(plants, workers, per_worker)
+        assert [i for a, b in cuts for i in range(a, b)] == list(range(plants))
+        assert all(b > a for a, b in cuts)
+        assert len(cuts) <= max(1, workers * per_worker)
+    assert sweeps.batches(100, 2) == [(i, min(i + 13, 100)) for i in range(0, 100, 13)]
+    with pytest.raises(ValueError, match="workers"):
+        sweeps.batches(10, 0)
+
+
 def test_study_recipe_pickles(study):
     again = pickle.loads(pickle.dumps(study))
     assert again.key == study.key and again.plants == 6
@@ -64,9 +75,11 @@ def test_study_recipe_pickles(study):
 def test_monte_carlo_on_two_workers_equals_serial(study, client):
     threads = study.run(progress=False)
     one_by_one = sweeps.monte_carlo(study)
-    spread = sweeps.monte_carlo(study, client)
+    spread = sweeps.monte_carlo(study, client)  # one plant per task
+    batched = sweeps.monte_carlo(study, client, per_worker=1)  # plants 0–2 and 3–5
     assert [p.index for p in spread.plants] == list(range(6))
     assert fs.same(threads, one_by_one) and fs.same(threads, spread)
+    assert fs.same(threads, batched)
     p = spread.plants[0]
     assert p.rms.shape == (2, 2) and p.passed.shape == (2,)
     assert 0.0 <= spread.pass_rate("pi-notch-ff") <= 1.0
