@@ -6,11 +6,13 @@
 //! (`margins_table`: transfer function for the linear ones, sine injection for the others).
 //!
 //! ```text
-//! cargo run --release -p flexstage-assess --example measured -- quick runs/quick/design/design.json [noisy|quiet|linear]
+//! cargo run --release -p flexstage-assess --example measured -- quick runs/quick/design/design.json [noisy|quiet|linear] [SETTLE_PERIODS [PEAK_M]]
 //! ```
 //!
 //! `quiet` measures without the rig's noise, `linear` in the twin's linear loop (ideal
-//! amplifier, no PEA, no noise: the loop the margins are scored on), both references.
+//! amplifier, no PEA, no noise: the loop the margins are scored on), both references;
+//! `SETTLE_PERIODS` replaces the 2 periods played before the measured ones (at 10 kHz),
+//! `PEAK_M` the multisine's 0.1 µm peak.
 
 use flexstage_assess::Bench;
 use flexstage_assess::inject::InjectionParams;
@@ -26,19 +28,26 @@ use flexstage_twin::DesignedStage;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let preset = args
-        .get(1)
-        .and_then(|p| Preset::from_name(p))
-        .ok_or("usage: measured quick|paper DESIGN.json [noisy|quiet|linear]")?;
+    let preset = args.get(1).and_then(|p| Preset::from_name(p)).ok_or(
+        "usage: measured quick|paper DESIGN.json [noisy|quiet|linear] [SETTLE_PERIODS [PEAK_M]]",
+    )?;
     let design = DesignFile::decode(&std::fs::read(args.get(2).ok_or("missing design")?)?)?;
     let DesignedStage {
         scenario: s, twin, ..
     } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
     let mode = args.get(3).map_or("noisy", String::as_str);
-    let lab = LabParams {
+    let mut lab = LabParams {
         noise: mode == "noisy",
         ..LabParams::default()
     };
+    if let Some(settle) = args.get(4) {
+        let mut plan = flexstage_identify::measured::MultisinePlan::new(1e-4);
+        plan.settle = settle.parse()?;
+        if let Some(a) = args.get(5) {
+            plan.amplitude = a.parse()?;
+        }
+        lab.plan = Some(plan);
+    }
     let mut setup = Setup::from_scenario(&s);
     if mode == "linear" {
         // The twin's linear loop as the rig (what the margins are scored on).

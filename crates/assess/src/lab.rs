@@ -1,13 +1,15 @@
 //! The twin measured as a lab measures its stage: the periodic multisine of
 //! `flexstage_identify::measured` played through the twin's full rig at the controller's
 //! sample time (zero-order hold, delay, amplifier, the hysteretic PEAs with creep, sensor
-//! chain, the scenario's noise), logged as a rig logs it, the response estimated from the
+//! chain, the scenario's noise), the commands sent through the controllers' actuator stage
+//! (the inverse hysteresis compensation by default), logged as a rig logs it, the response estimated from the
 //! logs and fitted by a z-domain model. [`crate::Bench::measured`] designs the controllers
 //! from this and nothing of the twin's truth.
 
+use flexstage_control::actuator::{Actuator, Compensation};
 use flexstage_control::experiment::Setup;
 use flexstage_identify::measured::{
-    Drive, FitParams, LabLog, MeasuredResponse, MultisinePlan, ZFit, run_log,
+    FitParams, LabLog, MeasuredResponse, MultisinePlan, ZFit, run_log,
 };
 use flexstage_twin::Twin;
 
@@ -23,6 +25,10 @@ pub struct LabParams {
     /// Whether the rig's noise (white, 1/f, quantization, floor) is on, as the scenario says;
     /// `false` for a noise-free measurement (a reference).
     pub noise: bool,
+    /// How a command becomes the amplifiers' voltage: the controllers' actuator stage with
+    /// this compensation, so that the command is the x_nom the controllers write. Default
+    /// [`Compensation::Inverse`], as `track` runs them.
+    pub compensation: Compensation,
 }
 
 impl Default for LabParams {
@@ -31,6 +37,7 @@ impl Default for LabParams {
             plan: None,
             fit: FitParams::default(),
             noise: true,
+            compensation: Compensation::Inverse,
         }
     }
 }
@@ -58,21 +65,15 @@ pub fn lab_logs(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<([LabLog; 2
         .plan
         .clone()
         .unwrap_or_else(|| MultisinePlan::new(rig.sample_time));
-    let drive = Drive {
-        slope: flexstage_sim::pea::mean_slope(&rig.hysteresis[0], rig.voltage_range),
-        bias_voltage: rig.bias_voltage,
-        voltage_range: rig.voltage_range,
-    };
     let log = |input: usize| -> Result<LabLog> {
         let mut r = rig.clone();
         r.seed = rig.seed.wrapping_add(101 * (input as u64 + 1));
         let mut plant = twin.plant(&r)?;
-        Ok(run_log(
-            &mut plant,
-            r.sample_time,
-            &plan.commands(input)?,
-            &drive,
-        )?)
+        let mut actuator = Actuator::new(setup.actuator(p.compensation))?;
+        let t = r.sample_time;
+        Ok(run_log(&mut plant, t, &plan.commands(input)?, |x| {
+            actuator.command(x, t).voltage
+        })?)
     };
     Ok(([log(0)?, log(1)?], plan))
 }

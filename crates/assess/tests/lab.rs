@@ -45,9 +45,9 @@ fn lab_measurement_of_the_linear_loop_is_the_exact_sampled_loop() {
     let mut worst = 0.0f64;
     for l in m.response.lines() {
         let h = exact.response(l.f);
-        for i in 0..2 {
-            for j in 0..2 {
-                worst = worst.max((l.h[i][j] - h[i][j]).norm() / top);
+        for (row, exact_row) in l.h.iter().zip(&h) {
+            for (v, e) in row.iter().zip(exact_row) {
+                worst = worst.max((v - e).norm() / top);
             }
         }
     }

@@ -188,14 +188,25 @@ firmware tree: <DIR>/<controller>.c and .h, C99 with <math.h> only, functions \
 <controller>_init and <controller>_step (with - as _). The backstepping controllers are \
 nonlinear and are not exported. docs/controller-export.md says how to call them at 10 kHz.
 
+With --response or --log it designs the linear controllers (PI + notch, PID) from a measured loop alone, no design or twin: a measured response or a time log of your stage at the controller's sample time (formats in docs/formats.md), the paper scenario's actuator settings; it writes <controller>.json, .c and .h of each.
+
 Examples:
   flexstage controller runs/quick/track/controllers/pi-notch-ff.json
-  flexstage controller runs/quick/track/controllers/pid-ff.json --to firmware/control"
+  flexstage controller runs/quick/track/controllers/pid-ff.json --to firmware/control
+  flexstage controller --response measured.csv --to firmware/control
+  flexstage controller --log lab_log.csv"
     )]
     Controller {
         /// The coefficients file (JSON).
-        json: PathBuf,
-        /// Folder for the source and header (default: the folder of the JSON file).
+        #[arg(required_unless_present_any = ["response", "log"], conflicts_with_all = ["response", "log"])]
+        json: Option<PathBuf>,
+        /// Design from a measured response (CSV: f, re/im per entry, coherence, std, sample_time).
+        #[arg(long, conflicts_with = "log")]
+        response: Option<PathBuf>,
+        /// Design from a time log (CSV: t, command1, command2, reading1, reading2), by H1.
+        #[arg(long)]
+        log: Option<PathBuf>,
+        /// Folder for the files (default: the folder of the input file).
         #[arg(long)]
         to: Option<PathBuf>,
     },
@@ -283,21 +294,38 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
         Command::Export(a) => stages::export(a),
         Command::Front(a) => stages::front(a),
         Command::Run(a) => run(a),
-        Command::Controller { json, to } => {
+        Command::Controller {
+            json,
+            response,
+            log,
+            to,
+        } => {
+            use flexstage_pipeline::Measurement;
+            let (input, measured) = match (&json, &response, &log) {
+                (_, Some(r), _) => (r.clone(), Some(Measurement::Response(r))),
+                (_, _, Some(l)) => (l.clone(), Some(Measurement::Log(l))),
+                (Some(j), _, _) => (j.clone(), None),
+                _ => anyhow::bail!("give a coefficients file, --response or --log"),
+            };
             let dir = match to {
                 Some(d) => d,
-                None => json
+                None => input
                     .parent()
                     .map(std::path::Path::to_path_buf)
                     .unwrap_or_default(),
             };
-            let e = flexstage_pipeline::export_controller(&json, &dir)?;
-            outln!(
-                "{}: {} and {}",
-                e.controller,
-                e.source.display(),
-                e.header.display()
-            );
+            let written = match measured {
+                Some(m) => flexstage_pipeline::export_measured(m, &dir)?,
+                None => vec![flexstage_pipeline::export_controller(&input, &dir)?],
+            };
+            for e in written {
+                outln!(
+                    "{}: {} and {}",
+                    e.controller,
+                    e.source.display(),
+                    e.header.display()
+                );
+            }
             Ok(())
         }
         Command::Report { run } => {

@@ -299,7 +299,7 @@ fn fit_of_a_noisy_response_agrees_within_the_band() {
 #[test]
 fn a_response_written_and_read_back_is_bitwise_the_same() {
     let r = multisine(&plan(4), 20e-9, 31);
-    let back = MeasuredResponse::from_csv(r.to_csv().as_bytes(), "response.csv").unwrap();
+    let back = MeasuredResponse::from_csv(r.to_csv().as_bytes(), "the written response").unwrap();
     assert_eq!(back, r);
     let bits = |r: &MeasuredResponse| -> Vec<u64> {
         r.lines()

@@ -10,16 +10,21 @@
 
 use std::path::{Path, PathBuf};
 
-use flexstage_control::actuator::ActuatorParams;
-use flexstage_control::registry::{Controller, Designs};
+use flexstage_control::actuator::{ActuatorParams, Compensation};
+use flexstage_control::experiment::Setup;
+use flexstage_control::registry::{CONTROLLERS, Controller, Designs, Stage};
 use flexstage_control::target::{CSource, TargetLaw, c_prefix, compensation_name, compensation_of};
+use flexstage_control::tuning::TuningParams;
 use flexstage_control_core::{Biquad, PidGains};
+use flexstage_identify::measured::{FitParams, LabLog, MeasuredResponse, WelchParams, ZFit};
+use flexstage_identify::response::RESPONSE_SHARE;
 use flexstage_piezo::{BoucWenParams, CompensatorParams};
 use flexstage_run::files::controller::{
     ActuatorFile, AxisFile, ControllerFile, SectionFile, VERSION,
 };
 use flexstage_run::layout::Tracking;
 use flexstage_run::{Format, RunDir};
+use flexstage_scenario::Scenario;
 
 use crate::error::{PipelineError, Result};
 
@@ -180,6 +185,91 @@ pub fn export_controller(json: &Path, dir: &Path) -> Result<ExportedController> 
     })
 }
 
+/// A measured loop given as a file (`docs/formats.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Measurement<'a> {
+    /// A measured response (`MeasuredResponse` CSV).
+    Response(&'a Path),
+    /// A time log (`LabLog` CSV), estimated by H1 with the default segments.
+    Log(&'a Path),
+}
+
+/// The coefficients files of the linear controllers of the registry designed from
+/// `response` alone (no design, no twin): its z-domain loop model (`ZFit`) to tune the
+/// PI + notch and the PID on, the model's response fit for the feed-forward, and the
+/// scenario's settings for the actuator stage (inverse compensation). A response read back
+/// from its file gives the same files, bitwise.
+pub fn measured_controller_files(
+    response: &MeasuredResponse,
+    scenario: &Scenario,
+) -> Result<Vec<ControllerFile>> {
+    let model = ZFit::fit(response, &FitParams::default())?;
+    let fit = model.response_fit(RESPONSE_SHARE);
+    let mut setup = Setup::from_scenario(scenario);
+    setup.rig.sample_time = response.sample_time();
+    let stage = Stage::new(
+        &setup,
+        Some(&model),
+        Some(fit),
+        None,
+        TuningParams::default(),
+    );
+    let designs = Designs::for_stage(&stage)?;
+    let actuator = setup.actuator(Compensation::Inverse);
+    let mut files = Vec::new();
+    for &c in &CONTROLLERS {
+        let Some(design) = designs.get(c) else {
+            continue;
+        };
+        if let Some(law) = TargetLaw::of_design(&**design, actuator)? {
+            files.push(controller_file(c, &law));
+        }
+    }
+    Ok(files)
+}
+
+/// Designs the linear controllers from a measured response or a time log alone
+/// ([`measured_controller_files`], the actuator settings of the paper's scenario) and writes each one's
+/// coefficients file, C source and header (`<controller>.json`, `.c`, `.h`) into `dir`
+/// (created if missing), each atomically.
+pub fn export_measured(source: Measurement<'_>, dir: &Path) -> Result<Vec<ExportedController>> {
+    let path = match source {
+        Measurement::Response(p) | Measurement::Log(p) => p,
+    };
+    let file = std::fs::File::open(path).map_err(|source| PipelineError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let origin = path.display().to_string();
+    let response = match source {
+        Measurement::Response(_) => MeasuredResponse::from_csv(file, &origin)?,
+        Measurement::Log(_) => {
+            let log = LabLog::from_csv(file, &origin)?;
+            MeasuredResponse::from_log(&log, &WelchParams::default())?
+        }
+    };
+    let mut out = Vec::new();
+    for f in measured_controller_files(&response, &Scenario::paper())? {
+        let name = f.controller.clone();
+        let src = c_files(&f)?;
+        let json = f.encode().map_err(|reason| PipelineError::Format {
+            path: name.clone(),
+            reason,
+        })?;
+        let source = dir.join(format!("{name}.c"));
+        let header = dir.join(format!("{name}.h"));
+        flexstage_run::write_atomic(&dir.join(format!("{name}.json")), &json)?;
+        flexstage_run::write_atomic(&source, src.source.as_bytes())?;
+        flexstage_run::write_atomic(&header, src.header.as_bytes())?;
+        out.push(ExportedController {
+            controller: name,
+            source,
+            header,
+        });
+    }
+    Ok(out)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -296,5 +386,77 @@ mod tests {
         assert!(source.contains("#include \"pi-notch-ff.h\""));
         assert!(source.contains("pi_notch_ff_step("));
         std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    /// A multisine measurement of the two decoupled 1 %-damped modes
+    /// (`flexstage_sim::samples::decoupled_modes`) with one sample of delay at 10 kHz,
+    /// simulated by each mode's exact ZOH discretization, with 10 nm of reading noise.
+    fn measured() -> MeasuredResponse {
+        use flexstage_identify::measured::MultisinePlan;
+        let t = 1e-4;
+        let modes = flexstage_sim::samples::decoupled_modes();
+        let plan = MultisinePlan {
+            period: 1000,
+            lines: (1..500).collect(),
+            periods: 4,
+            settle: 3,
+            amplitude: 1e-6,
+            ..MultisinePlan::new(t)
+        };
+        let disc: Vec<_> = modes
+            .iter()
+            .map(|m| {
+                let w = std::f64::consts::TAU * m.frequency;
+                let a = nalgebra::DMatrix::from_row_slice(2, 2, &[0.0, 1.0, -w * w, -0.02 * w]);
+                let b = nalgebra::DMatrix::from_row_slice(2, 1, &[0.0, 1.0]);
+                flexstage_sim::linalg::c2d(&a, &b, t).unwrap()
+            })
+            .collect();
+        let log = |input: usize| {
+            let cmds = plan.commands(input).unwrap();
+            let mut noise = flexstage_numerics::noise::GaussianNoise::new(10e-9, input as u64);
+            let mut x = vec![[0.0f64; 2]; modes.len()];
+            let (mut c, mut r) = ([Vec::new(), Vec::new()], [Vec::new(), Vec::new()]);
+            for k in 0..cmds.len() {
+                for i in 0..2 {
+                    let y: f64 = modes.iter().zip(&x).map(|(m, s)| m.output[i] * s[0]).sum();
+                    r[i].push(y + noise.sample());
+                    c[i].push(cmds[k][i]);
+                }
+                let u = if k > 0 { cmds[k - 1] } else { [0.0; 2] };
+                for ((m, (phi, gam)), s) in modes.iter().zip(&disc).zip(x.iter_mut()) {
+                    let v = m.input[0] * u[0] + m.input[1] * u[1];
+                    *s = [
+                        phi[(0, 0)] * s[0] + phi[(0, 1)] * s[1] + gam[0] * v,
+                        phi[(1, 0)] * s[0] + phi[(1, 1)] * s[1] + gam[1] * v,
+                    ];
+                }
+            }
+            LabLog::new(t, c, r).unwrap()
+        };
+        let (a, b) = (log(0), log(1));
+        MeasuredResponse::from_multisine([&a, &b], &plan).unwrap()
+    }
+
+    /// Goal: the PI + notch and the PID are designed from a measured response alone, and a
+    /// response written to its file and read back designs the same controllers, bitwise
+    /// (every coefficient of their files).
+    #[test]
+    fn controllers_from_a_response_read_back_are_bitwise_the_same() {
+        let r = measured();
+        let scenario = Scenario::paper();
+        let direct = measured_controller_files(&r, &scenario).unwrap();
+        let back =
+            MeasuredResponse::from_csv(r.to_csv().as_bytes(), "the written response").unwrap();
+        let again = measured_controller_files(&back, &scenario).unwrap();
+        let names: Vec<&str> = direct.iter().map(|f| f.controller.as_str()).collect();
+        assert!(
+            names.contains(&"pi-notch-ff") && names.contains(&"pid-ff"),
+            "{names:?}"
+        );
+        assert_eq!(direct.len(), again.len());
+        for (a, b) in direct.iter().zip(&again) {
+            assert_eq!(a.encode().unwrap(), b.encode().unwrap(), "{}", a.controller);
+        }
     }
 }

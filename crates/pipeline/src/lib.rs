@@ -79,7 +79,7 @@ mod track_files;
 pub mod twin;
 
 pub use analyze::{AnalyzeOptions, AnalyzeSummary, analyze};
-pub use controllers::{ExportedController, export_controller};
+pub use controllers::{ExportedController, Measurement, export_controller, export_measured};
 pub use design::{
     DesignOptions, DesignStart, DesignSummary, GradientReport, design, gradient_check,
 };

@@ -32,7 +32,7 @@ pub struct MultisinePlan {
 
 impl MultisinePlan {
     /// The default plan at `sample_time`: f₀ = 5 Hz lines from 5 Hz to just below Nyquist,
-    /// 0.3 µm peak (the amplifier stays below its current limit: a PEA is a capacitor and
+    /// 0.1 µm peak (the amplifier stays clear of its current limit: a PEA is a capacitor and
     /// the multisine reaches Nyquist), 2 settling and 12 measured periods per input
     /// (`docs/DECISIONS.md`, "The measured response").
     pub fn new(sample_time: f64) -> MultisinePlan {
@@ -41,7 +41,7 @@ impl MultisinePlan {
             sample_time,
             period,
             lines: (1..period.div_ceil(2)).collect(),
-            amplitude: 0.3e-6,
+            amplitude: 0.1e-6,
             settle: 2,
             periods: 12,
         }
@@ -144,31 +144,38 @@ pub struct Drive {
     pub voltage_range: [f64; 2],
 }
 
+impl Drive {
+    /// The voltages of the command `x` \[m\] (around the bias, through the mean slope,
+    /// clamped to the range).
+    pub fn voltage(&self, x: [f64; 2]) -> [f64; 2] {
+        let [lo, hi] = self.voltage_range;
+        [0, 1].map(|i| (self.bias_voltage + x[i] * 1e6 / self.slope).clamp(lo, hi))
+    }
+}
+
 /// Plays `commands` on `plant` at its sample time `sample_time` \[s\] and logs what a rig
 /// records: at sample k the readings y_k, then the command u_k (held until k + 1, after
-/// the rig's own delay). The plant is the whole simulated rig (zero-order hold, delay,
-/// amplifier, the plant's PEAs, sensor chain, noise), so its folded modes appear in the log
-/// as the controller sees them.
+/// the rig's own delay), sent to the amplifiers as the voltages `voltage(u_k)` (the
+/// controllers' actuator stage, or a [`Drive`]). The plant is the whole simulated rig
+/// (zero-order hold, delay, amplifier, the plant's PEAs, sensor chain, noise), so its folded
+/// modes appear in the log as the controller sees them.
 pub fn run_log(
     plant: &mut impl StagePlant,
     sample_time: f64,
     commands: &[[f64; 2]],
-    drive: &Drive,
+    mut voltage: impl FnMut([f64; 2]) -> [f64; 2],
 ) -> Result<LabLog> {
-    check("drive.slope", drive.slope, drive.slope > 0.0, "> 0 [µm/V]")?;
     let n = commands.len();
     let mut command = [Vec::with_capacity(n), Vec::with_capacity(n)];
     let mut reading = [Vec::with_capacity(n), Vec::with_capacity(n)];
-    let [lo, hi] = drive.voltage_range;
     for &x in commands {
         let y = plant.measure();
-        let voltage = [0, 1].map(|i| (drive.bias_voltage + x[i] * 1e6 / drive.slope).clamp(lo, hi));
         for i in 0..2 {
             command[i].push(x[i]);
             reading[i].push(y[i]);
         }
         plant.apply(&Command {
-            voltage,
+            voltage: voltage(x),
             x_nom: x,
             reference: [0.0; 2],
             saturated: false,

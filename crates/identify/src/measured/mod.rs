@@ -22,6 +22,28 @@
 //! A [`MeasuredResponse`] can be built only by the estimators from a [`LabLog`] or read from
 //! its file: no constructor takes a modal model, so a design that takes one cannot be fed
 //! the simulation's truth. File formats: `docs/formats.md`.
+//!
+//! The loop model is fitted from a measured response:
+//! ```
+//! use flexstage_identify::measured::{FitParams, LabLog, MeasuredResponse, WelchParams, ZFit};
+//! // A log of white commands through y_k = 0.5 u_{k−1}.
+//! let mut noise = flexstage_numerics::noise::GaussianNoise::new(1e-6, 1);
+//! let u: Vec<[f64; 2]> = (0..8000).map(|_| [noise.sample(), noise.sample()]).collect();
+//! let y = |i: usize| (0..u.len()).map(|k| if k > 0 { 0.5 * u[k - 1][i] } else { 0.0 }).collect();
+//! let log = LabLog::new(1e-4, [u.iter().map(|v| v[0]).collect(), u.iter().map(|v| v[1]).collect()], [y(0), y(1)])?;
+//! let response = MeasuredResponse::from_log(&log, &WelchParams { segment: 200, skip: 0 })?;
+//! let model = ZFit::fit(&response, &FitParams::default())?;
+//! assert_eq!(model.delay(), 0); // z⁻¹ is the hold's own sample: strictly proper, no extra delay
+//! # Ok::<(), flexstage_identify::IdentifyError>(())
+//! ```
+//! and only from one: the simulation's exact loop (a `ModalPlant`) is not a measured
+//! response, so this does not compile.
+//! ```compile_fail
+//! use flexstage_identify::measured::{FitParams, ZFit};
+//! use flexstage_sim::modal::ModalPlant;
+//! let truth = ModalPlant::new(flexstage_sim::samples::decoupled_modes(), 1e-4, 1).unwrap();
+//! let model = ZFit::fit(&truth, &FitParams::default());
+//! ```
 
 mod experiment;
 mod fit;
