@@ -527,7 +527,7 @@ impl fmt::Display for TrackSummary {
                  {max1:>8.1}/{max2:<8.1} {max1_pct:>7.3}/{max2_pct:<7.3} {settling:>9.4} \
                  {peak:>8.0} {:>5}  {}",
                 r.trajectory,
-                r.controller.name,
+                r.variant(),
                 r.metrics.saturated,
                 r.metrics.status().name()
             )?;

@@ -16,7 +16,7 @@ pub use flexstage_run::files::design::stop_in_words;
 use flexstage_run::files::design::{DesignRecord, DesignSummaryFile};
 use flexstage_run::files::export::VerificationFile;
 use flexstage_run::files::reduce::ReduceSummaryJson;
-use flexstage_run::files::track::{MarginRow, MetricsRow, ScanRow};
+use flexstage_run::files::track::{LEARNING_SUFFIX, MarginRow, MetricsRow, ScanRow};
 use flexstage_run::files::twin::TwinValidity;
 use flexstage_run::format::Rows;
 use flexstage_run::layout::{self, Tracking};
@@ -322,11 +322,18 @@ fn comparisons(
 
 /// The controllers' results on each trajectory, the default and the best.
 fn advice(metrics: &[MetricsRow], margins: &[MarginRow], scan: &[ScanRow]) -> ControlAdvice {
+    // A controller with the learning layer has the margins of its feedback loop: learning
+    // shifts the reference, outside the loop.
+    let base = |name: &str| -> String {
+        name.strip_suffix(LEARNING_SUFFIX).unwrap_or(name).to_string()
+    };
     let meets = |name: &str| -> Option<bool> {
+        let name = base(name);
         let rows: Vec<&MarginRow> = margins.iter().filter(|m| m.controller == name).collect();
         (!rows.is_empty()).then(|| rows.iter().all(|m| m.meets_targets))
     };
     let pass = |name: &str| -> Option<f64> {
+        let name = base(name);
         margins
             .iter()
             .find(|m| m.controller == name)
