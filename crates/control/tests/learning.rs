@@ -180,7 +180,10 @@ fn datasheet_lag_is_the_sensor_chains_phase_delay() {
         anti_alias: 0.0,
     };
     let e = bad.lag(t).unwrap_err().to_string();
-    assert!(e.contains("sensor_datasheet.bandwidth") && e.contains("-1"), "{e}");
+    assert!(
+        e.contains("sensor_datasheet.bandwidth") && e.contains("-1"),
+        "{e}"
+    );
 }
 
 /// Reference: the monotone-convergence condition (Bristow et al. 2006, Eq. (24)) holds for
@@ -216,7 +219,13 @@ fn learning_converges_with_the_sensor_20_percent_off_its_datasheet() {
             .unwrap()
             .with_sensor_lag(sheet.lag(t).unwrap())
             .unwrap();
-        let rec = run(&mut l, &mut setup.lumped_plant().unwrap(), duration, t, |_| {});
+        let rec = run(
+            &mut l,
+            &mut setup.lumped_plant().unwrap(),
+            duration,
+            t,
+            |_| {},
+        );
         let rms = rms_per_period(&rec.error, period);
         let mut c0 = setup
             .controller(&PID_FF, Compensation::Inverse, reference)
@@ -232,7 +241,10 @@ fn learning_converges_with_the_sensor_20_percent_off_its_datasheet() {
         eprintln!("×{factor}: ρ = {rho:.3}, {params:?}, {rms:?}");
         for a in 0..2 {
             for j in 3..periods {
-                assert!(rms[j][a] <= 1.05 * rms[j - 1][a], "×{factor} axis {a}: {rms:?}");
+                assert!(
+                    rms[j][a] <= 1.05 * rms[j - 1][a],
+                    "×{factor} axis {a}: {rms:?}"
+                );
             }
             assert!(
                 rms[periods - 1][a] < 0.5 * rms0[periods - 1][a],
@@ -282,7 +294,10 @@ fn learning_told_the_datasheet_lag_tracks_the_true_output() {
         rms_per_period(&rec.error, period)[periods - 1]
     };
     let (told, not_told) = (last(lag), last(SensorLag::NONE));
-    eprintln!("lag {:?}: told {told:?}, not told {not_told:?}", lag.samples());
+    eprintln!(
+        "lag {:?}: told {told:?}, not told {not_told:?}",
+        lag.samples()
+    );
     assert!(told[0] < 0.7 * not_told[0], "{told:?} vs {not_told:?}");
     assert!(told[1] < not_told[1], "{told:?} vs {not_told:?}");
 }

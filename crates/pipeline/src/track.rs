@@ -43,9 +43,13 @@ use flexstage_assess::Bench;
 use flexstage_assess::inject::InjectionParams;
 use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, monte_carlo};
+use flexstage_control::ControlError;
+use flexstage_control::actuator::ActuatorParams;
 use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::Setup;
-use flexstage_control::actuator::ActuatorParams;
+use flexstage_control::learning::{
+    self, DesignParams, Learning, Readings, SensorDatasheet, SensorLag, measure_learning_plant,
+};
 use flexstage_control::registry::{Controller, Design, Designs, Stage};
 use flexstage_control::tuning::TuningParams;
 use flexstage_figures::plot::{Figure, Series};
@@ -53,16 +57,12 @@ use flexstage_identify::response::ResponseFit;
 use flexstage_piezo::BoucWenParams;
 use flexstage_run::files::pea::PeaEstimates;
 use flexstage_run::files::stage::{ResponseFitFile, StageParamsFile};
+use flexstage_run::files::track::LEARNING_SUFFIX;
 use flexstage_run::format::Rows;
 use flexstage_run::layout::{self, Tracking};
 use flexstage_run::{RunDir, Table};
-use flexstage_sim::experiment::{Metrics, Record, Status, WatchParams, run_watched};
-use flexstage_control::ControlError;
-use flexstage_control::learning::{
-    self, DesignParams, Learning, Readings, SensorDatasheet, SensorLag, measure_learning_plant,
-};
-use flexstage_run::files::track::LEARNING_SUFFIX;
 use flexstage_sim::experiment::StageControl;
+use flexstage_sim::experiment::{Metrics, Record, Status, WatchParams, run_watched};
 use flexstage_sim::rig::StagePlant;
 use flexstage_sim::trajectory::{Reference, Shape};
 use rayon::prelude::*;

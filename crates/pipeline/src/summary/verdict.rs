@@ -325,7 +325,9 @@ fn advice(metrics: &[MetricsRow], margins: &[MarginRow], scan: &[ScanRow]) -> Co
     // A controller with the learning layer has the margins of its feedback loop: learning
     // shifts the reference, outside the loop.
     let base = |name: &str| -> String {
-        name.strip_suffix(LEARNING_SUFFIX).unwrap_or(name).to_string()
+        name.strip_suffix(LEARNING_SUFFIX)
+            .unwrap_or(name)
+            .to_string()
     };
     let meets = |name: &str| -> Option<bool> {
         let name = base(name);

@@ -164,7 +164,10 @@ pub(super) fn verdict(rows: &[MetricsRow], margins: Option<&[MarginRow]>) -> Vec
             .iter()
             .filter(|r| {
                 // A controller with learning has its feedback controller's margins.
-                let feedback = r.variant.strip_suffix(LEARNING_SUFFIX).unwrap_or(&r.variant);
+                let feedback = r
+                    .variant
+                    .strip_suffix(LEARNING_SUFFIX)
+                    .unwrap_or(&r.variant);
                 &r.trajectory == t && !flagged.iter().any(|f| f == feedback) && !refused(r)
             })
             .filter_map(|r| {
