@@ -18,12 +18,12 @@
 //!
 //! # Measured
 //! 3:1 Lissajous at 2 Hz (N = 5000), error against the true output, on the twin of the
-//! quick design in its rig, each shipped controller as `track` sets it up (`cargo run
-//! --release -p flexstage-assess --example learn -- quick runs/quick/design/design.json`),
-//! last of 20 periods, without → with learning: PI + notch + FF 10.3/5.9 → 2.6/6.5 nm, tuned
-//! PID + FF 21.7/10.9 → 1.4/2.8 nm, backstepping robust 3.8/11.4 → 2.8/2.5 nm (sensor noise
-//! floor ≈ 7.8/10.4 nm). On the lumped stage in the rig (tests/learning.rs) the PID with the
-//! scenario's gains goes from 23/46 nm to 2.8/2.7 nm after 10 periods.
+//! quick design in its rig, each shipped controller as `flexstage track --learning` sets it
+//! up, RMS of the scored run after 20 trials, without → with learning: PI + notch + FF
+//! 9.8/5.9 → 5.4/5.1 nm, backstepping robust 7.7/10.4 → 5.1/2.1 nm, tuned PID + FF
+//! 20.8/10.5 → 5.1/2.4 nm (sensor noise floor ≈ 7.8/10.4 nm; docs/verification.md). The
+//! learning plant from the readings, the lag from the datasheet: nothing fitted on the true
+//! output.
 //!
 //! # The measurement's lag, from the datasheet
 //! Learning drives the *measured* error to zero. The measurement lags the true output by the
@@ -42,7 +42,7 @@
 //! [`measure_learning_plant`] sees the loop through [`Readings`]: the ADC readings and the
 //! commands, what a lab records. The stage's true output is not reachable from it:
 //!
-//! ```compile_fail
+//! ```compile_fail,E0599
 //! fn peek(rig: &mut flexstage_control::learning::Readings) -> [f64; 2] {
 //!     rig.output() // no such method: the true output never reaches the learning design
 //! }

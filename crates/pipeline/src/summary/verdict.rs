@@ -757,6 +757,25 @@ mod tests {
     }
 
     #[test]
+    fn a_controller_with_learning_is_judged_by_its_feedback_controllers_margins() {
+        // Goal: `<controller>+learning` wins when it tracks best and its feedback controller
+        // keeps its margins (with that controller's Monte-Carlo pass rate), and is never best
+        // when the feedback controller misses them.
+        let default = registry::DEFAULT.name;
+        let rows = [
+            metrics("circle", default, [4.0, 5.0], 0),
+            metrics("circle", &format!("{default}{LEARNING_SUFFIX}"), [2.0, 2.0], 0),
+            metrics("circle", &format!("fast{LEARNING_SUFFIX}"), [1.0, 1.0], 0),
+        ];
+        let margins = [margin(default, true, 95.0), margin("fast", false, 0.0)];
+        let a = advice(&rows, &margins, &[]);
+        let best = a.trajectories[0].best.as_ref().unwrap();
+        assert_eq!(best.name, format!("{default}+learning"));
+        assert_eq!(best.meets_margins, Some(true));
+        assert_eq!(best.montecarlo_pass_pct, Some(95.0));
+    }
+
+    #[test]
     fn best_controller_keeps_the_margins_and_ranks_by_the_planar() {
         // Goal: a controller that misses its margins is never "best", however small its error;
         // among the others the smallest planar RMS √(q1² + q2²) wins (robust 5.85 nm against
