@@ -764,7 +764,12 @@ mod tests {
         let default = registry::DEFAULT.name;
         let rows = [
             metrics("circle", default, [4.0, 5.0], 0),
-            metrics("circle", &format!("{default}{LEARNING_SUFFIX}"), [2.0, 2.0], 0),
+            metrics(
+                "circle",
+                &format!("{default}{LEARNING_SUFFIX}"),
+                [2.0, 2.0],
+                0,
+            ),
             metrics("circle", &format!("fast{LEARNING_SUFFIX}"), [1.0, 1.0], 0),
         ];
         let margins = [margin(default, true, 95.0), margin("fast", false, 0.0)];
