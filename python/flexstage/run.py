@@ -208,15 +208,17 @@ class Run:
               controllers: Optional[Sequence[str]] = None, compensation: str = "inverse",
               params: Optional[PathLike] = None, allow_foreign_params: bool = False,
               duration: Optional[float] = None, plant: str = "twin",
-              progress: Any = True) -> Tracking:
+              learning: Optional[int] = None, progress: Any = True) -> Tracking:
         """The simulated tracking experiment (Section 4, Figures 9–11; ``flexstage track``):
         ``trajectory`` of the scenario (default all), ``controllers`` among "pi-notch-ff",
         "robust", "nonrobust", "pid-ff", "pid-ff-scenario" (default all but the last) on
-        the twin (``plant="lumped"``: the 8-state model)."""
+        the twin (``plant="lumped"``: the 8-state model). ``learning``: also run every
+        controller with iterative learning for that many trials (periodic trajectories
+        only; ``flexstage track --learning --trials N``), rows ``<controller>+learning``."""
         ctrl = None if controllers is None else [str(c) for c in controllers]
         out, conditions = self._n.track(reporter(progress), plant, trajectory, ctrl,
                                         compensation, None if params is None else str(params),
-                                        allow_foreign_params, duration)
+                                        allow_foreign_params, duration, learning)
         return self._tracking(conditions, **_common(out))
 
     def report(self) -> Path:

@@ -451,7 +451,7 @@ impl PyRun {
     }
 
     /// Tracking; returns the outcome and the folder's conditions name ("" for `track/`).
-    #[pyo3(signature = (reporter, plant, trajectory, controllers, compensation, params, allow_foreign_params, duration))]
+    #[pyo3(signature = (reporter, plant, trajectory, controllers, compensation, params, allow_foreign_params, duration, learning))]
     #[allow(clippy::too_many_arguments)]
     fn track(
         &self,
@@ -464,6 +464,7 @@ impl PyRun {
         params: Option<PathBuf>,
         allow_foreign_params: bool,
         duration: Option<f64>,
+        learning: Option<usize>,
     ) -> PyResult<(Outcome, String)> {
         let folder = self.folder()?;
         let options = TrackOptions {
@@ -474,6 +475,7 @@ impl PyRun {
             params,
             allow_foreign_params,
             duration,
+            learning,
         };
         let s = blocking(py, reporter.as_ref(), |p| {
             flexstage_pipeline::track(folder, &options, p)

@@ -491,6 +491,13 @@ pub struct TrackArgs {
     /// model in its minimal loop (results in track/plant-lumped/).
     #[arg(long, default_value = TrackOptions::default().plant.name(), value_parser = TRACK_PLANTS)]
     pub plant: String,
+    /// Also run every controller with iterative learning on top (periodic trajectories
+    /// only): the learning designed from the loop's readings, rows <controller>+learning.
+    #[arg(long)]
+    pub learning: bool,
+    /// With --learning: the learning trials (periods) before the scored run, 1..=200.
+    #[arg(long, default_value_t = flexstage_pipeline::track::LEARNING_TRIALS, requires = "learning")]
+    pub trials: usize,
     /// First write the twin's report data to <run>/twin/ (modes, Bode data and figures beside
     /// the lumped model, validity.json), as `flexstage run` does.
     #[arg(long)]
@@ -510,6 +517,7 @@ pub fn track(a: TrackArgs) -> anyhow::Result<()> {
         params: a.params,
         allow_foreign_params: a.target.out.is_some(),
         duration: a.duration,
+        learning: a.learning.then_some(a.trials),
     };
     let folder = a.target.open()?;
     if a.write_twin {

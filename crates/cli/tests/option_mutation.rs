@@ -116,6 +116,12 @@ const OPTIONS: &[OptionRow] = &[
     (&["pea", "simulate"], "--dt", &["pea.dt"], &[]),
     (&["pea", "simulate"], "--seed", &[], &["0", "4000000000"]),
     (&["track"], "--duration", &["track.duration"], &[]),
+    (
+        &["track", "--learning"],
+        "--trials",
+        &["track.learning"],
+        &[],
+    ),
     (&["export"], "--level", &["export.level"], &["1e-308"]),
     (&["export"], "--smoothing", &["export.smoothing"], &["0"]),
     (

@@ -100,10 +100,10 @@ fn pi_notch_step(b: Bencher) {
 
 /// One step of a controller with the learning layer (≤ 1 µs including it): the
 /// robust backstepping (Kalman estimate) under learning with the twin's design (γ = 0.7,
-/// λ = 7, M = 1) and a fractional sensor lag, in its learning periods.
+/// λ = 7, M = 1) and the sensor's datasheet lag, in its learning periods.
 #[divan::bench(sample_size = 1000)]
 fn learning_step(b: Bencher) {
-    use flexstage_control::learning::{Learning, LearningParams};
+    use flexstage_control::learning::{Learning, LearningParams, SensorDatasheet};
     use flexstage_sim::experiment::StageControl;
     let (setup, r) = setup();
     let y = measurements(4096);
@@ -117,7 +117,13 @@ fn learning_step(b: Bencher) {
         q_half_width: 1,
     };
     let mut c = Learning::new(c, params)
-        .and_then(|l| l.with_sensor_lag([0.34, 0.09]))
+        .and_then(|l| {
+            let sheet = SensorDatasheet {
+                bandwidth: 15e3,
+                anti_alias: 0.0,
+            };
+            l.with_sensor_lag(sheet.lag(1e-4)?)
+        })
         .expect("learning");
     // Past the first period, so every step learns.
     for k in 0..6000 {

@@ -18,34 +18,50 @@
 //!
 //! # Measured
 //! 3:1 Lissajous at 2 Hz (N = 5000), error against the true output, on the twin of the
-//! quick design in its rig, each shipped controller as `track` sets it up (`cargo run
-//! --release -p flexstage-assess --example learn -- quick runs/quick/design/design.json`),
-//! last of 20 periods, without → with learning: PI + notch + FF 10.3/5.9 → 2.6/6.5 nm, tuned
-//! PID + FF 21.7/10.9 → 1.4/2.8 nm, backstepping robust 3.8/11.4 → 2.8/2.5 nm (sensor noise
-//! floor ≈ 7.8/10.4 nm). On the lumped stage in the rig (tests/learning.rs) the PID with the
-//! scenario's gains goes from 23/46 nm to 2.8/2.7 nm after 10 periods.
+//! quick design in its rig, each shipped controller as `flexstage track --learning` sets it
+//! up, RMS of the scored run after 20 trials, without → with learning: PI + notch + FF
+//! 9.8/5.9 → 5.4/5.1 nm, backstepping robust 7.7/10.4 → 5.1/2.1 nm, tuned PID + FF
+//! 20.8/10.5 → 5.1/2.4 nm (sensor noise floor ≈ 7.8/10.4 nm; docs/verification.md). The
+//! learning plant from the readings, the lag from the datasheet: nothing fitted on the true
+//! output.
 //!
-//! # The measurement's lag
-//! Learning drives the *measured* error to zero. On the twin the measurement lags the true
-//! output by 0.34/0.09 sample: the 15 kHz sensor electronics (0.11 sample) and, on q1, the
-//! modes above Nyquist, which the sensor filter sees at their real frequency (a component
-//! of the sampled output proportional to the input's velocity). Learning that is not told
-//! the lag leaves the true output that far ahead: 7.5 nm RMS on q1 for every controller.
-//! [`measure_learning_plant`] therefore also fits the lag on the loop's own motion
-//! ([`sensor_lag`]; this uses the true output, which the twin has and a rig would take from
-//! its model), and [`Learning::with_sensor_lag`] learns against the reference delayed by it.
+//! # The measurement's lag, from the datasheet
+//! Learning drives the *measured* error to zero. The measurement lags the true output by the
+//! sensor chain's delay (the 15 kHz sensor electronics: 0.11 sample at 10 kHz), so learning
+//! that is not told the lag leaves the true output that far ahead. The lag the learning
+//! layer corrects for is the group delay of the sensor chain as its *datasheet* gives it
+//! ([`SensorDatasheet`]: the lab's own electronics and anti-aliasing filter, here the
+//! scenario's sensor settings taken as datasheet values), never a fit on the true output:
+//! [`SensorLag`] can only be made from a datasheet. [`Learning::with_sensor_lag`] learns
+//! against the reference delayed by it. What the datasheet does not know (on the twin's q1,
+//! the modes above Nyquist that the zero-order hold excites, seen at the sample instants but
+//! filtered by the sensor) stays in the true-output error; docs/verification.md has the
+//! numbers.
+//!
+//! # Readings only
+//! [`measure_learning_plant`] sees the loop through [`Readings`]: the ADC readings and the
+//! commands, what a lab records. The stage's true output is not reachable from it:
+//!
+//! ```compile_fail,E0599
+//! fn peek(rig: &mut flexstage_control::learning::Readings) -> [f64; 2] {
+//!     rig.output() // no such method: the true output never reaches the learning design
+//! }
+//! ```
 //!
 //! # Design from the loop's frequency response
 //! The signals of a learning controller are N-periodic, so the only frequencies are the
 //! harmonics k f_0 (f_0 = f_s/N) up to Nyquist. [`measure_learning_plant`] measures T at
-//! every harmonic on the loop itself (the twin or the lumped plant): two runs with the same
-//! seed, one with a Schroeder multisine added to c (odd harmonics on axis 1 and even on axis
-//! 2, then swapped), differenced so that the sensor noise cancels. [`design`] then picks the
-//! lead λ, gain γ and the widest Q passband (smallest M) for which the monotone-convergence
-//! condition (Bristow et al. 2006, Eq. (24))
+//! every harmonic on the loop itself (the twin or the lumped plant), from the readings: runs
+//! with the same seed, with and without a Schroeder multisine added to c (odd harmonics on
+//! axis 1 and even on axis 2, then swapped), differenced so that the sensor noise cancels;
+//! then again at half the amplitude, whose difference from the first bounds the
+//! measurement's uncertainty δ_k (amplitude-dependent hysteresis, quantization). [`design`]
+//! then picks the lead λ, gain γ and the widest Q passband (smallest M) for which the
+//! monotone-convergence condition (Bristow et al. 2006, Eq. (24)) holds for every plant
+//! within the uncertainty, |ΔT| ≤ δ_k (triangle inequality):
 //!
 //! ```text
-//! ρ = max_k |Q(ω_k) (1 − γ e^{jω_kλ} T_ii(ω_k))| < 1,   i = 1, 2
+//! ρ = max_k |Q(ω_k)| (|1 − γ e^{jω_kλ} T_ii(ω_k)| + γ δ_ik) < 1,   i = 1, 2
 //! ```
 //!
 //! holds with a margin on every harmonic: checked on the complete set of frequencies the
@@ -58,7 +74,8 @@ use flexstage_numerics::RangeError;
 
 use crate::error::Result;
 use flexstage_sim::experiment::{Command, StageControl};
-use flexstage_sim::rig::StagePlant;
+
+pub use lab::Readings;
 
 pub use flexstage_control_core::ilc::IlcParams as LearningParams;
 
@@ -74,7 +91,7 @@ fn core_error(e: flexstage_control_core::CoreError) -> crate::ControlError {
 pub struct Learning<C> {
     inner: C,
     ilc: Ilc<Vec<[f64; 2]>>,
-    /// The measurement's lag behind the true output per axis \[samples\].
+    /// The measurement's lag behind the true output per axis \[samples\] (datasheet).
     lag: [f64; 2],
     /// The references of the last N samples (index: the sample's index in its period).
     references: Vec<[f64; 2]>,
@@ -98,17 +115,16 @@ impl<C: StageControl> Learning<C> {
         })
     }
 
-    /// Learns the error against the reference delayed by the measurement's lag τ_i
-    /// \[samples\] per axis (|τ_i| < N/2; [`LearningPlant::sensor_lag`]): e = q_d(k − τ) − y(k),
-    /// linear between samples (earlier period's samples for a lead; the reference is
-    /// periodic). The learning drives the *measurement* to its reference; when the
-    /// measurement lags the true output by τ, q_d(k − τ) = y(k) means q(k − τ) = q_d(k − τ),
-    /// where without the shift the true output would end τ ahead (on the twin of the quick
-    /// design τ ≈ 0.3 sample on q1: 7.5 nm RMS of the Lissajous 3:1).
-    pub fn with_sensor_lag(mut self, lag: [f64; 2]) -> Result<Self> {
+    /// Learns the error against the reference delayed by the measurement's lag τ
+    /// \[samples\] ([`SensorLag`], from the sensor chain's datasheet; |τ| < N/2): e =
+    /// q_d(k − τ) − y(k), linear between samples (earlier period's samples for a lead; the
+    /// reference is periodic). The learning drives the *measurement* to its reference; when
+    /// the measurement lags the true output by τ, q_d(k − τ) = y(k) means q(k − τ) =
+    /// q_d(k − τ), where without the shift the true output would end τ ahead.
+    pub fn with_sensor_lag(mut self, lag: SensorLag) -> Result<Self> {
         let half = (self.references.len() / 2) as f64;
-        for (a, l) in lag.iter().enumerate() {
-            if !(l.is_finite() && l.abs() < half) {
+        for (a, l) in lag.0.iter().enumerate() {
+            if l.abs() >= half {
                 return Err(RangeError::new(
                     format!("learning.sensor_lag[{a}]"),
                     l.to_string(),
@@ -117,7 +133,7 @@ impl<C: StageControl> Learning<C> {
                 .into());
             }
         }
-        self.lag = lag;
+        self.lag = lag.0;
         Ok(self)
     }
 
@@ -185,64 +201,145 @@ impl StageControl for Injected<'_> {
     }
 }
 
-/// A fresh loop: the controller (owning its periodic reference) and the plant, identical
-/// (same seeds) at every call.
-pub type LoopFactory<'a> = dyn FnMut() -> Result<(Box<dyn StageControl>, Box<dyn StagePlant>)> + 'a;
+/// What a lab records of its loop, and nothing more (module docs, "Readings only").
+mod lab {
+    use flexstage_sim::experiment::Command;
+    use flexstage_sim::rig::StagePlant;
 
-/// The frequency response of the learning plant T_ii at the harmonics k f_0, k = 1..N/2.
+    /// A stage in its rig seen as a lab sees it: the ADC readings it samples and the
+    /// commands it applies. The stage inside is private to this module, so nothing that
+    /// takes a `Readings` (the learning plant's measurement) can read the true output.
+    pub struct Readings(Box<dyn StagePlant>);
+
+    impl Readings {
+        /// The readings of `plant` (a simulated stage in its rig, or a lab's driver).
+        pub fn new(plant: impl StagePlant + 'static) -> Readings {
+            Readings(Box::new(plant))
+        }
+
+        /// The readings of a boxed plant.
+        pub fn boxed(plant: Box<dyn StagePlant>) -> Readings {
+            Readings(plant)
+        }
+
+        /// Samples the sensors (the ADC reading \[m\]).
+        pub fn reading(&mut self) -> [f64; 2] {
+            self.0.measure()
+        }
+
+        /// Advances one sample with the command.
+        pub fn apply(&mut self, cmd: &Command) {
+            self.0.apply(cmd)
+        }
+    }
+}
+
+/// A fresh loop: the controller (owning its periodic reference) and the rig's readings,
+/// identical (same seeds) at every call.
+pub type LoopFactory<'a> = dyn FnMut() -> Result<(Box<dyn StageControl>, Readings)> + 'a;
+
+/// The frequency response of the learning plant T_ii at the harmonics k f_0, k = 1..N/2,
+/// measured from the readings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LearningPlant {
     /// Samples per period N.
     pub period: usize,
     /// T_11(k f_0), T_22(k f_0) for k = 1..=N/2 (index k − 1).
     pub response: [Vec<Complex>; 2],
-    /// The lag of the measurement behind the true output per axis \[samples\] (negative: a
-    /// lead) on the loop's own motion, without injection ([`sensor_lag`]); 0 where unknown.
-    pub sensor_lag: [f64; 2],
+    /// The bound δ_ik on the error of `response` per axis and harmonic (module docs): the
+    /// difference between the measurements at full and at half amplitude; 0 where unknown.
+    pub uncertainty: [Vec<f64>; 2],
 }
 
-/// The lag τ \[samples\] of the measurement behind the true output on axis `axis` of one
-/// period of the loop (periodic records): the least-squares fit of y − q − mean = −τ q̇ with
-/// q̇ the central difference, τ = −Σ (y − q) q̇ / Σ q̇²; 0 when q does not move. Records of
-/// different lengths are cut to the shorter.
-pub fn sensor_lag(truth: &[[f64; 2]], measured: &[[f64; 2]], axis: usize) -> f64 {
-    let n = truth.len().min(measured.len());
-    let truth = &truth[..n];
-    let mean = truth
-        .iter()
-        .zip(measured)
-        .map(|(q, y)| y[axis] - q[axis])
-        .sum::<f64>()
-        / n.max(1) as f64;
-    let (mut num, mut den) = (0.0, 0.0);
-    for i in 0..n {
-        let dq = 0.5 * (truth[(i + 1) % n][axis] - truth[(i + n - 1) % n][axis]);
-        num += (measured[i][axis] - truth[i][axis] - mean) * dq;
-        den += dq * dq;
+/// The position sensors' chain as the lab's datasheets give it: the values the learning
+/// layer's lag is computed from ([`SensorDatasheet::lag`]). Not fitted on any record.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorDatasheet {
+    /// Bandwidth of the sensor electronics \[Hz\], first order (datasheet); 0 = none.
+    pub bandwidth: f64,
+    /// Corner of the ADC's anti-aliasing filter \[Hz\], 2nd-order Butterworth
+    /// (datasheet); 0 = none.
+    pub anti_alias: f64,
+}
+
+impl SensorDatasheet {
+    /// The scenario's sensor settings (`[rig.sensor]` bandwidth and anti-aliasing corner),
+    /// taken as the lab's datasheet values; the simulated rig may differ from them.
+    pub fn from_scenario(s: &flexstage_scenario::Scenario) -> SensorDatasheet {
+        SensorDatasheet {
+            bandwidth: s.rig.sensor.bandwidth,
+            anti_alias: s.rig.sensor.anti_alias,
+        }
     }
-    if den > 0.0 { -num / den } else { 0.0 }
+
+    /// The chain's group delay at low frequency in samples of `sample_time` \[s\]: 1/ω_b for
+    /// the first-order electronics and √2/ω_a for the Butterworth filter (the limits of
+    /// −arg H(jω)/ω as ω → 0), the same on both axes. The scans learning serves lie far
+    /// below both corners (the 3:1 Lissajous's 6 Hz against 15 kHz: the phase delay there
+    /// differs from the limit by (ω/ω_b)²/3 ≈ 5e-8 relative).
+    pub fn lag(&self, sample_time: f64) -> Result<SensorLag> {
+        let corner = |field: &str, f: f64| -> Result<f64> {
+            if f.is_finite() && f >= 0.0 {
+                Ok(f)
+            } else {
+                Err(RangeError::new(field, f.to_string(), "a frequency ≥ 0 [Hz] (0: none)").into())
+            }
+        };
+        let b = corner("sensor_datasheet.bandwidth", self.bandwidth)?;
+        let a = corner("sensor_datasheet.anti_alias", self.anti_alias)?;
+        if !(sample_time.is_finite() && sample_time > 0.0) {
+            return Err(RangeError::new(
+                "sensor_datasheet.sample_time",
+                sample_time.to_string(),
+                "a time > 0 [s]",
+            )
+            .into());
+        }
+        let tau = |f: f64, k: f64| {
+            if f > 0.0 {
+                k / (std::f64::consts::TAU * f)
+            } else {
+                0.0
+            }
+        };
+        let lag = (tau(b, 1.0) + tau(a, std::f64::consts::SQRT_2)) / sample_time;
+        Ok(SensorLag([lag; 2]))
+    }
 }
 
-/// Runs the loop `periods` periods and returns the true outputs and the measurements of the
-/// last period.
+/// The measurement's lag behind the true output per axis \[samples\] that the learning
+/// layer corrects for. Made only from a [`SensorDatasheet`] (or [`SensorLag::NONE`]), so a
+/// lag fitted on the true output cannot reach a [`Learning`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SensorLag([f64; 2]);
+
+impl SensorLag {
+    /// No lag (an ideal sensor).
+    pub const NONE: SensorLag = SensorLag([0.0; 2]);
+
+    /// The lag per axis \[samples\].
+    pub fn samples(&self) -> [f64; 2] {
+        self.0
+    }
+}
+
+/// Runs the loop `periods` periods and returns the readings of the last period.
 fn last_period(
     controller: &mut dyn StageControl,
-    plant: &mut dyn StagePlant,
+    rig: &mut Readings,
     n: usize,
     periods: usize,
-) -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
-    let mut out = Vec::with_capacity(n);
+) -> Vec<[f64; 2]> {
     let mut measured = Vec::with_capacity(n);
     for k in 0..n * periods {
-        let y = plant.measure();
+        let y = rig.reading();
         let cmd = controller.step(y);
         if k >= n * (periods - 1) {
-            out.push(plant.output());
             measured.push(y);
         }
-        plant.apply(&cmd);
+        rig.apply(&cmd);
     }
-    (out, measured)
+    measured
 }
 
 /// The DFT bin k of a real N-sample record, Σ x_n e^{−j2πkn/N}.
@@ -254,9 +351,10 @@ fn dft_bin(x: impl Iterator<Item = f64>, k: usize, n: usize) -> Complex {
     })
 }
 
-/// Measures T_ii of the learning plant at every harmonic of the period (module docs):
-/// `periods` periods per run (the last one is analysed, the others let the transient of the
-/// smooth start and the injection settle), multisine of `amplitude` \[m\] RMS per axis.
+/// Measures T_ii of the learning plant at every harmonic of the period from the readings
+/// (module docs): `periods` periods per run (the last one is analysed, the others let the
+/// transient of the smooth start and the injection settle), multisine of `amplitude` \[m\]
+/// RMS per axis, and again at half of it for the uncertainty; five runs in all.
 pub fn measure_learning_plant(
     factory: &mut LoopFactory<'_>,
     period: usize,
@@ -271,12 +369,36 @@ pub fn measure_learning_plant(
         )
         .into());
     }
-    let n = period;
-    let half = n / 2;
     let base = {
-        let (mut c, mut p) = factory()?;
-        last_period(c.as_mut(), p.as_mut(), n, periods)
+        let (mut c, mut rig) = factory()?;
+        last_period(c.as_mut(), &mut rig, period, periods)
     };
+    let full = injected_response(factory, &base, period, periods, amplitude)?;
+    let half = injected_response(factory, &base, period, periods, 0.5 * amplitude)?;
+    let uncertainty = core::array::from_fn(|a| {
+        full[a]
+            .iter()
+            .zip(&half[a])
+            .map(|(f, h)| (f.0 - h.0).hypot(f.1 - h.1))
+            .collect()
+    });
+    Ok(LearningPlant {
+        period,
+        response: full,
+        uncertainty,
+    })
+}
+
+/// T_ii at every harmonic from two injected runs (one per harmonic parity) against `base`,
+/// the readings of the run without injection.
+fn injected_response(
+    factory: &mut LoopFactory<'_>,
+    base: &[[f64; 2]],
+    n: usize,
+    periods: usize,
+    amplitude: f64,
+) -> Result<[Vec<Complex>; 2]> {
+    let half = n / 2;
     let mut response = [vec![(0.0, 0.0); half], vec![(0.0, 0.0); half]];
     for parity in 0..2 {
         // Axis 1 on harmonics of one parity, axis 2 on the other; Schroeder phases.
@@ -291,34 +413,25 @@ pub fn measure_learning_plant(
                 s[axis] += a * (w * i as f64 + phase).cos();
             }
         }
-        let (c, mut p) = factory()?;
+        let (c, mut rig) = factory()?;
         let mut inj = Injected {
             inner: c,
             signal: &signal,
             k: 0,
         };
-        let (out, _) = last_period(&mut inj, p.as_mut(), n, periods);
+        let out = last_period(&mut inj, &mut rig, n, periods);
         for k in 1..=half {
             let axis = (k + parity) % 2;
             let dc = dft_bin(signal.iter().map(|s| s[axis]), k, n);
             let d2 = dc.0 * dc.0 + dc.1 * dc.1;
-            let dy = dft_bin(
-                out.iter().zip(&base.0).map(|(o, b)| o[axis] - b[axis]),
-                k,
-                n,
-            );
+            let dy = dft_bin(out.iter().zip(base).map(|(o, b)| o[axis] - b[axis]), k, n);
             response[axis][k - 1] = (
                 (dy.0 * dc.0 + dy.1 * dc.1) / d2,
                 (dy.1 * dc.0 - dy.0 * dc.1) / d2,
             );
         }
     }
-    let sensor_lag = [0, 1].map(|a| sensor_lag(&base.0, &base.1, a));
-    Ok(LearningPlant {
-        period: n,
-        response,
-        sensor_lag,
-    })
+    Ok(response)
 }
 
 /// The Bartlett Q-filter's frequency response at ω [rad/sample]: the Fejér kernel
@@ -334,12 +447,13 @@ pub fn q_response(half_width: usize, omega: f64) -> f64 {
 }
 
 /// The monotone-convergence factor ρ = max over harmonics and axes of
-/// |Q(ω_k)(1 − γ e^{jω_kλ} T_ii(ω_k))| (module docs). Below 1: the ℓ² norm of the learned
-/// correction's error contracts every period.
+/// |Q(ω_k)| (|1 − γ e^{jω_kλ} T_ii(ω_k)| + γ δ_ik) (module docs; δ the measurement's
+/// uncertainty, 0 where the plant has none). Below 1: the ℓ² norm of the learned
+/// correction's error contracts every period, for every plant within the uncertainty.
 pub fn convergence_factor(plant: &LearningPlant, params: &LearningParams) -> f64 {
     let n = plant.period as f64;
     let mut rho = 0.0f64;
-    for axis in &plant.response {
+    for (axis, delta) in plant.response.iter().zip(&plant.uncertainty) {
         for (i, t) in axis.iter().enumerate() {
             let omega = std::f64::consts::TAU * (i + 1) as f64 / n;
             let (c, s) = (
@@ -350,7 +464,9 @@ pub fn convergence_factor(plant: &LearningPlant, params: &LearningParams) -> f64
             let lt = (c * t.0 - s * t.1, c * t.1 + s * t.0);
             let re = 1.0 - params.gain * lt.0;
             let im = -params.gain * lt.1;
-            let f = q_response(params.q_half_width, omega) * (re * re + im * im).sqrt();
+            let d = delta.get(i).copied().unwrap_or(0.0);
+            let f = q_response(params.q_half_width, omega)
+                * ((re * re + im * im).sqrt() + params.gain * d);
             rho = rho.max(f);
         }
     }

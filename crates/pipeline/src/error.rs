@@ -273,7 +273,7 @@ pub(crate) fn require_converged_tracking(rows: &[crate::track::TrackRow]) -> Res
             format!(
                 "{}/{} ({})",
                 r.trajectory,
-                r.controller.name,
+                r.variant(),
                 r.metrics.status().name()
             )
         })
@@ -283,7 +283,8 @@ pub(crate) fn require_converged_tracking(rows: &[crate::track::TrackRow]) -> Res
     Err(PipelineError::Unphysical {
         what: format!(
             "track: {}, {}: max error",
-            first.trajectory, first.controller.name
+            first.trajectory,
+            first.variant()
         ),
         value: format!(
             "[{:.3e}, {:.3e}] m, {}",
@@ -336,6 +337,7 @@ mod tests {
             |t: &str, v: &'static Controller, non_finite: usize, max: f64| crate::track::TrackRow {
                 trajectory: t.into(),
                 controller: v,
+                learning: false,
                 metrics: Metrics {
                     max: [max, 1e-9],
                     non_finite,

@@ -490,7 +490,7 @@ impl Summary for TwinSummary {
 }
 
 /// The head of the tracking table of [`TrackSummary`]'s `Display`.
-const TRACK_HEADER: &str = "trajectory     variant       RMS q1/q2 [nm]   RMS [% range]    \
+const TRACK_HEADER: &str = "trajectory     variant                 RMS q1/q2 [nm]   RMS [% range]    \
 max q1/q2 [nm]   max [% range] settle[s] peak [V]   sat  status";
 
 impl fmt::Display for TrackSummary {
@@ -523,11 +523,11 @@ impl fmt::Display for TrackSummary {
             ] = r.error_columns();
             writeln!(
                 f,
-                "{:<14} {:<10} {rms1:>8.1}/{rms2:<8.1} {rms1_pct:>7.3}/{rms2_pct:<7.3} \
+                "{:<14} {:<20} {rms1:>8.1}/{rms2:<8.1} {rms1_pct:>7.3}/{rms2_pct:<7.3} \
                  {max1:>8.1}/{max2:<8.1} {max1_pct:>7.3}/{max2_pct:<7.3} {settling:>9.4} \
                  {peak:>8.0} {:>5}  {}",
                 r.trajectory,
-                r.controller.name,
+                r.variant(),
                 r.metrics.saturated,
                 r.metrics.status().name()
             )?;

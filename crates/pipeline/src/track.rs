@@ -25,6 +25,14 @@
 //!   `track/params-reduce/`, so they never overwrite each other. Running a subset of the
 //!   trajectories or controllers updates those rows of `metrics.csv` and keeps the others.
 //!
+//! * **Learning** ([`TrackOptions::learning`], `--learning`): every selected controller
+//!   also runs with the iterative-learning layer (`flexstage_control::learning`) on every
+//!   trajectory, which must be periodic. Per pair: the learning plant is measured from the
+//!   ADC readings of the loop, the layer designed from it (monotone-convergence factor
+//!   ρ < 1 with the measurement's uncertainty) and told the sensor's datasheet lag; it
+//!   learns for the given number of trials (periods), then the trajectory's run is scored
+//!   with learning still on. Its row is `<controller>+learning`.
+//!
 //! Every (trajectory, controller) pair is independent and runs in parallel (rayon).
 
 use flexstage_scenario::RecordEstimate;
@@ -35,20 +43,28 @@ use flexstage_assess::Bench;
 use flexstage_assess::inject::InjectionParams;
 use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, monte_carlo};
+use flexstage_control::ControlError;
+use flexstage_control::actuator::ActuatorParams;
 use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::Setup;
-use flexstage_control::registry::{Controller, Designs, Stage};
+use flexstage_control::learning::{
+    self, DesignParams, Learning, Readings, SensorDatasheet, SensorLag, measure_learning_plant,
+};
+use flexstage_control::registry::{Controller, Design, Designs, Stage};
 use flexstage_control::tuning::TuningParams;
 use flexstage_figures::plot::{Figure, Series};
 use flexstage_identify::response::ResponseFit;
 use flexstage_piezo::BoucWenParams;
 use flexstage_run::files::pea::PeaEstimates;
 use flexstage_run::files::stage::{ResponseFitFile, StageParamsFile};
+use flexstage_run::files::track::LEARNING_SUFFIX;
 use flexstage_run::format::Rows;
 use flexstage_run::layout::{self, Tracking};
 use flexstage_run::{RunDir, Table};
+use flexstage_sim::experiment::StageControl;
 use flexstage_sim::experiment::{Metrics, Record, Status, WatchParams, run_watched};
-use flexstage_sim::trajectory::Reference;
+use flexstage_sim::rig::StagePlant;
+use flexstage_sim::trajectory::{Reference, Shape};
 use rayon::prelude::*;
 
 use crate::error::{PipelineError, Result, require};
@@ -60,6 +76,21 @@ use crate::twin::Built;
 
 /// The longest tracking run \[s\] (bounded work: 6·10⁶ samples at 10 kHz).
 pub const MAX_DURATION: f64 = 600.0;
+
+/// The learning trials (periods) of `--learning` without `--trials`: on the twin the error
+/// settles within 10 % of its last value in 2–8 periods (docs/verification.md).
+pub const LEARNING_TRIALS: usize = 20;
+
+/// The most learning trials (bounded work: with the longest period below, 4·10⁶ samples).
+pub const MAX_LEARNING_TRIALS: usize = 200;
+
+/// The longest period learning accepts \[samples\]: measuring the learning plant takes a
+/// DFT bin at every harmonic, O(N²) (seconds at this N; 0.5 Hz at 10 kHz).
+pub const MAX_LEARNING_PERIOD: usize = 20_000;
+
+/// RMS per axis \[m\] of the multisine that measures the learning plant: well above the
+/// sensors' quantization, far below the workspace (0.1 % of the quick stroke).
+pub const LEARNING_AMPLITUDE: f64 = 20e-9;
 
 /// Which stage `track` simulates.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -109,6 +140,11 @@ pub struct TrackOptions {
     pub allow_foreign_params: bool,
     /// Duration of every run \[s\], in (0, 600]; `None`: each trajectory's own.
     pub duration: Option<f64>,
+    /// Iterative learning on top of every selected controller, this many trials (periods)
+    /// before the scored run, in 1..=200 (module docs); its rows are
+    /// `<controller>+learning`, beside the controller's own. `None`: off, the default
+    /// (docs/DECISIONS.md, "Learning in track").
+    pub learning: Option<usize>,
 }
 
 impl Default for TrackOptions {
@@ -121,6 +157,7 @@ impl Default for TrackOptions {
             params: None,
             allow_foreign_params: false,
             duration: None,
+            learning: None,
         }
     }
 }
@@ -140,6 +177,14 @@ impl TrackOptions {
                 "track.duration",
                 d,
                 "a duration in (0, 600] s",
+            )?;
+        }
+        if let Some(n) = self.learning {
+            require(
+                (1..=MAX_LEARNING_TRIALS).contains(&n),
+                "track.learning",
+                n,
+                "a number of trials in 1..=200",
             )?;
         }
         Ok(())
@@ -229,6 +274,8 @@ pub struct TrackRow {
     pub trajectory: String,
     /// Controller.
     pub controller: &'static Controller,
+    /// Whether the controller ran with the learning layer.
+    pub learning: bool,
     /// Errors against the true output.
     pub metrics: Metrics,
     /// Largest fraction of the designed workspace the reference uses.
@@ -236,6 +283,12 @@ pub struct TrackRow {
 }
 
 impl TrackRow {
+    /// The row's name in `metrics.csv`, tables and file names: the controller's, with
+    /// [`LEARNING_SUFFIX`] under learning.
+    pub fn variant(&self) -> String {
+        variant_name(self.controller, self.learning)
+    }
+
     /// The error columns of `metrics.csv` and the printed table, in their order: RMS q1, q2
     /// \[nm\], RMS q1, q2 \[% of range\], max q1, q2 \[nm\], max q1, q2 \[% of range\], settling
     /// time \[s\], peak voltage \[V\].
@@ -401,12 +454,75 @@ fn tune_and_margins(
     Ok((bench.designs, rows, Some(mc), scan))
 }
 
+/// The name of a controller's row, with [`LEARNING_SUFFIX`] under learning.
+pub fn variant_name(controller: &Controller, learning: bool) -> String {
+    if learning {
+        format!("{}{LEARNING_SUFFIX}", controller.name)
+    } else {
+        controller.name.to_string()
+    }
+}
+
 /// One planned run.
 struct Job<'a> {
     trajectory: &'a str,
     reference: Reference,
     duration: f64,
     controller: &'static Controller,
+    /// With the learning layer: its trials, period and the sensor's datasheet lag.
+    learning: Option<Learn>,
+}
+
+/// The learning layer of a job.
+#[derive(Debug, Clone, Copy)]
+struct Learn {
+    trials: usize,
+    period: usize,
+    lag: SensorLag,
+}
+
+impl Job<'_> {
+    /// The samples the job advances the progress by (learning trials and the scored run).
+    fn samples(&self, dt: f64) -> f64 {
+        let trials = self.learning.map_or(0, |l| l.trials * l.period);
+        trials as f64 + self.duration / dt
+    }
+}
+
+/// Samples per period N of a periodic reference, for the learning layer: a circle, or a
+/// Lissajous curve of whole frequency ratio, whose period is a whole number of samples
+/// (relative 1e-6) in 4..=[`MAX_LEARNING_PERIOD`]; a typed error naming the trajectory
+/// otherwise.
+pub fn learning_period(reference: &Reference, dt: f64, trajectory: &str) -> Result<usize> {
+    let refuse = |why: String| PipelineError::Option {
+        option: "track.learning",
+        value: format!("trajectory {trajectory:?}"),
+        expected: format!(
+            "a periodic trajectory (circle, or Lissajous of whole ratio) whose period is a \
+             whole number of 4..={MAX_LEARNING_PERIOD} samples: {why}"
+        ),
+    };
+    let frequency = match reference.shape {
+        Shape::Circle { frequency, .. } => frequency,
+        Shape::Lissajous {
+            ratio, frequency, ..
+        } if (ratio - ratio.round()).abs() < 1e-9 && ratio >= 1.0 => frequency,
+        Shape::Lissajous { ratio, .. } => {
+            return Err(refuse(format!("its frequency ratio {ratio} is not whole")));
+        }
+        Shape::Step { .. } | Shape::Ramp { .. } => {
+            return Err(refuse("it is not periodic".into()));
+        }
+    };
+    let n = 1.0 / (frequency * dt);
+    let whole = n.round();
+    if !(n.is_finite() && (n - whole).abs() <= 1e-6 * n) {
+        return Err(refuse(format!("its period is {n} samples")));
+    }
+    if !(4.0..=MAX_LEARNING_PERIOD as f64).contains(&whole) {
+        return Err(refuse(format!("its period is {whole} samples")));
+    }
+    Ok(whole as usize)
 }
 
 /// The stage a `track` call simulates.
@@ -631,7 +747,7 @@ pub fn track_on(
         progress.note(&format!("warning: {w}"));
     }
     let dt = plant.scenario.simulation.sample_time;
-    let samples: f64 = jobs.iter().map(|(j, _)| j.duration / dt).sum();
+    let samples: f64 = jobs.iter().map(|(j, _)| j.samples(dt)).sum();
     progress.start("track", samples.round() as u64);
     let records: Vec<Result<Record>> = jobs
         .par_iter()
@@ -714,6 +830,9 @@ fn run_job(
     let dt = setup.controller.observer.sample_time;
     let watch = watch(&j.reference, j.duration, dt);
     let actuator = setup.actuator(compensation);
+    if let Some(learn) = j.learning {
+        return run_learning(setup, design, sim, actuator, j, learn, progress);
+    }
     // As `flexstage_control::experiment::{experiment_on, experiment_with_progress}`, watched.
     Ok(match sim {
         Simulated::Twin(twin) => {
@@ -728,6 +847,76 @@ fn run_job(
             run_watched(c.as_mut(), &mut p, j.duration, dt, &watch, advance)
         }
     })
+}
+
+/// The rig's readings of a fresh simulated stage (the twin in its rig, or the lumped model).
+fn readings(setup: &Setup, sim: &Simulated) -> Result<(Box<dyn StagePlant>, usize)> {
+    Ok(match sim {
+        Simulated::Twin(twin) => (Box::new(twin.plant(&setup.rig)?), setup.controller.delay),
+        // The minimal loop has no delay: the controller predicts over none.
+        Simulated::Lumped => (
+            Box::new(flexstage_sim::plant::Plant::new(setup.plant.clone())?),
+            0,
+        ),
+    })
+}
+
+/// One (trajectory, controller) run with the learning layer (module docs): the learning
+/// plant measured from the readings of fresh loops, the layer designed from it, `trials`
+/// periods of learning, then the scored run (learning on). A learning phase that the watch
+/// stops is returned as the record.
+fn run_learning(
+    setup: &Setup,
+    design: &dyn Design,
+    sim: &Simulated,
+    actuator: ActuatorParams,
+    j: &Job,
+    learn: Learn,
+    progress: &dyn Progress,
+) -> Result<Record> {
+    let dt = setup.controller.observer.sample_time;
+    let infeasible = |e: PipelineError| ControlError::Infeasible {
+        what: "learning loop".into(),
+        detail: e.to_string(),
+    };
+    let mut factory = || -> flexstage_control::Result<(Box<dyn StageControl>, Readings)> {
+        let (plant, delay) = readings(setup, sim).map_err(infeasible)?;
+        let c = design.build(actuator, delay, j.reference)?;
+        Ok((c, Readings::boxed(plant)))
+    };
+    let measured = measure_learning_plant(&mut factory, learn.period, 3, LEARNING_AMPLITUDE)?;
+    let (params, rho) = learning::design(&measured, &DesignParams::default())?;
+    progress.note(&format!(
+        "{} on {}: learning γ = {}, lead {} samples, Q half-width {}, ρ = {rho:.3}, datasheet \
+         lag {:.3} samples",
+        j.controller.name,
+        j.trajectory,
+        params.gain,
+        params.lead,
+        params.q_half_width,
+        learn.lag.samples()[0]
+    ));
+    let (mut plant, delay) = readings(setup, sim)?;
+    let inner = design.build(actuator, delay, j.reference)?;
+    let mut c = Learning::new(inner, params)?.with_sensor_lag(learn.lag)?;
+    let watch = watch(&j.reference, j.duration, dt);
+    let advance = |n: usize| progress.advance(n as u64);
+    // The trials a period at a time, so that only one period is ever recorded.
+    let period = learn.period as f64 * dt;
+    for _ in 0..learn.trials {
+        let trial = run_watched(&mut c, plant.as_mut(), period, dt, &watch, advance);
+        if trial.stopped.is_some() {
+            return Ok(trial);
+        }
+    }
+    Ok(run_watched(
+        &mut c,
+        plant.as_mut(),
+        j.duration,
+        dt,
+        &watch,
+        advance,
+    ))
 }
 
 /// An error beyond this many times the reference's range (peak to peak, the larger axis)
@@ -783,9 +972,18 @@ fn plan<'a>(
         Simulated::Lumped => None,
     };
     let mut jobs = Vec::new();
+    let lag = SensorDatasheet::from_scenario(s).lag(dt)?;
     for t in &trajectories {
         let (reference, d) = Reference::from_scenario(t);
         let duration = options.duration.unwrap_or(d);
+        let learning = match options.learning {
+            Some(trials) => Some(Learn {
+                trials,
+                period: learning_period(&reference, dt, t.name())?,
+                lag,
+            }),
+            None => None,
+        };
         setup
             .check_reference(&reference, duration, gain)
             .map_err(|e| PipelineError::Format {
@@ -805,15 +1003,18 @@ fn plan<'a>(
             if designs.get(controller).is_none() {
                 continue;
             }
-            jobs.push((
-                Job {
-                    trajectory: t.name(),
-                    reference,
-                    duration,
-                    controller,
-                },
-                usage,
-            ));
+            for learning in std::iter::once(None).chain(learning.map(Some)) {
+                jobs.push((
+                    Job {
+                        trajectory: t.name(),
+                        reference,
+                        duration,
+                        controller,
+                        learning,
+                    },
+                    usage,
+                ));
+            }
         }
     }
     Ok(jobs)
@@ -870,7 +1071,8 @@ fn write_results(
     let mut paths = Vec::with_capacity(jobs.len());
     for ((job, usage), rec) in jobs.iter().zip(records) {
         let rec = rec?;
-        let (t, v) = (job.trajectory, job.controller.name);
+        let variant = variant_name(job.controller, job.learning.is_some());
+        let (t, v) = (job.trajectory, variant.as_str());
         // Written, not stored: the series is large, and its paths stay in memory for
         // Figure 11.
         let table = Table::of(&Record::header(), &rec.columns());
@@ -896,6 +1098,7 @@ fn write_results(
         rows.push(TrackRow {
             trajectory: t.to_string(),
             controller: job.controller,
+            learning: job.learning.is_some(),
             metrics: rec.metrics(half),
             usage: *usage,
         });
@@ -1011,6 +1214,47 @@ mod tests {
             )
             .is_ok()
         );
+    }
+
+    /// Goal: learning accepts the periodic references whose period is a whole number of
+    /// samples (the 3:1 Lissajous at 2 Hz: 5000 samples at 10 kHz; a circle) and refuses a
+    /// step, a non-whole ratio and a fractional period with a typed error naming the
+    /// option and the trajectory; the trials are checked against their range.
+    #[test]
+    fn learning_needs_a_periodic_reference_of_whole_samples() {
+        let dt = 1e-4;
+        let liss = |ratio: f64, frequency: f64| {
+            Reference::new(Shape::Lissajous {
+                ratio,
+                amplitude: [1e-6, 1e-6],
+                frequency,
+            })
+        };
+        assert_eq!(learning_period(&liss(3.0, 2.0), dt, "l").unwrap(), 5000);
+        let circle = Reference::new(Shape::Circle {
+            radius: 1e-6,
+            frequency: 4.0,
+        });
+        assert_eq!(learning_period(&circle, dt, "c").unwrap(), 2500);
+        let step = Reference::new(Shape::Step { target: [1e-6; 2] });
+        for (r, why) in [
+            (step, "not periodic"),
+            (liss(1.5, 2.0), "ratio 1.5"),
+            (liss(3.0, 3.0), "3333.3"),
+        ] {
+            let e = learning_period(&r, dt, "scan").unwrap_err().to_string();
+            assert!(
+                e.contains("track.learning") && e.contains("\"scan\"") && e.contains(why),
+                "{e}"
+            );
+        }
+        for (n, ok) in [(0, false), (1, true), (200, true), (201, false)] {
+            let o = TrackOptions {
+                learning: Some(n),
+                ..TrackOptions::default()
+            };
+            assert_eq!(o.validate().is_ok(), ok, "{n}");
+        }
     }
 
     #[test]

@@ -16,7 +16,7 @@ fn row(r: &TrackRow, compensation: &str, model: &str, plant: &str) -> MetricsRow
     let m = &r.metrics;
     MetricsRow {
         trajectory: r.trajectory.clone(),
-        variant: r.controller.name.to_string(),
+        variant: r.variant(),
         compensation: compensation.to_string(),
         model: model.to_string(),
         plant: plant.to_string(),
@@ -144,6 +144,7 @@ mod tests {
         TrackRow {
             trajectory: "circle".into(),
             controller,
+            learning: false,
             metrics: Metrics {
                 rms: [rms, rms],
                 ..Metrics::default()

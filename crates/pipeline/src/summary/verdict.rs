@@ -16,7 +16,7 @@ pub use flexstage_run::files::design::stop_in_words;
 use flexstage_run::files::design::{DesignRecord, DesignSummaryFile};
 use flexstage_run::files::export::VerificationFile;
 use flexstage_run::files::reduce::ReduceSummaryJson;
-use flexstage_run::files::track::{MarginRow, MetricsRow, ScanRow};
+use flexstage_run::files::track::{LEARNING_SUFFIX, MarginRow, MetricsRow, ScanRow};
 use flexstage_run::files::twin::TwinValidity;
 use flexstage_run::format::Rows;
 use flexstage_run::layout::{self, Tracking};
@@ -322,11 +322,20 @@ fn comparisons(
 
 /// The controllers' results on each trajectory, the default and the best.
 fn advice(metrics: &[MetricsRow], margins: &[MarginRow], scan: &[ScanRow]) -> ControlAdvice {
+    // A controller with the learning layer has the margins of its feedback loop: learning
+    // shifts the reference, outside the loop.
+    let base = |name: &str| -> String {
+        name.strip_suffix(LEARNING_SUFFIX)
+            .unwrap_or(name)
+            .to_string()
+    };
     let meets = |name: &str| -> Option<bool> {
+        let name = base(name);
         let rows: Vec<&MarginRow> = margins.iter().filter(|m| m.controller == name).collect();
         (!rows.is_empty()).then(|| rows.iter().all(|m| m.meets_targets))
     };
     let pass = |name: &str| -> Option<f64> {
+        let name = base(name);
         margins
             .iter()
             .find(|m| m.controller == name)
@@ -745,6 +754,30 @@ mod tests {
         assert_eq!(stop_in_words("Converged"), "converged");
         assert!(stop_in_words("MaxIterations").contains("iteration limit"));
         assert!(!stop_in_words("Stagnated").contains("Stagnated"));
+    }
+
+    #[test]
+    fn a_controller_with_learning_is_judged_by_its_feedback_controllers_margins() {
+        // Goal: `<controller>+learning` wins when it tracks best and its feedback controller
+        // keeps its margins (with that controller's Monte-Carlo pass rate), and is never best
+        // when the feedback controller misses them.
+        let default = registry::DEFAULT.name;
+        let rows = [
+            metrics("circle", default, [4.0, 5.0], 0),
+            metrics(
+                "circle",
+                &format!("{default}{LEARNING_SUFFIX}"),
+                [2.0, 2.0],
+                0,
+            ),
+            metrics("circle", &format!("fast{LEARNING_SUFFIX}"), [1.0, 1.0], 0),
+        ];
+        let margins = [margin(default, true, 95.0), margin("fast", false, 0.0)];
+        let a = advice(&rows, &margins, &[]);
+        let best = a.trajectories[0].best.as_ref().unwrap();
+        assert_eq!(best.name, format!("{default}+learning"));
+        assert_eq!(best.meets_margins, Some(true));
+        assert_eq!(best.montecarlo_pass_pct, Some(95.0));
     }
 
     #[test]

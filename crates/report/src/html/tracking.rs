@@ -7,7 +7,7 @@ use std::sync::Arc;
 use flexstage_figures::cloud::Cloud;
 use flexstage_figures::plot::{Figure, Legend, Multiples, Series};
 use flexstage_run::Table;
-use flexstage_run::files::track::{MarginRow, MetricsRow};
+use flexstage_run::files::track::{LEARNING_SUFFIX, MarginRow, MetricsRow};
 use flexstage_run::format::Rows;
 use flexstage_run::layout::Tracking;
 
@@ -162,7 +162,14 @@ pub(super) fn verdict(rows: &[MetricsRow], margins: Option<&[MarginRow]>) -> Vec
     for t in &order {
         let mut ranked: Vec<(f64, &MetricsRow, [f64; 2])> = rows
             .iter()
-            .filter(|r| &r.trajectory == t && !flagged.contains(&r.variant) && !refused(r))
+            .filter(|r| {
+                // A controller with learning has its feedback controller's margins.
+                let feedback = r
+                    .variant
+                    .strip_suffix(LEARNING_SUFFIX)
+                    .unwrap_or(&r.variant);
+                &r.trajectory == t && !flagged.iter().any(|f| f == feedback) && !refused(r)
+            })
             .filter_map(|r| {
                 let (a, b) = (r.rms1_nm, r.rms2_nm);
                 let planar = a.hypot(b);

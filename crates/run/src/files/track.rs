@@ -7,13 +7,18 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use crate::format::{Row, num};
 
+/// The suffix of a controller's row with the iterative-learning layer on top
+/// (`<controller>+learning` in [`MetricsRow::variant`] and the record's file name).
+pub const LEARNING_SUFFIX: &str = "+learning";
+
 /// One row of `metrics.csv`: the errors of one (trajectory, controller) pair against the true
 /// output, under the conditions of the folder.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct MetricsRow {
     /// Trajectory name.
     pub trajectory: String,
-    /// Controller name.
+    /// Controller name; `<controller>+learning` ([`LEARNING_SUFFIX`]) for the controller
+    /// with the learning layer.
     pub variant: String,
     /// Hysteresis compensation (`inverse`, `off`).
     pub compensation: String,
