@@ -432,11 +432,11 @@ impl FeModel {
         let mut offsets = Vec::with_capacity(nd + 1);
         let mut terms = Vec::with_capacity(nd);
         offsets.push(0);
-        for d in 0..nd {
+        for (d, &r) in reduced.iter().enumerate() {
             if let Some(t) = eliminated.get(&d) {
                 terms.extend_from_slice(t);
-            } else if reduced[d] != usize::MAX {
-                terms.push((reduced[d], 1.0));
+            } else if r != usize::MAX {
+                terms.push((r, 1.0));
             }
             offsets.push(terms.len());
         }
