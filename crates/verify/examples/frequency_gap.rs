@@ -140,7 +140,7 @@ fn main() -> Res<()> {
     let (dx, dy) = s.mesh.element_size();
     let outline = Outline::from_fem_order(nl, nw, dx, dy, 0.5, 10, &rho)?.refined(0.05e-3);
     let h = dx.max(dy);
-    for radius in [0.25, 0.5, 0.75, 1.5] {
+    for radius in [0.5, 0.75, 1.5, 3.0] {
         let p = VerifyParams {
             port_radius: Some(radius * h),
             refine_check: false,
