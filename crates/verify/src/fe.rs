@@ -4,14 +4,21 @@
 //! The design model attaches a PEA, a roller or the output to **one node** of the Q4 mesh. On
 //! a body-fitted mesh a point load is a stress singularity (the peak von Mises grows without
 //! bound as the mesh is refined), so each port acts on the outline boundary within a radius of
-//! its point through a distributing coupling (the "RBE3" element of commercial codes): the port
-//! displacement is the weighted mean `ū = Σ w_i u_i` of the boundary nodes, with the weights of
-//! a uniform traction on the quadratic edges (`L/6, 2L/3, L/6` per edge of length `L`,
-//! normalized to `Σ w = 1`). A force `F` on the port is the uniform traction `f_i = w_i F`; a
-//! grounded spring `k` on the port adds `½ k ū²`; a roller `ū_c = 0` is eliminated exactly:
-//! `u_{p,c} = −Σ_{i≠p} (w_i/w_p) u_{i,c}` for the node `p` of largest weight. The coupling
-//! adds no stiffness and leaves the port free to rotate, like the single node of the design
-//! model, and it removes the singularity (a uniform traction on a straight edge gives bounded
+//! its point through a distributing coupling (the "RBE3" element of commercial codes), with
+//! the weights `w_i` of a uniform traction on the quadratic edges (`L/6, 2L/3, L/6` per edge
+//! of length `L`, normalized to `Σ w = 1`). The port's displacement is that of its point `p`
+//! moving with the nodes' weighted least-squares rigid motion: their weighted mean `ū = Σ w_i
+//! u_i` at their centroid `c = Σ w_i x_i` and the rotation `θ = Σ w_i (r_i × u_i) / Σ w_i
+//! |r_i|²` (`r_i = x_i − c`), carried to the point: `u_p = ū + θ e_z × (p − c)`. A rigid
+//! rotation of the nodes about `p` leaves `u_p = 0`, so a roller or a spring on the port does
+//! not hold the port's rotation, like the single node of the design model (the plain mean
+//! `ū` would: on the edge of a port patch the nodes lie to one side of the port's point, and
+//! a roller on their mean clamped the patch's rotation, which raised the first frequency by
+//! 5–25 %). Everything on the port goes through the same linear map `u_p = A u`: a force `F`
+//! is `Aᵀ F` (the uniform traction plus the moment that keeps it at `p`), a grounded spring
+//! `k` adds `½ k u_{p,c}²`, a point mass `½ m u_{p,c}²`, and a roller `u_{p,c} = 0` is
+//! eliminated exactly through the DOF of the node of largest weight. The coupling adds no
+//! stiffness and removes the singularity (a uniform traction on a straight edge gives bounded
 //! stresses).
 //!
 //! # Algebra
@@ -42,6 +49,8 @@ pub struct Attachment {
     pub nodes: Vec<usize>,
     /// Their weights (uniform traction, `Σ w = 1`).
     pub weights: Vec<f64>,
+    /// Their positions \[m\].
+    pub positions: Vec<[f64; 2]>,
     /// Components of the mean displacement held at zero (rollers): `[x, y]`.
     pub fixed: [bool; 2],
 }
@@ -69,6 +78,7 @@ impl Attachment {
         select: impl Fn([f64; 2]) -> bool,
     ) -> Option<Self> {
         let mut w = std::collections::BTreeMap::<usize, f64>::new();
+        let position = |n: usize| mesh.nodes[n];
         for e in &mesh.boundary {
             if !select(mesh.nodes[e[1]]) {
                 continue;
@@ -88,18 +98,111 @@ impl Attachment {
             point,
             nodes: w.keys().copied().collect(),
             weights: w.values().map(|v| v / total).collect(),
+            positions: w.keys().map(|&n| position(n)).collect(),
             fixed,
         })
     }
 
-    /// Mean displacement component `c` of the full displacement vector `u`.
-    pub fn mean(&self, u: &[f64], c: usize) -> f64 {
-        self.nodes
+    /// The map `u_p = A u` (module docs) as `(full DOF, [A_xd, A_yd])` for each node's
+    /// components `d`: the port's displacement components are `u_{p,c} = Σ A_cd u_d`.
+    pub fn coefficients(&self) -> Vec<(usize, [f64; 2])> {
+        let c = self
+            .positions
             .iter()
             .zip(&self.weights)
-            .map(|(&n, w)| w * u[2 * n + c])
-            .sum()
+            .fold([0.0; 2], |a, (x, w)| [a[0] + w * x[0], a[1] + w * x[1]]);
+        let r: Vec<[f64; 2]> = self
+            .positions
+            .iter()
+            .map(|x| [x[0] - c[0], x[1] - c[1]])
+            .collect();
+        let j: f64 = r
+            .iter()
+            .zip(&self.weights)
+            .map(|(r, w)| w * (r[0] * r[0] + r[1] * r[1]))
+            .sum();
+        // e_z × (p − c): the point's velocity per unit rotation. A single node (or coincident
+        // nodes) has no rotation to fit.
+        let size = r.iter().fold(0.0f64, |m, r| m.max(r[0].hypot(r[1])));
+        let lever = if j > 1e-12 * size * size && j > 0.0 {
+            [-(self.point[1] - c[1]) / j, (self.point[0] - c[0]) / j]
+        } else {
+            [0.0; 2]
+        };
+        let mut out = Vec::with_capacity(2 * self.nodes.len());
+        for ((&n, &w), r) in self.nodes.iter().zip(&self.weights).zip(&r) {
+            // θ = Σ w_i (r_x u_y − r_y u_x) / J.
+            out.push((2 * n, [w - lever[0] * w * r[1], -lever[1] * w * r[1]]));
+            out.push((2 * n + 1, [lever[0] * w * r[0], w + lever[1] * w * r[0]]));
+        }
+        out
     }
+
+    /// Displacement component `c` of the port (module docs) from the full displacement
+    /// vector `u`.
+    pub fn mean(&self, u: &[f64], c: usize) -> f64 {
+        self.coefficients().iter().map(|&(d, a)| a[c] * u[d]).sum()
+    }
+}
+
+/// The rollers' pivot DOFs as combinations of reduced unknowns: a held component `c` of a
+/// port is `Σ_d A_cd u_d = 0` over its nodes; the held components' pivots (`pivot[d] = port`)
+/// solve it (one or two equations) for the other DOFs, which are all reduced unknowns (ports
+/// that hold a component share no nodes, directly fixed nodes are not on ports).
+fn eliminate_rollers(
+    attachments: &[Attachment],
+    pivot: &[Option<usize>],
+    reduced: &[usize],
+) -> Result<std::collections::BTreeMap<usize, Vec<(usize, f64)>>> {
+    let mut out = std::collections::BTreeMap::new();
+    for (a, att) in attachments.iter().enumerate() {
+        let held: Vec<usize> = (0..2).filter(|&c| att.fixed[c]).collect();
+        if held.is_empty() {
+            continue;
+        }
+        let coef = att.coefficients();
+        let piv: Vec<usize> = coef
+            .iter()
+            .map(|t| t.0)
+            .filter(|&d| pivot[d] == Some(a))
+            .collect();
+        // Equations k: Σ_j P[k][j] u_piv[j] + Σ_r R[k][r] x_r = 0.
+        let mut p = [[0.0; 2]; 2];
+        let mut rest: Vec<Vec<(usize, f64)>> = vec![Vec::new(); held.len()];
+        for (k, &c) in held.iter().enumerate() {
+            for &(d, ad) in &coef {
+                if let Some(j) = piv.iter().position(|&q| q == d) {
+                    p[k][j] += ad[c];
+                } else if ad[c] != 0.0 {
+                    rest[k].push((reduced[d], ad[c]));
+                }
+            }
+        }
+        let inv = match held.len() {
+            1 => [[1.0 / p[0][0], 0.0], [0.0, 0.0]],
+            _ => {
+                let det = p[0][0] * p[1][1] - p[0][1] * p[1][0];
+                [
+                    [p[1][1] / det, -p[0][1] / det],
+                    [-p[1][0] / det, p[0][0] / det],
+                ]
+            }
+        };
+        if !inv.iter().flatten().all(|v| v.is_finite()) {
+            return Err(VerifyError::Outline(format!(
+                "the roller of port {} cannot be eliminated (singular coupling)",
+                att.name
+            )));
+        }
+        for (j, &d) in piv.iter().enumerate() {
+            let mut t: Vec<(usize, f64)> = Vec::new();
+            for (k, r) in rest.iter().enumerate() {
+                t.extend(r.iter().map(|&(x, v)| (x, -inv[j][k] * v)));
+            }
+            out.insert(d, t);
+        }
+    }
+    Ok(out)
 }
 
 /// Lower triangle of a symmetric sparse matrix in CSC.
@@ -290,6 +393,7 @@ impl FeModel {
                 )));
             }
             att.nodes = keep.iter().map(|&i| att.nodes[i]).collect();
+            att.positions = keep.iter().map(|&i| att.positions[i]).collect();
             att.weights = keep.iter().map(|&i| att.weights[i] / total).collect();
             // Ports may share boundary nodes unless one of them holds a component (its
             // roller is eliminated through those nodes).
@@ -304,15 +408,15 @@ impl FeModel {
                 owner[node] = a;
             }
         }
-        // Pivot DOFs of the rollers.
-        let mut pivot: Vec<Option<(usize, usize)>> = vec![None; nd];
+        // Pivot DOFs of the rollers: the held components of the node of largest weight.
+        let mut pivot: Vec<Option<usize>> = vec![None; nd];
         for (a, att) in attachments.iter().enumerate() {
             let p = (0..att.nodes.len())
                 .max_by(|&i, &j| att.weights[i].total_cmp(&att.weights[j]))
                 .expect("non-empty");
             for c in 0..2 {
                 if att.fixed[c] {
-                    pivot[2 * att.nodes[p] + c] = Some((a, p));
+                    pivot[2 * att.nodes[p] + c] = Some(a);
                 }
             }
         }
@@ -324,21 +428,15 @@ impl FeModel {
                 n += 1;
             }
         }
+        let eliminated = eliminate_rollers(&attachments, &pivot, &reduced)?;
         let mut offsets = Vec::with_capacity(nd + 1);
         let mut terms = Vec::with_capacity(nd);
         offsets.push(0);
-        for d in 0..nd {
-            if let Some((a, p)) = pivot[d] {
-                let att = &attachments[a];
-                let c = d % 2;
-                for (i, &node) in att.nodes.iter().enumerate() {
-                    let r = reduced[2 * node + c];
-                    if i != p && r != usize::MAX {
-                        terms.push((r, -att.weights[i] / att.weights[p]));
-                    }
-                }
-            } else if reduced[d] != usize::MAX {
-                terms.push((reduced[d], 1.0));
+        for (d, &r) in reduced.iter().enumerate() {
+            if let Some(t) = eliminated.get(&d) {
+                terms.extend_from_slice(t);
+            } else if r != usize::MAX {
+                terms.push((r, 1.0));
             }
             offsets.push(terms.len());
         }
@@ -399,17 +497,20 @@ impl FeModel {
         std::array::from_fn(|k| 2 * el[k / 2] + k % 2)
     }
 
-    /// `½ k ū_c²` of each port `a` with `springs[a] = [k_x, k_y]` as `(dofs, weights)` pairs.
+    /// `½ k u_{p,c}²` of each port `a` with `springs[a] = [k_x, k_y]` (a grounded spring or
+    /// a point mass on the port's displacement, module docs): the outer product of the port's
+    /// coefficients.
     fn port_entries(&self, per_port: &[[f64; 2]], out: &mut Vec<(usize, usize, f64)>) {
         for (att, k) in self.attachments.iter().zip(per_port) {
+            let a = att.coefficients();
             for (c, &kc) in k.iter().enumerate() {
                 if kc == 0.0 {
                     continue;
                 }
-                for (i, &ni) in att.nodes.iter().enumerate() {
-                    for (j, &nj) in att.nodes.iter().enumerate() {
-                        let v = kc * att.weights[i] * att.weights[j];
-                        self.scatter(&[2 * ni + c, 2 * nj + c], &[[v, 0.0], [0.0, 0.0]], out);
+                for &(di, ai) in &a {
+                    for &(dj, aj) in &a {
+                        let v = kc * ai[c] * aj[c];
+                        self.scatter(&[di, dj], &[[0.0, v], [0.0, 0.0]], out);
                     }
                 }
             }
@@ -422,12 +523,13 @@ impl FeModel {
     fn link_entries(&self, links: &[PortLink], out: &mut Vec<(usize, usize, f64)>) {
         for l in links {
             for &(a, ca, wa) in &l.terms {
+                let coef_a = self.attachments[a].coefficients();
                 for &(b, cb, wb) in &l.terms {
-                    let (att_a, att_b) = (&self.attachments[a], &self.attachments[b]);
-                    for (i, &ni) in att_a.nodes.iter().enumerate() {
-                        for (j, &nj) in att_b.nodes.iter().enumerate() {
-                            let v = l.stiffness * wa * wb * att_a.weights[i] * att_b.weights[j];
-                            self.scatter(&[2 * ni + ca, 2 * nj + cb], &[[0.0, v], [0.0, 0.0]], out);
+                    let coef_b = self.attachments[b].coefficients();
+                    for &(di, ai) in &coef_a {
+                        for &(dj, bj) in &coef_b {
+                            let v = l.stiffness * wa * wb * ai[ca] * bj[cb];
+                            self.scatter(&[di, dj], &[[0.0, v], [0.0, 0.0]], out);
                         }
                     }
                 }
@@ -485,12 +587,12 @@ impl FeModel {
         rho0 * self.material.thickness * self.mesh.area()
     }
 
-    /// Reduced load of a force `f` on component `c` of port `a` (a uniform traction).
+    /// Reduced load of a force `f` on component `c` of port `a` (`Aᵀ f`: a uniform traction
+    /// and the moment that keeps its resultant at the port's point).
     pub fn port_load(&self, a: usize, c: usize, f: f64, rhs: &mut [f64]) {
-        let att = &self.attachments[a];
-        for (&node, w) in att.nodes.iter().zip(&att.weights) {
-            for &(r, coef) in self.terms(2 * node + c) {
-                rhs[r] += coef * w * f;
+        for (d, ad) in self.attachments[a].coefficients() {
+            for &(r, coef) in self.terms(d) {
+                rhs[r] += coef * ad[c] * f;
             }
         }
     }

@@ -387,9 +387,10 @@ fn check_held(model: &FeModel, specs: &[PortSpec], links: &[PortLink]) -> Result
                 || linked
             {
                 let mut per_part: std::collections::BTreeMap<usize, [f64; 3]> = Default::default();
-                for (&n, &w) in att.nodes.iter().zip(&att.weights) {
+                for (d, a) in att.coefficients() {
+                    let n = d / 2;
                     let r = per_part.entry(roots[n]).or_insert([0.0; 3]);
-                    let v = row(n, c, w);
+                    let v = row(n, d % 2, a[c]);
                     for k in 0..3 {
                         r[k] += v[k];
                     }
