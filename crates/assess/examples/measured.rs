@@ -79,6 +79,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &bench.twin,
         bench.setup.rig.sample_time,
         bench.setup.rig.delay,
+        &bench.setup.rig.amplifier,
         &bench.setup.rig.sensor,
     )?;
     println!("f Hz | measured H11 H22 (std) | loop model | exact linear loop (score only)");

@@ -40,13 +40,22 @@ pub struct Bench {
     pub designs: Designs,
 }
 
-/// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay and the
-/// rig's sensor chain `sensor` (electronics and anti-aliasing filter) before the sampler.
-pub fn modal_plant(twin: &Twin, t: f64, delay: usize, sensor: &SensorParams) -> Result<ModalPlant> {
-    Ok(ModalPlant::with_sensor(
+/// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay, the
+/// amplifier's first-order small-signal response (`amplifier`'s bandwidth; its limits do not
+/// enter a linear loop) after the hold and the rig's sensor chain `sensor` (electronics and
+/// anti-aliasing filter) before the sampler: the loop the controller runs in, linearized.
+pub fn modal_plant(
+    twin: &Twin,
+    t: f64,
+    delay: usize,
+    amplifier: &AmplifierParams,
+    sensor: &SensorParams,
+) -> Result<ModalPlant> {
+    Ok(ModalPlant::with_chain(
         twin.modal.plant_modes(),
         t,
         delay,
+        amplifier.bandwidth,
         sensor,
     )?)
 }
@@ -70,6 +79,7 @@ impl Bench {
             &twin,
             setup.rig.sample_time,
             setup.rig.delay,
+            &setup.rig.amplifier,
             &setup.rig.sensor,
         )?;
         let nyquist = 0.5 / setup.controller.observer.sample_time;
@@ -201,6 +211,7 @@ impl Bench {
             &self.twin,
             self.setup.rig.sample_time,
             delay,
+            &self.setup.rig.amplifier,
             &self.setup.rig.sensor,
         )?;
         Ok(loop_margins(&plant, p, &self.tuning.margins)?)
@@ -219,14 +230,18 @@ pub struct LinearLoop<'a> {
 }
 
 impl LinearLoop<'_> {
-    /// The linear loop of the rig with `delay` samples: ideal amplifier, no PEA (x_nom
-    /// applied directly), the rig's sensor chain (electronics and anti-aliasing filter)
+    /// The linear loop of the rig with `delay` samples: the amplifier's first-order
+    /// small-signal response (its bandwidth, not its limits), no PEA (x_nom through the
+    /// amplifier's response), the rig's sensor chain (electronics and anti-aliasing filter)
     /// without noise, no creep or floor.
     pub fn linear_rig(&self, delay: usize) -> RigParams {
         let mut r = self.setup.rig.clone();
         r.delay = delay;
-        r.actuator = PlantActuator::Ideal;
-        r.amplifier = AmplifierParams::ideal();
+        r.actuator = PlantActuator::Amplified;
+        r.amplifier = AmplifierParams {
+            bandwidth: self.setup.rig.amplifier.bandwidth,
+            ..AmplifierParams::ideal()
+        };
         r.sensor.flicker_corner = 0.0;
         r.creep.factor = 0.0;
         r.floor.velocity_rms = 0.0;

@@ -30,8 +30,14 @@ fn bench() -> Bench {
 fn injection_equals_transfer_function_for_the_pi_notch() {
     let mut b = bench();
     b.setup.rig.substeps = 80;
-    let plant =
-        flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, &b.setup.rig.sensor).unwrap();
+    let plant = flexstage_assess::bench::modal_plant(
+        &b.twin,
+        1e-4,
+        1,
+        &b.setup.rig.amplifier,
+        &b.setup.rig.sensor,
+    )
+    .unwrap();
     assert!(plant.sample_time() == 1e-4);
     let p = b.linear_params(&PI_NOTCH_FF).unwrap().unwrap();
     let (probe, design) = (b.probe(), b.design(&PI_NOTCH_FF).unwrap());
@@ -42,7 +48,9 @@ fn injection_equals_transfer_function_for_the_pi_notch() {
             let expect = loop_response(&plant, &p, f)[axis];
             if f == 20.0 {
                 let ideal = flexstage_sim::rig::SensorParams::ideal();
-                let bare = flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, &ideal).unwrap();
+                let amp = &b.setup.rig.amplifier;
+                let bare =
+                    flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, amp, &ideal).unwrap();
                 let e0 = loop_response(&bare, &p, f)[axis];
                 let d = (measured.arg() - expect.arg()).to_degrees();
                 assert!(d.abs() < 0.05, "axis {axis}: {d}° off at 20 Hz");
@@ -122,9 +130,10 @@ fn rig_sensor_chain_equals_its_sampled_transfer_function() {
     b.setup.rig.sensor.anti_alias = 3000.0;
     let sensor = b.setup.rig.sensor;
     let t = 1e-4;
-    let filtered = flexstage_assess::bench::modal_plant(&b.twin, t, 0, &sensor).unwrap();
+    let amp = b.setup.rig.amplifier;
+    let filtered = flexstage_assess::bench::modal_plant(&b.twin, t, 0, &amp, &sensor).unwrap();
     let ideal =
-        flexstage_assess::bench::modal_plant(&b.twin, t, 0, &SensorParams::ideal()).unwrap();
+        flexstage_assess::bench::modal_plant(&b.twin, t, 0, &amp, &SensorParams::ideal()).unwrap();
     for f in [20.0, 700.0, 2500.0, 4000.0] {
         let measure = |with_sensor: bool| {
             let mut rig = b.probe().linear_rig(0);

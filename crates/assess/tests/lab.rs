@@ -34,7 +34,14 @@ fn lab_measurement_of_the_linear_loop_is_the_exact_sampled_loop() {
     };
     let (bench, m) = Bench::measured(setup, twin, Default::default(), &lab).unwrap();
     let rig = &bench.setup.rig;
-    let exact = modal_plant(&bench.twin, rig.sample_time, rig.delay, &rig.sensor).unwrap();
+    let exact = modal_plant(
+        &bench.twin,
+        rig.sample_time,
+        rig.delay,
+        &rig.amplifier,
+        &rig.sensor,
+    )
+    .unwrap();
     let top = m
         .response
         .lines()
