@@ -116,13 +116,16 @@ impl Bench {
     /// (`flexstage_identify::measured::ZFit`), the backstepping's model fitted to that loop
     /// model's response fit (`ZFit::response_fit`). The backstepping's gains are not sized
     /// by margins here (the only probe, [`LinearLoop`], runs on the twin's exact linear
-    /// loop): it keeps the full gains. The twin stays on the bench to score the designs.
+    /// loop): it keeps the full gains. The linear designs allow for the measurement's
+    /// uncertainty: `tuning`'s margin targets are raised by [`crate::lab::LabParams::allowing`]
+    /// (the bench keeps the raised tuning). The twin stays on the bench to score the designs.
     pub fn measured(
         mut setup: Setup,
         twin: Twin,
         tuning: TuningParams,
         lab: &crate::lab::LabParams,
     ) -> Result<(Bench, crate::lab::LabMeasurement)> {
+        let tuning = lab.allowing(&tuning)?;
         let measured = crate::lab::measure(&twin, &setup, lab)?;
         let fit = measured.model.response_fit(RESPONSE_SHARE);
         let stage = Stage::new(
