@@ -18,12 +18,14 @@ fn bench() -> Bench {
 }
 
 /// Reference: the analytic loop-at-a-time return ratio of a linear controller (its discrete
-/// transfer function on the twin's exact ZOH modal response with the rig's sensor chain
-/// before the sampler, one sample of delay). Goal: sine injection into the running closed
-/// loop (the method used for the nonlinear controllers) measures the same ratio, within 1 %,
-/// from 20 Hz to 4 kHz; at 20 Hz its phase is the model's to 0.05°, 3° away from the loop
-/// without the sensor filter (the filter acts on the modes above Nyquist before they fold
-/// down: the "3° at 20 Hz" of the first twin study); and the tuned baselines meet 6 dB / 40°. The rig
+/// transfer function on the twin's exact ZOH modal response with the amplifier's response
+/// after the hold and the rig's sensor chain before the sampler, one sample of delay). Goal:
+/// sine injection into the running closed loop (the method used for the nonlinear
+/// controllers) measures the same ratio, within 1 %, from 20 Hz to 4 kHz; at 20 Hz its phase
+/// is the model's to 0.05°, 3.3° away from the loop without the amplifier and the sensor
+/// chain (they act on the modes above Nyquist before they fold down: the "3° at 20 Hz" of
+/// the first twin study; with the amplifier in, the sensor filter's own share is 0.03°); and
+/// the tuned baselines meet 6 dB / 40°. The rig
 /// runs 80 substeps: its sensor chain interpolates the output within a substep at O(h³),
 /// and at the default 20 it is 3 % off the exact ratio at 2.5 kHz (|L| = 0.08), 5e-4 at 80.
 #[test]
@@ -48,15 +50,16 @@ fn injection_equals_transfer_function_for_the_pi_notch() {
             let expect = loop_response(&plant, &p, f)[axis];
             if f == 20.0 {
                 let ideal = flexstage_sim::rig::SensorParams::ideal();
-                let amp = &b.setup.rig.amplifier;
+                let amp = flexstage_sim::rig::AmplifierParams::ideal();
                 let bare =
-                    flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, amp, &ideal).unwrap();
+                    flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, &amp, &ideal).unwrap();
                 let e0 = loop_response(&bare, &p, f)[axis];
                 let d = (measured.arg() - expect.arg()).to_degrees();
                 assert!(d.abs() < 0.05, "axis {axis}: {d}° off at 20 Hz");
                 if axis == 0 {
                     let off = (e0.arg() - expect.arg()).to_degrees();
-                    assert!(off.abs() > 2.0, "the filter's share at 20 Hz: {off}°");
+                    println!("the chain's share at 20 Hz: {off}°");
+                    assert!(off.abs() > 2.0, "the chain's share at 20 Hz: {off}°");
                 }
             }
             assert!(
