@@ -120,13 +120,26 @@ impl Bench {
     /// uncertainty: `tuning`'s margin targets are raised by [`crate::lab::LabParams::allowing`]
     /// (the bench keeps the raised tuning). The twin stays on the bench to score the designs.
     pub fn measured(
-        mut setup: Setup,
+        setup: Setup,
         twin: Twin,
         tuning: TuningParams,
         lab: &crate::lab::LabParams,
     ) -> Result<(Bench, crate::lab::LabMeasurement)> {
-        let tuning = lab.allowing(&tuning)?;
         let measured = crate::lab::measure(&twin, &setup, lab)?;
+        let bench = Bench::from_measurement(setup, twin, tuning, lab, &measured)?;
+        Ok((bench, measured))
+    }
+
+    /// [`Bench::measured`] from a measurement already made (`measured`, e.g. read back from
+    /// its file): the same designs, from `measured` and `lab`'s allowance alone.
+    pub fn from_measurement(
+        mut setup: Setup,
+        twin: Twin,
+        tuning: TuningParams,
+        lab: &crate::lab::LabParams,
+        measured: &crate::lab::LabMeasurement,
+    ) -> Result<Bench> {
+        let tuning = lab.allowing(&tuning)?;
         let fit = measured.model.response_fit(RESPONSE_SHARE);
         let stage = Stage::new(
             &setup,
@@ -139,14 +152,13 @@ impl Bench {
         let (model, coupling) = stage.controller_model();
         drop(stage);
         (setup.controller.model, setup.controller.coupling) = (model, coupling);
-        let bench = Bench {
+        Ok(Bench {
             setup,
             twin,
             tuning,
             identified: Some(fit),
             designs,
-        };
-        Ok((bench, measured))
+        })
     }
 
     /// The design of `c` on this bench.

@@ -106,8 +106,15 @@ pub fn lab_logs(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<([LabLog; 2
 pub fn measure(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<LabMeasurement> {
     let ([a, b], plan) = lab_logs(twin, setup, p)?;
     let response = MeasuredResponse::from_multisine([&a, &b], &plan)?;
-    let model = ZFit::fit(&response, &p.fit)?;
-    Ok(LabMeasurement { response, model })
+    LabMeasurement::from_response(response, &p.fit)
+}
+
+impl LabMeasurement {
+    /// A measured `response` (from the rig or its file) with its loop model fitted by `fit`.
+    pub fn from_response(response: MeasuredResponse, fit: &FitParams) -> Result<LabMeasurement> {
+        let model = ZFit::fit(&response, fit)?;
+        Ok(LabMeasurement { response, model })
+    }
 }
 
 #[cfg(test)]
