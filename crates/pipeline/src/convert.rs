@@ -207,26 +207,6 @@ pub(crate) fn scan_rows(points: &[SweepPoint]) -> Vec<ScanRow> {
         .collect()
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn finding_names_are_the_verifications_serde_names() {
-        // Reference: flexstage-verify's `#[serde(rename_all = "snake_case")]`.
-        use flexstage_verify::{FindingKind, Severity};
-        for (k, name) in [
-            (FindingKind::Island, "island"),
-            (FindingKind::ThinLigament, "thin_ligament"),
-            (FindingKind::PocketTooSmall, "pocket_too_small"),
-        ] {
-            assert_eq!(snake(&format!("{k:?}")), name);
-            assert_eq!(serde_json::to_value(k).unwrap(), name);
-        }
-        assert_eq!(snake(&format!("{:?}", Severity::Error)), "error");
-    }
-}
-
 /// The typed rows of a measured response's file (`docs/formats.md`), value for value.
 pub fn measured_rows(
     r: &flexstage_identify::measured::MeasuredResponse,
@@ -257,4 +237,24 @@ pub fn measured_rows(
             })
             .collect(),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn finding_names_are_the_verifications_serde_names() {
+        // Reference: flexstage-verify's `#[serde(rename_all = "snake_case")]`.
+        use flexstage_verify::{FindingKind, Severity};
+        for (k, name) in [
+            (FindingKind::Island, "island"),
+            (FindingKind::ThinLigament, "thin_ligament"),
+            (FindingKind::PocketTooSmall, "pocket_too_small"),
+        ] {
+            assert_eq!(snake(&format!("{k:?}")), name);
+            assert_eq!(serde_json::to_value(k).unwrap(), name);
+        }
+        assert_eq!(snake(&format!("{:?}", Severity::Error)), "error");
+    }
 }
