@@ -40,13 +40,22 @@ pub struct Bench {
     pub designs: Designs,
 }
 
-/// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay and the
-/// rig's sensor chain `sensor` (electronics and anti-aliasing filter) before the sampler.
-pub fn modal_plant(twin: &Twin, t: f64, delay: usize, sensor: &SensorParams) -> Result<ModalPlant> {
-    Ok(ModalPlant::with_sensor(
+/// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay, the
+/// amplifier's first-order small-signal response (`amplifier`'s bandwidth; its limits do not
+/// enter a linear loop) after the hold and the rig's sensor chain `sensor` (electronics and
+/// anti-aliasing filter) before the sampler: the loop the controller runs in, linearized.
+pub fn modal_plant(
+    twin: &Twin,
+    t: f64,
+    delay: usize,
+    amplifier: &AmplifierParams,
+    sensor: &SensorParams,
+) -> Result<ModalPlant> {
+    Ok(ModalPlant::with_chain(
         twin.modal.plant_modes(),
         t,
         delay,
+        amplifier.bandwidth,
         sensor,
     )?)
 }
@@ -70,6 +79,7 @@ impl Bench {
             &twin,
             setup.rig.sample_time,
             setup.rig.delay,
+            &setup.rig.amplifier,
             &setup.rig.sensor,
         )?;
         let nyquist = 0.5 / setup.controller.observer.sample_time;
@@ -106,14 +116,30 @@ impl Bench {
     /// (`flexstage_identify::measured::ZFit`), the backstepping's model fitted to that loop
     /// model's response fit (`ZFit::response_fit`). The backstepping's gains are not sized
     /// by margins here (the only probe, [`LinearLoop`], runs on the twin's exact linear
-    /// loop): it keeps the full gains. The twin stays on the bench to score the designs.
+    /// loop): it keeps the full gains. The linear designs allow for the measurement's
+    /// uncertainty: `tuning`'s margin targets are raised by [`crate::lab::LabParams::allowing`]
+    /// (the bench keeps the raised tuning). The twin stays on the bench to score the designs.
     pub fn measured(
-        mut setup: Setup,
+        setup: Setup,
         twin: Twin,
         tuning: TuningParams,
         lab: &crate::lab::LabParams,
     ) -> Result<(Bench, crate::lab::LabMeasurement)> {
         let measured = crate::lab::measure(&twin, &setup, lab)?;
+        let bench = Bench::from_measurement(setup, twin, tuning, lab, &measured)?;
+        Ok((bench, measured))
+    }
+
+    /// [`Bench::measured`] from a measurement already made (`measured`, e.g. read back from
+    /// its file): the same designs, from `measured` and `lab`'s allowance alone.
+    pub fn from_measurement(
+        mut setup: Setup,
+        twin: Twin,
+        tuning: TuningParams,
+        lab: &crate::lab::LabParams,
+        measured: &crate::lab::LabMeasurement,
+    ) -> Result<Bench> {
+        let tuning = lab.allowing(&tuning)?;
         let fit = measured.model.response_fit(RESPONSE_SHARE);
         let stage = Stage::new(
             &setup,
@@ -126,14 +152,13 @@ impl Bench {
         let (model, coupling) = stage.controller_model();
         drop(stage);
         (setup.controller.model, setup.controller.coupling) = (model, coupling);
-        let bench = Bench {
+        Ok(Bench {
             setup,
             twin,
             tuning,
             identified: Some(fit),
             designs,
-        };
-        Ok((bench, measured))
+        })
     }
 
     /// The design of `c` on this bench.
@@ -201,6 +226,7 @@ impl Bench {
             &self.twin,
             self.setup.rig.sample_time,
             delay,
+            &self.setup.rig.amplifier,
             &self.setup.rig.sensor,
         )?;
         Ok(loop_margins(&plant, p, &self.tuning.margins)?)
@@ -219,14 +245,18 @@ pub struct LinearLoop<'a> {
 }
 
 impl LinearLoop<'_> {
-    /// The linear loop of the rig with `delay` samples: ideal amplifier, no PEA (x_nom
-    /// applied directly), the rig's sensor chain (electronics and anti-aliasing filter)
+    /// The linear loop of the rig with `delay` samples: the amplifier's first-order
+    /// small-signal response (its bandwidth, not its limits), no PEA (x_nom through the
+    /// amplifier's response), the rig's sensor chain (electronics and anti-aliasing filter)
     /// without noise, no creep or floor.
     pub fn linear_rig(&self, delay: usize) -> RigParams {
         let mut r = self.setup.rig.clone();
         r.delay = delay;
-        r.actuator = PlantActuator::Ideal;
-        r.amplifier = AmplifierParams::ideal();
+        r.actuator = PlantActuator::Amplified;
+        r.amplifier = AmplifierParams {
+            bandwidth: self.setup.rig.amplifier.bandwidth,
+            ..AmplifierParams::ideal()
+        };
         r.sensor.flicker_corner = 0.0;
         r.creep.factor = 0.0;
         r.floor.velocity_rms = 0.0;

@@ -13,7 +13,9 @@ use flexstage_identify::measured::{
 };
 use flexstage_twin::Twin;
 
-use crate::error::Result;
+use flexstage_control::tuning::TuningParams;
+
+use crate::error::{Result, check};
 
 /// Settings of the lab measurement.
 #[derive(Debug, Clone, PartialEq)]
@@ -29,6 +31,27 @@ pub struct LabParams {
     /// this compensation, so that the command is the x_nom the controllers write. Default
     /// [`Compensation::Inverse`], as `track` runs them.
     pub compensation: Compensation,
+    /// Relative uncertainty ε of the measured loop the designs allow for, 0 ≤ ε < 0.5
+    /// (default 0.03): the linear designs are tuned to the gain margin raised by
+    /// 20·log10(1 + ε) dB and the phase margin raised by asin(ε) (a loop off its model by a
+    /// factor within 1 ± ε, in gain and direction, keeps the targets). The 3 % cover the
+    /// measured gap between the rig and its linearization (1.1–1.8 %: the PEAs' small-signal
+    /// gain under the inverse compensation) and the noise (std ≤ 1e-4 of |H| near the
+    /// crossovers).
+    pub uncertainty: f64,
+}
+
+impl LabParams {
+    /// The tuning `tuning` with its margin targets raised by the allowance for the
+    /// measurement's uncertainty ([`LabParams::uncertainty`]); errors name the field.
+    pub fn allowing(&self, tuning: &TuningParams) -> Result<TuningParams> {
+        let u = self.uncertainty;
+        check("lab.uncertainty", u, (0.0..0.5).contains(&u), "0 ≤ ε < 0.5")?;
+        let mut t = tuning.clone();
+        t.gain_margin_db += 20.0 * u.ln_1p() / std::f64::consts::LN_10;
+        t.phase_margin_deg += u.asin().to_degrees();
+        Ok(t)
+    }
 }
 
 impl Default for LabParams {
@@ -38,6 +61,7 @@ impl Default for LabParams {
             fit: FitParams::default(),
             noise: true,
             compensation: Compensation::Inverse,
+            uncertainty: 0.03,
         }
     }
 }
@@ -82,6 +106,38 @@ pub fn lab_logs(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<([LabLog; 2
 pub fn measure(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<LabMeasurement> {
     let ([a, b], plan) = lab_logs(twin, setup, p)?;
     let response = MeasuredResponse::from_multisine([&a, &b], &plan)?;
-    let model = ZFit::fit(&response, &p.fit)?;
-    Ok(LabMeasurement { response, model })
+    LabMeasurement::from_response(response, &p.fit)
+}
+
+impl LabMeasurement {
+    /// A measured `response` (from the rig or its file) with its loop model fitted by `fit`.
+    pub fn from_response(response: MeasuredResponse, fit: &FitParams) -> Result<LabMeasurement> {
+        let model = ZFit::fit(&response, fit)?;
+        Ok(LabMeasurement { response, model })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reference: by hand, ε = 3 %: 20·log10(1.03) = 0.25674 dB and asin(0.03) = 1.71913°.
+    /// Goal: the allowance raises the targets by exactly that and nothing else; ε outside
+    /// [0, 0.5) or NaN is refused naming the field.
+    #[test]
+    fn allowance_raises_the_targets_by_the_uncertainty() {
+        let base = TuningParams::default();
+        let t = LabParams::default().allowing(&base).unwrap();
+        assert!((t.gain_margin_db - base.gain_margin_db - 0.256_744_4).abs() < 1e-6);
+        assert!((t.phase_margin_deg - base.phase_margin_deg - 1.719_131).abs() < 1e-5);
+        assert_eq!(t.zero_ratios, base.zero_ratios);
+        for bad in [-0.01, 0.5, f64::NAN] {
+            let p = LabParams {
+                uncertainty: bad,
+                ..LabParams::default()
+            };
+            let e = p.allowing(&base).unwrap_err().to_string();
+            assert!(e.contains("lab.uncertainty"), "{e}");
+        }
+    }
 }

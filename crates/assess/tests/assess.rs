@@ -18,20 +18,28 @@ fn bench() -> Bench {
 }
 
 /// Reference: the analytic loop-at-a-time return ratio of a linear controller (its discrete
-/// transfer function on the twin's exact ZOH modal response with the rig's sensor chain
-/// before the sampler, one sample of delay). Goal: sine injection into the running closed
-/// loop (the method used for the nonlinear controllers) measures the same ratio, within 1 %,
-/// from 20 Hz to 4 kHz; at 20 Hz its phase is the model's to 0.05°, 3° away from the loop
-/// without the sensor filter (the filter acts on the modes above Nyquist before they fold
-/// down: the "3° at 20 Hz" of the first twin study); and the tuned baselines meet 6 dB / 40°. The rig
+/// transfer function on the twin's exact ZOH modal response with the amplifier's response
+/// after the hold and the rig's sensor chain before the sampler, one sample of delay). Goal:
+/// sine injection into the running closed loop (the method used for the nonlinear
+/// controllers) measures the same ratio, within 1 %, from 20 Hz to 4 kHz; at 20 Hz its phase
+/// is the model's to 0.05°, 3.3° away from the loop without the amplifier and the sensor
+/// chain (they act on the modes above Nyquist before they fold down: the "3° at 20 Hz" of
+/// the first twin study; with the amplifier in, the sensor filter's own share is 0.03°); and
+/// the tuned baselines meet 6 dB / 40°. The rig
 /// runs 80 substeps: its sensor chain interpolates the output within a substep at O(h³),
 /// and at the default 20 it is 3 % off the exact ratio at 2.5 kHz (|L| = 0.08), 5e-4 at 80.
 #[test]
 fn injection_equals_transfer_function_for_the_pi_notch() {
     let mut b = bench();
     b.setup.rig.substeps = 80;
-    let plant =
-        flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, &b.setup.rig.sensor).unwrap();
+    let plant = flexstage_assess::bench::modal_plant(
+        &b.twin,
+        1e-4,
+        1,
+        &b.setup.rig.amplifier,
+        &b.setup.rig.sensor,
+    )
+    .unwrap();
     assert!(plant.sample_time() == 1e-4);
     let p = b.linear_params(&PI_NOTCH_FF).unwrap().unwrap();
     let (probe, design) = (b.probe(), b.design(&PI_NOTCH_FF).unwrap());
@@ -42,13 +50,16 @@ fn injection_equals_transfer_function_for_the_pi_notch() {
             let expect = loop_response(&plant, &p, f)[axis];
             if f == 20.0 {
                 let ideal = flexstage_sim::rig::SensorParams::ideal();
-                let bare = flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, &ideal).unwrap();
+                let amp = flexstage_sim::rig::AmplifierParams::ideal();
+                let bare =
+                    flexstage_assess::bench::modal_plant(&b.twin, 1e-4, 1, &amp, &ideal).unwrap();
                 let e0 = loop_response(&bare, &p, f)[axis];
                 let d = (measured.arg() - expect.arg()).to_degrees();
                 assert!(d.abs() < 0.05, "axis {axis}: {d}° off at 20 Hz");
                 if axis == 0 {
                     let off = (e0.arg() - expect.arg()).to_degrees();
-                    assert!(off.abs() > 2.0, "the filter's share at 20 Hz: {off}°");
+                    println!("the chain's share at 20 Hz: {off}°");
+                    assert!(off.abs() > 2.0, "the chain's share at 20 Hz: {off}°");
                 }
             }
             assert!(
@@ -122,9 +133,10 @@ fn rig_sensor_chain_equals_its_sampled_transfer_function() {
     b.setup.rig.sensor.anti_alias = 3000.0;
     let sensor = b.setup.rig.sensor;
     let t = 1e-4;
-    let filtered = flexstage_assess::bench::modal_plant(&b.twin, t, 0, &sensor).unwrap();
+    let amp = b.setup.rig.amplifier;
+    let filtered = flexstage_assess::bench::modal_plant(&b.twin, t, 0, &amp, &sensor).unwrap();
     let ideal =
-        flexstage_assess::bench::modal_plant(&b.twin, t, 0, &SensorParams::ideal()).unwrap();
+        flexstage_assess::bench::modal_plant(&b.twin, t, 0, &amp, &SensorParams::ideal()).unwrap();
     for f in [20.0, 700.0, 2500.0, 4000.0] {
         let measure = |with_sensor: bool| {
             let mut rig = b.probe().linear_rig(0);

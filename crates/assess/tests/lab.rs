@@ -34,7 +34,14 @@ fn lab_measurement_of_the_linear_loop_is_the_exact_sampled_loop() {
     };
     let (bench, m) = Bench::measured(setup, twin, Default::default(), &lab).unwrap();
     let rig = &bench.setup.rig;
-    let exact = modal_plant(&bench.twin, rig.sample_time, rig.delay, &rig.sensor).unwrap();
+    let exact = modal_plant(
+        &bench.twin,
+        rig.sample_time,
+        rig.delay,
+        &rig.amplifier,
+        &rig.sensor,
+    )
+    .unwrap();
     let top = m
         .response
         .lines()
@@ -57,5 +64,74 @@ fn lab_measurement_of_the_linear_loop_is_the_exact_sampled_loop() {
         let margins = bench.analytic_margins(c, rig.delay).unwrap().unwrap();
         println!("{c}: {margins:?}");
         assert!(margins.iter().all(|m| m.gain_db > 0.0 && m.phase_deg > 0.0));
+    }
+}
+
+/// The largest |measured − model| over every line and entry, over the largest measured entry.
+fn worst_gap(m: &flexstage_identify::measured::MeasuredResponse, model: &dyn LoopPlant) -> f64 {
+    let top = m
+        .lines()
+        .iter()
+        .flat_map(|l| l.h.iter().flatten())
+        .map(|v| v.norm())
+        .fold(0.0, f64::max);
+    let mut worst = 0.0f64;
+    for l in m.lines() {
+        let h = model.response(l.f);
+        for (row, model_row) in l.h.iter().zip(&h) {
+            for (v, e) in row.iter().zip(model_row) {
+                worst = worst.max((v - e).norm() / top);
+            }
+        }
+    }
+    worst
+}
+
+/// Reference: the scoring loop (`modal_plant`: the twin's modes sampled exactly with the
+/// amplifier's first-order response after the hold and the sensor chain before the sampler).
+/// Goal: measured noise-free through the FULL rig (amplifier, hysteretic PEAs under the
+/// inverse compensation, creep) at 10 kHz, the response is that loop to 3 % of the largest
+/// entry at every line (the residual is the PEAs' small-signal gain under the compensation,
+/// about 1–2 %), while the loop without the amplifier is more than 10 % off (the amplifier
+/// attenuates the hold's image that excites the folded modes). The designs from the
+/// measurement meet 6 dB / 40° on the scoring loop.
+#[test]
+fn full_rig_measurement_agrees_with_the_scoring_loop_only_with_the_amplifier() {
+    let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
+    let twin = flexstage_twin::Twin::from_scenario(&s, &rho).unwrap();
+    let setup = Setup::from_scenario(&s);
+    assert!(setup.rig.amplifier.bandwidth > 0.0);
+    let lab = LabParams {
+        noise: false,
+        ..LabParams::default()
+    };
+    let (bench, m) = Bench::measured(setup, twin, Default::default(), &lab).unwrap();
+    let rig = &bench.setup.rig;
+    let exact = modal_plant(
+        &bench.twin,
+        rig.sample_time,
+        rig.delay,
+        &rig.amplifier,
+        &rig.sensor,
+    )
+    .unwrap();
+    let ideal = flexstage_sim::rig::AmplifierParams::ideal();
+    let bare = modal_plant(&bench.twin, rig.sample_time, rig.delay, &ideal, &rig.sensor).unwrap();
+    let (with, without) = (
+        worst_gap(&m.response, &exact),
+        worst_gap(&m.response, &bare),
+    );
+    println!("full rig − scoring loop {with:.2e}, − the loop without the amplifier {without:.2e}");
+    assert!(with < 3e-2, "{with:e}");
+    assert!(without > 0.1, "{without:e}");
+    for c in [&PI_NOTCH_FF, &PID_FF] {
+        let margins = bench.analytic_margins(c, rig.delay).unwrap().unwrap();
+        println!("{c}: {margins:?}");
+        assert!(
+            margins
+                .iter()
+                .all(|m| m.gain_db >= 6.0 && m.phase_deg >= 40.0),
+            "{c}: {margins:?}"
+        );
     }
 }

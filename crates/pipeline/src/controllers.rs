@@ -196,7 +196,8 @@ pub enum Measurement<'a> {
 
 /// The coefficients files of the linear controllers of the registry designed from
 /// `response` alone (no design, no twin): its z-domain loop model (`ZFit`) to tune the
-/// PI + notch and the PID on, the model's response fit for the feed-forward, and the
+/// PI + notch and the PID on (to the margins raised by the default allowance for the
+/// measurement's uncertainty, `flexstage_assess::lab::LabParams::allowing`, as `track`), the model's response fit for the feed-forward, and the
 /// scenario's settings for the actuator stage (inverse compensation). A response read back
 /// from its file gives the same files, bitwise.
 pub fn measured_controller_files(
@@ -207,13 +208,9 @@ pub fn measured_controller_files(
     let fit = model.response_fit(RESPONSE_SHARE);
     let mut setup = Setup::from_scenario(scenario);
     setup.rig.sample_time = response.sample_time();
-    let stage = Stage::new(
-        &setup,
-        Some(&model),
-        Some(fit),
-        None,
-        TuningParams::default(),
-    );
+    // The same allowance for the measurement's uncertainty as `track`'s designs.
+    let tuning = flexstage_assess::lab::LabParams::default().allowing(&TuningParams::default())?;
+    let stage = Stage::new(&setup, Some(&model), Some(fit), None, tuning);
     let designs = Designs::for_stage(&stage)?;
     let actuator = setup.actuator(Compensation::Inverse);
     let mut files = Vec::new();

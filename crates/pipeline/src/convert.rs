@@ -207,6 +207,38 @@ pub(crate) fn scan_rows(points: &[SweepPoint]) -> Vec<ScanRow> {
         .collect()
 }
 
+/// The typed rows of a measured response's file (`docs/formats.md`), value for value.
+pub fn measured_rows(
+    r: &flexstage_identify::measured::MeasuredResponse,
+) -> flexstage_run::format::Rows<flexstage_run::files::measured::MeasuredLineRow> {
+    let ts = r.sample_time();
+    flexstage_run::format::Rows(
+        r.lines()
+            .iter()
+            .map(|l| flexstage_run::files::measured::MeasuredLineRow {
+                f: l.f,
+                re11: l.h[0][0].re,
+                im11: l.h[0][0].im,
+                re12: l.h[0][1].re,
+                im12: l.h[0][1].im,
+                re21: l.h[1][0].re,
+                im21: l.h[1][0].im,
+                re22: l.h[1][1].re,
+                im22: l.h[1][1].im,
+                coh11: l.coherence[0][0],
+                coh12: l.coherence[0][1],
+                coh21: l.coherence[1][0],
+                coh22: l.coherence[1][1],
+                sample_time: ts,
+                std11: l.std[0][0],
+                std12: l.std[0][1],
+                std21: l.std[1][0],
+                std22: l.std[1][1],
+            })
+            .collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -4,15 +4,14 @@
 //! depends on the study's seed and `i` alone (`flexstage_assess::montecarlo`).
 //!
 //! A study is set up from a run folder as `track` sets up its own study on the twin: the
-//! controllers tuned on the twin's sampled response, the backstepping from the identified
-//! response fit, the compensator from the identified PEAs ([`mod@crate::track`]).
+//! controllers designed from the twin measured in its rig at the controller's sample time,
+//! the compensator from the identified PEAs ([`mod@crate::track`]).
 //! [`MonteCarloStudy::inputs`] lists the files it reads, so that another process can rebuild
 //! it in a folder of its own.
 
 use flexstage_assess::Bench;
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, PlantResult, one_plant};
 use flexstage_control::registry::Controller;
-use flexstage_control::tuning::TuningParams;
 use flexstage_run::layout::{self, PeaIdentification};
 use flexstage_sim::trajectory::Reference;
 
@@ -42,11 +41,7 @@ impl MonteCarloStudy {
     ) -> Result<MonteCarloStudy> {
         params.validate()?;
         let Prepared {
-            setup,
-            sim,
-            identified,
-            plant,
-            ..
+            setup, sim, plant, ..
         } = prepare(folder, options, progress, None)?;
         let Simulated::Twin(twin) = sim else {
             return Err(PipelineError::Missing {
@@ -66,8 +61,8 @@ impl MonteCarloStudy {
         };
         let (reference, _) = Reference::from_scenario(first);
         crate::progress::check_stop(progress, "the study stopped before tuning", "")?;
-        progress.note("designing the controllers on the twin's sampled response");
-        let bench = Bench::with_identified(setup, *twin, TuningParams::default(), identified)?;
+        progress.note("designing the controllers from the twin measured in its rig");
+        let (bench, _) = crate::track::measured_bench(&setup, &twin, progress)?;
         Ok(MonteCarloStudy {
             bench,
             candidates: options.controllers.clone(),
@@ -83,7 +78,6 @@ impl MonteCarloStudy {
             layout::PLANT.to_string(),
             layout::design::DESIGN.to_string(),
             layout::stage::PARAMS.to_string(),
-            layout::stage::RESPONSE_FIT.to_string(),
         ];
         files.extend([1, 2].map(|pea| PeaIdentification { pea }.estimates()));
         files

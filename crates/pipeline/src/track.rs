@@ -18,7 +18,10 @@
 //!   scenario's `[hysteresis]`; the plant keeps its own (truth) PEAs, which only simulate
 //!   and score. [`TrackSummary::compensator`] says which were used.
 //! * **Controller's model**: [`TrackOptions::params`] if given; else the run's identified
-//!   parameters (`identify/stage/params.toml`) if the run has them; else the guess.
+//!   parameters (`identify/stage/params.toml`) if the run has them; else the guess. On the
+//!   twin the controllers are designed from its loop measured in its rig at the
+//!   controller's sample time (multisine with the scenario's noise, stored as
+//!   `measured_response.csv` of the result folder); the twin's truth only scores them.
 //! * **Folder**: `track/` for the default conditions (inverse compensation, the default
 //!   model, each trajectory's own duration); other conditions get their own folder
 //!   ([`TrackOptions::conditions`]), e.g. `track/compensation-off/` or
@@ -41,6 +44,7 @@ use std::path::{Path, PathBuf};
 use crate::scan::{ScanFrequency, scan_frequency};
 use flexstage_assess::Bench;
 use flexstage_assess::inject::InjectionParams;
+use flexstage_assess::lab::{LabMeasurement, LabParams};
 use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, monte_carlo};
 use flexstage_control::ControlError;
@@ -53,12 +57,13 @@ use flexstage_control::learning::{
 use flexstage_control::registry::{Controller, Design, Designs, Stage};
 use flexstage_control::tuning::TuningParams;
 use flexstage_figures::plot::{Figure, Series};
-use flexstage_identify::response::ResponseFit;
+use flexstage_identify::measured::MeasuredResponse;
 use flexstage_piezo::BoucWenParams;
+use flexstage_run::files::measured::MeasuredLineRow;
 use flexstage_run::files::pea::PeaEstimates;
-use flexstage_run::files::stage::{ResponseFitFile, StageParamsFile};
+use flexstage_run::files::stage::StageParamsFile;
 use flexstage_run::files::track::LEARNING_SUFFIX;
-use flexstage_run::format::Rows;
+use flexstage_run::format::{Format, Rows};
 use flexstage_run::layout::{self, Tracking};
 use flexstage_run::{RunDir, Table};
 use flexstage_sim::experiment::StageControl;
@@ -379,13 +384,16 @@ type Designed = (
     Vec<MarginRow>,
     Option<MonteCarlo>,
     Option<ScanFrequency>,
+    Option<Rows<MeasuredLineRow>>,
 );
 
-/// On the twin: designs every controller of the registry on its sampled frequency response
-/// with the rig's delay and sensor chain (`flexstage_assess::Bench`: the loop-shaping ones
-/// tuned by `flexstage_control::tuning`, the backstepping fitted to the response and sized by
-/// its margins; the controllers' model in `setup` becomes the one fitted to the response),
-/// measures every selected controller's margins and runs the Monte-Carlo study
+/// On the twin: measures its loop in its rig at the controller's sample time and designs
+/// every controller of the registry from that measurement alone ([`measured_bench`]:
+/// `flexstage_assess::Bench::from_measurement`, the loop-shaping ones tuned by
+/// `flexstage_control::tuning` on the measured loop model with the allowance for its
+/// uncertainty, the backstepping's model fitted to it; the controllers' model in `setup`
+/// becomes that fit), returns the measurement's file rows, scores every selected
+/// controller's margins on the twin's exact loop and runs the Monte-Carlo study
 /// (`flexstage_assess::montecarlo`, default settings, on the scenario's first trajectory),
 /// whose pass rates go into the margin rows, and the error against scan frequency
 /// ([`crate::scan`]). On the lumped plant the controllers are designed from the scenario's
@@ -393,7 +401,6 @@ type Designed = (
 /// `pid-ff` runs the scenario's gains.
 fn tune_and_margins(
     setup: &mut Setup,
-    identified: Option<ResponseFit>,
     sim: &Simulated,
     controllers: &[&'static Controller],
     scenario: &flexstage_scenario::Scenario,
@@ -409,14 +416,9 @@ fn tune_and_margins(
                 c.name
             ));
         }
-        return Ok((designs, Vec::new(), None, None));
+        return Ok((designs, Vec::new(), None, None, None));
     };
-    let bench = Bench::with_identified(
-        setup.clone(),
-        (**twin).clone(),
-        TuningParams::default(),
-        identified,
-    )?;
+    let (bench, measured) = measured_bench(setup, twin, progress)?;
     setup.controller = bench.setup.controller.clone();
     let mut rows = margins_table(
         &bench,
@@ -426,7 +428,7 @@ fn tune_and_margins(
         &InjectionParams::default(),
     )?;
     let Some(first) = scenario.trajectories.first() else {
-        return Ok((bench.designs, rows, None, None));
+        return Ok((bench.designs, rows, None, None, Some(measured)));
     };
     let (reference, _) = Reference::from_scenario(first);
     let t0 = std::time::Instant::now();
@@ -451,7 +453,46 @@ fn tune_and_margins(
             t0.elapsed().as_secs_f64()
         ));
     }
-    Ok((bench.designs, rows, Some(mc), scan))
+    Ok((bench.designs, rows, Some(mc), scan, Some(measured)))
+}
+
+/// The bench of the twin with every controller designed from its loop measured in its rig
+/// at the controller's sample time (`flexstage_assess::lab`, default settings: the
+/// multisine with the scenario's noise, commands through the inverse compensation) and from
+/// nothing of its truth: the measurement goes through the typed rows of its run file and
+/// the designs come from what the file holds. The twin stays on the bench to score.
+pub(crate) fn measured_bench(
+    setup: &Setup,
+    twin: &flexstage_twin::Twin,
+    progress: &dyn Progress,
+) -> Result<(Bench, Rows<MeasuredLineRow>)> {
+    let t0 = std::time::Instant::now();
+    let lab = LabParams::default();
+    let measured = flexstage_assess::lab::measure(twin, setup, &lab)?;
+    let rows = crate::convert::measured_rows(&measured.response);
+    let bytes = rows.encode().map_err(|reason| PipelineError::Format {
+        path: "the measured response".into(),
+        reason,
+    })?;
+    let response = MeasuredResponse::from_csv(&bytes[..], "the measured response")?;
+    let measured = LabMeasurement::from_response(response, &lab.fit)?;
+    let bench = Bench::from_measurement(
+        setup.clone(),
+        twin.clone(),
+        TuningParams::default(),
+        &lab,
+        &measured,
+    )?;
+    progress.note(&format!(
+        "the controllers designed from the twin measured in its rig ({} lines at {} Hz, loop \
+         model order {}, delay {}) in {:.1} s",
+        measured.response.lines().len(),
+        1.0 / setup.rig.sample_time,
+        measured.model.order(),
+        measured.model.delay(),
+        t0.elapsed().as_secs_f64()
+    ));
+    Ok((bench, rows))
 }
 
 /// The name of a controller's row, with [`LEARNING_SUFFIX`] under learning.
@@ -632,7 +673,6 @@ pub(crate) struct Prepared {
     pub compensator: [String; 2],
     pub warnings: Vec<String>,
     pub sim: Simulated,
-    pub identified: Option<ResponseFit>,
 }
 
 /// The set-up of `track` ([`Prepared`]), read from the run folder.
@@ -665,23 +705,6 @@ pub(crate) fn prepare(
     let compensator = identified_peas(folder, &mut setup)?;
     let mut warnings = Vec::new();
     let sim = simulated(folder, options, progress, prebuilt, &mut warnings)?;
-    // The response fit identified on the twin (else the fit of its exact modes).
-    let identified = match folder
-        .dir()
-        .load::<ResponseFitFile>(layout::stage::RESPONSE_FIT)?
-    {
-        Some(f) => Some(crate::stage_id::response_fit_of(
-            &f,
-            &folder.dir().path(layout::stage::RESPONSE_FIT),
-        )?),
-        None => None,
-    };
-    if identified.is_some() {
-        progress.note(&format!(
-            "the backstepping's model on the twin: the identified response fit ({})",
-            layout::stage::RESPONSE_FIT
-        ));
-    }
     Ok(Prepared {
         plant,
         setup,
@@ -689,7 +712,6 @@ pub(crate) fn prepare(
         compensator,
         warnings,
         sim,
-        identified,
     })
 }
 
@@ -717,7 +739,6 @@ pub fn track_on(
         compensator,
         mut warnings,
         sim,
-        identified,
     } = prepare(folder, options, progress, prebuilt)?;
     const STOPPED_HINT: &str = "its earlier results are unchanged; run track again";
     crate::progress::check_stop(progress, "track stopped before tuning", STOPPED_HINT)?;
@@ -725,9 +746,8 @@ pub fn track_on(
         Simulated::Twin(_) => PlantKind::Twin,
         Simulated::Lumped => PlantKind::Lumped,
     };
-    let (designs, margins, montecarlo, scan) = tune_and_margins(
+    let (designs, margins, montecarlo, scan, measured) = tune_and_margins(
         &mut setup,
-        identified,
         &sim,
         &options.controllers,
         &plant.scenario,
@@ -771,6 +791,9 @@ pub fn track_on(
     if !margins.is_empty() {
         let rows = crate::convert::margin_rows(&margins, dt);
         folder.dir().store(&out.margins(), Rows(rows))?;
+    }
+    if let Some(m) = measured {
+        folder.dir().store(&out.measured_response(), m)?;
     }
     if let Some(mc) = &montecarlo {
         let rows = crate::convert::montecarlo_rows(mc);
@@ -1275,5 +1298,32 @@ mod tests {
         o.allow_foreign_params = true;
         assert_eq!(model_source(&b, &o).unwrap(), ModelSource::File(p));
         std::fs::remove_dir_all(&base).unwrap();
+    }
+
+    /// Reference: the designs of `Bench::measured` from the same measurement in memory
+    /// (same twin, rig, seeds and lab settings). Goal: `track`'s designs, made from the
+    /// measurement after it went through its run file's typed rows and was read back as a
+    /// measured response file, are the same bitwise (the file loses nothing a design uses),
+    /// on the rhombus fixture.
+    #[test]
+    fn track_designs_from_its_measured_response_file_as_from_the_measurement() {
+        let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
+        let twin = flexstage_twin::Twin::from_scenario(&s, &rho).unwrap();
+        let setup = Setup::from_scenario(&s);
+        let (bench, rows) = measured_bench(&setup, &twin, &crate::progress::Silent).unwrap();
+        assert_eq!(rows.0.len(), 999);
+        let (direct, _) =
+            Bench::measured(setup, twin, TuningParams::default(), &LabParams::default()).unwrap();
+        for c in [
+            &flexstage_control::pi_notch::PI_NOTCH_FF,
+            &flexstage_control::pid::PID_FF,
+        ] {
+            let (a, b) = (
+                bench.linear_params(c).unwrap().unwrap(),
+                direct.linear_params(c).unwrap().unwrap(),
+            );
+            assert_eq!(format!("{a:?}"), format!("{b:?}"), "{c}");
+        }
+        assert_eq!(bench.identified, direct.identified);
     }
 }

@@ -368,6 +368,11 @@ impl Tracking {
     pub fn montecarlo(&self) -> String {
         format!("{}/montecarlo.csv", self.dir)
     }
+    /// The twin's loop as measured in its rig at the controller's sample time, the response
+    /// the controllers are designed from (`files::measured`).
+    pub fn measured_response(&self) -> String {
+        format!("{}/measured_response.csv", self.dir)
+    }
     /// RMS error against scan frequency (Lissajous 3:1), data.
     pub fn scan_frequency_csv(&self) -> String {
         format!("{}/scan_frequency.csv", self.dir)

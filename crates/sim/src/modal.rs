@@ -85,8 +85,33 @@ impl ModalPlant {
         delay: usize,
         sensor: &SensorParams,
     ) -> Result<ModalPlant> {
+        ModalPlant::with_chain(modes, t, delay, 0.0, sensor)
+    }
+
+    /// The plant of `modes` sampled at `t` \[s\] with `delay` samples of delay, the
+    /// amplifier's first-order small-signal response of bandwidth `amplifier` \[Hz\] (0 =
+    /// ideal) between the hold and the stage, and the sensor chain `sensor` before the
+    /// sampler. Every continuous filter sits in series between the hold and the sampler, so
+    /// the amplifier's pole −2πf_a joins the filter poles of the partial fractions and the
+    /// sampling stays exact (module docs).
+    pub fn with_chain(
+        modes: Vec<PlantMode>,
+        t: f64,
+        delay: usize,
+        amplifier: f64,
+        sensor: &SensorParams,
+    ) -> Result<ModalPlant> {
+        check(
+            "amplifier bandwidth",
+            amplifier,
+            amplifier >= 0.0,
+            ">= 0 Hz",
+        )?;
         let mut p = ModalPlant::new(modes, t, delay)?;
-        let filter = sensor.poles();
+        let mut filter = sensor.poles();
+        if amplifier > 0.0 {
+            filter.push(Complex::new(-std::f64::consts::TAU * amplifier, 0.0));
+        }
         if filter.is_empty() {
             return Ok(p);
         }
@@ -269,5 +294,60 @@ mod tests {
         assert!((h.arg() - analytic).abs() < 1e-12);
         let ideal = ModalPlant::with_sensor(vec![mode], t, 0, &SensorParams::ideal()).unwrap();
         assert_eq!(ideal.response(700.0), bare.response(700.0));
+    }
+
+    /// Reference: the ZOH discretization (`c2d`, Van Loan) of the augmented state space of
+    /// a 1 kHz-bandwidth first-order amplifier, one 8.99 kHz mode (folded to 1.01 kHz at
+    /// 10 kHz) and the sensor chain (15 kHz first order, 3 kHz 2nd-order Butterworth),
+    /// evaluated as C(zI − Φ)⁻¹Γ with one sample of delay. Goal: the partial-fraction
+    /// response of [`ModalPlant::with_chain`] equals it to 1e-9 (relative) from 1 Hz to
+    /// Nyquist; a zero bandwidth is [`ModalPlant::with_sensor`]; a negative one is refused.
+    #[test]
+    fn amplifier_in_the_chain_matches_augmented_c2d() {
+        use nalgebra::{DMatrix, DVector};
+        let (f0, zeta, t, fa) = (8990.0, 0.01, 1e-4, 1000.0);
+        let tau = std::f64::consts::TAU;
+        let w = tau * f0;
+        let mode = PlantMode {
+            frequency: f0,
+            damping: zeta,
+            input: [w * w, 0.0],
+            output: [1.0, 0.0],
+        };
+        let sensor = SensorParams {
+            bandwidth: 15_000.0,
+            flicker_corner: 0.0,
+            anti_alias: 3000.0,
+        };
+        let p = ModalPlant::with_chain(vec![mode], t, 1, fa, &sensor).unwrap();
+        let (wa, ws, wf) = (tau * fa, tau * 15_000.0, tau * 3000.0);
+        // States: amplifier output, η, η̇, electronics, filter output, its rate.
+        #[rustfmt::skip]
+        let a = DMatrix::from_row_slice(6, 6, &[
+            -wa, 0.0, 0.0, 0.0, 0.0, 0.0,
+            0.0, 0.0, 1.0, 0.0, 0.0, 0.0,
+            w * w, -w * w, -2.0 * zeta * w, 0.0, 0.0, 0.0,
+            0.0, ws, 0.0, -ws, 0.0, 0.0,
+            0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+            0.0, 0.0, 0.0, wf * wf, -wf * wf, -std::f64::consts::SQRT_2 * wf,
+        ]);
+        let b = DMatrix::from_row_slice(6, 1, &[wa, 0.0, 0.0, 0.0, 0.0, 0.0]);
+        let (phi, gam) = crate::linalg::c2d(&a, &b, t).unwrap();
+        for f in [1.0, 20.0, 300.0, 1010.0, 2700.0, 4000.0, 4990.0] {
+            let z = Complex::from_polar(1.0, tau * f * t);
+            let m = DMatrix::<Complex<f64>>::identity(6, 6) * z - phi.map(|v| Complex::new(v, 0.0));
+            let g = DVector::from_iterator(6, gam.iter().map(|&v| Complex::new(v, 0.0)));
+            let x = m.lu().solve(&g).unwrap();
+            let expect = x[4] / z;
+            let got = p.response(f)[0][0];
+            assert!(
+                (got - expect).norm() < 1e-9 * expect.norm(),
+                "f {f}: {got} vs {expect}"
+            );
+        }
+        let plain = ModalPlant::with_sensor(vec![mode], t, 1, &sensor).unwrap();
+        let zero = ModalPlant::with_chain(vec![mode], t, 1, 0.0, &sensor).unwrap();
+        assert_eq!(plain.response(1010.0), zero.response(1010.0));
+        assert!(ModalPlant::with_chain(vec![mode], t, 1, -1.0, &sensor).is_err());
     }
 }

@@ -44,6 +44,10 @@ pub enum PlantActuator {
     Hysteretic,
     /// The command's x_nom directly (no amplifier, no PEA: the linear plant of Eq. 36).
     Ideal,
+    /// The command's x_nom through the amplifiers' first-order small-signal response
+    /// ([`AmplifierParams::bandwidth`]; no slew, current or voltage limit) and no PEA: the
+    /// linear plant of Eq. 36 with the amplifier the rig has.
+    Amplified,
 }
 
 /// The high-voltage amplifier of one PEA.
@@ -805,7 +809,19 @@ impl Rig {
     /// at the start of the sample.
     fn actuate(&mut self, target: ([f64; 2], [f64; 2]), h: f64) {
         let n = self.params.substeps;
-        if self.params.actuator == PlantActuator::Ideal {
+        if self.params.actuator == PlantActuator::Amplified && self.amp_decay > 0.0 {
+            // x_nom follows the target as the amplifier's voltage does (first order).
+            for i in 0..2 {
+                let (goal, gap) = (target.1[i], self.x_nom[i] - target.1[i]);
+                self.path[0][i] = self.x_nom[i];
+                for k in 1..=n {
+                    self.path[k][i] = goal + gap * self.amp_powers[k];
+                }
+                self.x_nom[i] = self.path[n][i];
+            }
+            return;
+        }
+        if self.params.actuator != PlantActuator::Hysteretic {
             self.x_nom = target.1;
             self.path.iter_mut().for_each(|p| *p = target.1);
             return;
