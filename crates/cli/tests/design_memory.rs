@@ -52,6 +52,10 @@ fn vm_peak(path: &std::path::Path, out: &std::path::Path) -> f64 {
         .arg(out)
         .arg(path)
         .env("RAYON_NUM_THREADS", "2")
+        // One malloc arena: a thread's own arena reserves 64 MiB of address space or not,
+        // depending on which thread allocates first, and made VmPeak jump by ≈ 0.1 GiB
+        // between identical runs.
+        .env("MALLOC_ARENA_MAX", "1")
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()

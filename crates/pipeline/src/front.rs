@@ -13,9 +13,9 @@
 //!   symmetry, the stage's frequencies), the body-fitted verification of its exported outline
 //!   (frequency, stress, manufacturability, verdict), its digital twin (first resonance), and
 //!   the error against scan frequency of every controller `track` runs, designed exactly as
-//!   `track` designs them on that twin (`flexstage_assess::Bench`: the PI + notch and PID
-//!   tuned on the twin's sampled response, the backstepping from the exact modes' response
-//!   fit), including the scan speed the user names.
+//!   `track` designs them on that twin (every controller designed from the twin's loop
+//!   measured in its rig at the controller's rate, never from its exact modes), including
+//!   the scan speed the user names.
 //! * **Files** in `front/` ([`flexstage_run::layout::front`]): `front.csv`, `front.json`, the figure
 //!   `front.svg` (workspace against first resonance, each design's tracking error at the named
 //!   scan speed in the legend), and per design `d<k>/`: `design.json` (a design source for the
@@ -23,11 +23,9 @@
 
 use std::time::Instant;
 
-use flexstage_assess::Bench;
 use flexstage_assess::sweep::{self, SweepParams};
 use flexstage_control::experiment::Setup;
 use flexstage_control::registry::CONTROLLERS;
-use flexstage_control::tuning::TuningParams;
 use flexstage_figures::plot::{Figure, Legend, Series};
 use flexstage_run::Table;
 use flexstage_run::files::design::{DESIGN_VERSION, DesignFile};
@@ -378,12 +376,8 @@ fn assess_one(
         },
     )?;
     let plant = crate::plant::designed(s, reduced.params)?;
-    let bench = Bench::with_identified(
-        Setup::from_scenario(&plant),
-        twin,
-        TuningParams::default(),
-        None,
-    )?;
+    // The controllers designed from the twin measured in its rig, as `track` designs them.
+    let (bench, _) = crate::track::measured_bench(&Setup::from_scenario(&plant), &twin, progress)?;
     let Some(amplitude) = crate::scan::start_amplitude(s) else {
         return Ok(());
     };
