@@ -12,7 +12,9 @@
 use flexstage_assess::Bench;
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, PlantResult, one_plant};
 use flexstage_control::registry::Controller;
-use flexstage_run::layout::{self, PeaIdentification};
+use flexstage_run::files::measured::MeasuredLineRow;
+use flexstage_run::format::Rows;
+use flexstage_run::layout::{self, PeaIdentification, Tracking};
 use flexstage_sim::trajectory::Reference;
 
 use crate::error::{PipelineError, Result};
@@ -61,8 +63,20 @@ impl MonteCarloStudy {
         };
         let (reference, _) = Reference::from_scenario(first);
         crate::progress::check_stop(progress, "the study stopped before tuning", "")?;
-        progress.note("designing the controllers from the twin measured in its rig");
-        let (bench, _) = crate::track::measured_bench(&setup, &twin, progress)?;
+        // The run's own measurement when `track` stored one under these conditions (the
+        // designs from it are bitwise those from measuring again), else a new one.
+        let stored = Tracking::variant(&options.conditions(folder)).measured_response();
+        let bench = match folder.dir().load::<Rows<MeasuredLineRow>>(&stored)? {
+            Some(rows) => {
+                progress.note(&format!("designing the controllers from {stored}"));
+                let t0 = std::time::Instant::now();
+                crate::track::bench_from_rows(&setup, &twin, &rows, progress, t0)?
+            }
+            None => {
+                progress.note("designing the controllers from the twin measured in its rig");
+                crate::track::measured_bench(&setup, &twin, progress)?.0
+            }
+        };
         Ok(MonteCarloStudy {
             bench,
             candidates: options.controllers.clone(),
@@ -72,12 +86,14 @@ impl MonteCarloStudy {
     }
 
     /// The run-folder files [`MonteCarloStudy::of_run`] reads with the default options
-    /// (relative paths): a folder holding these and the scenario sets up the same study.
+    /// (relative paths; the measured response only when `track` stored one): a folder
+    /// holding these and the scenario sets up the same study.
     pub fn inputs() -> Vec<String> {
         let mut files = vec![
             layout::PLANT.to_string(),
             layout::design::DESIGN.to_string(),
             layout::stage::PARAMS.to_string(),
+            Tracking::main().measured_response(),
         ];
         files.extend([1, 2].map(|pea| PeaIdentification { pea }.estimates()));
         files

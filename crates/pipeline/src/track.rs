@@ -470,6 +470,20 @@ pub(crate) fn measured_bench(
     let lab = LabParams::default();
     let measured = flexstage_assess::lab::measure(twin, setup, &lab)?;
     let rows = crate::convert::measured_rows(&measured.response);
+    let bench = bench_from_rows(setup, twin, &rows, progress, t0)?;
+    Ok((bench, rows))
+}
+
+/// The bench of the twin with every controller designed from the measured response `rows`
+/// (what [`measured_bench`] measures and stores, or the run's stored file read back).
+pub(crate) fn bench_from_rows(
+    setup: &Setup,
+    twin: &flexstage_twin::Twin,
+    rows: &Rows<MeasuredLineRow>,
+    progress: &dyn Progress,
+    t0: std::time::Instant,
+) -> Result<Bench> {
+    let lab = LabParams::default();
     let bytes = rows.encode().map_err(|reason| PipelineError::Format {
         path: "the measured response".into(),
         reason,
@@ -492,7 +506,7 @@ pub(crate) fn measured_bench(
         measured.model.delay(),
         t0.elapsed().as_secs_f64()
     ));
-    Ok((bench, rows))
+    Ok(bench)
 }
 
 /// The name of a controller's row, with [`LEARNING_SUFFIX`] under learning.
@@ -1312,18 +1326,42 @@ mod tests {
         let setup = Setup::from_scenario(&s);
         let (bench, rows) = measured_bench(&setup, &twin, &crate::progress::Silent).unwrap();
         assert_eq!(rows.0.len(), 999);
+        // The rows stored in a run folder and loaded by a fresh session (what the
+        // Monte-Carlo study reads when `track` stored them).
+        let dir = std::env::temp_dir().join(format!("flexstage-measured-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let rel = Tracking::main().measured_response();
+        RunDir::create(&dir).unwrap().store(&rel, rows).unwrap();
+        let loaded = RunDir::create(&dir)
+            .unwrap()
+            .load::<Rows<MeasuredLineRow>>(&rel)
+            .unwrap()
+            .unwrap();
+        let stored = bench_from_rows(
+            &setup,
+            &twin,
+            &loaded,
+            &crate::progress::Silent,
+            std::time::Instant::now(),
+        )
+        .unwrap();
+        std::fs::remove_dir_all(&dir).unwrap();
         let (direct, _) =
             Bench::measured(setup, twin, TuningParams::default(), &LabParams::default()).unwrap();
         for c in [
             &flexstage_control::pi_notch::PI_NOTCH_FF,
             &flexstage_control::pid::PID_FF,
         ] {
-            let (a, b) = (
-                bench.linear_params(c).unwrap().unwrap(),
-                direct.linear_params(c).unwrap().unwrap(),
-            );
-            assert_eq!(format!("{a:?}"), format!("{b:?}"), "{c}");
+            let b = format!("{:?}", direct.linear_params(c).unwrap().unwrap());
+            for from in [&bench, &stored] {
+                assert_eq!(
+                    format!("{:?}", from.linear_params(c).unwrap().unwrap()),
+                    b,
+                    "{c}"
+                );
+            }
         }
         assert_eq!(bench.identified, direct.identified);
+        assert_eq!(stored.identified, direct.identified);
     }
 }
