@@ -14,7 +14,7 @@ use flexstage_control::registry::{Controller, Design, Designs, MarginProbe, Stag
 use flexstage_control::tuning::{TuningParams, loop_margins};
 use flexstage_identify::response::{RESPONSE_SHARE, ResponseFit};
 use flexstage_sim::experiment::StageControl;
-use flexstage_sim::modal::ModalPlant;
+use flexstage_sim::modal::{LoopPlant, ModalPlant};
 use flexstage_sim::rig::{AmplifierParams, PlantActuator, RigParams, RigPlant, SensorParams};
 use flexstage_sim::trajectory::Reference;
 use flexstage_twin::{Twin, TwinStage};
@@ -70,7 +70,7 @@ impl Bench {
     /// [`Bench::new`] with the model-based designs from an `identified` response fit
     /// ([`Bench::identified`]).
     pub fn with_identified(
-        mut setup: Setup,
+        setup: Setup,
         twin: Twin,
         tuning: TuningParams,
         identified: Option<ResponseFit>,
@@ -86,28 +86,7 @@ impl Bench {
         let fit = identified.unwrap_or_else(|| {
             ResponseFit::from_modes(&twin.modal.plant_modes(), nyquist, RESPONSE_SHARE)
         });
-        let probe = LinearLoop {
-            twin: &twin,
-            setup: &setup,
-        };
-        let stage = Stage::new(
-            &setup,
-            Some(&plant),
-            Some(fit),
-            Some(&probe),
-            tuning.clone(),
-        );
-        let designs = Designs::for_stage(&stage)?;
-        let (model, coupling) = stage.controller_model();
-        drop(stage);
-        (setup.controller.model, setup.controller.coupling) = (model, coupling);
-        Ok(Bench {
-            setup,
-            twin,
-            tuning,
-            identified,
-            designs,
-        })
+        Bench::designed(setup, twin, tuning, &plant, fit, true, identified)
     }
 
     /// Every controller designed from a lab measurement of the twin in its rig at the
@@ -133,7 +112,7 @@ impl Bench {
     /// [`Bench::measured`] from a measurement already made (`measured`, e.g. read back from
     /// its file): the same designs, from `measured` and `lab`'s allowance alone.
     pub fn from_measurement(
-        mut setup: Setup,
+        setup: Setup,
         twin: Twin,
         tuning: TuningParams,
         lab: &crate::lab::LabParams,
@@ -141,11 +120,30 @@ impl Bench {
     ) -> Result<Bench> {
         let tuning = lab.allowing(&tuning)?;
         let fit = measured.model.response_fit(RESPONSE_SHARE);
+        Bench::designed(setup, twin, tuning, &measured.model, fit, false, Some(fit))
+    }
+
+    /// Every registry controller designed on the sampled loop `response` with its response
+    /// fit `fit` (with `probe`, the backstepping sized by its margins on the twin's
+    /// [`LinearLoop`]); the bench's setup keeps the controllers' model fitted to `fit`.
+    fn designed(
+        mut setup: Setup,
+        twin: Twin,
+        tuning: TuningParams,
+        response: &dyn LoopPlant,
+        fit: ResponseFit,
+        probe: bool,
+        identified: Option<ResponseFit>,
+    ) -> Result<Bench> {
+        let linear = LinearLoop {
+            twin: &twin,
+            setup: &setup,
+        };
         let stage = Stage::new(
             &setup,
-            Some(&measured.model),
+            Some(response),
             Some(fit),
-            None,
+            probe.then_some(&linear as &dyn MarginProbe),
             tuning.clone(),
         );
         let designs = Designs::for_stage(&stage)?;
@@ -156,7 +154,7 @@ impl Bench {
             setup,
             twin,
             tuning,
-            identified: Some(fit),
+            identified,
             designs,
         })
     }
