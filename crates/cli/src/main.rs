@@ -188,27 +188,35 @@ firmware tree: <DIR>/<controller>.c and .h, C99 with <math.h> only, functions \
 <controller>_init and <controller>_step (with - as _). The backstepping controllers are \
 nonlinear and are not exported. docs/controller-export.md says how to call them at 10 kHz.
 
-With --response or --log it designs the linear controllers (PI + notch, PID) from a measured loop alone, no design or twin: a measured response or a time log of your stage at the controller's sample time (formats in docs/formats.md), the paper scenario's actuator settings; it writes <controller>.json, .c and .h of each.
+With --response or --log it designs the linear controllers (PI + notch, PID) from a measured loop alone, no design or twin: a measured response or a time log of your stage at the controller's sample time (formats in docs/formats.md). The actuator settings (the PEAs' hysteresis model for the inverse compensation, the stroke) come from --scenario FILE, or from --preset (default: paper). It writes <controller>.json, .c and .h of each.
 
 Examples:
   flexstage controller runs/quick/track/controllers/pi-notch-ff.json
   flexstage controller runs/quick/track/controllers/pid-ff.json --to firmware/control
   flexstage controller --response measured.csv --to firmware/control
-  flexstage controller --log lab_log.csv"
+  flexstage controller --log lab_log.csv --scenario my_stage.toml"
     )]
     Controller {
         /// The coefficients file (JSON).
         #[arg(required_unless_present_any = ["response", "log"], conflicts_with_all = ["response", "log"])]
         json: Option<PathBuf>,
         /// Design from a measured response (CSV: f, re/im per entry, coherence, std, sample_time).
-        #[arg(long, conflicts_with = "log")]
+        #[arg(long, conflicts_with = "log", group = "measurement")]
         response: Option<PathBuf>,
         /// Design from a time log (CSV: t, command1, command2, reading1, reading2), by H1.
-        #[arg(long)]
+        #[arg(long, group = "measurement")]
         log: Option<PathBuf>,
         /// Folder for the files (default: the folder of the input file).
         #[arg(long)]
         to: Option<PathBuf>,
+        /// With --response or --log: the scenario (TOML) whose actuator settings the
+        /// controllers use.
+        #[arg(long, requires = "measurement")]
+        scenario: Option<PathBuf>,
+        /// With --response or --log and no --scenario: the built-in scenario whose actuator
+        /// settings the controllers use.
+        #[arg(long, default_value = "paper", value_parser = PRESETS, requires = "measurement")]
+        preset: String,
     },
     /// Rebuild <run>/report.html from a run folder (stages not run are marked "not run").
     #[command(after_help = "Examples:
@@ -299,6 +307,8 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
             response,
             log,
             to,
+            scenario,
+            preset,
         } => {
             use flexstage_pipeline::Measurement;
             let (input, measured) = match (&json, &response, &log) {
@@ -315,7 +325,11 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
                     .unwrap_or_default(),
             };
             let written = match measured {
-                Some(m) => flexstage_pipeline::export_measured(m, &dir)?,
+                Some(m) => {
+                    let scenario = flexstage_pipeline::load_scenario(scenario.as_deref(), &preset)
+                        .context("invalid scenario")?;
+                    flexstage_pipeline::export_measured(m, &scenario, &dir)?
+                }
                 None => vec![flexstage_pipeline::export_controller(&input, &dir)?],
             };
             for e in written {

@@ -48,3 +48,31 @@ fn refusals_name_the_option_compactly_and_resume_says_how_to_start_over() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Goal: `flexstage controller` takes a scenario only for a design from a measurement, and
+/// says so; a scenario file that does not read is named as the scenario.
+#[test]
+fn controller_scenario_options_need_a_measurement_and_name_a_bad_scenario() {
+    let o = Command::new(BIN)
+        .args(["controller", "pi-notch-ff.json", "--preset", "quick"])
+        .output()
+        .unwrap();
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{e}");
+    assert!(e.contains("--response") && e.contains("--log"), "{e}");
+    let dir = std::env::temp_dir().join(format!("flexstage-ctl-msg-{}", std::process::id()));
+    let e = refusal(
+        &[
+            "controller",
+            "--response",
+            "measured.csv",
+            "--scenario",
+            dir.join("missing.toml").to_str().unwrap(),
+        ],
+        None,
+    );
+    assert!(
+        e.contains("invalid scenario") && e.contains("missing.toml"),
+        "{e}"
+    );
+}

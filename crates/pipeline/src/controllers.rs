@@ -226,10 +226,15 @@ pub fn measured_controller_files(
 }
 
 /// Designs the linear controllers from a measured response or a time log alone
-/// ([`measured_controller_files`], the actuator settings of the paper's scenario) and writes each one's
+/// ([`measured_controller_files`], the actuator settings of `scenario`: its PEAs' hysteresis
+/// model for the inverse compensation and its stage's stroke) and writes each one's
 /// coefficients file, C source and header (`<controller>.json`, `.c`, `.h`) into `dir`
 /// (created if missing), each atomically.
-pub fn export_measured(source: Measurement<'_>, dir: &Path) -> Result<Vec<ExportedController>> {
+pub fn export_measured(
+    source: Measurement<'_>,
+    scenario: &Scenario,
+    dir: &Path,
+) -> Result<Vec<ExportedController>> {
     let path = match source {
         Measurement::Response(p) | Measurement::Log(p) => p,
     };
@@ -246,7 +251,7 @@ pub fn export_measured(source: Measurement<'_>, dir: &Path) -> Result<Vec<Export
         }
     };
     let mut out = Vec::new();
-    for f in measured_controller_files(&response, &Scenario::paper())? {
+    for f in measured_controller_files(&response, scenario)? {
         let name = f.controller.clone();
         let src = c_files(&f)?;
         let json = f.encode().map_err(|reason| PipelineError::Format {
@@ -455,5 +460,40 @@ mod tests {
         for (a, b) in direct.iter().zip(&again) {
             assert_eq!(a.encode().unwrap(), b.encode().unwrap(), "{}", a.controller);
         }
+    }
+
+    /// Goal: `export_measured` takes the actuator settings from the scenario it is given: the
+    /// paper scenario writes what `measured_controller_files` designs with it, and a scenario
+    /// whose PEA1 hysteresis differs writes a different inverse compensation.
+    #[test]
+    fn exported_controllers_take_the_given_scenarios_actuator() {
+        let r = measured();
+        let dir = std::env::temp_dir().join(format!("flexstage-export-{}", std::process::id()));
+        let file = dir.join("measured.csv");
+        std::fs::create_dir_all(&dir).unwrap();
+        std::fs::write(&file, r.to_csv()).unwrap();
+        let read = |name: &str, to: &Path| std::fs::read(to.join(format!("{name}.json"))).unwrap();
+        let paper = Scenario::paper();
+        let written = export_measured(Measurement::Response(&file), &paper, &dir).unwrap();
+        for (f, e) in measured_controller_files(&r, &paper)
+            .unwrap()
+            .iter()
+            .zip(&written)
+        {
+            assert_eq!(read(&e.controller, &dir), f.encode().unwrap());
+        }
+        let mut other = Scenario::paper();
+        other.hysteresis.pea1.d_p *= 1.5;
+        let to = dir.join("other");
+        export_measured(Measurement::Response(&file), &other, &to).unwrap();
+        for e in &written {
+            assert_ne!(
+                read(&e.controller, &dir),
+                read(&e.controller, &to),
+                "{}",
+                e.controller
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }
