@@ -4,7 +4,7 @@
 //! field: the discretization of the design model; the bilinear field of the element centroids
 //! that the outline contours, thresholded at ½ per sub-element: the outline's geometry in
 //! pixels of `h/n`), and the body-fitted T6 model of the exported outline with the port
-//! couplings of several radii.
+//! couplings of several radii and with point ports (each port on its nearest boundary node).
 //!
 //! ```text
 //! cargo run --release -p flexstage-verify --example frequency_gap -- paper design.json [PAYLOAD_KG]
@@ -70,6 +70,72 @@ fn refined(s: &Scenario, rho: &[f64], n: usize) -> (Scenario, Vec<f64>, Vec<f64>
     (r, same, smooth)
 }
 
+/// The face nodes of the design mesh around input node `node` (same domain edge, the
+/// edges whose midpoint lies within `radius` of the node, as the body-fitted coupling picks
+/// them) with the weights of a uniform traction (`L/2` per end of a linear edge, `Σ w = 1`).
+fn face(problem: &Problem, node: usize, radius: f64) -> Vec<(usize, f64)> {
+    let mesh = problem.mesh();
+    let (i, _) = mesh.node_ij(node);
+    let p = mesh.node_coords(node);
+    let mut w = std::collections::BTreeMap::<usize, f64>::new();
+    for jj in 0..mesh.nw {
+        let (a, b) = (mesh.node(i, jj), mesh.node(i, jj + 1));
+        let mid = 0.5 * (mesh.node_coords(a)[1] + mesh.node_coords(b)[1]);
+        if (mid - p[1]).abs() <= radius * (1.0 + 1e-9) {
+            *w.entry(a).or_default() += 0.5 * mesh.dy();
+            *w.entry(b).or_default() += 0.5 * mesh.dy();
+        }
+    }
+    let total: f64 = w.values().sum();
+    w.into_iter().map(|(n, v)| (n, v / total)).collect()
+}
+
+/// The design's stage eigenproblem with each PEA port spread over its face (`face`): the PEA
+/// spring and the input plate's spring on the face's weighted mean x displacement (link
+/// springs), the plate's mass spread over the face's x DOFs by weight, the roller kept at the
+/// port's node.
+fn distributed_ports(s: &Scenario, rho: &[f64], radius: f64) -> Res<f64> {
+    use flexstage_fem::{DofMass, LinkSpring, Model};
+    let mut problem = Problem::from_scenario(s, None)?;
+    let inputs: Vec<usize> = problem.inputs.iter().map(|p| p.dof).collect();
+    let faces: Vec<Vec<(usize, f64)>> = problem
+        .inputs
+        .iter()
+        .map(|p| face(&problem, p.node, radius))
+        .collect();
+    let mut bcs = problem.model.bcs().clone();
+    bcs.springs.retain(|sp| !inputs.contains(&sp.dof));
+    for (p, f) in problem.inputs.iter().zip(&faces) {
+        let terms: Vec<(usize, f64)> = f.iter().map(|&(n, w)| (2 * n, w)).collect();
+        bcs.add_link(&terms, p.stiffness);
+    }
+    let m = &problem.model;
+    problem.model = Model::new(m.mesh().clone(), *m.material(), m.kinematics(), bcs)?;
+    let dynamics = problem.dynamics.as_mut().ok_or("no stage dynamics")?;
+    for (k, (dof, f)) in inputs.iter().zip(&faces).enumerate() {
+        let terms: Vec<(usize, f64)> = f.iter().map(|&(n, w)| (2 * n, w)).collect();
+        if let Some(sp) = dynamics
+            .springs
+            .iter_mut()
+            .find(|sp| sp.terms == vec![(*dof, 1.0)])
+        {
+            *sp = LinkSpring {
+                terms,
+                stiffness: sp.stiffness,
+            };
+        }
+        let m_in = [s.stage.guess.m_in1, s.stage.guess.m_in2][k];
+        dynamics.point_masses.retain(|pm| pm.dof != *dof);
+        dynamics
+            .point_masses
+            .extend(f.iter().map(|&(n, w)| DofMass {
+                dof: 2 * n,
+                mass: m_in * w,
+            }));
+    }
+    Ok(stage_modes(&problem, rho, &ModalParams::default(), false)?.frequencies[0])
+}
+
 fn mass(s: &Scenario, rho: &[f64]) -> f64 {
     let v = s.mesh.length * s.mesh.width * s.mesh.thickness / rho.len() as f64;
     rho.iter().sum::<f64>() * v * s.material.density
@@ -119,6 +185,14 @@ fn main() -> Res<()> {
         pct(f),
         1e3 * mass(&s, &crisp)
     );
+    let h0 = s.mesh.element_size().0.max(s.mesh.element_size().1);
+    for r in [0.5, 1.5, 3.0] {
+        let f = distributed_ports(&s, &rho, r * h0)?;
+        println!(
+            "design mesh, PEA ports over the face within {r} h: f1 {f:.1} Hz ({:+.2} %)",
+            pct(f)
+        );
+    }
     let levels: Vec<usize> = std::env::var("REFINE")
         .unwrap_or_else(|_| "2,3".into())
         .split(',')
@@ -140,9 +214,12 @@ fn main() -> Res<()> {
     let (dx, dy) = s.mesh.element_size();
     let outline = Outline::from_fem_order(nl, nw, dx, dy, 0.5, 10, &rho)?.refined(0.05e-3);
     let h = dx.max(dy);
-    for radius in [0.5, 0.75, 1.5, 3.0] {
+    // `None`: point ports (the design mesh's one node per port).
+    let radii: [Option<f64>; 5] = [None, Some(0.5), Some(0.75), Some(1.5), Some(3.0)];
+    for radius in radii {
         let p = VerifyParams {
-            port_radius: Some(radius * h),
+            port_radius: radius.map(|r| r * h),
+            point_ports: radius.is_none(),
             refine_check: false,
             plate_masses: plates,
             ..VerifyParams::from_limits(&s.limits)
@@ -153,9 +230,10 @@ fn main() -> Res<()> {
             .design_mesh
             .as_ref()
             .map_or(f64::NAN, |d| d.first_frequency);
+        let ports = radius.map_or("point ports".into(), |r| format!("ports within {r} h"));
         println!(
-            "body-fitted, ports within {radius} h: f {:.1?} Hz ({:+.2} %), mass {:.2} g, {} \
-             elements; verify's design-mesh value {d:.1} Hz",
+            "body-fitted, {ports}: f {:.1?} Hz ({:+.2} %), mass {:.2} g, {} elements; \
+             verify's design-mesh value {d:.1} Hz",
             &b.frequencies,
             pct(b.frequencies[0]),
             1e3 * b.mass,

@@ -567,7 +567,7 @@ pub fn verify(
         prepared.mesh(&sizing)?,
         &specs,
         &supports,
-        port_radius,
+        (port_radius, p.point_ports),
         h_design,
     )?;
     check_held(&model, &specs, &links)?;
@@ -592,7 +592,7 @@ pub fn verify(
             prepared.mesh(&fine)?,
             &specs,
             &supports,
-            port_radius,
+            (port_radius, p.point_ports),
             h_design,
         )?;
         let peak = corner_statics(&fine_model, &specs, &links, &inputs, &corners)?.0;
@@ -653,25 +653,29 @@ pub fn verify(
     })
 }
 
-/// The FE model with the scenario's ports and supports on the body-fitted boundary.
+/// The FE model with the scenario's ports and supports on the body-fitted boundary: each port
+/// a distributing coupling within `port_radius`, or a point port (`VerifyParams::point_ports`).
 fn build_model(
     scenario: &Scenario,
     tri: TriMesh,
     specs: &[PortSpec],
     supports: &[Support],
-    port_radius: f64,
+    (port_radius, point_ports): (f64, bool),
     h_design: f64,
 ) -> Result<FeModel> {
+    let coupling = (!point_ports).then_some(port_radius);
     let mut attachments = Vec::with_capacity(specs.len());
     for s in specs {
-        let a = Attachment::on_boundary(&tri, &s.name, s.point, port_radius, s.fixed).ok_or_else(
-            || VerifyError::Port {
-                what: s.name.clone(),
-                x_mm: s.point[0] * 1e3,
-                y_mm: s.point[1] * 1e3,
-                radius_mm: port_radius * 1e3,
-            },
-        )?;
+        let a = match coupling {
+            Some(radius) => Attachment::on_boundary(&tri, &s.name, s.point, radius, s.fixed),
+            None => Attachment::at_nearest_boundary_node(&tri, &s.name, s.point, s.fixed),
+        };
+        let a = a.ok_or_else(|| VerifyError::Port {
+            what: s.name.clone(),
+            x_mm: s.point[0] * 1e3,
+            y_mm: s.point[1] * 1e3,
+            radius_mm: port_radius * 1e3,
+        })?;
         attachments.push(a);
     }
     // A support node of the design mesh holds the outline boundary within half an element.
