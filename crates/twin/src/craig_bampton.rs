@@ -37,6 +37,10 @@ pub struct CraigBampton {
     pub stiffness: DMatrix<f64>,
     /// `Tᵀ M r` for unit base accelerations in x and y \[kg\].
     pub floor: [DVector<f64>; 2],
+    /// `Tᵀ a_i` for the two inputs, `a_i` the uniform traction of unit force on PEA port i's
+    /// face: the reduced PEA force per newton, and the input displacement `a_iᵀ T q` as a
+    /// function of the reduced coordinates (`e_i` for a port of one DOF).
+    pub inputs: [DVector<f64>; 2],
     /// The basis as full displacement vectors: 4 constraint modes, then m fixed-interface modes.
     pub basis: Vec<Vec<f64>>,
     /// Frequencies of the fixed-interface modes \[Hz\].
@@ -169,10 +173,15 @@ pub fn craig_bampton(fe: &StageFe, modes: usize) -> Result<CraigBampton> {
             f[j] = dot(&basis[j], &mr);
         }
     }
+    let inputs = fe
+        .faces
+        .clone()
+        .map(|face| DVector::from_fn(r, |j, _| face.iter().map(|&(d, w)| w * basis[j][d]).sum()));
     Ok(CraigBampton {
         mass,
         stiffness,
         floor,
+        inputs,
         basis,
         fixed_interface_frequencies: fixed.frequencies,
     })

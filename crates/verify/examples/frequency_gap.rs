@@ -3,8 +3,10 @@
 //! field thresholded at ½, on the design mesh refined `n × n` (the same piecewise-constant
 //! field: the discretization of the design model; the bilinear field of the element centroids
 //! that the outline contours, thresholded at ½ per sub-element: the outline's geometry in
-//! pixels of `h/n`), and the body-fitted T6 model of the exported outline with the port
-//! couplings of several radii and with point ports (each port on its nearest boundary node).
+//! pixels of `h/n`), the design mesh with point ports (each PEA on its node, the design model
+//! before the PEA ports became faces), and the body-fitted T6 model of the exported outline
+//! with the PEA ports over their faces (the design's port model) and with point ports (each
+//! port on its nearest boundary node).
 //!
 //! ```text
 //! cargo run --release -p flexstage-verify --example frequency_gap -- paper design.json [PAYLOAD_KG]
@@ -70,68 +72,52 @@ fn refined(s: &Scenario, rho: &[f64], n: usize) -> (Scenario, Vec<f64>, Vec<f64>
     (r, same, smooth)
 }
 
-/// The face nodes of the design mesh around input node `node` (same domain edge, the
-/// edges whose midpoint lies within `radius` of the node, as the body-fitted coupling picks
-/// them) with the weights of a uniform traction (`L/2` per end of a linear edge, `Σ w = 1`).
-fn face(problem: &Problem, node: usize, radius: f64) -> Vec<(usize, f64)> {
-    let mesh = problem.mesh();
-    let (i, _) = mesh.node_ij(node);
-    let p = mesh.node_coords(node);
-    let mut w = std::collections::BTreeMap::<usize, f64>::new();
-    for jj in 0..mesh.nw {
-        let (a, b) = (mesh.node(i, jj), mesh.node(i, jj + 1));
-        let mid = 0.5 * (mesh.node_coords(a)[1] + mesh.node_coords(b)[1]);
-        if (mid - p[1]).abs() <= radius * (1.0 + 1e-9) {
-            *w.entry(a).or_default() += 0.5 * mesh.dy();
-            *w.entry(b).or_default() += 0.5 * mesh.dy();
-        }
-    }
-    let total: f64 = w.values().sum();
-    w.into_iter().map(|(n, v)| (n, v / total)).collect()
-}
-
-/// The design's stage eigenproblem with each PEA port spread over its face (`face`): the PEA
-/// spring and the input plate's spring on the face's weighted mean x displacement (link
-/// springs), the plate's mass spread over the face's x DOFs by weight, the roller kept at the
-/// port's node.
-fn distributed_ports(s: &Scenario, rho: &[f64], radius: f64) -> Res<f64> {
+/// The design's stage eigenproblem with point ports, the design model before the PEA ports
+/// became faces: the PEA spring, the input plate's spring and mass on the port's node's x DOF.
+fn point_ports(s: &Scenario, rho: &[f64]) -> Res<f64> {
     use flexstage_fem::{DofMass, LinkSpring, Model};
     let mut problem = Problem::from_scenario(s, None)?;
-    let inputs: Vec<usize> = problem.inputs.iter().map(|p| p.dof).collect();
-    let faces: Vec<Vec<(usize, f64)>> = problem
-        .inputs
-        .iter()
-        .map(|p| face(&problem, p.node, radius))
-        .collect();
+    let ports = problem.inputs.clone();
     let mut bcs = problem.model.bcs().clone();
-    bcs.springs.retain(|sp| !inputs.contains(&sp.dof));
-    for (p, f) in problem.inputs.iter().zip(&faces) {
-        let terms: Vec<(usize, f64)> = f.iter().map(|&(n, w)| (2 * n, w)).collect();
-        bcs.add_link(&terms, p.stiffness);
+    let m_in = [s.stage.guess.m_in1, s.stage.guess.m_in2];
+    for p in &ports {
+        bcs.links.retain(|l| l.terms != p.terms(1.0));
+        bcs.add_spring(p.dof, p.stiffness);
+        for l in &mut bcs.links {
+            let before = l.terms.len();
+            l.terms.retain(|t| !p.face.iter().any(|f| f.0 == t.0));
+            if l.terms.len() < before {
+                l.terms.push((p.dof, -0.5));
+            }
+        }
     }
     let m = &problem.model;
     problem.model = Model::new(m.mesh().clone(), *m.material(), m.kinematics(), bcs)?;
     let dynamics = problem.dynamics.as_mut().ok_or("no stage dynamics")?;
-    for (k, (dof, f)) in inputs.iter().zip(&faces).enumerate() {
-        let terms: Vec<(usize, f64)> = f.iter().map(|&(n, w)| (2 * n, w)).collect();
-        if let Some(sp) = dynamics
-            .springs
-            .iter_mut()
-            .find(|sp| sp.terms == vec![(*dof, 1.0)])
-        {
-            *sp = LinkSpring {
-                terms,
-                stiffness: sp.stiffness,
-            };
+    let faces: Vec<usize> = ports
+        .iter()
+        .flat_map(|p| p.face.iter().map(|t| t.0))
+        .collect();
+    dynamics.point_masses.retain(|pm| !faces.contains(&pm.dof));
+    for (p, m) in ports.iter().zip(m_in) {
+        dynamics.point_masses.push(DofMass {
+            dof: p.dof,
+            mass: m,
+        });
+        for sp in &mut dynamics.springs {
+            if sp.terms == p.terms(1.0) {
+                *sp = LinkSpring {
+                    terms: vec![(p.dof, 1.0)],
+                    stiffness: sp.stiffness,
+                };
+            } else {
+                let before = sp.terms.len();
+                sp.terms.retain(|t| !p.face.iter().any(|f| f.0 == t.0));
+                if sp.terms.len() < before {
+                    sp.terms.push((p.dof, -0.5));
+                }
+            }
         }
-        let m_in = [s.stage.guess.m_in1, s.stage.guess.m_in2][k];
-        dynamics.point_masses.retain(|pm| pm.dof != *dof);
-        dynamics
-            .point_masses
-            .extend(f.iter().map(|&(n, w)| DofMass {
-                dof: 2 * n,
-                mass: m_in * w,
-            }));
     }
     Ok(stage_modes(&problem, rho, &ModalParams::default(), false)?.frequencies[0])
 }
@@ -185,14 +171,11 @@ fn main() -> Res<()> {
         pct(f),
         1e3 * mass(&s, &crisp)
     );
-    let h0 = s.mesh.element_size().0.max(s.mesh.element_size().1);
-    for r in [0.5, 1.5, 3.0] {
-        let f = distributed_ports(&s, &rho, r * h0)?;
-        println!(
-            "design mesh, PEA ports over the face within {r} h: f1 {f:.1} Hz ({:+.2} %)",
-            pct(f)
-        );
-    }
+    let f = point_ports(&s, &rho)?;
+    println!(
+        "design mesh, point ports (the PEA at its node): f1 {f:.1} Hz ({:+.2} %)",
+        pct(f)
+    );
     let levels: Vec<usize> = std::env::var("REFINE")
         .unwrap_or_else(|_| "2,3".into())
         .split(',')
@@ -214,8 +197,9 @@ fn main() -> Res<()> {
     let (dx, dy) = s.mesh.element_size();
     let outline = Outline::from_fem_order(nl, nw, dx, dy, 0.5, 10, &rho)?.refined(0.05e-3);
     let h = dx.max(dy);
-    // `None`: point ports (the design mesh's one node per port).
-    let radii: [Option<f64>; 5] = [None, Some(0.5), Some(0.75), Some(1.5), Some(3.0)];
+    // `None`: point ports (one boundary node per port). The PEA ports take their faces; the
+    // radius applies to the output.
+    let radii: [Option<f64>; 2] = [None, Some(1.5)];
     for radius in radii {
         let p = VerifyParams {
             port_radius: radius.map(|r| r * h),

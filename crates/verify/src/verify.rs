@@ -145,6 +145,9 @@ struct PortSpec {
     spring_stress: [f64; 2],
     spring_reduced: [f64; 2],
     mass: f64,
+    /// The face a PEA presses (the ends of its segment on the design mesh, `Port::face`), when
+    /// the port has one: the coupling takes the outline's boundary along it.
+    face: Option<[[f64; 2]; 2]>,
 }
 
 /// A support of the design mesh: its node's point [m] and the components it fixes.
@@ -187,16 +190,30 @@ fn port_specs(
         .collect();
     // The payload (`output.payload`) rides on the output port.
     named.push(("output".into(), stress.output, s.output.payload));
+    // The port a DOF belongs to: a PEA port's face, else its node's port.
+    let face_port = |dof: usize| {
+        stress
+            .inputs
+            .iter()
+            .position(|p| p.face.iter().any(|t| t.0 == dof))
+    };
+    // A PEA's spring over its face is the port's spring (below), not a link.
+    let is_face_link = |l: &flexstage_fem::LinkSpring| {
+        stress
+            .inputs
+            .iter()
+            .any(|p| p.face.len() > 1 && l.terms == p.terms(1.0))
+    };
     for sp in &stress.model.bcs().springs {
         let node = sp.dof / 2;
         if !named.iter().any(|n| n.1 == node) {
             named.push((format!("spring at node {node}"), node, 0.0));
         }
     }
-    for l in &stress.model.bcs().links {
+    for l in stress.model.bcs().links.iter().filter(|l| !is_face_link(l)) {
         for &(dof, _) in &l.terms {
             let node = dof / 2;
-            if !named.iter().any(|n| n.1 == node) {
+            if face_port(dof).is_none() && !named.iter().any(|n| n.1 == node) {
                 named.push((format!("link spring at node {node}"), node, 0.0));
             }
         }
@@ -206,29 +223,47 @@ fn port_specs(
         .bcs()
         .links
         .iter()
-        .map(|l| PortLink {
-            terms: l
-                .terms
-                .iter()
-                .map(|&(dof, c)| {
-                    let port = named
+        .filter(|l| !is_face_link(l))
+        .map(|l| {
+            // Terms on one port's component add up (a face's weights sum to its coefficient).
+            let mut terms: Vec<(usize, usize, f64)> = Vec::new();
+            for &(dof, c) in &l.terms {
+                let port = face_port(dof).unwrap_or_else(|| {
+                    named
                         .iter()
                         .position(|n| n.1 == dof / 2)
-                        .expect("named above");
-                    (port, dof % 2, c)
-                })
-                .collect(),
-            stiffness: l.stiffness,
+                        .expect("named above")
+                });
+                match terms.iter_mut().find(|t| t.0 == port && t.1 == dof % 2) {
+                    Some(t) => t.2 += c,
+                    None => terms.push((port, dof % 2, c)),
+                }
+            }
+            PortLink {
+                terms,
+                stiffness: l.stiffness,
+            }
         })
         .collect();
-    for (name, node, mass) in named {
+    for (k, (name, node, mass)) in named.into_iter().enumerate() {
+        let input = stress.inputs.get(k);
+        let mut spring_stress = springs(stress, node);
+        let mut spring_reduced = springs(reduced, node);
+        let mut face = None;
+        if let Some(p) = input.filter(|p| p.face.len() > 1) {
+            spring_stress[0] += p.stiffness;
+            spring_reduced[0] += p.stiffness;
+            let ends = |d: usize| mesh.node_coords(d / 2);
+            face = Some([ends(p.face[0].0), ends(p.face[p.face.len() - 1].0)]);
+        }
         specs.push(PortSpec {
             name,
             point: mesh.node_coords(node),
             fixed: fixed(node),
-            spring_stress: springs(stress, node),
-            spring_reduced: springs(reduced, node),
+            spring_stress,
+            spring_reduced,
             mass,
+            face,
         });
     }
     let mut supports: Vec<Support> = Vec::new();
@@ -666,9 +701,19 @@ fn build_model(
     let coupling = (!point_ports).then_some(port_radius);
     let mut attachments = Vec::with_capacity(specs.len());
     for s in specs {
-        let a = match coupling {
-            Some(radius) => Attachment::on_boundary(&tri, &s.name, s.point, radius, s.fixed),
-            None => Attachment::at_nearest_boundary_node(&tri, &s.name, s.point, s.fixed),
+        let a = match (coupling, s.face) {
+            (None, _) => Attachment::at_nearest_boundary_node(&tri, &s.name, s.point, s.fixed),
+            // The boundary along the face the PEA presses: beside the face's segment, within
+            // half a design element of its line (the smoothed outline lies up to about 0.15
+            // elements outside the domain's edge).
+            (Some(_), Some(face)) => {
+                Attachment::on_boundary_where(&tri, &s.name, s.point, s.fixed, |m| {
+                    beside_segment(m, face, 0.5 * h_design)
+                })
+            }
+            (Some(radius), None) => {
+                Attachment::on_boundary(&tri, &s.name, s.point, radius, s.fixed)
+            }
         };
         let a = a.ok_or_else(|| VerifyError::Port {
             what: s.name.clone(),
@@ -700,6 +745,20 @@ fn build_model(
         thickness: scenario.mesh.thickness,
     };
     FeModel::new(tri, material, attachments, fixed)
+}
+
+/// Whether `p` projects onto the segment `[a, b]` (between its ends) within `distance` of its
+/// line.
+fn beside_segment(p: [f64; 2], [a, b]: [[f64; 2]; 2], distance: f64) -> bool {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let len = d[0].hypot(d[1]);
+    if len == 0.0 {
+        return (p[0] - a[0]).hypot(p[1] - a[1]) <= distance;
+    }
+    let r = [p[0] - a[0], p[1] - a[1]];
+    let along = (r[0] * d[0] + r[1] * d[1]) / len;
+    let normal = (r[0] * d[1] - r[1] * d[0]) / len;
+    (-1e-9 * len..=len * (1.0 + 1e-9)).contains(&along) && normal.abs() <= distance
 }
 
 fn verdict(b: &BodyFitted, m: &Manufacturability, p: &VerifyParams) -> Verdict {
