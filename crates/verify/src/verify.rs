@@ -37,7 +37,10 @@ pub struct Transfer {
     pub alpha: [[f64; 2]; 2],
     /// Scalar `α = ½(α21 − α22)` (Eq. 27–29).
     pub alpha_scalar: f64,
-    /// Tilt `θ = atan((α11 − α12)/(α21 − α22))` \[deg\] (Eq. 26).
+    /// Tilt `θ = atan((α11 − α12)/(α21 − α22))` \[deg\] (Eq. 26), in (−90°, 90°]: the axis of
+    /// the differential output from +y towards +x, the convention of the design summary and
+    /// of the reduced model; the orientation along the axis is the sign of `alpha_scalar`
+    /// (negative for a reversed design).
     pub theta_deg: f64,
 }
 
@@ -50,11 +53,20 @@ impl Transfer {
             alpha_abs,
             alpha,
             alpha_scalar: 0.5 * (alpha[1][0] - alpha[1][1]),
-            theta_deg: (alpha[0][0] - alpha[0][1])
-                .atan2(alpha[1][0] - alpha[1][1])
-                .to_degrees(),
+            theta_deg: axis_angle_deg(alpha[0][0] - alpha[0][1], alpha[1][0] - alpha[1][1]),
         }
     }
+}
+
+/// The angle of the axis through `(x, y)` from +y towards +x \[deg\], in (−90°, 90°] (the
+/// direction's sign dropped: Eq. 26's `atan(x / y)`; `+0` for a zero angle).
+pub fn axis_angle_deg(x: f64, y: f64) -> f64 {
+    let theta = if y == 0.0 {
+        90.0
+    } else {
+        (x / y).atan().to_degrees()
+    };
+    if theta == -90.0 { 90.0 } else { theta + 0.0 }
 }
 
 /// Body-fitted results.
@@ -883,5 +895,42 @@ impl Verification {
     /// as a VTU document (ParaView).
     pub fn to_vtu(&self) -> String {
         crate::vtu::to_vtu(&self.mesh, &self.displacement, &self.nodal_von_mises)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `A(θ)` of Eq. 29 (the fixed frame) with amplification `a` and tilt `θ`.
+    fn a_theta(a: f64, theta_deg: f64) -> [[f64; 2]; 2] {
+        let t = theta_deg.to_radians().tan();
+        [[0.5 + a * t, 0.5 - a * t], [a, -a]]
+    }
+
+    /// Goal: θ has one convention from design to export (Eq. 26, the axis in (−90°, 90°], the
+    /// orientation in the sign of α): a reversed design (α < 0) is θ = 0°, not 180°; a tilted
+    /// one keeps its tilt whichever way it is driven.
+    #[test]
+    fn theta_is_the_axis_and_alpha_carries_the_orientation() {
+        for (a, theta) in [
+            (1.2, 0.0),
+            (-1.2, 0.0),
+            (1.2, 20.0),
+            (-1.2, 20.0),
+            (0.8, -35.0),
+        ] {
+            let t = Transfer::from_alpha_abs(a_theta(a, theta));
+            assert!((t.theta_deg - theta).abs() < 1e-12, "{a}, {theta}: {t:?}");
+            assert!((t.alpha_scalar - a).abs() < 1e-12, "{a}, {theta}: {t:?}");
+        }
+        // A zero tilt prints as +0, and the ends of the range fold onto +90°.
+        assert!(
+            Transfer::from_alpha_abs(a_theta(-1.0, 0.0))
+                .theta_deg
+                .is_sign_positive()
+        );
+        assert_eq!(axis_angle_deg(1.0, 0.0), 90.0);
+        assert_eq!(axis_angle_deg(-1.0, 0.0), 90.0);
     }
 }
