@@ -2,20 +2,24 @@
 //! Eq. 23–25) and the output stiffness with the inputs held.
 //!
 //! # Partition (Eq. 23)
-//! The FE model already eliminates its fixed DOFs (rollers, clamps). Of its free DOFs, the two
-//! input DOFs (the x DOFs of the PEA ports) are the prescribed set `s` and all others the free
-//! set `f`. With `u_s = x_in` prescribed, linear equilibrium without load on `f` gives
+//! The FE model already eliminates its fixed DOFs (rollers, clamps). The inputs are the PEA
+//! ports, each the weighted mean of its face's x DOFs (`flexstage_topopt::Port::face`; one DOF
+//! for a point port). Prescribing `x_in` with no load elsewhere (Eq. 24) is the same as loading
+//! the inputs with the forces that produce `x_in`: with the whole tangent `K_T` (springs
+//! included) factored once, four solves give the input and output displacements under unit
+//! input forces (uniform tractions on the faces) and unit output forces, the 2 × 2 blocks
+//! `C_ii, C_oi, C_io, C_oo`, and
 //!
 //! ```text
-//! K_Tff u_f = −K_Tfs x_in,     q = L_o|_f u_f = α_abs x_in                      (Eq. 24)
+//! α_abs = C_oi C_ii⁻¹,     C = C_oo − C_oi C_ii⁻¹ C_io   (output compliance, inputs held)  (Eq. 24)
 //! ```
 //!
-//! (the paper writes Eq. 24 without the minus sign; it is absorbed in `α`). The grounded PEA
-//! springs act on `s` only, so they enter `K_Tss` and drop out of `α`. `K_Tff` is factored
-//! once (Cholesky, faer low-level API, [`flexstage_fem::Factor`]) by keeping the model's CSC
-//! pattern and replacing the rows and columns of `s` by their diagonal; one block solve then
-//! gives both unit inputs and both unit output forces.
-//!
+//! Springs that act on the inputs' displacements only (the grounded PEA springs, over the
+//! faces) change `C_ii` alone and drop out of both (Woodbury), as they drop out of the
+//! partition `K_Tff u_f = −K_Tfs x_in` of a point input, which this equals. `K_T` is factored
+//! by Cholesky (faer low-level API, [`flexstage_fem::Factor`]) with the LBLᵀ fallback at an
+//! indefinite operating point.
+
 //! # Frames (Eq. 22, 26)
 //! The FE output displacement `q` is in the fixed global frame and contains the rigid
 //! translation of the stage: [`Condensation::alpha_abs`] is `∂q/∂x_in`. The paper's `α`
@@ -58,11 +62,15 @@ use serde::Serialize;
 
 use crate::error::{ReduceError, Result};
 
-/// The ports of the reduction: the two prescribed input DOFs and the output node.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// The ports of the reduction: the two inputs (the PEA ports over their faces) and the output
+/// node.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Ports {
-    /// Full DOF index of input 1 and input 2 (x DOFs of the PEA ports).
+    /// Full DOF index of input 1 and input 2 (x DOFs of the PEA ports' points).
     pub inputs: [usize; 2],
+    /// The inputs' faces: `(full DOF, weight)`, `Σ w = 1` (`flexstage_topopt::Port::face`);
+    /// an input's displacement is its face's weighted mean.
+    pub faces: [Vec<(usize, f64)>; 2],
     /// Output node (`L_o`, Eq. 7).
     pub output: usize,
 }
@@ -73,6 +81,7 @@ impl Ports {
         match problem.inputs.as_slice() {
             [a, b] => Ok(Self {
                 inputs: [a.dof, b.dof],
+                faces: [a.face.clone(), b.face.clone()],
                 output: problem.output,
             }),
             other => Err(ReduceError::Input(format!(
@@ -80,6 +89,11 @@ impl Ports {
                 other.len()
             ))),
         }
+    }
+
+    /// The two input displacements `x_in` (the faces' weighted means) of a full vector.
+    pub fn input_displacements(&self, u: &[f64]) -> [f64; 2] {
+        std::array::from_fn(|i| self.faces[i].iter().map(|&(d, w)| w * u[d]).sum())
     }
 }
 
@@ -165,18 +179,21 @@ impl Condensation {
 #[derive(Debug)]
 pub struct Condenser {
     ports: Ports,
-    s: [usize; 2],
+    /// The inputs' faces in reduced numbering.
+    faces: [Vec<(usize, f64)>; 2],
     o: [usize; 2],
     tangent: SparseMatrix,
-    modified: SparseMatrix,
     factor: Factor,
     solve_ws: SolveWorkspace,
     assembly: AssemblyWorkspace,
     rhs: Vec<f64>,
+    /// `C_ii⁻¹` of the last condensation (unit input displacements from unit input forces).
+    inverse: [[f64; 2]; 2],
 }
 
 impl Condenser {
-    /// Buffers for `model` with these ports. The input DOFs and both output DOFs must be free.
+    /// Buffers for `model` with these ports. The inputs' face DOFs and both output DOFs must be
+    /// free.
     pub fn new(model: &Model, ports: Ports) -> Result<Self> {
         let dofs = model.dofs();
         let nd = model.n_dofs();
@@ -189,18 +206,20 @@ impl Condenser {
             dofs.reduced(d)
                 .ok_or_else(|| ReduceError::Input(format!("{what} DOF {d} is fixed")))
         };
-        let s = [
-            free(ports.inputs[0], "input 1")?,
-            free(ports.inputs[1], "input 2")?,
-        ];
-        if s[0] == s[1] {
+        let mut faces: [Vec<(usize, f64)>; 2] = [Vec::new(), Vec::new()];
+        for (i, f) in ports.faces.iter().enumerate() {
+            for &(d, w) in f {
+                faces[i].push((free(d, &format!("input {}", i + 1))?, w));
+            }
+        }
+        if ports.inputs[0] == ports.inputs[1] {
             return Err(ReduceError::Input("the two inputs are the same DOF".into()));
         }
         let o = [
             free(2 * ports.output, "output x")?,
             free(2 * ports.output + 1, "output y")?,
         ];
-        if o.iter().any(|d| s.contains(d)) {
+        if o.iter().any(|d| faces.iter().flatten().any(|t| t.0 == *d)) {
             return Err(ReduceError::Input(
                 "the output node is an input node".into(),
             ));
@@ -210,20 +229,20 @@ impl Condenser {
         factor.allow_indefinite = true;
         Ok(Self {
             ports,
-            s,
+            faces,
             o,
             tangent: model.new_matrix(),
-            modified: model.new_matrix(),
             solve_ws: SolveWorkspace::with_columns(&symbolic, 4),
             factor,
             assembly: model.new_workspace(),
             rhs: vec![0.0; 4 * dofs.n_free()],
+            inverse: [[0.0; 2]; 2],
         })
     }
 
     /// The ports.
-    pub fn ports(&self) -> Ports {
-        self.ports
+    pub fn ports(&self) -> &Ports {
+        &self.ports
     }
 
     /// The tangent assembled by the last [`Condenser::condense`] (reduced, with springs).
@@ -231,7 +250,8 @@ impl Condenser {
         &self.tangent
     }
 
-    /// Condensation of `K_T(u0)` (`u0 = None`: the undeformed state), Eq. 23–24.
+    /// Condensation of `K_T(u0)` (`u0 = None`: the undeformed state), Eq. 23–24, through
+    /// four solves with the whole tangent (module docs, "Partition").
     pub fn condense(
         &mut self,
         model: &Model,
@@ -264,60 +284,40 @@ impl Condenser {
             &mut self.assembly,
         );
         let n = model.dofs().n_free();
-        let s = self.s;
-        // Columns K_{:,s} of the full reduced tangent.
-        let pat = self.tangent.pattern().clone();
-        let (cp, ri) = (pat.col_ptr(), pat.row_idx());
-        let vals = self.tangent.values();
-        let rhs = &mut self.rhs;
-        rhs.fill(0.0);
-        for c in 0..n {
-            for k in cp[c]..cp[c + 1] {
-                let r = ri[k];
-                for (j, &sj) in s.iter().enumerate() {
-                    if c == sj {
-                        rhs[j * n + r] -= vals[k];
-                    } else if r == sj && r != c {
-                        rhs[j * n + c] -= vals[k];
-                    }
-                }
-            }
-        }
-        // K_Tff with the s rows/columns replaced by their diagonal.
-        let mv = self.modified.values_mut();
-        mv.copy_from_slice(vals);
-        let diag = [self.tangent.diag(s[0]), self.tangent.diag(s[1])];
-        for c in 0..n {
-            for k in cp[c]..cp[c + 1] {
-                let r = ri[k];
-                if r != c && (s.contains(&r) || s.contains(&c)) {
-                    mv[k] = 0.0;
-                }
-            }
-        }
-        // Right-hand sides: unit inputs (u_s = e_j) and unit output forces (u_s = 0).
-        for j in 0..2 {
-            for (i, &si) in s.iter().enumerate() {
-                rhs[j * n + si] = if i == j { diag[i] } else { 0.0 };
+        // Right-hand sides: unit forces on the inputs (uniform tractions on their faces) and on
+        // the output DOFs.
+        self.rhs.fill(0.0);
+        for (j, face) in self.faces.iter().enumerate() {
+            for &(r, w) in face {
+                self.rhs[j * n + r] += w;
             }
         }
         for (j, &oj) in self.o.iter().enumerate() {
-            let col = &mut rhs[(2 + j) * n..(3 + j) * n];
-            col[oj] = 1.0;
+            self.rhs[(2 + j) * n + oj] = 1.0;
         }
-        let kind = self.factor.factorize(&self.modified)?;
+        let kind = self.factor.factorize(&self.tangent)?;
         self.factor
             .solve_columns_in_place(&mut self.rhs, 4, &mut self.solve_ws)?;
         let rhs = &self.rhs;
-        let o = self.o;
-        let at = |col: usize, i: usize| rhs[col * n + o[i]];
-        let alpha_abs = [[at(0, 0), at(1, 0)], [at(0, 1), at(1, 1)]];
-        let compliance = [[at(2, 0), at(3, 0)], [at(2, 1), at(3, 1)]];
-        let det = compliance[0][0] * compliance[1][1] - compliance[0][1] * compliance[1][0];
-        let output_stiffness = [
-            [compliance[1][1] / det, -compliance[0][1] / det],
-            [-compliance[1][0] / det, compliance[0][0] / det],
-        ];
+        let input = |col: usize, i: usize| -> f64 {
+            self.faces[i]
+                .iter()
+                .map(|&(r, w)| w * rhs[col * n + r])
+                .sum()
+        };
+        let output = |col: usize, i: usize| rhs[col * n + self.o[i]];
+        let block = |f: &dyn Fn(usize, usize) -> f64, c0: usize| -> [[f64; 2]; 2] {
+            std::array::from_fn(|i| std::array::from_fn(|j| f(c0 + j, i)))
+        };
+        let (c_ii, c_io) = (block(&input, 0), block(&input, 2));
+        let (c_oi, c_oo) = (block(&output, 0), block(&output, 2));
+        let inverse = inverse2(c_ii);
+        let alpha_abs = mul2(c_oi, inverse);
+        let held = mul2(alpha_abs, c_io);
+        let compliance: [[f64; 2]; 2] =
+            std::array::from_fn(|i| std::array::from_fn(|j| c_oo[i][j] - held[i][j]));
+        self.inverse = inverse;
+        let output_stiffness = inverse2(compliance);
         let alpha = [
             [alpha_abs[0][0] - 0.5, alpha_abs[0][1] - 0.5],
             [alpha_abs[1][0], alpha_abs[1][1]],
@@ -331,15 +331,31 @@ impl Condenser {
         })
     }
 
-    /// Full displacement field of unit input `j` (0 or 1) from the last condensation.
+    /// Full displacement field of unit input `j` (0 or 1: `x_in = e_j`, no output load) from
+    /// the last condensation.
     pub fn unit_input_field(&self, model: &Model, j: usize) -> Vec<f64> {
         let n = model.dofs().n_free();
+        let reduced: Vec<f64> = (0..n)
+            .map(|r| self.rhs[r] * self.inverse[0][j] + self.rhs[n + r] * self.inverse[1][j])
+            .collect();
         let mut full = model.zero_vector();
-        model
-            .dofs()
-            .scatter(&self.rhs[j * n..(j + 1) * n], &mut full);
+        model.dofs().scatter(&reduced, &mut full);
         full
     }
+}
+
+/// The inverse of a 2 × 2 matrix.
+fn inverse2(a: [[f64; 2]; 2]) -> [[f64; 2]; 2] {
+    let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+    [
+        [a[1][1] / det, -a[0][1] / det],
+        [-a[1][0] / det, a[0][0] / det],
+    ]
+}
+
+/// The product of two 2 × 2 matrices.
+fn mul2(a: [[f64; 2]; 2], b: [[f64; 2]; 2]) -> [[f64; 2]; 2] {
+    std::array::from_fn(|i| std::array::from_fn(|j| a[i][0] * b[0][j] + a[i][1] * b[1][j]))
 }
 
 /// One-shot condensation (see [`Condenser`]).

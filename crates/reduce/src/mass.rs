@@ -39,13 +39,16 @@ pub enum MassLumping {
     Lumped,
 }
 
-/// A point mass on a node (both directions).
+/// A point mass on a node, in the directions `axes` (`[x, y]`).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PointMass {
     /// Node id.
     pub node: usize,
     /// Mass \[kg\], ≥ 0.
     pub mass: f64,
+    /// The displacement components that carry it (`[true, true]`: a rigid body on the node;
+    /// `[true, false]`: an input plate's share of its face, which moves in x).
+    pub axes: [bool; 2],
 }
 
 /// Symmetric mass matrix on the model's free DOFs, CSR (full storage).
@@ -120,7 +123,7 @@ impl MassMatrix {
                     }
                 }
                 for p in point_masses {
-                    for d in 0..2 {
+                    for d in (0..2).filter(|&d| p.axes[d]) {
                         if let Some(r) = dofs.reduced(2 * p.node + d) {
                             trip.push((r, r, p.mass));
                         }
@@ -134,7 +137,7 @@ impl MassMatrix {
                 let dof_masses: Vec<DofMass> = point_masses
                     .iter()
                     .flat_map(|p| {
-                        (0..2).map(move |d| DofMass {
+                        (0..2).filter(move |&d| p.axes[d]).map(move |d| DofMass {
                             dof: 2 * p.node + d,
                             mass: p.mass,
                         })

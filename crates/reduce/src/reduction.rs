@@ -163,7 +163,7 @@ pub fn reduce(
     let ports = Ports::from_problem(problem)?;
     let design = Design::new(rho);
     design.validate(model.mesh().n_elements())?;
-    let mut condenser = Condenser::new(model, ports)?;
+    let mut condenser = Condenser::new(model, ports.clone())?;
     let (u0, operating_output) = match params.operating_point {
         None => (None, [0.0; 2]),
         Some(x) => {
@@ -176,7 +176,7 @@ pub fn reduce(
             let mut ws = NewtonWorkspace::new(model, sym);
             let mut p = model.zero_vector();
             for (port, xi) in problem.inputs.iter().zip(x) {
-                p[port.dof] += flexstage_fem::pea_force(port.stiffness, xi);
+                port.add_force(flexstage_fem::pea_force(port.stiffness, xi), &mut p);
             }
             let mut u = model.zero_vector();
             let np = NewtonParams {
@@ -257,23 +257,28 @@ pub fn reduce(
     })
 }
 
-/// The stage's point masses: the PEA input plates on the input nodes (`m_in1`, `m_in2` of the
-/// scenario's model guess, Eq. 1–3) and the payload on the output node (`output.payload`,
+/// The stage's point masses: the PEA input plates on the inputs' faces (`m_in1`, `m_in2` of
+/// the scenario's model guess, Eq. 1–3, each face node carrying its weight's share in x, as
+/// the design's eigenproblem puts them) and the payload on the output node (`output.payload`,
 /// when it is not zero), for the modal analysis of the design with its actuators.
 pub fn plate_masses(problem: &Problem, scenario: &Scenario) -> Vec<PointMass> {
     let mut out: Vec<PointMass> = problem
         .inputs
         .iter()
         .zip([scenario.stage.guess.m_in1, scenario.stage.guess.m_in2])
-        .map(|(p, m)| PointMass {
-            node: p.node,
-            mass: m,
+        .flat_map(|(p, m)| {
+            p.face.iter().map(move |&(dof, w)| PointMass {
+                node: dof / 2,
+                mass: w * m,
+                axes: [dof % 2 == 0, dof % 2 == 1],
+            })
         })
         .collect();
     if scenario.output.payload > 0.0 {
         out.push(PointMass {
             node: problem.output,
             mass: scenario.output.payload,
+            axes: [true, true],
         });
     }
     out

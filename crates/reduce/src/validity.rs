@@ -176,7 +176,7 @@ pub fn validity_map(
         let mut tmp = vec![0.0; model.dofs().n_free()];
         for (j, port) in problem.inputs.iter().enumerate() {
             let mut p = model.zero_vector();
-            p[port.dof] = flexstage_fem::pea_force(port.stiffness, 1.0);
+            port.add_force(flexstage_fem::pea_force(port.stiffness, 1.0), &mut p);
             let mut u = model.zero_vector();
             f.solve_full(model.dofs(), &p, &mut u, &mut tmp, &mut sws)?;
             g[0][j] = u[2 * ports.output];
@@ -197,7 +197,7 @@ pub fn validity_map(
                 for &s in &params.scales {
                     let mut p = model.zero_vector();
                     for (port, &x) in problem.inputs.iter().zip(case) {
-                        p[port.dof] += flexstage_fem::pea_force(port.stiffness, s * x);
+                        port.add_force(flexstage_fem::pea_force(port.stiffness, s * x), &mut p);
                     }
                     let start = u.clone();
                     let mut res =
@@ -217,7 +217,7 @@ pub fn validity_map(
                         source,
                     })?;
                     out.push((
-                        [u[ports.inputs[0]], u[ports.inputs[1]]],
+                        ports.input_displacements(&u),
                         [u[2 * ports.output], u[2 * ports.output + 1]],
                     ));
                 }

@@ -4,8 +4,8 @@
 //! Goal: (1) for a left–right symmetric design, α11 = −α12 and α21 = −α22 within round-off
 //! in the moving frame of Eq. 22 (and α_abs11 = α_abs12 = ½ in the global frame); (2) the
 //! condensed α reproduces the full linear FE output for arbitrary inputs within 1e-9 relative;
-//! (3) the output stiffness with the inputs held matches an independent FE model whose input
-//! DOFs are fixed; (4) the rigid-translation relations hold at a deformed operating point too.
+//! (3) the output stiffness with the inputs held matches an independent FE model whose inputs
+//! (the PEA faces' weighted means) are held by a penalty spring, within 1e-4; (4) the rigid-translation relations hold at a deformed operating point too.
 
 use flexstage_fem::{
     BoundaryConditions, Design, Factor, Kinematics, Model, NewtonParams, NewtonWorkspace,
@@ -62,7 +62,7 @@ fn alpha_reproduces_full_linear_fe() {
     let rho = samples::random_design(&problem, 1e-3, 1.0, 5);
     let design = Design::new(&rho);
     let ports = Ports::from_problem(&problem).unwrap();
-    let c = condense(model, &design, ports, None).unwrap();
+    let c = condense(model, &design, ports.clone(), None).unwrap();
     let mut k = model.new_matrix();
     let mut aws = model.new_workspace();
     model.assemble(&design, &model.zero_vector(), None, Some(&mut k), &mut aws);
@@ -76,12 +76,12 @@ fn alpha_reproduces_full_linear_fe() {
     for pair in xs.chunks(2) {
         let mut p = model.zero_vector();
         for (port, &x) in problem.inputs.iter().zip(pair) {
-            p[port.dof] += port.stiffness * x;
+            port.add_force(port.stiffness * x, &mut p);
         }
         let mut u = model.zero_vector();
         f.solve_full(model.dofs(), &p, &mut u, &mut tmp, &mut sws)
             .unwrap();
-        let x_in = [u[ports.inputs[0]], u[ports.inputs[1]]];
+        let x_in = ports.input_displacements(&u);
         let q = [u[2 * ports.output], u[2 * ports.output + 1]];
         let pred = c.predict(x_in);
         let err = (pred[0] - q[0]).hypot(pred[1] - q[1]) / q[0].hypot(q[1]);
@@ -98,10 +98,13 @@ fn output_stiffness_matches_model_with_fixed_inputs() {
     let rho = samples::random_design(&problem, 1e-3, 1.0, 8);
     let design = Design::new(&rho);
     let ports = Ports::from_problem(&problem).unwrap();
-    let c = condense(model, &design, ports, None).unwrap();
-    // Independent model: the input DOFs fixed (x_in = 0) instead of condensed.
+    let c = condense(model, &design, ports.clone(), None).unwrap();
+    // Independent model: the inputs held (x_in = 0, each face's weighted mean) by a penalty
+    // spring 1e4 times the PEA's instead of condensed (its error is of order 1e-5).
     let mut bcs: BoundaryConditions = model.bcs().clone();
-    bcs.fixed.extend(ports.inputs);
+    for port in &problem.inputs {
+        bcs.add_link(&port.terms(1.0), 1e4 * port.stiffness);
+    }
     let held = Model::new(
         model.mesh().clone(),
         *model.material(),
@@ -130,7 +133,7 @@ fn output_stiffness_matches_model_with_fixed_inputs() {
             let got = c.compliance[i][d];
             let scale = c.compliance[d][d].abs();
             assert!(
-                (got - reference).abs() <= 1e-9 * scale,
+                (got - reference).abs() <= 1e-4 * scale,
                 "C[{i}][{d}] = {got:e}, independent {reference:e}"
             );
         }

@@ -93,6 +93,7 @@ fn stage_modes_are_orthonormal_and_point_masses_lower_them() {
         .map(|p| PointMass {
             node: p.node,
             mass: 0.042,
+            axes: [true, true],
         })
         .collect();
     let loaded = modal_analysis(model, &rho, s.material.density, &plates, &params).unwrap();

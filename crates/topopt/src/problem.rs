@@ -54,15 +54,89 @@ use crate::error::{Result, TopoptError};
 use crate::modal::StageDynamics;
 use crate::stress::StressConstraint;
 
-/// An input port: a grounded spring on one DOF, loaded by `stiffness · x_nom` (Eq. 2–3).
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// An input port: a grounded spring on the port's displacement, loaded by `stiffness · x_nom`
+/// (Eq. 2–3). A PEA port acts over the face its tip presses (DECISIONS.md, "The PEA port: a
+/// face"): its displacement is the face's weighted mean `Σ w_i u_i` (`face`, the weights of a
+/// uniform traction, `Σ w = 1`), its force the uniform traction `w_i F`; a port of one DOF has
+/// `face = [(dof, 1)]`.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Port {
-    /// Node id.
+    /// Node id: the face's centre (the port's point).
     pub node: usize,
-    /// Full DOF index (the x DOF for the PEAs).
+    /// Full DOF index of the port's point (the x DOF for the PEAs).
     pub dof: usize,
     /// Spring stiffness `K_pea` [N/m].
     pub stiffness: f64,
+    /// The face: `(full DOF, weight)`, weights summing to 1.
+    pub face: Vec<(usize, f64)>,
+}
+
+impl Port {
+    /// A port on one DOF.
+    pub fn point(node: usize, dof: usize, stiffness: f64) -> Self {
+        Self {
+            node,
+            dof,
+            stiffness,
+            face: vec![(dof, 1.0)],
+        }
+    }
+
+    /// The port's displacement `Σ w_i u_i` from a full vector.
+    pub fn displacement(&self, u: &[f64]) -> f64 {
+        self.face.iter().map(|&(d, w)| w * u[d]).sum()
+    }
+
+    /// Adds a force `f` on the port (the uniform traction `w_i f`) to the full vector `p`.
+    pub fn add_force(&self, f: f64, p: &mut [f64]) {
+        for &(d, w) in &self.face {
+            p[d] += w * f;
+        }
+    }
+
+    /// The face's terms scaled by `c` (a link spring's terms on the port's displacement).
+    pub fn terms(&self, c: f64) -> Vec<(usize, f64)> {
+        self.face.iter().map(|&(d, w)| (d, c * w)).collect()
+    }
+}
+
+/// The face a PEA presses at input node `node` on a left or right domain edge: the edge's
+/// nodes along the passive solid elements next to the node (the port patch,
+/// `regions`), with the weights of a uniform traction on linear edges (`h/2` at each end of
+/// an edge, normalized). A node off those edges, or without a solid patch beside it, is a
+/// point port (`[(2·node, 1)]`).
+pub fn pea_face(mesh: &Mesh, node: usize) -> Vec<(usize, f64)> {
+    let (i, j0) = mesh.node_ij(node);
+    let column = if i == 0 {
+        0
+    } else if i == mesh.nl {
+        mesh.nl - 1
+    } else {
+        return vec![(2 * node, 1.0)];
+    };
+    let solid = |j: usize| mesh.passive[mesh.element(column, j)] == Passive::Solid;
+    // Element rows j (between nodes j and j + 1) of the patch, contiguous through the node.
+    let mut lo = j0;
+    while lo > 0 && solid(lo - 1) {
+        lo -= 1;
+    }
+    let mut hi = j0;
+    while hi < mesh.nw && solid(hi) {
+        hi += 1;
+    }
+    if hi - lo < 1 {
+        return vec![(2 * node, 1.0)];
+    }
+    let mut w = vec![0.0; hi - lo + 1];
+    for k in 0..hi - lo {
+        w[k] += 0.5;
+        w[k + 1] += 0.5;
+    }
+    let total = (hi - lo) as f64;
+    (lo..=hi)
+        .zip(w)
+        .map(|(j, wj)| (2 * mesh.node(i, j), wj / total))
+        .collect()
 }
 
 /// What is maximized.
@@ -247,15 +321,15 @@ fn energy_limit(s: &Scenario) -> Option<f64> {
 /// The stage's dynamic parts of a two-PEA scenario (`crate::modal`): the input plates of the
 /// model guess (`stage.guess`: K_in and m_in on the input DOFs, Eq. 1–3), the payload on both
 /// output DOFs, and the optimizer's output load taken off.
-fn stage_dynamics(s: &Scenario, inputs: [usize; 2], out: usize) -> StageDynamics {
+fn stage_dynamics(s: &Scenario, inputs: [&Port; 2], out: usize) -> StageDynamics {
     let g = &s.stage.guess;
     let mut springs = vec![
         LinkSpring {
-            terms: vec![(2 * inputs[0], 1.0)],
+            terms: inputs[0].terms(1.0),
             stiffness: g.k_in1,
         },
         LinkSpring {
-            terms: vec![(2 * inputs[1], 1.0)],
+            terms: inputs[1].terms(1.0),
             stiffness: g.k_in2,
         },
     ];
@@ -266,34 +340,40 @@ fn stage_dynamics(s: &Scenario, inputs: [usize; 2], out: usize) -> StageDynamics
             stiffness: -k,
         });
         springs.push(LinkSpring {
-            terms: vec![(2 * out, 1.0), (2 * inputs[0], -0.5), (2 * inputs[1], -0.5)],
+            terms: output_link_terms(out, inputs),
             stiffness: -k,
         });
     }
     let payload = s.output.payload;
+    // The plates move with their faces: each face DOF carries its weight's share.
+    let mut point_masses: Vec<DofMass> = inputs
+        .iter()
+        .zip([g.m_in1, g.m_in2])
+        .flat_map(|(p, m)| {
+            p.face
+                .iter()
+                .map(move |&(dof, w)| DofMass { dof, mass: w * m })
+        })
+        .collect();
+    point_masses.extend((0..2).map(|c| DofMass {
+        dof: 2 * out + c,
+        mass: payload,
+    }));
     StageDynamics {
         density: s.material.density,
         interpolation: MassInterpolation::default(),
-        point_masses: vec![
-            DofMass {
-                dof: 2 * inputs[0],
-                mass: g.m_in1,
-            },
-            DofMass {
-                dof: 2 * inputs[1],
-                mass: g.m_in2,
-            },
-            DofMass {
-                dof: 2 * out,
-                mass: payload,
-            },
-            DofMass {
-                dof: 2 * out + 1,
-                mass: payload,
-            },
-        ],
+        point_masses,
         springs,
     }
+}
+
+/// The terms of the output load's link spring, `u_ox − ½(u_in1 + u_in2)` (the output relative
+/// to the moving frame of Eq. 22, the inputs' displacements over their faces).
+fn output_link_terms(out: usize, inputs: [&Port; 2]) -> Vec<(usize, f64)> {
+    let mut terms = vec![(2 * out, 1.0)];
+    terms.extend(inputs[0].terms(-0.5));
+    terms.extend(inputs[1].terms(-0.5));
+    terms
 }
 
 /// SIMP material of a scenario.
@@ -369,8 +449,23 @@ impl Problem {
             ));
         }
         let mut bcs = scenario_supports(s, &mesh)?;
-        bcs.add_spring(2 * n1, a.stiffness)
-            .add_spring(2 * n2, a.stiffness);
+        let ports = [
+            Port {
+                face: pea_face(&mesh, n1),
+                ..Port::point(n1, 2 * n1, a.stiffness)
+            },
+            Port {
+                face: pea_face(&mesh, n2),
+                ..Port::point(n2, 2 * n2, a.stiffness)
+            },
+        ];
+        for p in &ports {
+            if p.face.len() == 1 {
+                bcs.add_spring(p.dof, p.stiffness);
+            } else {
+                bcs.add_link(&p.terms(1.0), p.stiffness);
+            }
+        }
         let theta = s.output.tilt_deg.to_radians();
         let sign = match a.configuration {
             Configuration::Regular => 1.0,
@@ -386,7 +481,7 @@ impl Problem {
             // "hinges", while a rigid translation of the floating stage loads nothing.
             let k = o.output_spring;
             bcs.add_spring(2 * out + 1, k)
-                .add_link(&[(2 * out, 1.0), (2 * n1, -0.5), (2 * n2, -0.5)], k);
+                .add_link(&output_link_terms(out, [&ports[0], &ports[1]]), k);
         }
         let (objective, cases) = match o.objective {
             ObjectiveKind::Workspace | ObjectiveKind::Resonance => (
@@ -399,9 +494,9 @@ impl Problem {
             ),
         };
         for &d in &bcs.fixed {
-            if d == 2 * n1 || d == 2 * n2 {
+            if ports.iter().any(|p| p.face.iter().any(|t| t.0 == d)) {
                 return Err(TopoptError::Problem(
-                    "a support fixes the x DOF of a PEA input node".into(),
+                    "a support fixes the x DOF of a node of a PEA input's face".into(),
                 ));
             }
         }
@@ -423,18 +518,8 @@ impl Problem {
             });
         let p = Problem {
             model,
-            inputs: vec![
-                Port {
-                    node: n1,
-                    dof: 2 * n1,
-                    stiffness: a.stiffness,
-                },
-                Port {
-                    node: n2,
-                    dof: 2 * n2,
-                    stiffness: a.stiffness,
-                },
-            ],
+            dynamics: Some(stage_dynamics(s, [&ports[0], &ports[1]], out)),
+            inputs: ports.to_vec(),
             output: out,
             cases,
             objective,
@@ -447,7 +532,6 @@ impl Problem {
             mirror_symmetry: o.mirror_symmetry,
             rho_min: o.rho_min,
             initial_density: o.initial_density,
-            dynamics: Some(stage_dynamics(s, [n1, n2], out)),
             resonance: match o.objective {
                 ObjectiveKind::Resonance => Some(Resonance::Maximize {
                     min_area: o.min_workspace,
@@ -475,11 +559,7 @@ impl Problem {
             let node = single_node(&mesh, &p.at, &format!("ports[{i}].at"))?;
             let dof = 2 * node + p.component();
             bcs.add_spring(dof, p.spring);
-            inputs.push(Port {
-                node,
-                dof,
-                stiffness: p.spring,
-            });
+            inputs.push(Port::point(node, dof, p.spring));
         }
         let direction = s
             .output
@@ -645,11 +725,11 @@ impl Problem {
             .collect()
     }
 
-    /// External load vector of case `k`: `K_pea·x_nom` on each input DOF (Eq. 2–3).
+    /// External load vector of case `k`: `K_pea·x_nom` on each input port (Eq. 2–3).
     pub fn load(&self, k: usize) -> Vec<f64> {
         let mut p = self.model.zero_vector();
         for (port, &x) in self.inputs.iter().zip(&self.cases[k]) {
-            p[port.dof] += flexstage_fem::pea_force(port.stiffness, x);
+            port.add_force(flexstage_fem::pea_force(port.stiffness, x), &mut p);
         }
         p
     }

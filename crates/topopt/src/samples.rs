@@ -33,11 +33,7 @@ pub fn inverter(nl: usize, nw: usize) -> Result<Problem> {
     let model = Model::new(mesh, material, Kinematics::Linear, bcs)?;
     let p = Problem {
         model,
-        inputs: vec![Port {
-            node: top_left,
-            dof: 2 * top_left,
-            stiffness: 0.1,
-        }],
+        inputs: vec![Port::point(top_left, 2 * top_left, 0.1)],
         output: top_right,
         // unit force = spring 0.1 × stroke 10
         cases: vec![vec![10.0]],

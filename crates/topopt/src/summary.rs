@@ -138,7 +138,8 @@ fn amplification(problem: &Problem, r: &CaseResults, theta_target: f64, sign: f6
     let theta = if d[1] == 0.0 {
         90.0
     } else {
-        (d[0] / d[1]).atan().to_degrees()
+        // `+ 0.0`: a zero tilt is +0 (a reversed design's D points along −y).
+        (d[0] / d[1]).atan().to_degrees() + 0.0
     };
     (alpha, theta)
 }

@@ -116,3 +116,30 @@ fn adjoint_matches_central_differences_with_a_resonance_bound() {
     };
     check(&s, Some(robust), false, 9);
 }
+
+/// The PEA ports over their faces (the port patches of the presets, here 2 elements of 7.5 mm
+/// beside each input): the PEA springs are link springs on the faces' weighted means, the
+/// loads uniform tractions, the strokes and the workspace read the faces' means; with the
+/// resonance bound (the plates' springs and masses over the faces).
+#[test]
+fn adjoint_matches_central_differences_with_pea_faces() {
+    use flexstage_scenario::{Region, RegionKind, Selector};
+    let mut s = small(Scenario::preset(Preset::Quick));
+    let (l, w, h) = (s.mesh.length, s.mesh.width, s.mesh.length / 16.0);
+    let solid = |min: [f64; 2], max: [f64; 2]| Region {
+        kind: RegionKind::Solid,
+        at: Selector::Box { min, max },
+    };
+    s.regions = vec![
+        solid([0.0, 0.5 * w - 1.25 * h], [2.0 * h, 0.5 * w + 1.25 * h]),
+        solid([l - 2.0 * h, 0.5 * w - 1.25 * h], [l, 0.5 * w + 1.25 * h]),
+    ];
+    s.optimization.min_frequency = 3000.0;
+    let problem = Problem::from_scenario(&s, None).unwrap();
+    assert!(problem.inputs.iter().all(|p| p.face.len() == 3));
+    let robust = RobustThresholds {
+        eroded: 0.6,
+        dilated: 0.4,
+    };
+    check(&s, Some(robust), false, 9);
+}

@@ -5,17 +5,20 @@
 //! ports and both output DOFs; everything else is the interior i. The basis is
 //!
 //! ```text
-//! T = [ Ψ  Φ ],   Ψ = [ I ; −K_ii⁻¹ K_ib ]   (static constraint modes, one per interface DOF)
-//!                 Φ = [ 0 ; φ_k ]            (fixed-interface modes, K_ii φ = ω² M_ii φ)
+//! T = [ Ψ  X  Φ ],   Ψ = [ I ; −K_ii⁻¹ K_ib ]   (static constraint modes, one per interface DOF)
+//!                    X = [ 0 ; K_ii⁻¹ f_i ]     (static corrections, one per PEA face)
+//!                    Φ = [ 0 ; φ_k ]            (fixed-interface modes, K_ii φ = ω² M_ii φ)
 //! ```
 //!
-//! with `K` the tangent at u = 0 (the PEA and plate springs act on interface DOFs only, so they
-//! do not enter Ψ or Φ) and `M` the consistent mass of [`crate::StageFe`]. The reduced
-//! matrices are `M_r = Tᵀ M T`, `K_r = Tᵀ K T` (dense, order 4 + m); the rigid-base loads are
-//! `Tᵀ M r` for unit base accelerations in x and y. The interface DOFs are the first four
-//! reduced coordinates themselves, so the reduced model's static response to the PEA forces
-//! equals the FE's exactly; the fixed-interface modes add the dynamics up to the frequency
-//! they cover. `K_ii` is factored once (Cholesky, faer through `flexstage_fem::Factor`); the
+//! with `K` the tangent at u = 0 without the springs (they act on the PEA faces and the
+//! interface, and enter through the projection), `f_i` the uniform traction of a PEA port
+//! over its face (DOFs off the interface besides the port's point) and `M` the consistent mass
+//! of [`crate::StageFe`]. The reduced matrices are `M_r = Tᵀ M T`, `K_r = Tᵀ K T` (dense,
+//! order 4 + faces + m); the rigid-base loads are `Tᵀ M r` for unit base accelerations in x
+//! and y. The interface DOFs are the first four reduced coordinates themselves and the face
+//! loads' static responses are in the span, so the reduced model's static response to the
+//! PEA forces equals the FE's exactly; the fixed-interface modes add the dynamics up to the
+//! frequency they cover. `K_ii` is factored once (Cholesky, faer through `flexstage_fem::Factor`); the
 //! fixed-interface modes come from `flexstage_reduce::modal_analysis` (shift-invert Lanczos)
 //! on the model with the interface clamped.
 
@@ -37,7 +40,14 @@ pub struct CraigBampton {
     pub stiffness: DMatrix<f64>,
     /// `Tᵀ M r` for unit base accelerations in x and y \[kg\].
     pub floor: [DVector<f64>; 2],
-    /// The basis as full displacement vectors: 4 constraint modes, then m fixed-interface modes.
+    /// `Tᵀ a_i` for the two inputs, `a_i` the uniform traction of unit force on PEA port i's
+    /// face: the reduced PEA force per newton, and the input displacement `a_iᵀ T q` as a
+    /// function of the reduced coordinates (`e_i` for a port of one DOF).
+    pub inputs: [DVector<f64>; 2],
+    /// Static corrections in the basis (one per PEA port over a face, module docs).
+    pub corrections: usize,
+    /// The basis as full displacement vectors: 4 constraint modes, the static corrections,
+    /// then m fixed-interface modes.
     pub basis: Vec<Vec<f64>>,
     /// Frequencies of the fixed-interface modes \[Hz\].
     pub fixed_interface_frequencies: Vec<f64>,
@@ -57,7 +67,7 @@ impl CraigBampton {
 
     /// Number of fixed-interface modes.
     pub fn modes(&self) -> usize {
-        self.order() - INTERFACE
+        self.order() - INTERFACE - self.corrections
     }
 }
 
@@ -137,7 +147,7 @@ pub fn craig_bampton(fe: &StageFe, modes: usize) -> Result<CraigBampton> {
     factor.factorize(&kc)?;
     let mut sws = SolveWorkspace::new(&sym);
     let n = dofs.n_free();
-    let mut basis: Vec<Vec<f64>> = Vec::with_capacity(INTERFACE + modes);
+    let mut basis: Vec<Vec<f64>> = Vec::with_capacity(INTERFACE + 2 + modes);
     let (mut e, mut col) = (vec![0.0; n], vec![0.0; n]);
     let mut full = model.zero_vector();
     let mut rhs = vec![0.0; cdofs.n_free()];
@@ -157,6 +167,22 @@ pub fn craig_bampton(fe: &StageFe, modes: usize) -> Result<CraigBampton> {
         psi[b] = 1.0;
         basis.push(psi);
     }
+    // Static corrections of the PEA faces: a face's uniform traction loads DOFs off the
+    // interface, so its static response with the interface clamped, K_ii χ = f_i, joins the
+    // basis (the twin then reproduces the FE statics exactly, as for a port of one DOF).
+    let mut corrections = 0;
+    for face in fe.faces.iter().filter(|f| f.len() > 1) {
+        let mut load = model.zero_vector();
+        for &(d, w) in face {
+            load[d] += w;
+        }
+        cdofs.gather(&load, &mut rhs);
+        factor.solve_in_place(&mut rhs, &mut sws)?;
+        let mut chi = model.zero_vector();
+        cdofs.scatter(&rhs, &mut chi);
+        basis.push(chi);
+        corrections += 1;
+    }
     basis.extend(fixed.shapes.iter().cloned());
     let r = basis.len();
     let mass = project(model, &basis, &m);
@@ -169,10 +195,16 @@ pub fn craig_bampton(fe: &StageFe, modes: usize) -> Result<CraigBampton> {
             f[j] = dot(&basis[j], &mr);
         }
     }
+    let inputs = fe
+        .faces
+        .clone()
+        .map(|face| DVector::from_fn(r, |j, _| face.iter().map(|&(d, w)| w * basis[j][d]).sum()));
     Ok(CraigBampton {
         mass,
         stiffness,
         floor,
+        inputs,
+        corrections,
         basis,
         fixed_interface_frequencies: fixed.frequencies,
     })

@@ -83,12 +83,13 @@ impl ModalStage {
             let phi = shapes.column(k);
             let fx = phi.dot(&cb.floor[0]);
             let fy = phi.dot(&cb.floor[1]);
+            let plates = [phi.dot(&cb.inputs[0]), phi.dot(&cb.inputs[1])];
             modes.push(Mode {
                 frequency: w / std::f64::consts::TAU,
                 damping: damping.mass / (2.0 * w) + damping.stiffness * w / 2.0,
-                input: [phi[0] * k_pea[0], phi[1] * k_pea[1], -fx, -fy],
+                input: [plates[0] * k_pea[0], plates[1] * k_pea[1], -fx, -fy],
                 output: [phi[2], phi[3]],
-                plates: [phi[0], phi[1]],
+                plates,
             });
         }
         Ok(ModalStage {

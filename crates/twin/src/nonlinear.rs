@@ -135,7 +135,7 @@ pub fn static_responses(fe: &StageFe, x_nom: &[[f64; 2]]) -> Result<Vec<StaticSa
     let mut factor = Factor::new(sym.clone());
     factor.allow_indefinite = false;
     factor.factorize(&fe.stiffness())?;
-    let [i1, i2, ox, oy] = fe.interface;
+    let [_, _, ox, oy] = fe.interface;
     let np = NewtonParams {
         increments: 2,
         residual_tol: 1e-11,
@@ -166,7 +166,7 @@ pub fn static_responses(fe: &StageFe, x_nom: &[[f64; 2]]) -> Result<Vec<StaticSa
                 )?;
                 Ok(StaticSample {
                     x_nom: x,
-                    x_in: [lin[i1], lin[i2]],
+                    x_in: fe.input_displacements(&lin),
                     q_linear: [lin[ox], lin[oy]],
                     q_nonlinear: [u[ox], u[oy]],
                 })
@@ -195,7 +195,6 @@ pub fn stiffening(
     let mut kt = model.new_matrix();
     let mut aws = model.new_workspace();
     let mut tmp = vec![0.0; n];
-    let [i1, i2, _, _] = fe.interface;
     // Modal stiffness shifts and input displacements at x_nom = ±A e_j.
     let mut shift = [[vec![0.0; r], vec![0.0; r]], [vec![0.0; r], vec![0.0; r]]];
     let mut x_in = [[[0.0; 2]; 2]; 2];
@@ -205,7 +204,7 @@ pub fn stiffening(
             x[j] = sign * amplitude;
             let mut u = model.zero_vector();
             factor.solve_full(dofs, &fe.pea_load(x), &mut u, &mut tmp, &mut sws)?;
-            x_in[j][s] = [u[i1], u[i2]];
+            x_in[j][s] = fe.input_displacements(&u);
             model.assemble(&fe.design(), &u, None, Some(&mut kt), &mut aws);
             let dk = cb.project(model, &kt) - &cb.stiffness;
             for k in 0..r {

@@ -133,7 +133,7 @@ pub fn full_response(
     )?;
     let n = (duration / params.dt).round() as usize;
     let mut out = Series::with_capacity(n + 1);
-    let [i1, i2, ox, oy] = fe.interface;
+    let [_, _, ox, oy] = fe.interface;
     out.push(0.0, [0.0; 2], [0.0; 2]);
     let mut p = fe.model.zero_vector();
     for k in 1..=n {
@@ -141,7 +141,7 @@ pub fn full_response(
         fe.pea_load_into(x_nom(t), &mut p);
         tr.step(&p)?;
         let u = tr.displacement();
-        out.push(t, [u[ox], u[oy]], [u[i1], u[i2]]);
+        out.push(t, [u[ox], u[oy]], fe.input_displacements(u));
     }
     let s: TransientStats = tr.stats();
     Ok((
@@ -246,17 +246,17 @@ pub fn mode_check(twin: &Twin) -> Result<Vec<ModeCheck>> {
         .filter(|m| m.frequency <= limit * (1.0 + 1e-9))
         .count()
         .max(1);
-    // The plates (on the input DOFs along x; their y is held by the rollers) and the payload
-    // (on both output DOFs) as node masses, one per node.
-    let mut plates: Vec<PointMass> = Vec::new();
-    for p in &fe.point_masses {
-        if !plates.iter().any(|q| q.node == p.dof / 2) {
-            plates.push(PointMass {
-                node: p.dof / 2,
-                mass: p.mass,
-            });
-        }
-    }
+    // The plates (over the inputs' faces along x) and the payload (on both output DOFs) as
+    // node masses in their directions.
+    let plates: Vec<PointMass> = fe
+        .point_masses
+        .iter()
+        .map(|p| PointMass {
+            node: p.dof / 2,
+            mass: p.mass,
+            axes: [p.dof % 2 == 0, p.dof % 2 == 1],
+        })
+        .collect();
     let params = ModalParams {
         modes: claimed,
         interpolation: fe.interpolation,

@@ -56,6 +56,9 @@ pub struct StageFe {
     pub output_node: usize,
     /// PEA stiffnesses K_pea [N/m].
     pub k_pea: [f64; 2],
+    /// The PEA ports' faces `(full DOF, weight)` (`flexstage_topopt::Port::face`): the PEA
+    /// force is their uniform traction, an input's displacement their weighted mean.
+    pub faces: [Vec<(usize, f64)>; 2],
     /// Input-plate stiffnesses K_in [N/m].
     pub k_in: [f64; 2],
     /// Input-plate masses m_in \[kg\].
@@ -137,7 +140,7 @@ impl StageFe {
         check("material.density", density, density > 0.0, "> 0 kg/m³")?;
         interpolation.validate()?;
         let [a, b] = match problem.inputs.as_slice() {
-            [a, b] => [*a, *b],
+            [a, b] => [a, b],
             other => {
                 return Err(TwinError::Reduced(format!(
                     "the twin needs exactly two PEA inputs, the problem has {}",
@@ -184,7 +187,14 @@ impl StageFe {
         let mut bcs: BoundaryConditions = base.bcs().clone();
         let orphans: Vec<usize> = (0..mesh.n_nodes()).filter(|&n| attached[n] == 0).collect();
         bcs.fix_nodes(&orphans, flexstage_fem::Component::Both);
-        bcs.add_spring(a.dof, k_in[0]).add_spring(b.dof, k_in[1]);
+        // The input plates' springs on the ports' displacements (their faces).
+        for (p, k) in [(a, k_in[0]), (b, k_in[1])] {
+            if p.face.len() == 1 {
+                bcs.add_spring(p.dof, k);
+            } else {
+                bcs.add_link(&p.terms(1.0), k);
+            }
+        }
         let material = flexstage_fem::Material {
             e_min: 0.0,
             ..*base.material()
@@ -195,16 +205,15 @@ impl StageFe {
             .iter()
             .map(|&r| interpolation.relative_mass(r) * density * v)
             .collect();
-        let mut point_masses = vec![
-            DofMass {
-                dof: a.dof,
-                mass: m_in[0],
-            },
-            DofMass {
-                dof: b.dof,
-                mass: m_in[1],
-            },
-        ];
+        // The plates move with their faces: each face DOF carries its weight's share.
+        let mut point_masses: Vec<DofMass> = [(a, m_in[0]), (b, m_in[1])]
+            .into_iter()
+            .flat_map(|(p, m)| {
+                p.face
+                    .iter()
+                    .map(move |&(dof, w)| DofMass { dof, mass: w * m })
+            })
+            .collect();
         if payload > 0.0 {
             point_masses.extend((0..2).map(|c| DofMass {
                 dof: 2 * out + c,
@@ -216,6 +225,7 @@ impl StageFe {
             interface: [a.dof, b.dof, 2 * out, 2 * out + 1],
             output_node: out,
             k_pea: [a.stiffness, b.stiffness],
+            faces: [a.face.clone(), b.face.clone()],
             k_in,
             m_in,
             payload,
@@ -280,12 +290,20 @@ impl StageFe {
         )?)
     }
 
-    /// The PEA load `K_pea,i · x_nom,i` on the input DOFs (Eq. 2–3), full vector, into `out`.
+    /// The PEA load `K_pea,i · x_nom,i` on the inputs (Eq. 2–3; the uniform traction on each
+    /// face), full vector, into `out`.
     pub fn pea_load_into(&self, x_nom: [f64; 2], out: &mut [f64]) {
         out.fill(0.0);
         for i in 0..2 {
-            out[self.interface[i]] += self.k_pea[i] * x_nom[i];
+            for &(d, w) in &self.faces[i] {
+                out[d] += w * self.k_pea[i] * x_nom[i];
+            }
         }
+    }
+
+    /// The input displacements `x_in` (the faces' weighted means) of a full vector.
+    pub fn input_displacements(&self, u: &[f64]) -> [f64; 2] {
+        std::array::from_fn(|i| self.faces[i].iter().map(|&(d, w)| w * u[d]).sum())
     }
 
     /// The PEA load as a new full vector.

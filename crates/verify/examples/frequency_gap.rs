@@ -3,8 +3,10 @@
 //! field thresholded at ½, on the design mesh refined `n × n` (the same piecewise-constant
 //! field: the discretization of the design model; the bilinear field of the element centroids
 //! that the outline contours, thresholded at ½ per sub-element: the outline's geometry in
-//! pixels of `h/n`), and the body-fitted T6 model of the exported outline with the port
-//! couplings of several radii.
+//! pixels of `h/n`), the design mesh with point ports (each PEA on its node, the design model
+//! before the PEA ports became faces), and the body-fitted T6 model of the exported outline
+//! with the PEA ports over their faces (the design's port model) and with point ports (each
+//! port on its nearest boundary node).
 //!
 //! ```text
 //! cargo run --release -p flexstage-verify --example frequency_gap -- paper design.json [PAYLOAD_KG]
@@ -70,6 +72,56 @@ fn refined(s: &Scenario, rho: &[f64], n: usize) -> (Scenario, Vec<f64>, Vec<f64>
     (r, same, smooth)
 }
 
+/// The design's stage eigenproblem with point ports, the design model before the PEA ports
+/// became faces: the PEA spring, the input plate's spring and mass on the port's node's x DOF.
+fn point_ports(s: &Scenario, rho: &[f64]) -> Res<f64> {
+    use flexstage_fem::{DofMass, LinkSpring, Model};
+    let mut problem = Problem::from_scenario(s, None)?;
+    let ports = problem.inputs.clone();
+    let mut bcs = problem.model.bcs().clone();
+    let m_in = [s.stage.guess.m_in1, s.stage.guess.m_in2];
+    for p in &ports {
+        bcs.links.retain(|l| l.terms != p.terms(1.0));
+        bcs.add_spring(p.dof, p.stiffness);
+        for l in &mut bcs.links {
+            let before = l.terms.len();
+            l.terms.retain(|t| !p.face.iter().any(|f| f.0 == t.0));
+            if l.terms.len() < before {
+                l.terms.push((p.dof, -0.5));
+            }
+        }
+    }
+    let m = &problem.model;
+    problem.model = Model::new(m.mesh().clone(), *m.material(), m.kinematics(), bcs)?;
+    let dynamics = problem.dynamics.as_mut().ok_or("no stage dynamics")?;
+    let faces: Vec<usize> = ports
+        .iter()
+        .flat_map(|p| p.face.iter().map(|t| t.0))
+        .collect();
+    dynamics.point_masses.retain(|pm| !faces.contains(&pm.dof));
+    for (p, m) in ports.iter().zip(m_in) {
+        dynamics.point_masses.push(DofMass {
+            dof: p.dof,
+            mass: m,
+        });
+        for sp in &mut dynamics.springs {
+            if sp.terms == p.terms(1.0) {
+                *sp = LinkSpring {
+                    terms: vec![(p.dof, 1.0)],
+                    stiffness: sp.stiffness,
+                };
+            } else {
+                let before = sp.terms.len();
+                sp.terms.retain(|t| !p.face.iter().any(|f| f.0 == t.0));
+                if sp.terms.len() < before {
+                    sp.terms.push((p.dof, -0.5));
+                }
+            }
+        }
+    }
+    Ok(stage_modes(&problem, rho, &ModalParams::default(), false)?.frequencies[0])
+}
+
 fn mass(s: &Scenario, rho: &[f64]) -> f64 {
     let v = s.mesh.length * s.mesh.width * s.mesh.thickness / rho.len() as f64;
     rho.iter().sum::<f64>() * v * s.material.density
@@ -119,6 +171,11 @@ fn main() -> Res<()> {
         pct(f),
         1e3 * mass(&s, &crisp)
     );
+    let f = point_ports(&s, &rho)?;
+    println!(
+        "design mesh, point ports (the PEA at its node): f1 {f:.1} Hz ({:+.2} %)",
+        pct(f)
+    );
     let levels: Vec<usize> = std::env::var("REFINE")
         .unwrap_or_else(|_| "2,3".into())
         .split(',')
@@ -140,9 +197,13 @@ fn main() -> Res<()> {
     let (dx, dy) = s.mesh.element_size();
     let outline = Outline::from_fem_order(nl, nw, dx, dy, 0.5, 10, &rho)?.refined(0.05e-3);
     let h = dx.max(dy);
-    for radius in [0.5, 0.75, 1.5, 3.0] {
+    // `None`: point ports (one boundary node per port). The PEA ports take their faces; the
+    // radius applies to the output.
+    let radii: [Option<f64>; 2] = [None, Some(1.5)];
+    for radius in radii {
         let p = VerifyParams {
-            port_radius: Some(radius * h),
+            port_radius: radius.map(|r| r * h),
+            point_ports: radius.is_none(),
             refine_check: false,
             plate_masses: plates,
             ..VerifyParams::from_limits(&s.limits)
@@ -153,9 +214,10 @@ fn main() -> Res<()> {
             .design_mesh
             .as_ref()
             .map_or(f64::NAN, |d| d.first_frequency);
+        let ports = radius.map_or("point ports".into(), |r| format!("ports within {r} h"));
         println!(
-            "body-fitted, ports within {radius} h: f {:.1?} Hz ({:+.2} %), mass {:.2} g, {} \
-             elements; verify's design-mesh value {d:.1} Hz",
+            "body-fitted, {ports}: f {:.1?} Hz ({:+.2} %), mass {:.2} g, {} elements; \
+             verify's design-mesh value {d:.1} Hz",
             &b.frequencies,
             pct(b.frequencies[0]),
             1e3 * b.mass,

@@ -48,7 +48,7 @@ fn corner_stress(problem: &Problem, rho: &[f64], corners: &[[f64; 2]]) -> Result
     for &x in corners {
         let mut p = model.zero_vector();
         for (port, xi) in problem.inputs.iter().zip(x) {
-            p[port.dof] += flexstage_fem::pea_force(port.stiffness, xi);
+            port.add_force(flexstage_fem::pea_force(port.stiffness, xi), &mut p);
         }
         let mut u = model.zero_vector();
         let np = NewtonParams {

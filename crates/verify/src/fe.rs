@@ -69,6 +69,31 @@ impl Attachment {
         })
     }
 
+    /// A point port: the one boundary node nearest `point`, weight 1 (`None` on an empty
+    /// boundary).
+    pub fn at_nearest_boundary_node(
+        mesh: &TriMesh,
+        name: &str,
+        point: [f64; 2],
+        fixed: [bool; 2],
+    ) -> Option<Self> {
+        let node = mesh.boundary.iter().flatten().copied().min_by(|&a, &b| {
+            let d = |n: usize| {
+                let q = mesh.nodes[n];
+                (q[0] - point[0]).hypot(q[1] - point[1])
+            };
+            d(a).total_cmp(&d(b))
+        })?;
+        Some(Self {
+            name: name.to_string(),
+            point,
+            nodes: vec![node],
+            weights: vec![1.0],
+            positions: vec![mesh.nodes[node]],
+            fixed,
+        })
+    }
+
     /// The boundary edges whose mid-node satisfies `select` (`None` if none).
     pub fn on_boundary_where(
         mesh: &TriMesh,

@@ -58,6 +58,10 @@ pub struct VerifyParams {
     /// attached to) the port, in (0, 50 mm]; `None`: 1.5 design elements (the passive port
     /// patches are 3 elements wide). Default `None`.
     pub port_radius: Option<f64>,
+    /// Attach each port to the one boundary node nearest its point instead of the distributing
+    /// coupling (a point port, the idealization of a port at one node; for the comparison of
+    /// the two port models, `docs/verification.md`). Default false.
+    pub point_ports: bool,
     /// Node budget of the body-fitted mesh, in [100, 20,000,000]. Default 3,000,000.
     pub max_nodes: usize,
     /// Natural frequencies to compute, in [1, 20]. Default 3.
@@ -88,6 +92,7 @@ impl Default for VerifyParams {
             gradation: 0.3,
             angle_limit_deg: 25.0,
             port_radius: None,
+            point_ports: false,
             max_nodes: 3_000_000,
             modes: 3,
             plate_masses: true,

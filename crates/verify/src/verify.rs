@@ -37,7 +37,10 @@ pub struct Transfer {
     pub alpha: [[f64; 2]; 2],
     /// Scalar `α = ½(α21 − α22)` (Eq. 27–29).
     pub alpha_scalar: f64,
-    /// Tilt `θ = atan((α11 − α12)/(α21 − α22))` \[deg\] (Eq. 26).
+    /// Tilt `θ = atan((α11 − α12)/(α21 − α22))` \[deg\] (Eq. 26), in (−90°, 90°]: the axis of
+    /// the differential output from +y towards +x, the convention of the design summary and
+    /// of the reduced model; the orientation along the axis is the sign of `alpha_scalar`
+    /// (negative for a reversed design).
     pub theta_deg: f64,
 }
 
@@ -50,11 +53,20 @@ impl Transfer {
             alpha_abs,
             alpha,
             alpha_scalar: 0.5 * (alpha[1][0] - alpha[1][1]),
-            theta_deg: (alpha[0][0] - alpha[0][1])
-                .atan2(alpha[1][0] - alpha[1][1])
-                .to_degrees(),
+            theta_deg: axis_angle_deg(alpha[0][0] - alpha[0][1], alpha[1][0] - alpha[1][1]),
         }
     }
+}
+
+/// The angle of the axis through `(x, y)` from +y towards +x \[deg\], in (−90°, 90°] (the
+/// direction's sign dropped: Eq. 26's `atan(x / y)`; `+0` for a zero angle).
+pub fn axis_angle_deg(x: f64, y: f64) -> f64 {
+    let theta = if y == 0.0 {
+        90.0
+    } else {
+        (x / y).atan().to_degrees()
+    };
+    if theta == -90.0 { 90.0 } else { theta + 0.0 }
 }
 
 /// Body-fitted results.
@@ -145,6 +157,9 @@ struct PortSpec {
     spring_stress: [f64; 2],
     spring_reduced: [f64; 2],
     mass: f64,
+    /// The face a PEA presses (the ends of its segment on the design mesh, `Port::face`), when
+    /// the port has one: the coupling takes the outline's boundary along it.
+    face: Option<[[f64; 2]; 2]>,
 }
 
 /// A support of the design mesh: its node's point [m] and the components it fixes.
@@ -187,16 +202,30 @@ fn port_specs(
         .collect();
     // The payload (`output.payload`) rides on the output port.
     named.push(("output".into(), stress.output, s.output.payload));
+    // The port a DOF belongs to: a PEA port's face, else its node's port.
+    let face_port = |dof: usize| {
+        stress
+            .inputs
+            .iter()
+            .position(|p| p.face.iter().any(|t| t.0 == dof))
+    };
+    // A PEA's spring over its face is the port's spring (below), not a link.
+    let is_face_link = |l: &flexstage_fem::LinkSpring| {
+        stress
+            .inputs
+            .iter()
+            .any(|p| p.face.len() > 1 && l.terms == p.terms(1.0))
+    };
     for sp in &stress.model.bcs().springs {
         let node = sp.dof / 2;
         if !named.iter().any(|n| n.1 == node) {
             named.push((format!("spring at node {node}"), node, 0.0));
         }
     }
-    for l in &stress.model.bcs().links {
+    for l in stress.model.bcs().links.iter().filter(|l| !is_face_link(l)) {
         for &(dof, _) in &l.terms {
             let node = dof / 2;
-            if !named.iter().any(|n| n.1 == node) {
+            if face_port(dof).is_none() && !named.iter().any(|n| n.1 == node) {
                 named.push((format!("link spring at node {node}"), node, 0.0));
             }
         }
@@ -206,29 +235,47 @@ fn port_specs(
         .bcs()
         .links
         .iter()
-        .map(|l| PortLink {
-            terms: l
-                .terms
-                .iter()
-                .map(|&(dof, c)| {
-                    let port = named
+        .filter(|l| !is_face_link(l))
+        .map(|l| {
+            // Terms on one port's component add up (a face's weights sum to its coefficient).
+            let mut terms: Vec<(usize, usize, f64)> = Vec::new();
+            for &(dof, c) in &l.terms {
+                let port = face_port(dof).unwrap_or_else(|| {
+                    named
                         .iter()
                         .position(|n| n.1 == dof / 2)
-                        .expect("named above");
-                    (port, dof % 2, c)
-                })
-                .collect(),
-            stiffness: l.stiffness,
+                        .expect("named above")
+                });
+                match terms.iter_mut().find(|t| t.0 == port && t.1 == dof % 2) {
+                    Some(t) => t.2 += c,
+                    None => terms.push((port, dof % 2, c)),
+                }
+            }
+            PortLink {
+                terms,
+                stiffness: l.stiffness,
+            }
         })
         .collect();
-    for (name, node, mass) in named {
+    for (k, (name, node, mass)) in named.into_iter().enumerate() {
+        let input = stress.inputs.get(k);
+        let mut spring_stress = springs(stress, node);
+        let mut spring_reduced = springs(reduced, node);
+        let mut face = None;
+        if let Some(p) = input.filter(|p| p.face.len() > 1) {
+            spring_stress[0] += p.stiffness;
+            spring_reduced[0] += p.stiffness;
+            let ends = |d: usize| mesh.node_coords(d / 2);
+            face = Some([ends(p.face[0].0), ends(p.face[p.face.len() - 1].0)]);
+        }
         specs.push(PortSpec {
             name,
             point: mesh.node_coords(node),
             fixed: fixed(node),
-            spring_stress: springs(stress, node),
-            spring_reduced: springs(reduced, node),
+            spring_stress,
+            spring_reduced,
             mass,
+            face,
         });
     }
     let mut supports: Vec<Support> = Vec::new();
@@ -567,7 +614,7 @@ pub fn verify(
         prepared.mesh(&sizing)?,
         &specs,
         &supports,
-        port_radius,
+        (port_radius, p.point_ports),
         h_design,
     )?;
     check_held(&model, &specs, &links)?;
@@ -592,7 +639,7 @@ pub fn verify(
             prepared.mesh(&fine)?,
             &specs,
             &supports,
-            port_radius,
+            (port_radius, p.point_ports),
             h_design,
         )?;
         let peak = corner_statics(&fine_model, &specs, &links, &inputs, &corners)?.0;
@@ -653,25 +700,39 @@ pub fn verify(
     })
 }
 
-/// The FE model with the scenario's ports and supports on the body-fitted boundary.
+/// The FE model with the scenario's ports and supports on the body-fitted boundary: each port
+/// a distributing coupling within `port_radius`, or a point port (`VerifyParams::point_ports`).
 fn build_model(
     scenario: &Scenario,
     tri: TriMesh,
     specs: &[PortSpec],
     supports: &[Support],
-    port_radius: f64,
+    (port_radius, point_ports): (f64, bool),
     h_design: f64,
 ) -> Result<FeModel> {
+    let coupling = (!point_ports).then_some(port_radius);
     let mut attachments = Vec::with_capacity(specs.len());
     for s in specs {
-        let a = Attachment::on_boundary(&tri, &s.name, s.point, port_radius, s.fixed).ok_or_else(
-            || VerifyError::Port {
-                what: s.name.clone(),
-                x_mm: s.point[0] * 1e3,
-                y_mm: s.point[1] * 1e3,
-                radius_mm: port_radius * 1e3,
-            },
-        )?;
+        let a = match (coupling, s.face) {
+            (None, _) => Attachment::at_nearest_boundary_node(&tri, &s.name, s.point, s.fixed),
+            // The boundary along the face the PEA presses: beside the face's segment, within
+            // half a design element of its line (the smoothed outline lies up to about 0.15
+            // elements outside the domain's edge).
+            (Some(_), Some(face)) => {
+                Attachment::on_boundary_where(&tri, &s.name, s.point, s.fixed, |m| {
+                    beside_segment(m, face, 0.5 * h_design)
+                })
+            }
+            (Some(radius), None) => {
+                Attachment::on_boundary(&tri, &s.name, s.point, radius, s.fixed)
+            }
+        };
+        let a = a.ok_or_else(|| VerifyError::Port {
+            what: s.name.clone(),
+            x_mm: s.point[0] * 1e3,
+            y_mm: s.point[1] * 1e3,
+            radius_mm: port_radius * 1e3,
+        })?;
         attachments.push(a);
     }
     // A support node of the design mesh holds the outline boundary within half an element.
@@ -696,6 +757,20 @@ fn build_model(
         thickness: scenario.mesh.thickness,
     };
     FeModel::new(tri, material, attachments, fixed)
+}
+
+/// Whether `p` projects onto the segment `[a, b]` (between its ends) within `distance` of its
+/// line.
+fn beside_segment(p: [f64; 2], [a, b]: [[f64; 2]; 2], distance: f64) -> bool {
+    let d = [b[0] - a[0], b[1] - a[1]];
+    let len = d[0].hypot(d[1]);
+    if len == 0.0 {
+        return (p[0] - a[0]).hypot(p[1] - a[1]) <= distance;
+    }
+    let r = [p[0] - a[0], p[1] - a[1]];
+    let along = (r[0] * d[0] + r[1] * d[1]) / len;
+    let normal = (r[0] * d[1] - r[1] * d[0]) / len;
+    (-1e-9 * len..=len * (1.0 + 1e-9)).contains(&along) && normal.abs() <= distance
 }
 
 fn verdict(b: &BodyFitted, m: &Manufacturability, p: &VerifyParams) -> Verdict {
@@ -820,5 +895,42 @@ impl Verification {
     /// as a VTU document (ParaView).
     pub fn to_vtu(&self) -> String {
         crate::vtu::to_vtu(&self.mesh, &self.displacement, &self.nodal_von_mises)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `A(θ)` of Eq. 29 (the fixed frame) with amplification `a` and tilt `θ`.
+    fn a_theta(a: f64, theta_deg: f64) -> [[f64; 2]; 2] {
+        let t = theta_deg.to_radians().tan();
+        [[0.5 + a * t, 0.5 - a * t], [a, -a]]
+    }
+
+    /// Goal: θ has one convention from design to export (Eq. 26, the axis in (−90°, 90°], the
+    /// orientation in the sign of α): a reversed design (α < 0) is θ = 0°, not 180°; a tilted
+    /// one keeps its tilt whichever way it is driven.
+    #[test]
+    fn theta_is_the_axis_and_alpha_carries_the_orientation() {
+        for (a, theta) in [
+            (1.2, 0.0),
+            (-1.2, 0.0),
+            (1.2, 20.0),
+            (-1.2, 20.0),
+            (0.8, -35.0),
+        ] {
+            let t = Transfer::from_alpha_abs(a_theta(a, theta));
+            assert!((t.theta_deg - theta).abs() < 1e-12, "{a}, {theta}: {t:?}");
+            assert!((t.alpha_scalar - a).abs() < 1e-12, "{a}, {theta}: {t:?}");
+        }
+        // A zero tilt prints as +0, and the ends of the range fold onto +90°.
+        assert!(
+            Transfer::from_alpha_abs(a_theta(-1.0, 0.0))
+                .theta_deg
+                .is_sign_positive()
+        );
+        assert_eq!(axis_angle_deg(1.0, 0.0), 90.0);
+        assert_eq!(axis_angle_deg(-1.0, 0.0), 90.0);
     }
 }

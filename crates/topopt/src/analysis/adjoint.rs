@@ -49,7 +49,12 @@ impl AdjointBasis {
         let dofs = model.dofs();
         let bcs = model.bcs();
         let mut ds: Vec<usize> = vec![2 * problem.output, 2 * problem.output + 1];
-        ds.extend(problem.inputs.iter().map(|p| p.dof));
+        ds.extend(
+            problem
+                .inputs
+                .iter()
+                .flat_map(|p| p.face.iter().map(|t| t.0)),
+        );
         ds.extend(bcs.springs.iter().map(|s| s.dof));
         ds.extend(bcs.links.iter().flat_map(|l| l.terms.iter().map(|t| t.0)));
         ds.sort_unstable();
@@ -98,7 +103,9 @@ impl AdjointBasis {
         add(2 * problem.output, c.output[0], out);
         add(2 * problem.output + 1, c.output[1], out);
         for (p, a) in problem.inputs.iter().zip(c.inputs) {
-            add(p.dof, a, out);
+            for &(d, w) in &p.face {
+                add(d, w * a, out);
+            }
         }
         if c.energy != 0.0 {
             out.iter_mut().zip(u).for_each(|(o, v)| *o += c.energy * v);
@@ -118,7 +125,7 @@ fn right_hand_side(problem: &Problem, c: &CaseCoefficients, u: &[f64], r: &[f64]
     b[2 * problem.output] += c.output[0];
     b[2 * problem.output + 1] += c.output[1];
     for (p, a) in problem.inputs.iter().zip(c.inputs) {
-        b[p.dof] += a;
+        p.add_force(a, b);
     }
     if c.energy != 0.0 {
         for (bi, f) in b.iter_mut().zip(r) {

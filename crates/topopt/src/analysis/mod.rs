@@ -324,7 +324,7 @@ impl<'p> Evaluator<'p> {
             r.outputs
                 .push([u[2 * problem.output], u[2 * problem.output + 1]]);
             r.inputs
-                .push(problem.inputs.iter().map(|p| u[p.dof]).collect());
+                .push(problem.inputs.iter().map(|p| p.displacement(u)).collect());
         }
         if self.compute_energies {
             r.energies = self

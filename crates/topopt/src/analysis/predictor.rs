@@ -80,7 +80,10 @@ impl Predictor {
         // Linear part: K [u_1 … u_ni] = [P_1 … P_ni], one multi-column solve.
         for (i, port) in problem.inputs.iter().enumerate() {
             self.r.fill(0.0);
-            self.r[port.dof] = flexstage_fem::pea_force(port.stiffness, self.scale[i]);
+            port.add_force(
+                flexstage_fem::pea_force(port.stiffness, self.scale[i]),
+                &mut self.r,
+            );
             dofs.gather(&self.r, &mut self.block[i * nf..(i + 1) * nf]);
         }
         k.solve_columns_in_place(&mut self.block[..nf * ni], ni, sws)?;
