@@ -46,7 +46,7 @@ use flexstage_assess::Bench;
 use flexstage_assess::inject::InjectionParams;
 use flexstage_assess::lab::{LabMeasurement, LabParams};
 use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
-use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, monte_carlo};
+use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, PlantDesign, monte_carlo};
 use flexstage_control::ControlError;
 use flexstage_control::actuator::ActuatorParams;
 use flexstage_control::actuator::Compensation;
@@ -394,7 +394,8 @@ type Designed = (
 /// uncertainty, the backstepping's model fitted to it; the controllers' model in `setup`
 /// becomes that fit), returns the measurement's file rows, scores every selected
 /// controller's margins on the twin's exact loop and runs the Monte-Carlo study
-/// (`flexstage_assess::montecarlo`, default settings, on the scenario's first trajectory),
+/// (`flexstage_assess::montecarlo`, default settings: each perturbed twin measured and every
+/// controller designed from its measurement; on the scenario's first trajectory),
 /// whose pass rates go into the margin rows, and the error against scan frequency
 /// ([`crate::scan`]). On the lumped plant the controllers are designed from the scenario's
 /// settings alone: one that needs the twin's response is skipped with a warning, and
@@ -419,6 +420,7 @@ fn tune_and_margins(
         return Ok((designs, Vec::new(), None, None, None));
     };
     let (bench, measured) = measured_bench(setup, twin, progress)?;
+    let scenario_setup = setup.clone();
     setup.controller = bench.setup.controller.clone();
     let mut rows = margins_table(
         &bench,
@@ -433,9 +435,19 @@ fn tune_and_margins(
     let (reference, _) = Reference::from_scenario(first);
     let t0 = std::time::Instant::now();
     let mp = MonteCarloParams::default();
-    let mc = monte_carlo(&bench, controllers, reference, &mp)?;
+    // Identified: the nominal stage as the scenario gives it; each plant is designed on.
+    let scenario_bench;
+    let base = match mp.design {
+        PlantDesign::Identified => {
+            scenario_bench = Bench::scenario(scenario_setup, twin.clone())?;
+            &scenario_bench
+        }
+        PlantDesign::Nominal => &bench,
+    };
+    let mc = monte_carlo(base, controllers, reference, &mp)?;
     progress.note(&format!(
-        "Monte-Carlo: {} perturbed twins × {} controller(s) in {:.1} s",
+        "Monte-Carlo ({} design): {} perturbed twins × {} controller(s) in {:.1} s",
+        mp.design.name(),
         mp.plants,
         controllers.len(),
         t0.elapsed().as_secs_f64()
