@@ -71,7 +71,7 @@ impl MonteCarloStudy {
         let bench = match params.design {
             // Each plant is measured and designed on: the nominal stage as the scenario
             // gives it, nothing designed.
-            PlantDesign::Identified => Bench::scenario(setup, twin)?,
+            PlantDesign::Identified => Bench::scenario(setup, *twin)?,
             PlantDesign::Nominal => nominal_bench(folder, options, &setup, &twin, progress)?,
         };
         Ok(MonteCarloStudy {

@@ -439,7 +439,7 @@ fn tune_and_margins(
     let scenario_bench;
     let base = match mp.design {
         PlantDesign::Identified => {
-            scenario_bench = Bench::scenario(scenario_setup, twin.clone())?;
+            scenario_bench = Bench::scenario(scenario_setup, (**twin).clone())?;
             &scenario_bench
         }
         PlantDesign::Nominal => &bench,
