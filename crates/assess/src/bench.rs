@@ -110,8 +110,10 @@ impl Bench {
     /// Every controller designed from a lab measurement of the twin in its rig at the
     /// controller's sample time ([`crate::lab::measure`]) and from nothing of its truth: the
     /// PI + notch and the PID tuned on the measured loop model
-    /// (`flexstage_identify::measured::ZFit`), the backstepping's model fitted to that loop
-    /// model's response fit (`ZFit::response_fit`), and its gains sized by its margins on
+    /// ([`crate::lab::LabMeasurement::loop_model`]: the z-domain fit
+    /// `flexstage_identify::measured::ZFit` with the static gain read off the lowest lines),
+    /// the backstepping's model fitted to that loop model's response fit
+    /// ([`crate::lab::LabMeasurement::response_fit`]), and its gains sized by its margins on
     /// the measured loop model run in the time domain ([`MeasuredLoop`]). The designs
     /// allow for the measurement's
     /// uncertainty: `tuning`'s margin targets are raised by [`crate::lab::LabParams::allowing`]
@@ -137,9 +139,10 @@ impl Bench {
         measured: &crate::lab::LabMeasurement,
     ) -> Result<Bench> {
         let tuning = lab.allowing(&tuning)?;
-        let fit = measured.model.response_fit(RESPONSE_SHARE);
+        let response = measured.loop_model();
+        let fit = measured.response_fit();
         let sizing = Sizing::Measured(&measured.model);
-        Bench::designed(setup, twin, tuning, &measured.model, fit, sizing, Some(fit))
+        Bench::designed(setup, twin, tuning, &response, fit, sizing, Some(fit))
     }
 
     /// Every registry controller designed on the sampled loop `response` with its response
