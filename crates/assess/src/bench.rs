@@ -172,7 +172,13 @@ impl Bench {
                 &measured
             }
         };
-        let stage = Stage::new(&setup, Some(response), Some(fit), Some(probe), tuning.clone());
+        let stage = Stage::new(
+            &setup,
+            Some(response),
+            Some(fit),
+            Some(probe),
+            tuning.clone(),
+        );
         let designs = Designs::for_stage(&stage)?;
         let (model, coupling) = stage.controller_model();
         drop(stage);
@@ -342,7 +348,13 @@ impl MarginProbe for LinearLoop<'_> {
         design: &dyn Design,
         params: &MarginParams,
     ) -> flexstage_control::Result<Option<[Margins; 2]>> {
-        probe_margins(self, self.setup.rig.delay, design, params, "the twin's linear loop")
+        probe_margins(
+            self,
+            self.setup.rig.delay,
+            design,
+            params,
+            "the twin's linear loop",
+        )
     }
 }
 
@@ -430,7 +442,13 @@ impl MarginProbe for MeasuredLoop<'_> {
         design: &dyn Design,
         params: &MarginParams,
     ) -> flexstage_control::Result<Option<[Margins; 2]>> {
-        probe_margins(self, self.setup.rig.delay, design, params, "the measured loop model")
+        probe_margins(
+            self,
+            self.setup.rig.delay,
+            design,
+            params,
+            "the measured loop model",
+        )
     }
 }
 

@@ -8,10 +8,10 @@
 
 use flexstage_control::actuator::{Actuator, Compensation};
 use flexstage_control::experiment::Setup;
+use flexstage_identify::frequency::C64;
 use flexstage_identify::measured::{
     FitParams, LabLog, MeasuredResponse, MultisinePlan, ZFit, run_log,
 };
-use flexstage_identify::frequency::C64;
 use flexstage_identify::response::{RESPONSE_SHARE, ResponseFit};
 use flexstage_sim::modal::LoopPlant;
 use flexstage_twin::Twin;

@@ -23,10 +23,10 @@
 //! A plant passes when the run does not diverge and the RMS error of each axis is within
 //! [`MonteCarloParams::rms_bound_pct`] of that axis's reference range (peak to peak).
 
+use flexstage_control::experiment::Setup;
 use flexstage_control::registry::Controller;
 use flexstage_control::tuning::TuningParams;
 use flexstage_numerics::noise::SplitMix64;
-use flexstage_control::experiment::Setup;
 use flexstage_sim::rig::RigParams;
 use flexstage_sim::trajectory::Reference;
 use flexstage_twin::Twin;

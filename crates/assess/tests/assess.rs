@@ -153,17 +153,29 @@ fn identified_plant_is_the_nominal_procedure_and_thread_count_free() {
     assert_eq!(p.design, PlantDesign::Identified);
     let seed = (0..40)
         .find(|&seed| {
-            let q = MonteCarloParams { seed, plants: 1, ..p };
+            let q = MonteCarloParams {
+                seed,
+                plants: 1,
+                ..p
+            };
             flexstage_assess::montecarlo::Perturbation::draw(&q, 0).delay == d
         })
         .expect("a seed with the nominal delay");
     let cands = [&PI_NOTCH_FF, &PID_FF];
     let mc = monte_carlo(&base, &cands, r, &MonteCarloParams { seed, ..p }).unwrap();
-    let (own, _) = Bench::measured(setup, twin, TuningParams::default(), &LabParams::default())
-        .unwrap();
+    let (own, _) =
+        Bench::measured(setup, twin, TuningParams::default(), &LabParams::default()).unwrap();
     for (j, c) in cands.iter().enumerate() {
-        let m = flexstage_assess::track::track_on(&own, &own.setup, &own.twin, &own.setup.rig, c, r, 0.05)
-            .unwrap();
+        let m = flexstage_assess::track::track_on(
+            &own,
+            &own.setup,
+            &own.twin,
+            &own.setup.rig,
+            c,
+            r,
+            0.05,
+        )
+        .unwrap();
         assert!(m.rms[0] > 0.0);
         assert_eq!(mc.plants[0].results[j].1, m.rms, "{c}");
     }

@@ -204,8 +204,10 @@ pub fn measured_controller_files(
     response: &MeasuredResponse,
     scenario: &Scenario,
 ) -> Result<Vec<ControllerFile>> {
-    let measured =
-        flexstage_assess::lab::LabMeasurement::from_response(response.clone(), &FitParams::default())?;
+    let measured = flexstage_assess::lab::LabMeasurement::from_response(
+        response.clone(),
+        &FitParams::default(),
+    )?;
     let model = measured.loop_model();
     let fit = measured.response_fit();
     let mut setup = Setup::from_scenario(scenario);
