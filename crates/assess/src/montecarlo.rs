@@ -283,6 +283,24 @@ impl Perturbation {
         }
     }
 
+    /// Plant `i`'s result with this perturbation and the candidates' `results`.
+    pub fn result(
+        &self,
+        i: usize,
+        results: Vec<(&'static Controller, [f64; 2], bool)>,
+    ) -> PlantResult {
+        PlantResult {
+            index: i,
+            stiffness: self.stiffness,
+            mass: self.mass,
+            alpha: self.alpha,
+            damping: self.damping,
+            coupling: self.coupling,
+            delay: self.delay,
+            results,
+        }
+    }
+
     /// The perturbed twin, the controllers' settings with the perturbed compensator and the
     /// perturbed rig (delay, sensor noise × `noise`, noise seed + `i`) of `bench`'s.
     pub fn apply(&self, bench: &Bench, noise: f64, i: usize) -> (Twin, Setup, RigParams) {
@@ -342,7 +360,15 @@ pub fn one_plant(
         PlantDesign::Nominal => (bench, &setup, &twin),
         PlantDesign::Identified => {
             setup.rig = rig.clone();
-            own = Bench::measured(setup, twin, TuningParams::default(), &LabParams::default())?.0;
+            match Bench::measured(setup, twin, TuningParams::default(), &LabParams::default()) {
+                Ok((b, _)) => own = b,
+                // The procedure gives no controller for this stage: every candidate fails.
+                Err(e) if no_design(&e) => {
+                    let failed = candidates.iter().map(|&c| (c, [f64::INFINITY; 2], false));
+                    return Ok(pert.result(i, failed.collect()));
+                }
+                Err(e) => return Err(e),
+            }
             (&own, &own.setup, &own.twin)
         }
     };
@@ -358,14 +384,18 @@ pub fn one_plant(
         };
         results.push((c, rms, pass));
     }
-    Ok(PlantResult {
-        index: i,
-        stiffness: pert.stiffness,
-        mass: pert.mass,
-        alpha: pert.alpha,
-        damping: pert.damping,
-        coupling: pert.coupling,
-        delay: pert.delay,
-        results,
-    })
+    Ok(pert.result(i, results))
+}
+
+/// Whether `e` says the design procedure found no controller for a measured stage (the
+/// tuning meets no margins, a design is infeasible, the loop model cannot be fitted): the
+/// plant fails, the study goes on. Any other error stops the study.
+fn no_design(e: &crate::error::AssessError) -> bool {
+    use crate::error::AssessError;
+    use flexstage_control::ControlError;
+    matches!(
+        e,
+        AssessError::Control(ControlError::Unstable { .. } | ControlError::Infeasible { .. })
+            | AssessError::Identify(flexstage_identify::IdentifyError::Estimate { .. })
+    )
 }
