@@ -3,10 +3,11 @@
 ``MonteCarloStudy.of_run(run)`` takes the *recipe* of the study that ``track`` runs on the
 twin (100 perturbed twins by default: stiffness, mass and α × U(0.8, 1.2), damping
 U(0.5 %, 3 %), cross couplings up to 15 %, compensator parameters × U(0.8, 1.2), 0–2
-samples of delay; a plant passes when its RMS error per axis stays within 0.5 % of the
-range): the scenario, the run-folder files the study reads, the controllers and the
-settings. The recipe pickles; a process sets the study up from it once (twin, tuning) and
-keeps it, so :meth:`run` here and :func:`flexstage.sweeps.monte_carlo` on a cluster give the
+samples of delay, sensor noise × 2; each perturbed twin measured in its own rig and every
+controller designed from that measurement, as ``track`` designs on the nominal twin; a
+plant passes when its RMS error per axis stays within 0.5 % of the range): the scenario,
+the run-folder files the study reads, the controllers and the settings. The recipe
+pickles; a process sets the study up from it once (the nominal twin) and keeps it, so :meth:`run` here and :func:`flexstage.sweeps.monte_carlo` on a cluster give the
 same :class:`MonteCarlo`, bitwise: plant ``i`` depends on the seed and ``i`` alone.
 """
 
@@ -22,7 +23,7 @@ from . import _native
 from .progress import reporter
 
 _SETTINGS = ("plants", "duration", "rms_bound_pct", "seed", "spread", "coupling", "damping",
-             "max_delay")
+             "max_delay", "noise", "design")
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,8 +96,11 @@ class MonteCarloStudy:
         identified parameters and PEAs are used when it has them), for ``controllers``
         (default: those of ``track``) and settings ``plants`` (100), ``duration`` [s] (0.5),
         ``rms_bound_pct`` (0.5), ``seed`` (18), ``spread`` (0.2), ``coupling`` (0.15),
-        ``damping`` ((0.005, 0.03)), ``max_delay`` (2). Sets the study up here (the twin,
-        the controllers tuned on it: seconds)."""
+        ``damping`` ((0.005, 0.03)), ``max_delay`` (2), ``noise`` (2: factor on the sensor
+        noise), ``design`` (``"identified"``: each plant measured and every controller
+        designed from its measurement; ``"nominal"``: the nominal twin's designs on every
+        plant). Sets the study up here (the nominal twin and, for ``"nominal"``, the
+        controllers designed from its measurement)."""
         scenario_json, files = run._n.study_recipe()
         ctrl = controllers or ("pi-notch-ff", "robust", "nonrobust", "pid-ff")
         study = MonteCarloStudy(scenario_json, files, ctrl, settings)

@@ -5,10 +5,12 @@ the same objects as the serial calls, bitwise, whatever the number of workers.
   front), one design each. A design is deterministic (parallel sums in fixed chunks, in
   order), so a worker computes the same bits as this process.
 * :func:`monte_carlo`: the Monte-Carlo study of a run (:class:`flexstage.MonteCarloStudy`),
-  one task per batch of consecutive plants (four batches per worker thread by default: a
-  task costs the scheduler and the worker a round trip, a plant of the quick design 30 ms).
-  The study's recipe is sent to every worker once (``client.scatter(..., broadcast=True)``);
-  each worker sets the study up once and keeps it. Plant ``i`` depends on the seed and
+  one task per batch of consecutive plants (16 batches per worker thread by default: a
+  task costs the scheduler and the worker a round trip of milliseconds, a plant seconds,
+  measured and designed on, and plants vary several-fold in cost, so small batches keep
+  the workers evenly loaded to the end). The study's recipe is sent to every worker once
+  (``client.scatter(..., broadcast=True)``); each worker sets the study up once (the
+  nominal twin) and keeps it. Plant ``i`` depends on the seed and
   ``i`` alone, so neither the batches nor the number of workers change a bit.
 
 Give a ``dask.distributed.Client`` you already run; without one (``client=None``) the same
@@ -70,7 +72,7 @@ def plants_task(first: int, stop: int, study: MonteCarloStudy) -> List[PlantResu
     return [study.plant(i) for i in range(first, stop)]
 
 
-def batches(plants: int, workers: int, per_worker: int = 4) -> List[Tuple[int, int]]:
+def batches(plants: int, workers: int, per_worker: int = 16) -> List[Tuple[int, int]]:
     """``plants`` cut into consecutive ``(first, stop)`` batches, about ``per_worker`` for
     each of ``workers`` worker threads (at least one plant each): few enough that the
     cluster's per-task cost stays small beside the plants, enough that a worker that set up
@@ -83,7 +85,7 @@ def batches(plants: int, workers: int, per_worker: int = 4) -> List[Tuple[int, i
 
 
 def monte_carlo(study: MonteCarloStudy, client: Any = None, *,
-                per_worker: int = 4) -> MonteCarlo:
+                per_worker: int = 16) -> MonteCarlo:
     """The study on ``client``, ``per_worker`` batches of consecutive plants per worker
     thread (else here, one plant after the other; :meth:`MonteCarloStudy.run` uses this
     process's threads instead). The result is the same, bitwise, whatever the batches and

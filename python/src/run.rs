@@ -476,6 +476,7 @@ impl PyRun {
             allow_foreign_params,
             duration,
             learning,
+            montecarlo_plants: TrackOptions::default().montecarlo_plants,
         };
         let s = blocking(py, reporter.as_ref(), |p| {
             flexstage_pipeline::track(folder, &options, p)

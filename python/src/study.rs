@@ -30,11 +30,25 @@ pub struct Settings {
     coupling: Option<f64>,
     damping: Option<[f64; 2]>,
     max_delay: Option<usize>,
+    noise: Option<f64>,
+    design: Option<String>,
 }
 
-fn params(s: &Settings) -> flexstage_assess::montecarlo::MonteCarloParams {
+fn params(s: &Settings) -> PyResult<flexstage_assess::montecarlo::MonteCarloParams> {
     let d = flexstage_assess::montecarlo::MonteCarloParams::default();
-    flexstage_assess::montecarlo::MonteCarloParams {
+    let design = match &s.design {
+        Some(name) => flexstage_assess::montecarlo::PlantDesign::from_name(name).map_err(|_| {
+            errors::pipeline(PipelineError::Option {
+                option: "design",
+                value: name.clone(),
+                expected: "identified (each plant measured, the controllers designed from it) \
+                           or nominal (the nominal designs on every plant)"
+                    .into(),
+            })
+        })?,
+        None => d.design,
+    };
+    Ok(flexstage_assess::montecarlo::MonteCarloParams {
         plants: s.plants.unwrap_or(d.plants),
         duration: s.duration.unwrap_or(d.duration),
         rms_bound_pct: s.rms_bound_pct.unwrap_or(d.rms_bound_pct),
@@ -43,7 +57,9 @@ fn params(s: &Settings) -> flexstage_assess::montecarlo::MonteCarloParams {
         coupling: s.coupling.unwrap_or(d.coupling),
         damping: s.damping.unwrap_or(d.damping),
         max_delay: s.max_delay.unwrap_or(d.max_delay),
-    }
+        noise: s.noise.unwrap_or(d.noise),
+        design,
+    })
 }
 
 /// A study set up in this process.
@@ -105,7 +121,7 @@ impl PyStudy {
             controllers: crate::run::variants(Some(controllers))?,
             ..TrackOptions::default()
         };
-        let mp = params(&settings);
+        let mp = params(&settings)?;
 
         let study = blocking(py, reporter.as_ref(), |p| {
             let dir = tempdir()?;

@@ -60,7 +60,7 @@ def test_batches_cover_every_plant_once_in_order():
         assert [i for a, b in cuts for i in range(a, b)] == list(range(plants))
         assert all(b > a for a, b in cuts)
         assert len(cuts) <= max(1, workers * per_worker)
-    assert sweeps.batches(100, 2) == [(i, min(i + 13, 100)) for i in range(0, 100, 13)]
+    assert sweeps.batches(100, 2) == [(i, min(i + 4, 100)) for i in range(0, 100, 4)]
     with pytest.raises(ValueError, match="workers"):
         sweeps.batches(10, 0)
 
@@ -70,6 +70,20 @@ def test_study_recipe_pickles(study):
     assert again.key == study.key and again.plants == 6
     with pytest.raises(TypeError, match="nosuch"):
         fs.MonteCarloStudy(study.scenario_json, study.files, study.controllers, {"nosuch": 1})
+    bad = fs.MonteCarloStudy(study.scenario_json, study.files, study.controllers,
+                             {"plants": 2, "design": "nosuch"})
+    with pytest.raises(fs.OptionError, match="identified"):
+        bad.plant(0)
+
+
+def test_nominal_design_is_the_old_study_and_differs_from_identified(study):
+    """The study designs on each plant by default; ``design="nominal"`` runs the nominal
+    designs on every plant instead: another result on the same plants."""
+    settings = dict(study.settings, plants=2, design="nominal")
+    nominal = fs.MonteCarloStudy(study.scenario_json, study.files, study.controllers, settings)
+    a, b = nominal.plant(1), study.plant(1)
+    assert fs.same(a.stiffness, b.stiffness) and a.delay == b.delay
+    assert not fs.same(a.rms, b.rms)
 
 
 def test_monte_carlo_on_two_workers_equals_serial(study, client):

@@ -1,7 +1,8 @@
 //! The test bench: the twin of a design, the controllers of `flexstage-control`'s registry
-//! designed for it (tuned on the twin's sampled response, the backstepping sized by its
-//! margins measured on the twin's linear loop), its linear loop for margins and its full rig
-//! for tracking.
+//! designed for it (from a lab measurement of its loop, [`Bench::measured`]: tuned on the
+//! measured loop model, the backstepping sized by its margins on that model run in the time
+//! domain, [`MeasuredLoop`]; or, as a reference, on the twin's truth, [`Bench::new`]), its
+//! linear loop for scoring margins ([`LinearLoop`]) and its full rig for tracking.
 
 use std::sync::Arc;
 
@@ -12,15 +13,18 @@ use flexstage_control::margins::{MarginParams, Margins};
 use flexstage_control::pi_notch::PiNotchParams;
 use flexstage_control::registry::{Controller, Design, Designs, MarginProbe, Stage};
 use flexstage_control::tuning::{TuningParams, loop_margins};
+use flexstage_identify::measured::{ZFilter, ZFit};
 use flexstage_identify::response::{RESPONSE_SHARE, ResponseFit};
 use flexstage_sim::experiment::StageControl;
 use flexstage_sim::modal::{LoopPlant, ModalPlant};
-use flexstage_sim::rig::{AmplifierParams, PlantActuator, RigParams, RigPlant, SensorParams};
+use flexstage_sim::rig::{
+    AmplifierParams, PlantActuator, RigParams, RigPlant, SensorParams, StagePlant,
+};
 use flexstage_sim::trajectory::Reference;
 use flexstage_twin::{Twin, TwinStage};
 
 use crate::error::{AssessError, Result};
-use crate::inject::{InjectionParams, injected_margins};
+use crate::inject::{InjectionLoop, InjectionParams, injected_margins};
 
 /// The bench: the controllers' settings, the twin and the controllers designed for it.
 #[derive(Debug, Clone)]
@@ -86,16 +90,32 @@ impl Bench {
         let fit = identified.unwrap_or_else(|| {
             ResponseFit::from_modes(&twin.modal.plant_modes(), nyquist, RESPONSE_SHARE)
         });
-        Bench::designed(setup, twin, tuning, &plant, fit, true, identified)
+        Bench::designed(setup, twin, tuning, &plant, fit, Sizing::Twin, identified)
+    }
+
+    /// The twin with the controllers of the scenario's settings alone (nothing tuned, no
+    /// response, `Stage::scenario`): the nominal stage of a Monte-Carlo study that measures
+    /// each perturbed twin and designs on it ([`crate::montecarlo::PlantDesign::Identified`]).
+    pub fn scenario(setup: Setup, twin: Twin) -> Result<Bench> {
+        let designs = Designs::for_stage(&Stage::scenario(&setup))?;
+        Ok(Bench {
+            setup,
+            twin,
+            tuning: TuningParams::default(),
+            identified: None,
+            designs,
+        })
     }
 
     /// Every controller designed from a lab measurement of the twin in its rig at the
     /// controller's sample time ([`crate::lab::measure`]) and from nothing of its truth: the
     /// PI + notch and the PID tuned on the measured loop model
-    /// (`flexstage_identify::measured::ZFit`), the backstepping's model fitted to that loop
-    /// model's response fit (`ZFit::response_fit`). The backstepping's gains are not sized
-    /// by margins here (the only probe, [`LinearLoop`], runs on the twin's exact linear
-    /// loop): it keeps the full gains. The linear designs allow for the measurement's
+    /// ([`crate::lab::LabMeasurement::loop_model`]: the z-domain fit
+    /// `flexstage_identify::measured::ZFit` with the static gain read off the lowest lines),
+    /// the backstepping's model fitted to that loop model's response fit
+    /// ([`crate::lab::LabMeasurement::response_fit`]), and its gains sized by its margins on
+    /// the measured loop model run in the time domain ([`MeasuredLoop`]). The designs
+    /// allow for the measurement's
     /// uncertainty: `tuning`'s margin targets are raised by [`crate::lab::LabParams::allowing`]
     /// (the bench keeps the raised tuning). The twin stays on the bench to score the designs.
     pub fn measured(
@@ -119,31 +139,44 @@ impl Bench {
         measured: &crate::lab::LabMeasurement,
     ) -> Result<Bench> {
         let tuning = lab.allowing(&tuning)?;
-        let fit = measured.model.response_fit(RESPONSE_SHARE);
-        Bench::designed(setup, twin, tuning, &measured.model, fit, false, Some(fit))
+        let response = measured.loop_model();
+        let fit = measured.response_fit();
+        let sizing = Sizing::Measured(&measured.model);
+        Bench::designed(setup, twin, tuning, &response, fit, sizing, Some(fit))
     }
 
     /// Every registry controller designed on the sampled loop `response` with its response
-    /// fit `fit` (with `probe`, the backstepping sized by its margins on the twin's
-    /// [`LinearLoop`]); the bench's setup keeps the controllers' model fitted to `fit`.
+    /// fit `fit`, the backstepping sized by its margins on the loop `sizing` names; the
+    /// bench's setup keeps the controllers' model fitted to `fit`.
     fn designed(
         mut setup: Setup,
         twin: Twin,
         tuning: TuningParams,
         response: &dyn LoopPlant,
         fit: ResponseFit,
-        probe: bool,
+        sizing: Sizing<'_>,
         identified: Option<ResponseFit>,
     ) -> Result<Bench> {
         let linear = LinearLoop {
             twin: &twin,
             setup: &setup,
         };
+        let measured;
+        let probe: &dyn MarginProbe = match sizing {
+            Sizing::Twin => &linear,
+            Sizing::Measured(model) => {
+                measured = MeasuredLoop {
+                    model,
+                    setup: &setup,
+                };
+                &measured
+            }
+        };
         let stage = Stage::new(
             &setup,
             Some(response),
             Some(fit),
-            probe.then_some(&linear as &dyn MarginProbe),
+            Some(probe),
             tuning.clone(),
         );
         let designs = Designs::for_stage(&stage)?;
@@ -231,6 +264,15 @@ impl Bench {
     }
 }
 
+/// Where the designs sized by their margins (the backstepping) are sized.
+#[derive(Debug, Clone, Copy)]
+enum Sizing<'m> {
+    /// The twin's linear loop ([`LinearLoop`], its truth): the bench tuned on the truth.
+    Twin,
+    /// The measured loop model ([`MeasuredLoop`]).
+    Measured(&'m ZFit),
+}
+
 /// The twin's linear loop: the linear rig (ideal amplifier, no PEA, the sensor chain without
 /// noise, no creep or floor) around the twin without its geometric correction, with the
 /// controllers' actuator stage and delay of `setup`. What margins are measured on.
@@ -273,25 +315,156 @@ impl LinearLoop<'_> {
     /// `design` built for a zero reference with the ideal actuator stage (x_nom is the
     /// command), predicting over the controllers' delay.
     pub fn controller(&self, design: &dyn Design) -> Result<Box<dyn StageControl>> {
-        let r = Reference::new(flexstage_sim::trajectory::Shape::Step { target: [0.0; 2] });
-        let actuator = self.setup.actuator(Compensation::Ideal);
-        Ok(design.build(actuator, self.setup.controller.delay, r)?)
+        at_rest(self.setup, design)
     }
 }
 
-/// Margins by sine injection with the rig's delay, for designs sized by their margins.
+/// `design` built for a zero reference with the ideal actuator stage of `setup` (x_nom is
+/// the command), predicting over the controllers' delay.
+fn at_rest(setup: &Setup, design: &dyn Design) -> Result<Box<dyn StageControl>> {
+    let r = Reference::new(flexstage_sim::trajectory::Shape::Step { target: [0.0; 2] });
+    let actuator = setup.actuator(Compensation::Ideal);
+    Ok(design.build(actuator, setup.controller.delay, r)?)
+}
+
+impl InjectionLoop for LinearLoop<'_> {
+    fn controller(&self, design: &dyn Design) -> Result<Box<dyn StageControl>> {
+        LinearLoop::controller(self, design)
+    }
+
+    fn plant(&self, delay: usize) -> Result<Box<dyn StagePlant>> {
+        Ok(Box::new(self.linear_plant(delay)?))
+    }
+
+    fn sample_time(&self) -> f64 {
+        self.setup.rig.sample_time
+    }
+}
+
+/// Margins by sine injection on the twin's linear loop with the rig's delay.
 impl MarginProbe for LinearLoop<'_> {
     fn margins(
         &self,
         design: &dyn Design,
         params: &MarginParams,
     ) -> flexstage_control::Result<Option<[Margins; 2]>> {
-        let delay = self.setup.rig.delay;
-        injected_margins(self, design, delay, params, &InjectionParams::default()).map_err(|e| {
-            ControlError::Measurement {
-                what: "margins by sine injection on the twin".into(),
-                detail: e.to_string(),
-            }
-        })
+        probe_margins(
+            self,
+            self.setup.rig.delay,
+            design,
+            params,
+            "the twin's linear loop",
+        )
     }
+}
+
+/// The loop a lab measured: its z-domain loop model (`flexstage_identify::measured::ZFit`,
+/// fitted to the response from the DAC command to the ADC reading through the full rig:
+/// hold, the rig's delay, amplifier, PEAs under the compensation, stage, sensor chain) run
+/// in the time domain ([`ZFit::filter`]), with the controllers' actuator stage of `setup`
+/// (ideal compensation: the command is the x_nom the model takes). What the designs sized
+/// by their margins are sized on: nothing of the twin's truth.
+#[derive(Debug, Clone, Copy)]
+pub struct MeasuredLoop<'a> {
+    /// The measured loop model.
+    pub model: &'a ZFit,
+    /// The controllers' settings and the rig the model was measured in.
+    pub setup: &'a Setup,
+}
+
+/// The measured loop model as a [`StagePlant`]: its reading is its output (no noise).
+struct ModelPlant {
+    filter: ZFilter,
+    /// Commands still in the extra delay, oldest first.
+    queue: std::collections::VecDeque<[f64; 2]>,
+    x_nom: [f64; 2],
+}
+
+impl StagePlant for ModelPlant {
+    fn measure(&mut self) -> [f64; 2] {
+        self.filter.output()
+    }
+
+    fn output(&self) -> [f64; 2] {
+        self.filter.output()
+    }
+
+    fn apply(&mut self, cmd: &flexstage_sim::experiment::Command) {
+        self.queue.push_back(cmd.x_nom);
+        if let Some(u) = self.queue.pop_front() {
+            self.x_nom = u;
+            self.filter.step(u);
+        }
+    }
+
+    fn voltage(&self) -> [f64; 2] {
+        [0.0; 2]
+    }
+
+    fn x_nom(&self) -> [f64; 2] {
+        self.x_nom
+    }
+}
+
+impl InjectionLoop for MeasuredLoop<'_> {
+    fn controller(&self, design: &dyn Design) -> Result<Box<dyn StageControl>> {
+        at_rest(self.setup, design)
+    }
+
+    /// The model with the delay it was measured with (the rig's) and `delay` − the rig's
+    /// delay samples more; fewer than the rig's are refused naming the delay.
+    fn plant(&self, delay: usize) -> Result<Box<dyn StagePlant>> {
+        let measured = self.setup.rig.delay;
+        let Some(extra) = delay.checked_sub(measured) else {
+            return Err(flexstage_numerics::RangeError::new(
+                "delay",
+                delay.to_string(),
+                format!("≥ {measured} samples (the measured loop's own delay)"),
+            )
+            .into());
+        };
+        Ok(Box::new(ModelPlant {
+            filter: self.model.filter(),
+            queue: std::iter::repeat_n([0.0; 2], extra).collect(),
+            x_nom: [0.0; 2],
+        }))
+    }
+
+    fn sample_time(&self) -> f64 {
+        self.setup.rig.sample_time
+    }
+}
+
+/// Margins by sine injection on the measured loop model, with the delay it was measured with.
+impl MarginProbe for MeasuredLoop<'_> {
+    fn margins(
+        &self,
+        design: &dyn Design,
+        params: &MarginParams,
+    ) -> flexstage_control::Result<Option<[Margins; 2]>> {
+        probe_margins(
+            self,
+            self.setup.rig.delay,
+            design,
+            params,
+            "the measured loop model",
+        )
+    }
+}
+
+/// [`injected_margins`] of `design` on `probe` with `delay`, its error a
+/// [`ControlError::Measurement`] naming `what`.
+fn probe_margins(
+    probe: &dyn InjectionLoop,
+    delay: usize,
+    design: &dyn Design,
+    params: &MarginParams,
+    what: &str,
+) -> flexstage_control::Result<Option<[Margins; 2]>> {
+    injected_margins(probe, design, delay, params, &InjectionParams::default()).map_err(|e| {
+        ControlError::Measurement {
+            what: format!("margins by sine injection on {what}"),
+            detail: e.to_string(),
+        }
+    })
 }

@@ -13,8 +13,20 @@ use flexstage_sim::experiment::StageControl;
 use flexstage_sim::rig::StagePlant;
 use nalgebra::Complex;
 
-use crate::bench::LinearLoop;
 use crate::error::Result;
+
+/// A loop margins are measured on by injection: a controller of a design and the plant it
+/// runs on, both at rest. [`crate::bench::LinearLoop`] is the twin's linear loop (where
+/// margins are scored), [`crate::bench::MeasuredLoop`] the loop model a lab measured (where
+/// designs sized by their margins are sized).
+pub trait InjectionLoop {
+    /// `design` built for a zero reference, its command the x_nom the plant takes.
+    fn controller(&self, design: &dyn Design) -> Result<Box<dyn StageControl>>;
+    /// The plant with `delay` samples of rig delay.
+    fn plant(&self, delay: usize) -> Result<Box<dyn StagePlant>>;
+    /// The sample time \[s\].
+    fn sample_time(&self) -> f64;
+}
 
 /// Settings of the injection.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -37,21 +49,19 @@ impl Default for InjectionParams {
     }
 }
 
-/// One closed loop of `design` on the linear rig with `delay` samples, at rest with a zero
+/// One closed loop of `design` on the loop `probe` with `delay` samples, at rest with a zero
 /// reference.
 fn closed_loop(
-    probe: &LinearLoop<'_>,
+    probe: &dyn InjectionLoop,
     design: &dyn Design,
     delay: usize,
 ) -> Result<(Box<dyn StageControl>, Box<dyn StagePlant>)> {
-    let ctrl = probe.controller(design)?;
-    let plant = probe.linear_plant(delay)?;
-    Ok((ctrl, Box::new(plant)))
+    Ok((probe.controller(design)?, probe.plant(delay)?))
 }
 
 /// The measured return ratio of loop `axis` at `f` \[Hz\]; NaN when the loop diverges.
 pub fn return_ratio(
-    probe: &LinearLoop<'_>,
+    probe: &dyn InjectionLoop,
     design: &dyn Design,
     delay: usize,
     axis: usize,
@@ -59,7 +69,7 @@ pub fn return_ratio(
     p: &InjectionParams,
 ) -> Result<Complex<f64>> {
     let (mut ctrl, mut plant) = closed_loop(probe, design, delay)?;
-    let t = probe.setup.rig.sample_time;
+    let t = probe.sample_time();
     let settle = ((p.settle + 3.0 / f) / t).ceil() as usize;
     let cycles = (4.0f64).max((p.window * f).ceil());
     let n = (cycles / (f * t)).round() as usize;
@@ -91,13 +101,13 @@ pub fn return_ratio(
 /// can still pass for a short `duration`; [`injected_margins`] also reports a loop that
 /// diverges under injection as unstable.)
 pub fn is_stable(
-    probe: &LinearLoop<'_>,
+    probe: &dyn InjectionLoop,
     design: &dyn Design,
     delay: usize,
     duration: f64,
 ) -> Result<bool> {
     let (mut ctrl, mut plant) = closed_loop(probe, design, delay)?;
-    let t = probe.setup.rig.sample_time;
+    let t = probe.sample_time();
     let n = (duration / t).round() as usize;
     let (mut peak, mut tail, mut last) = (0.0f64, 0.0f64, 0.0f64);
     for k in 0..n {
@@ -131,7 +141,7 @@ const KICK: f64 = 1e-8;
 /// Margins of `design` from measured return ratios; `None` when the closed loop is
 /// unstable (no margin to speak of).
 pub fn injected_margins(
-    probe: &LinearLoop<'_>,
+    probe: &dyn InjectionLoop,
     design: &dyn Design,
     delay: usize,
     m: &MarginParams,

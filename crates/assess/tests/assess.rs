@@ -3,7 +3,7 @@
 
 use flexstage_assess::Bench;
 use flexstage_assess::inject::{InjectionParams, return_ratio};
-use flexstage_assess::montecarlo::{MonteCarloParams, monte_carlo};
+use flexstage_assess::montecarlo::{MonteCarloParams, PlantDesign, monte_carlo};
 use flexstage_control::experiment::Setup;
 use flexstage_control::pi_notch::PI_NOTCH_FF;
 use flexstage_control::pid::PID_FF;
@@ -74,9 +74,9 @@ fn injection_equals_transfer_function_for_the_pi_notch() {
     }
 }
 
-/// Goal: a Monte-Carlo "perturbation" of zero spread, zero coupling, the nominal delay and
-/// the twin's own damping reproduces the nominal run exactly (the perturbation path changes
-/// nothing it should not).
+/// Goal: a Monte-Carlo "perturbation" of zero spread, zero coupling, the nominal delay, the
+/// twin's own damping and noise, with the nominal designs, reproduces the nominal run
+/// exactly (the perturbation path changes nothing it should not).
 #[test]
 fn zero_perturbation_reproduces_the_nominal_run() {
     let b = bench();
@@ -95,6 +95,8 @@ fn zero_perturbation_reproduces_the_nominal_run() {
         coupling: 0.0,
         damping: [zeta, zeta],
         max_delay: d,
+        noise: 1.0,
+        design: PlantDesign::Nominal,
         ..MonteCarloParams::default()
     };
     for seed in 0..40 {
@@ -117,6 +119,75 @@ fn zero_perturbation_reproduces_the_nominal_run() {
         return;
     }
     panic!("no plant with the nominal delay in 40 seeds");
+}
+
+/// Goal: with identification in the loop, a "perturbation" that changes nothing (zero
+/// spread and coupling, the nominal delay, damping and noise) designs on the plant exactly
+/// what `Bench::measured` designs on the nominal twin with the same rig seed, and runs it to
+/// the same bits (the per-plant measurement and design are the nominal procedure); and the
+/// study gives the same bits on one thread and on three (plants computed in any order).
+#[test]
+fn identified_plant_is_the_nominal_procedure_and_thread_count_free() {
+    use flexstage_assess::lab::LabParams;
+    use flexstage_control::tuning::TuningParams;
+    let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
+    let mut twin = flexstage_twin::Twin::from_scenario(&s, &rho).unwrap();
+    let zeta = twin.modal.modes[0].damping;
+    for m in &mut twin.modal.modes {
+        m.damping = zeta;
+    }
+    let setup = Setup::from_scenario(&s);
+    let d = setup.rig.delay;
+    let base = Bench::scenario(setup.clone(), twin.clone()).unwrap();
+    let (r, _) = Reference::from_scenario(&s.trajectories[0]);
+    let p = MonteCarloParams {
+        plants: 1,
+        duration: 0.05,
+        spread: 0.0,
+        coupling: 0.0,
+        damping: [zeta, zeta],
+        max_delay: d,
+        noise: 1.0,
+        ..MonteCarloParams::default()
+    };
+    assert_eq!(p.design, PlantDesign::Identified);
+    let seed = (0..40)
+        .find(|&seed| {
+            let q = MonteCarloParams {
+                seed,
+                plants: 1,
+                ..p
+            };
+            flexstage_assess::montecarlo::Perturbation::draw(&q, 0).delay == d
+        })
+        .expect("a seed with the nominal delay");
+    let cands = [&PI_NOTCH_FF, &PID_FF];
+    let mc = monte_carlo(&base, &cands, r, &MonteCarloParams { seed, ..p }).unwrap();
+    let (own, _) =
+        Bench::measured(setup, twin, TuningParams::default(), &LabParams::default()).unwrap();
+    for (j, c) in cands.iter().enumerate() {
+        let m = flexstage_assess::track::track_on(
+            &own,
+            &own.setup,
+            &own.twin,
+            &own.setup.rig,
+            c,
+            r,
+            0.05,
+        )
+        .unwrap();
+        assert!(m.rms[0] > 0.0);
+        assert_eq!(mc.plants[0].results[j].1, m.rms, "{c}");
+    }
+    let q = MonteCarloParams { plants: 3, ..p };
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| monte_carlo(&base, &[&PI_NOTCH_FF], r, &q).unwrap())
+    };
+    assert_eq!(on(1), on(3));
 }
 
 /// Reference: the exact ZOH response of the twin's modes followed by the rig's sensor chain

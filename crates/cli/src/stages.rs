@@ -506,6 +506,10 @@ pub struct TrackArgs {
     /// 5000 FE DOF, i.e. quick; off for paper, minutes per case), on, off.
     #[arg(long, default_value = "auto", value_parser = TWIN_VALIDATIONS, requires = "write_twin")]
     pub twin_validate: String,
+    /// Perturbed twins of the Monte-Carlo study on the twin (each one measured and every
+    /// controller designed from that measurement, then run on it), ≥ 1.
+    #[arg(long, default_value_t = TrackOptions::default().montecarlo_plants)]
+    pub montecarlo_plants: usize,
 }
 
 pub fn track(a: TrackArgs) -> anyhow::Result<()> {
@@ -518,6 +522,7 @@ pub fn track(a: TrackArgs) -> anyhow::Result<()> {
         allow_foreign_params: a.target.out.is_some(),
         duration: a.duration,
         learning: a.learning.then_some(a.trials),
+        montecarlo_plants: a.montecarlo_plants,
     };
     let folder = a.target.open()?;
     if a.write_twin {

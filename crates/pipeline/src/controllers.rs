@@ -16,8 +16,7 @@ use flexstage_control::registry::{CONTROLLERS, Controller, Designs, Stage};
 use flexstage_control::target::{CSource, TargetLaw, c_prefix, compensation_name, compensation_of};
 use flexstage_control::tuning::TuningParams;
 use flexstage_control_core::{Biquad, PidGains};
-use flexstage_identify::measured::{FitParams, LabLog, MeasuredResponse, WelchParams, ZFit};
-use flexstage_identify::response::RESPONSE_SHARE;
+use flexstage_identify::measured::{FitParams, LabLog, MeasuredResponse, WelchParams};
 use flexstage_piezo::{BoucWenParams, CompensatorParams};
 use flexstage_run::files::controller::{
     ActuatorFile, AxisFile, ControllerFile, SectionFile, VERSION,
@@ -195,8 +194,9 @@ pub enum Measurement<'a> {
 }
 
 /// The coefficients files of the linear controllers of the registry designed from
-/// `response` alone (no design, no twin): its z-domain loop model (`ZFit`) to tune the
-/// PI + notch and the PID on (to the margins raised by the default allowance for the
+/// `response` alone (no design, no twin): its loop model
+/// (`flexstage_assess::lab::LabMeasurement::loop_model`: the z-domain fit with the static
+/// gain read off the lowest lines) to tune the PI + notch and the PID on (to the margins raised by the default allowance for the
 /// measurement's uncertainty, `flexstage_assess::lab::LabParams::allowing`, as `track`), the model's response fit for the feed-forward, and the
 /// scenario's settings for the actuator stage (inverse compensation). A response read back
 /// from its file gives the same files, bitwise.
@@ -204,8 +204,12 @@ pub fn measured_controller_files(
     response: &MeasuredResponse,
     scenario: &Scenario,
 ) -> Result<Vec<ControllerFile>> {
-    let model = ZFit::fit(response, &FitParams::default())?;
-    let fit = model.response_fit(RESPONSE_SHARE);
+    let measured = flexstage_assess::lab::LabMeasurement::from_response(
+        response.clone(),
+        &FitParams::default(),
+    )?;
+    let model = measured.loop_model();
+    let fit = measured.response_fit();
     let mut setup = Setup::from_scenario(scenario);
     setup.rig.sample_time = response.sample_time();
     // The same allowance for the measurement's uncertainty as `track`'s designs.

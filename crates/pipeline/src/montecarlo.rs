@@ -4,13 +4,18 @@
 //! depends on the study's seed and `i` alone (`flexstage_assess::montecarlo`).
 //!
 //! A study is set up from a run folder as `track` sets up its own study on the twin: the
-//! controllers designed from the twin measured in its rig at the controller's sample time,
-//! the compensator from the identified PEAs ([`mod@crate::track`]).
+//! nominal twin and the compensator from the identified PEAs ([`mod@crate::track`]); with
+//! the default [`PlantDesign::Identified`] each plant is measured and designed on when it is
+//! computed, with [`PlantDesign::Nominal`] the controllers are designed once, from the
+//! nominal twin measured in its rig at the controller's sample time.
 //! [`MonteCarloStudy::inputs`] lists the files it reads, so that another process can rebuild
 //! it in a folder of its own.
 
 use flexstage_assess::Bench;
-use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, PlantResult, one_plant};
+use flexstage_assess::montecarlo::{
+    MonteCarlo, MonteCarloParams, PlantDesign, PlantResult, one_plant,
+};
+use flexstage_control::experiment::Setup;
 use flexstage_control::registry::Controller;
 use flexstage_run::files::measured::MeasuredLineRow;
 use flexstage_run::format::Rows;
@@ -63,19 +68,11 @@ impl MonteCarloStudy {
         };
         let (reference, _) = Reference::from_scenario(first);
         crate::progress::check_stop(progress, "the study stopped before tuning", "")?;
-        // The run's own measurement when `track` stored one under these conditions (the
-        // designs from it are bitwise those from measuring again), else a new one.
-        let stored = Tracking::variant(&options.conditions(folder)).measured_response();
-        let bench = match folder.dir().load::<Rows<MeasuredLineRow>>(&stored)? {
-            Some(rows) => {
-                progress.note(&format!("designing the controllers from {stored}"));
-                let t0 = std::time::Instant::now();
-                crate::track::bench_from_rows(&setup, &twin, &rows, progress, t0)?
-            }
-            None => {
-                progress.note("designing the controllers from the twin measured in its rig");
-                crate::track::measured_bench(&setup, &twin, progress)?.0
-            }
+        let bench = match params.design {
+            // Each plant is measured and designed on: the nominal stage as the scenario
+            // gives it, nothing designed.
+            PlantDesign::Identified => Bench::scenario(setup, *twin)?,
+            PlantDesign::Nominal => nominal_bench(folder, options, &setup, &twin, progress)?,
         };
         Ok(MonteCarloStudy {
             bench,
@@ -86,7 +83,8 @@ impl MonteCarloStudy {
     }
 
     /// The run-folder files [`MonteCarloStudy::of_run`] reads with the default options
-    /// (relative paths; the measured response only when `track` stored one): a folder
+    /// (relative paths; the measured response only when `track` stored one, and read only
+    /// for [`PlantDesign::Nominal`]): a folder
     /// holding these and the scenario sets up the same study.
     pub fn inputs() -> Vec<String> {
         let mut files = vec![
@@ -141,4 +139,28 @@ impl MonteCarloStudy {
             &self.params,
         )?)
     }
+}
+
+/// The bench with every controller designed from the nominal twin's measurement, as `track`
+/// designs it: the run's own measurement when `track` stored one under these conditions (the
+/// designs from it are bitwise those from measuring again), else a new one.
+fn nominal_bench(
+    folder: &RunFolder,
+    options: &TrackOptions,
+    setup: &Setup,
+    twin: &flexstage_twin::Twin,
+    progress: &dyn Progress,
+) -> Result<Bench> {
+    let stored = Tracking::variant(&options.conditions(folder)).measured_response();
+    Ok(match folder.dir().load::<Rows<MeasuredLineRow>>(&stored)? {
+        Some(rows) => {
+            progress.note(&format!("designing the controllers from {stored}"));
+            let t0 = std::time::Instant::now();
+            crate::track::bench_from_rows(setup, twin, &rows, progress, t0)?
+        }
+        None => {
+            progress.note("designing the controllers from the twin measured in its rig");
+            crate::track::measured_bench(setup, twin, progress)?.0
+        }
+    })
 }

@@ -46,7 +46,7 @@ use flexstage_assess::Bench;
 use flexstage_assess::inject::InjectionParams;
 use flexstage_assess::lab::{LabMeasurement, LabParams};
 use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
-use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, monte_carlo};
+use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, PlantDesign, monte_carlo};
 use flexstage_control::ControlError;
 use flexstage_control::actuator::ActuatorParams;
 use flexstage_control::actuator::Compensation;
@@ -150,6 +150,9 @@ pub struct TrackOptions {
     /// `<controller>+learning`, beside the controller's own. `None`: off, the default
     /// (docs/DECISIONS.md, "Learning in track").
     pub learning: Option<usize>,
+    /// Perturbed twins of the Monte-Carlo study on the twin, ≥ 1 (default 100; each one
+    /// measured and designed on, seconds apiece: tests use a few).
+    pub montecarlo_plants: usize,
 }
 
 impl Default for TrackOptions {
@@ -163,6 +166,7 @@ impl Default for TrackOptions {
             allow_foreign_params: false,
             duration: None,
             learning: None,
+            montecarlo_plants: MonteCarloParams::default().plants,
         }
     }
 }
@@ -192,6 +196,12 @@ impl TrackOptions {
                 "a number of trials in 1..=200",
             )?;
         }
+        require(
+            self.montecarlo_plants >= 1,
+            "track.montecarlo_plants",
+            self.montecarlo_plants,
+            "≥ 1 plant",
+        )?;
         Ok(())
     }
 
@@ -394,7 +404,9 @@ type Designed = (
 /// uncertainty, the backstepping's model fitted to it; the controllers' model in `setup`
 /// becomes that fit), returns the measurement's file rows, scores every selected
 /// controller's margins on the twin's exact loop and runs the Monte-Carlo study
-/// (`flexstage_assess::montecarlo`, default settings, on the scenario's first trajectory),
+/// (`flexstage_assess::montecarlo`, default settings but `montecarlo_plants` plants: each
+/// perturbed twin measured and every controller designed from its measurement; on the
+/// scenario's first trajectory),
 /// whose pass rates go into the margin rows, and the error against scan frequency
 /// ([`crate::scan`]). On the lumped plant the controllers are designed from the scenario's
 /// settings alone: one that needs the twin's response is skipped with a warning, and
@@ -403,6 +415,7 @@ fn tune_and_margins(
     setup: &mut Setup,
     sim: &Simulated,
     controllers: &[&'static Controller],
+    montecarlo_plants: usize,
     scenario: &flexstage_scenario::Scenario,
     progress: &dyn Progress,
     warnings: &mut Vec<String>,
@@ -419,6 +432,7 @@ fn tune_and_margins(
         return Ok((designs, Vec::new(), None, None, None));
     };
     let (bench, measured) = measured_bench(setup, twin, progress)?;
+    let scenario_setup = setup.clone();
     setup.controller = bench.setup.controller.clone();
     let mut rows = margins_table(
         &bench,
@@ -432,10 +446,23 @@ fn tune_and_margins(
     };
     let (reference, _) = Reference::from_scenario(first);
     let t0 = std::time::Instant::now();
-    let mp = MonteCarloParams::default();
-    let mc = monte_carlo(&bench, controllers, reference, &mp)?;
+    let mp = MonteCarloParams {
+        plants: montecarlo_plants,
+        ..MonteCarloParams::default()
+    };
+    // Identified: the nominal stage as the scenario gives it; each plant is designed on.
+    let scenario_bench;
+    let base = match mp.design {
+        PlantDesign::Identified => {
+            scenario_bench = Bench::scenario(scenario_setup, (**twin).clone())?;
+            &scenario_bench
+        }
+        PlantDesign::Nominal => &bench,
+    };
+    let mc = monte_carlo(base, controllers, reference, &mp)?;
     progress.note(&format!(
-        "Monte-Carlo: {} perturbed twins × {} controller(s) in {:.1} s",
+        "Monte-Carlo ({} design): {} perturbed twins × {} controller(s) in {:.1} s",
+        mp.design.name(),
         mp.plants,
         controllers.len(),
         t0.elapsed().as_secs_f64()
@@ -764,6 +791,7 @@ pub fn track_on(
         &mut setup,
         &sim,
         &options.controllers,
+        options.montecarlo_plants,
         &plant.scenario,
         progress,
         &mut warnings,

@@ -58,7 +58,7 @@ use flexstage_numerics::DataError;
 use flexstage_numerics::records::{NumericCsv, RecordError};
 
 pub use experiment::{Drive, MultisinePlan, run_log};
-pub use fit::{FitParams, ZFit};
+pub use fit::{FitParams, ZFilter, ZFit};
 pub use log::{LOG_COLUMNS, LabLog};
 pub use welch::WelchParams;
 

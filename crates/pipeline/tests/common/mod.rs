@@ -48,6 +48,7 @@ pub fn short(iterations: usize, checkpoint_every: usize, validity: bool) -> RunO
     };
     o.track = TrackOptions {
         duration: Some(0.05),
+        montecarlo_plants: 2,
         ..TrackOptions::default()
     };
     o
