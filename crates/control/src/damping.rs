@@ -40,15 +40,19 @@
 //!    measured):
 //!    * (a) per axis, the candidate of step 4 with the best predicted damping whose damping
 //!      loop alone is stable (Nyquist on det(I − P G⁻¹ D)) and meets the margins;
-//!    * (b) with both filters (their gains scaled by 1, ½, ¼, …, [`BACK_OFF`] steps, until
-//!      (c) passes), the PI + notch tuned on the damped loop (I − P G⁻¹ D)⁻¹ P by
-//!      [`crate::tuning::tune`]: the default controller's procedure and budget (equal
-//!      effort);
+//!    * (b) with both filters, the PI + notch tuned on the damped loop
+//!      (I − P G⁻¹ D)⁻¹ P by [`crate::tuning::tune`], with the default controller's
+//!      procedure, budget and targets (equal effort);
 //!    * (c) the whole controller's loop-at-a-time margins at the output (where the
-//!      assessment breaks the loop), L = P G⁻¹ diag(c − D), meet the targets, the outer
-//!      gains scaled down by a common factor (bisection in [1/16, 1]) if they do not.
+//!      assessment breaks the loop), L = P G⁻¹ diag(c − D), must meet the targets, with
+//!      the outer gains (kp, ki, kd of both axes) scaled by the largest 2^{−k/8},
+//!      k < [`OUTER_STEPS`], that does (the outer tuning meets the targets on the damped
+//!      loop, where the damping loop is closed, not on the whole loop); else the
+//!      filter of a loop that does not has its gain halved (both filters when the damping
+//!      loop is unstable or the tuning fails, or the failing loop has no filter) and (b)
+//!      is repeated; a filter halved [`BACK_OFF`] times is dropped.
 //!
-//!    No scale passing: the controller is not designed on that stage.
+//!    No filter left: the controller is not designed on that stage.
 //!
 //! The margins the assessment reports come from sine injection on the twin's loop (the
 //! controller has no PI(D) + notch transfer function, [`Design::linear`] is `None`).
@@ -82,8 +86,11 @@ pub static PPF_PI_FF: Controller = Controller {
 /// The filter dampings ζ_f tried by step 4 (module docs).
 pub const FILTER_DAMPINGS: [f64; 4] = [0.1, 0.2, 0.3, 0.5];
 
-/// The gain scales tried by step 5: 1, ½, …, 2^{−(BACK_OFF − 1)}.
+/// Halvings of a filter's gain before step 5c drops it.
 pub const BACK_OFF: usize = 8;
+
+/// Outer gain scales tried by step 5c: 2^{−k/8}, k < OUTER_STEPS (down to 0.71).
+pub const OUTER_STEPS: usize = 5;
 
 /// Gains on the grid of step 4.
 const GAIN_POINTS: usize = 40;
@@ -472,6 +479,15 @@ fn whole_margins(
     ])
 }
 
+/// `p` with every axis's kp, ki and kd scaled by `x`.
+fn scaled(p: &PiNotchParams, x: f64) -> PiNotchParams {
+    let mut p = *p;
+    for a in &mut p.axes {
+        (a.kp, a.ki, a.kd) = (a.kp * x, a.ki * x, a.kd * x);
+    }
+    p
+}
+
 /// The inverse of a static gain, or a typed error when it is singular.
 fn inverse(g: [[f64; 2]; 2]) -> Result<[[f64; 2]; 2]> {
     let det = g[0][0] * g[1][1] - g[0][1] * g[1][0];
@@ -487,7 +503,7 @@ fn inverse(g: [[f64; 2]; 2]) -> Result<[[f64; 2]; 2]> {
 }
 
 /// The design of the module docs on `plant` with `tuning`'s procedure and margin targets;
-/// `None` when no gain scale passes step 5.
+/// `None` when no axis keeps a filter through step 5.
 pub fn design(plant: &dyn LoopPlant, tuning: &TuningParams) -> Result<Option<DampedParams>> {
     tuning.validate()?;
     let g_inv = inverse(plant.static_gain())?;
@@ -495,69 +511,53 @@ pub fn design(plant: &dyn LoopPlant, tuning: &TuningParams) -> Result<Option<Dam
         axis_filter(plant, g_inv, 0, tuning)?,
         axis_filter(plant, g_inv, 1, tuning)?,
     ];
-    if filters.iter().all(Option::is_none) {
-        return Ok(None);
-    }
-    let meets = |m: &[Margins; 2]| {
-        m.iter()
-            .all(|m| m.meets(tuning.gain_margin_db, tuning.phase_margin_deg))
-    };
-    for step in 0..BACK_OFF {
-        let s = 0.5f64.powi(step as i32);
-        let damping = filters.map(|f| f.map(|f| f.scaled(s)));
+    let mut halvings = [0i32; 2];
+    loop {
+        let damping = [0, 1].map(|i| {
+            filters[i]
+                .filter(|_| halvings[i] < BACK_OFF as i32)
+                .map(|f| f.scaled(0.5f64.powi(halvings[i])))
+        });
+        if damping.iter().all(Option::is_none) {
+            return Ok(None);
+        }
         let damped = Damped {
             plant,
             g_inv,
             damping,
         };
-        if !damping_loop_stable(&damped) {
-            continue;
-        }
-        let Ok(outer) = tune(&damped, Structure::PiNotch, tuning) else {
-            continue;
-        };
-        // Step 5c: the largest common scale (≤ 1) of the outer gains at which the whole
-        // controller keeps the margins, by bisection in log scale.
-        let scaled = |x: f64| {
-            let mut p = outer.params;
-            for a in &mut p.axes {
-                (a.kp, a.ki, a.kd) = (a.kp * x, a.ki * x, a.kd * x);
-            }
-            p
-        };
-        let whole = |x: f64| -> Result<Option<[Margins; 2]>> {
-            let p = scaled(x);
-            if !closed_loop_stable(&damped, &p) {
-                return Ok(None);
-            }
-            let m = whole_margins(plant, &p, damping, tuning)?;
-            Ok(meets(&m).then_some(m))
-        };
-        let mut found = whole(1.0)?.map(|m| (1.0, m));
-        if found.is_none() {
-            let (mut lo, mut hi) = (1.0 / 16.0, 1.0);
-            if let Some(m) = whole(lo)? {
-                found = Some((lo, m));
-                for _ in 0..12 {
-                    let mid = (lo * hi).sqrt();
-                    match whole(mid)? {
-                        Some(m) => {
-                            (lo, found) = (mid, Some((mid, m)));
-                        }
-                        None => hi = mid,
+        // Which loops fail (b) or (c): both when the damping loop or the tuning fails.
+        let failing = match damping_loop_stable(&damped)
+            .then(|| tune(&damped, Structure::PiNotch, tuning).ok())
+            .flatten()
+        {
+            Some(outer) if closed_loop_stable(&damped, &outer.params) => {
+                let mut fails = [true; 2];
+                for k in 0..OUTER_STEPS {
+                    let params = scaled(&outer.params, 2f64.powf(-(k as f64) / 8.0));
+                    let margins = whole_margins(plant, &params, damping, tuning)?;
+                    fails =
+                        margins.map(|m| !m.meets(tuning.gain_margin_db, tuning.phase_margin_deg));
+                    if !fails.contains(&true) {
+                        return Ok(Some(DampedParams {
+                            outer: params,
+                            damping,
+                            margins,
+                        }));
                     }
                 }
+                fails
+            }
+            _ => [true; 2],
+        };
+        // Back off the failing loops' filters (a loop without one: both filters).
+        let own = [0, 1].map(|i| failing[i] && damping[i].is_some());
+        for i in 0..2 {
+            if own[i] || (!own.contains(&true) && damping[i].is_some()) {
+                halvings[i] += 1;
             }
         }
-        if let Some((x, margins)) = found {
-            return Ok(Some(DampedParams {
-                outer: scaled(x),
-                damping,
-                margins,
-            }));
-        }
     }
-    Ok(None)
 }
 
 /// The design steps [`DampedController`].
