@@ -98,7 +98,7 @@ class MonteCarloStudy:
         ``damping`` ((0.005, 0.03)), ``max_delay`` (2). Sets the study up here (the twin,
         the controllers tuned on it: seconds)."""
         scenario_json, files = run._n.study_recipe()
-        ctrl = controllers or ("pi-notch-ff", "robust", "nonrobust", "pid-ff")
+        ctrl = controllers or tuple(_native.DEFAULT_CONTROLLERS)
         study = MonteCarloStudy(scenario_json, files, ctrl, settings)
         study._native(progress)
         return study
