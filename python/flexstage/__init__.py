@@ -18,8 +18,8 @@ Errors are :class:`FlexstageError` (and its subclasses) with the command line's 
 Ctrl-C stops a long call cleanly with ``KeyboardInterrupt``.
 """
 
-from ._native import (DEFAULT_PRESET, PRESETS, FlexstageError, OptionError, RunFolderError,
-                      ScenarioError)
+from ._native import (CONTROLLERS, DEFAULT_CONTROLLERS, DEFAULT_PRESET, PRESETS, FlexstageError,
+                      OptionError, RunFolderError, ScenarioError)
 from .results import (Analysis, Design, Export, PeaIdentification, PeaRecord, Reduction,
                       RunSummary, StageIdentification, TrackCase, Tracking, Twin, same)
 from .run import Run
@@ -27,8 +27,8 @@ from .scenario import Scenario
 from .study import MonteCarlo, MonteCarloStudy, PlantResult
 
 __all__ = [
-    "DEFAULT_PRESET", "PRESETS", "FlexstageError", "OptionError", "RunFolderError",
-    "ScenarioError", "Analysis", "Design", "Export", "PeaIdentification", "PeaRecord",
-    "Reduction", "RunSummary", "StageIdentification", "TrackCase", "Tracking", "Twin", "same",
-    "Run", "Scenario", "MonteCarlo", "MonteCarloStudy", "PlantResult",
+    "CONTROLLERS", "DEFAULT_CONTROLLERS", "DEFAULT_PRESET", "PRESETS", "FlexstageError",
+    "OptionError", "RunFolderError", "ScenarioError", "Analysis", "Design", "Export",
+    "PeaIdentification", "PeaRecord", "Reduction", "RunSummary", "StageIdentification",
+    "TrackCase", "Tracking", "Twin", "same", "Run", "Scenario", "MonteCarlo", "MonteCarloStudy", "PlantResult",
 ]

@@ -19,6 +19,8 @@ Doc = Optional[Dict[str, Any]]
 
 PRESETS: List[str]
 DEFAULT_PRESET: str
+CONTROLLERS: List[str]
+DEFAULT_CONTROLLERS: List[str]
 
 class FlexstageError(Exception):
     """Base of every flexstage error; the message is the command line's."""

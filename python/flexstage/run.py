@@ -210,8 +210,8 @@ class Run:
               duration: Optional[float] = None, plant: str = "twin",
               learning: Optional[int] = None, progress: Any = True) -> Tracking:
         """The simulated tracking experiment (Section 4, Figures 9–11; ``flexstage track``):
-        ``trajectory`` of the scenario (default all), ``controllers`` among "pi-notch-ff",
-        "robust", "nonrobust", "pid-ff", "pid-ff-scenario" (default all but the last) on
+        ``trajectory`` of the scenario (default all), ``controllers`` among the registry's
+        (``flexstage.CONTROLLERS``; default ``flexstage.DEFAULT_CONTROLLERS``) on
         the twin (``plant="lumped"``: the 8-state model). ``learning``: also run every
         controller with iterative learning for that many trials (periodic trajectories
         only; ``flexstage track --learning --trials N``), rows ``<controller>+learning``."""

@@ -102,7 +102,7 @@ class MonteCarloStudy:
         plant). Sets the study up here (the nominal twin and, for ``"nominal"``, the
         controllers designed from its measurement)."""
         scenario_json, files = run._n.study_recipe()
-        ctrl = controllers or ("pi-notch-ff", "robust", "nonrobust", "pid-ff")
+        ctrl = controllers or tuple(_native.DEFAULT_CONTROLLERS)
         study = MonteCarloStudy(scenario_json, files, ctrl, settings)
         study._native(progress)
         return study

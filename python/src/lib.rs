@@ -26,5 +26,14 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<study::PyStudy>()?;
     m.add("PRESETS", flexstage_pipeline::PRESETS.to_vec())?;
     m.add("DEFAULT_PRESET", flexstage_pipeline::DEFAULT_PRESET)?;
+    // The registry's controllers by name, and those `track` runs by default.
+    let names = |cs: &[&flexstage_pipeline::Controller]| -> Vec<&'static str> {
+        cs.iter().map(|c| c.name).collect()
+    };
+    m.add("CONTROLLERS", names(&flexstage_pipeline::CONTROLLERS))?;
+    m.add(
+        "DEFAULT_CONTROLLERS",
+        names(&flexstage_pipeline::Controller::defaults()),
+    )?;
     Ok(())
 }

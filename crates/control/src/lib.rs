@@ -31,6 +31,9 @@
 //! * [`pi_notch`]: the industry baseline and the default controller: per-axis PI(D) with up
 //!   to two notches, static feed-forward through a measured static gain, inverse-hysteresis
 //!   compensation, tuned on the stage's sampled response;
+//! * [`damping`]: positive position feedback on each axis's first mode (its filter placed on
+//!   the measured loop's modal model, phase restored for the loop's delay) with the PI +
+//!   notch tuned around the damped loop;
 //! * [`pid`]: the PID + feed-forward baseline (the same law without notches), tuned or with
 //!   the scenario's gains;
 //! * [`margins`]: gain, phase and delay margins of a loop from its frequency response
@@ -152,6 +155,7 @@ pub mod actuator;
 pub mod analysis;
 pub mod backstepping;
 pub mod controller;
+pub mod damping;
 mod error;
 pub mod estimator;
 pub mod experiment;

@@ -42,12 +42,13 @@ use crate::tuning::TuningParams;
 
 /// Every controller, in report order (the default controller first). One line per
 /// controller.
-pub static CONTROLLERS: [&Controller; 5] = [
+pub static CONTROLLERS: [&Controller; 6] = [
     &crate::pi_notch::PI_NOTCH_FF,
     &crate::controller::ROBUST,
     &crate::controller::NONROBUST,
     &crate::pid::PID_FF,
     &crate::pid::PID_FF_SCENARIO,
+    &crate::damping::PPF_PI_FF,
 ];
 
 /// The default controller (DECISIONS.md, "Default controller").

@@ -682,7 +682,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "twin.min_modes",
-        "At least this many fixed-interface modes, in [1, 40]. Default 6.",
+        "At least this many fixed-interface modes, in [1, 40]. Default 24 (the 50 µs step of the twin's validity within 2 % of range; 6 left it at 8.6 %).",
     ),
     (
         "twin.damping_ratio",

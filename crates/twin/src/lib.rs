@@ -37,8 +37,9 @@
 //! ## What it neglects
 //!
 //! * Modes above the covered band: an input with content far above it (an ideal voltage
-//!   jump) excites FE modes the twin does not have (a 50 µs step: 10–20 % of range, reported
-//!   by [`reference::validate`] as "fast step"). The default rig cannot move the PEAs that fast
+//!   jump) excites FE modes the twin does not have well converged (a 50 µs step, reported by
+//!   [`reference::validate`] as "fast step": 1.7 / 0.3 % of range with the default 24
+//!   fixed-interface modes on the quick design, 10.7 / 4.7 % with 6). The default rig cannot move the PEAs that fast
 //!   (0.1 A into 1.5 µF is 67 V/ms).
 //! * Out-of-plane motion, contact, thermal drift, the PEAs' own mass and internal dynamics
 //!   beyond the plate mass, the electrical dynamics of the PEA beyond `i = C dU/dt`,

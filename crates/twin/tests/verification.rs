@@ -71,9 +71,9 @@ fn twin_modes_match_the_fe_modal_analysis_within_half_a_percent() {
         );
         assert!(m.relative.abs() < 0.005, "{m:?}");
     }
-    // The twin claims every mode below coverage × f1 (3 × f1 here) and keeps at least 6
-    // fixed-interface modes reaching twice that band.
-    assert!(t.reduction.modes() >= 6);
+    // The twin claims every mode below coverage × f1 (3 × f1 here) and keeps at least
+    // `min_modes` (24) fixed-interface modes reaching twice that band.
+    assert!(t.reduction.modes() >= t.params.min_modes && t.params.min_modes == 24);
     let top = *t.reduction.fixed_interface_frequencies.last().unwrap();
     assert!(top >= 2.0 * t.covered_frequency(), "{top} Hz");
     assert!(checks.last().unwrap().twin <= t.covered_frequency());
@@ -99,7 +99,9 @@ fn twin_follows_the_full_nonlinear_transient_within_one_percent() {
     for c in &v.cases {
         let r = c.twin.relative();
         if c.name == "fast step" {
-            // The documented limit: a 50 µs rise excites FE modes above the twin's band.
+            // A 50 µs rise excites modes up to about 50 kHz, where this coarse reference
+            // step (4 µs, for the test's time) has a period error of 13 %: the fast step is
+            // checked at the default 0.5 µs in verification.md (1.7 / 0.3 %), not here.
             assert!(r[0] > 0.01 || r[1] > 0.01, "{r:?}");
             continue;
         }
