@@ -1,17 +1,30 @@
 //! Error against scan frequency: every candidate on the Lissajous 3:1 whose fast component
 //! (q1, 3 f) runs from 1 % to 30 % of the twin's first resonance, on the twin in the full
-//! rig. Amplitudes start at the scenario's first Lissajous and are halved until the rig can
-//! deliver the scan (amplifier range, current, stroke: `Setup::check_reference`); the RMS is
-//! taken over the second half of the run (after the smooth start), also in % of the range.
+//! rig. Amplitudes start at the scenario's first Lissajous and are scaled down by the factor
+//! the binding limit asks for (controller stroke, amplifier range, current, slew:
+//! [`flexstage_control::feasibility::Feasibility::binding`]) until every candidate's
+//! feed-forward command fits, so each point runs as large as the amplifier allows. The
+//! static gain the check inverts is the measured one (the bench's identified response fit),
+//! never the twin's.
+//!
+//! Every point reports, per candidate and axis, the RMS and the peak error over the second
+//! half of the run (after the smooth start; no cut-off), also in % of the range, and what
+//! limits it ([`Cause`]): the loop's lag at the scan's own lines (bandwidth), error at other
+//! frequencies (distortion: hysteresis residual, excited modes), the same at a mode above
+//! Nyquist folded by the sampling (aliasing), or a run that did not stay finite or grew
+//! (instability). The twin's modes name the folded frequencies: they score the run, they
+//! feed nothing.
 
+use flexstage_control::actuator::Compensation;
+use flexstage_control::feasibility::{Feasibility, Limit};
 use flexstage_figures::plot::{Figure, Series};
+use flexstage_sim::experiment::{Record, run};
 use flexstage_sim::trajectory::{Reference, Shape};
 
 use flexstage_control::registry::Controller;
 
 use crate::bench::Bench;
 use crate::error::{Result, check};
-use crate::track::{diverged, track_on};
 
 /// Settings of the sweep.
 #[derive(Debug, Clone, PartialEq)]
@@ -25,10 +38,55 @@ pub struct SweepParams {
 impl Default for SweepParams {
     fn default() -> Self {
         SweepParams {
-            fractions: vec![0.01, 0.02, 0.03, 0.05, 0.08, 0.12, 0.2, 0.3],
+            fractions: vec![0.01, 0.02, 0.03, 0.05, 0.08, 0.1, 0.12, 0.2, 0.3],
             periods: 2.0,
         }
     }
+}
+
+/// What limits a candidate's error at a point of the sweep (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cause {
+    /// Most of the error lies at the reference's own lines (f and 3 f): the loop's lag there.
+    Bandwidth,
+    /// Most of the error lies elsewhere (harmonics of the hysteresis residual, excited modes).
+    Distortion,
+    /// As [`Cause::Distortion`], with the largest error line within 5 % of a mode above
+    /// Nyquist folded by the 10 kHz sampling (or of a hold image reaching it).
+    Aliasing,
+    /// The run did not stay finite, or its error grew over the steady half.
+    Unstable,
+}
+
+impl Cause {
+    /// Its name in files and tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Cause::Bandwidth => "bandwidth",
+            Cause::Distortion => "distortion",
+            Cause::Aliasing => "aliasing",
+            Cause::Unstable => "unstable",
+        }
+    }
+}
+
+/// One candidate at one point of the sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepResult {
+    /// The candidate.
+    pub controller: &'static Controller,
+    /// RMS error per axis over the second half \[m\] (non-finite only for a run that was).
+    pub rms: [f64; 2],
+    /// Largest |error| per axis over the second half \[m\].
+    pub peak: [f64; 2],
+    /// `rms` in % of the range (peak to peak).
+    pub rms_pct: [f64; 2],
+    /// `peak` in % of the range.
+    pub peak_pct: [f64; 2],
+    /// What limits the error.
+    pub cause: Cause,
+    /// Frequency of the largest error line over both axes \[Hz\] (0 when there is none).
+    pub dominant: f64,
 }
 
 /// One point of the sweep.
@@ -40,11 +98,71 @@ pub struct SweepPoint {
     pub frequency: f64,
     /// Amplitudes used (A1, A2) \[m\].
     pub amplitude: [f64; 2],
-    /// Per candidate: steady RMS error per axis \[m\] (∞: diverged), and in % of the range.
-    pub results: Vec<(&'static Controller, [f64; 2], [f64; 2])>,
+    /// The limit that reduced the amplitude from the scenario's, and the factor it was
+    /// reduced by (`None`: not reduced).
+    pub reduced: Option<(Limit, f64)>,
+    /// One result per candidate, in the candidates' order.
+    pub results: Vec<SweepResult>,
+}
+
+/// What following `r` over `duration` takes from the rig with the feed-forward command of
+/// every candidate (the most demanding of them counts).
+fn feasibility(
+    bench: &Bench,
+    candidates: &[&'static Controller],
+    r: &Reference,
+    duration: f64,
+) -> Result<Vec<Feasibility>> {
+    candidates
+        .iter()
+        .map(|c| bench.feasibility(c, r, duration))
+        .collect()
+}
+
+/// The amplitude of one point: `amplitude` scaled until every candidate's feed-forward fits
+/// (at most 8 rounds of the binding factor, each with a 3 % allowance), with the first
+/// binding limit and the total factor.
+fn fitting_amplitude(
+    bench: &Bench,
+    candidates: &[&'static Controller],
+    amplitude: [f64; 2],
+    base: f64,
+    duration: f64,
+) -> Result<Option<([f64; 2], Option<(Limit, f64)>)>> {
+    let mut scale = 1.0;
+    let mut first: Option<Limit> = None;
+    for _ in 0..8 {
+        let r = lissajous(amplitude.map(|a| a * scale), base);
+        let binding = feasibility(bench, candidates, &r, duration)?
+            .iter()
+            .filter_map(Feasibility::binding)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match binding {
+            None => {
+                return Ok(Some((
+                    amplitude.map(|a| a * scale),
+                    first.map(|l| (l, scale)),
+                )));
+            }
+            Some((limit, factor)) => {
+                first.get_or_insert(limit);
+                scale *= 0.97 * factor.min(1.0);
+            }
+        }
+    }
+    Ok(None)
+}
+
+fn lissajous(amplitude: [f64; 2], frequency: f64) -> Reference {
+    Reference::new(Shape::Lissajous {
+        ratio: 3.0,
+        amplitude,
+        frequency,
+    })
 }
 
 /// Runs the sweep for `candidates`, starting from the Lissajous amplitudes `amplitude`.
+/// A point no amplitude makes feasible is left out.
 pub fn sweep(
     bench: &Bench,
     candidates: &[&'static Controller],
@@ -54,59 +172,150 @@ pub fn sweep(
     check("sweep.periods", p.periods, p.periods >= 1.0, "≥ 1")?;
     let f1 = bench.twin.first_resonance();
     let t = bench.setup.rig.sample_time;
+    let folded = folded_modes(bench);
     let mut out = Vec::new();
     for &frac in &p.fractions {
         check("sweep.fractions", frac, frac > 0.0 && frac < 0.45, "0–0.45")?;
         let fast = frac * f1;
         let base = fast / 3.0;
         let duration = (p.periods / base).max(0.05);
-        let mut amp = amplitude;
-        let mut reference = None;
-        for _ in 0..12 {
-            let r = Reference::new(Shape::Lissajous {
-                ratio: 3.0,
-                amplitude: amp,
-                frequency: base,
-            });
-            if bench
-                .setup
-                .check_reference(&r, duration, Some(bench.twin.dc_gain()))
-                .is_ok()
-            {
-                reference = Some(r);
-                break;
-            }
-            amp = amp.map(|a| 0.5 * a);
-        }
-        let Some(r) = reference else { continue };
+        let Some((amp, reduced)) = fitting_amplitude(bench, candidates, amplitude, base, duration)?
+        else {
+            continue;
+        };
+        let r = lissajous(amp, base);
         let half = r.half_range(duration, t);
         let mut results = Vec::new();
         for &c in candidates {
-            let m = track_on(
-                bench,
-                &bench.setup,
-                &bench.twin,
-                &bench.setup.rig,
-                c,
-                r,
-                duration,
-            )?;
-            let rms = if diverged(&m) {
-                [f64::INFINITY; 2]
-            } else {
-                m.steady_rms
-            };
-            let pct = [0, 1].map(|i| 100.0 * rms[i] / (2.0 * half[i]));
-            results.push((c, rms, pct));
+            let mut ctrl = bench.controller(c, Compensation::Inverse, r)?;
+            let mut plant = bench.twin.plant(&bench.setup.rig)?;
+            let rec = run(ctrl.as_mut(), &mut plant, duration, t, |_| {});
+            results.push(score(c, &rec, half, base, t, &folded));
         }
         out.push(SweepPoint {
             fraction: frac,
             frequency: fast,
             amplitude: amp,
+            reduced,
             results,
         });
     }
     Ok(out)
+}
+
+/// Where the twin's modes above Nyquist appear in the sampled loop: |f − n f_s| for the
+/// nearest n (scoring only).
+fn folded_modes(bench: &Bench) -> Vec<f64> {
+    let fs = 1.0 / bench.setup.rig.sample_time;
+    bench
+        .twin
+        .modal
+        .plant_modes()
+        .iter()
+        .map(|m| m.frequency)
+        .filter(|&f| f > 0.5 * fs)
+        .map(|f| (f - (f / fs).round() * fs).abs())
+        .collect()
+}
+
+/// The result of one run (module docs): steady RMS and peak, the largest error line and the
+/// share of the error at the reference's lines `base` and 3 `base`.
+fn score(
+    c: &'static Controller,
+    rec: &Record,
+    half: [f64; 2],
+    base: f64,
+    t: f64,
+    folded: &[f64],
+) -> SweepResult {
+    let n = rec.t.len();
+    let steady = n / 2;
+    let mut rms = [0.0; 2];
+    let mut peak = [0.0; 2];
+    let mut growth = false;
+    for i in 0..2 {
+        let e = &rec.error[i][steady..];
+        let ms = |s: &[f64]| s.iter().map(|x| x * x).sum::<f64>() / s.len().max(1) as f64;
+        rms[i] = ms(e).sqrt();
+        peak[i] = e.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let q = e.len() / 2;
+        let (a, b) = (ms(&e[..q]), ms(&e[q..]));
+        // Grown by more than 4× in power over a quarter of the run and beyond the reference.
+        growth |= b > 4.0 * a && b.sqrt() > half[i];
+    }
+    let finite = rms.iter().chain(&peak).all(|v| v.is_finite()) && rec.stopped.is_none();
+    let pct = |v: [f64; 2]| [0, 1].map(|i| 100.0 * v[i] / (2.0 * half[i]));
+    let (share, dominant) = if finite {
+        lines(rec, steady, base, t)
+    } else {
+        (0.0, 0.0)
+    };
+    let cause = if !finite || growth {
+        Cause::Unstable
+    } else if share >= 0.5 {
+        Cause::Bandwidth
+    } else if folded
+        .iter()
+        .any(|&f| (dominant - f).abs() <= 0.05 * f.max(dominant))
+    {
+        Cause::Aliasing
+    } else {
+        Cause::Distortion
+    };
+    SweepResult {
+        controller: c,
+        rms,
+        peak,
+        rms_pct: pct(rms),
+        peak_pct: pct(peak),
+        cause,
+        dominant,
+    }
+}
+
+/// The error's spectrum over the whole base periods of the steady half (a DFT of that
+/// window, both axes): the share of its power at the bins of `base` and 3 `base`, and the
+/// frequency of its largest line (DC excluded).
+fn lines(rec: &Record, steady: usize, base: f64, t: f64) -> (f64, f64) {
+    let per = 1.0 / (base * t);
+    let len = rec.t.len() - steady;
+    let periods = (len as f64 / per).floor().max(1.0);
+    let w = ((periods * per).round() as usize).min(len);
+    if w < 4 {
+        return (0.0, 0.0);
+    }
+    let table: Vec<(f64, f64)> = (0..w)
+        .map(|k| (std::f64::consts::TAU * k as f64 / w as f64).sin_cos())
+        .collect();
+    let df = 1.0 / (w as f64 * t);
+    let own = [base, 3.0 * base].map(|f| (f / df).round() as usize);
+    let (mut total, mut at_own, mut best, mut best_f) = (0.0, 0.0, 0.0, 0.0);
+    for j in 1..w.div_ceil(2) {
+        let mut p = 0.0;
+        for i in 0..2 {
+            let e = &rec.error[i][steady..steady + w];
+            let (mut re, mut im) = (0.0, 0.0);
+            for (k, x) in e.iter().enumerate() {
+                let (s, c) = table[(j * k) % w];
+                re += x * c;
+                im -= x * s;
+            }
+            p += re * re + im * im;
+        }
+        total += p;
+        if own.contains(&j) {
+            at_own += p;
+        }
+        if p > best {
+            best = p;
+            best_f = j as f64 * df;
+        }
+    }
+    if total > 0.0 {
+        (at_own / total, best_f)
+    } else {
+        (0.0, 0.0)
+    }
 }
 
 /// The figure: RMS error (mean of both axes, % of range, on a log axis) against the fast
@@ -122,9 +331,9 @@ pub fn figure(points: &[SweepPoint], candidates: &[&Controller]) -> Result<Strin
         let pts = points
             .iter()
             .filter_map(|p| {
-                let pct = p.results.get(j)?.2;
+                let pct = p.results.get(j)?.rms_pct;
                 let v = 0.5 * (pct[0] + pct[1]);
-                v.is_finite().then(|| (100.0 * p.fraction, v.log10()))
+                (v.is_finite() && v > 0.0).then(|| (100.0 * p.fraction, v.log10()))
             })
             .collect();
         fig = fig.with(Series::line(c.name, pts));
