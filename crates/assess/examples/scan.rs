@@ -37,14 +37,13 @@ fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
                 p.taps = v.parse()?;
                 p.grid = p.grid.max(4 * (p.preview + p.taps));
             }
+            if let Some(v) = parts.next() {
+                p.regularization = v.parse()?;
+            }
             FeedForward::Inverse(p)
         }
         _ => return Err("feed-forward: static, lead or inverse[:CUTOFF[:PREVIEW[:TAPS]]]".into()),
     })
-}
-
-fn bench_model(m: &LabMeasurement) -> &flexstage_identify::measured::ZFit {
-    &m.model
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -132,7 +131,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                         .fold(0.0, f64::max)
                 })
             };
-            let (a, b) = (err(bench_model(&m).response(f)), err(truth.response(f)));
+            let (a, b) = (err(m.model.response(f)), err(truth.response(f)));
             let d0 = nalgebra::Complex::new(d.norm(), 0.0);
             let o = {
                 let g = output.response(f);

@@ -9,11 +9,12 @@
 //!
 //! Every point reports, per candidate and axis, the RMS and the peak error over the second
 //! half of the run (after the smooth start; no cut-off), also in % of the range, and what
-//! limits it ([`Cause`]): the loop's lag at the scan's own lines (bandwidth), error at other
-//! frequencies (distortion: hysteresis residual, excited modes), the same at a mode above
-//! Nyquist folded by the sampling (aliasing), or a run that did not stay finite or grew
-//! (instability). The twin's modes name the folded frequencies: they score the run, they
-//! feed nothing.
+//! limits it ([`Cause`]): a run that did not stay finite or grew (instability); a true error
+//! more than twice the error the loop reads (the reading against the reference), which the
+//! loop cannot see: what the sampled, filtered reading misses of the true output, chiefly the
+//! modes above Nyquist the hold's images excite, folded onto the scan's lines (aliasing); else
+//! the loop's lag at the scan's own lines (bandwidth) or error at other frequencies
+//! (distortion: hysteresis residual, excited modes).
 
 use flexstage_control::actuator::Compensation;
 use flexstage_control::feasibility::{Feasibility, Limit};
@@ -51,8 +52,8 @@ pub enum Cause {
     Bandwidth,
     /// Most of the error lies elsewhere (harmonics of the hysteresis residual, excited modes).
     Distortion,
-    /// As [`Cause::Distortion`], with the largest error line within 5 % of a mode above
-    /// Nyquist folded by the 10 kHz sampling (or of a hold image reaching it).
+    /// The true error is more than twice the error the loop reads: what the sampled,
+    /// filtered reading misses (modes above Nyquist excited by the hold's images, folded).
     Aliasing,
     /// The run did not stay finite, or its error grew over the steady half.
     Unstable,
@@ -172,7 +173,6 @@ pub fn sweep(
     check("sweep.periods", p.periods, p.periods >= 1.0, "≥ 1")?;
     let f1 = bench.twin.first_resonance();
     let t = bench.setup.rig.sample_time;
-    let folded = folded_modes(bench);
     let mut out = Vec::new();
     for &frac in &p.fractions {
         check("sweep.fractions", frac, frac > 0.0 && frac < 0.45, "0–0.45")?;
@@ -190,7 +190,7 @@ pub fn sweep(
             let mut ctrl = bench.controller(c, Compensation::Inverse, r)?;
             let mut plant = bench.twin.plant(&bench.setup.rig)?;
             let rec = run(ctrl.as_mut(), &mut plant, duration, t, |_| {});
-            results.push(score(c, &rec, half, base, t, &folded));
+            results.push(score(c, &rec, half, base, t));
         }
         out.push(SweepPoint {
             fraction: frac,
@@ -203,36 +203,16 @@ pub fn sweep(
     Ok(out)
 }
 
-/// Where the twin's modes above Nyquist appear in the sampled loop: |f − n f_s| for the
-/// nearest n (scoring only).
-fn folded_modes(bench: &Bench) -> Vec<f64> {
-    let fs = 1.0 / bench.setup.rig.sample_time;
-    bench
-        .twin
-        .modal
-        .plant_modes()
-        .iter()
-        .map(|m| m.frequency)
-        .filter(|&f| f > 0.5 * fs)
-        .map(|f| (f - (f / fs).round() * fs).abs())
-        .collect()
-}
-
-/// The result of one run (module docs): steady RMS and peak, the largest error line and the
-/// share of the error at the reference's lines `base` and 3 `base`.
-fn score(
-    c: &'static Controller,
-    rec: &Record,
-    half: [f64; 2],
-    base: f64,
-    t: f64,
-    folded: &[f64],
-) -> SweepResult {
+/// The result of one run (module docs): steady RMS and peak, the largest error line, the
+/// share of the error at the reference's lines `base` and 3 `base`, and the error the loop
+/// reads.
+fn score(c: &'static Controller, rec: &Record, half: [f64; 2], base: f64, t: f64) -> SweepResult {
     let n = rec.t.len();
     let steady = n / 2;
     let mut rms = [0.0; 2];
     let mut peak = [0.0; 2];
     let mut growth = false;
+    let mut unseen = false;
     for i in 0..2 {
         let e = &rec.error[i][steady..];
         let ms = |s: &[f64]| s.iter().map(|x| x * x).sum::<f64>() / s.len().max(1) as f64;
@@ -242,6 +222,13 @@ fn score(
         let (a, b) = (ms(&e[..q]), ms(&e[q..]));
         // Grown by more than 4× in power over a quarter of the run and beyond the reference.
         growth |= b > 4.0 * a && b.sqrt() > half[i];
+        let read = rec.measured[i][steady..]
+            .iter()
+            .zip(&rec.reference[i][steady..])
+            .map(|(y, r)| (y - r) * (y - r))
+            .sum::<f64>()
+            / e.len().max(1) as f64;
+        unseen |= rms[i] > 2.0 * read.sqrt() && rms[i] > 1e-3 * half[i];
     }
     let finite = rms.iter().chain(&peak).all(|v| v.is_finite()) && rec.stopped.is_none();
     let pct = |v: [f64; 2]| [0, 1].map(|i| 100.0 * v[i] / (2.0 * half[i]));
@@ -252,13 +239,10 @@ fn score(
     };
     let cause = if !finite || growth {
         Cause::Unstable
+    } else if unseen {
+        Cause::Aliasing
     } else if share >= 0.5 {
         Cause::Bandwidth
-    } else if folded
-        .iter()
-        .any(|&f| (dominant - f).abs() <= 0.05 * f.max(dominant))
-    {
-        Cause::Aliasing
     } else {
         Cause::Distortion
     };

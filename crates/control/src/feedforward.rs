@@ -233,11 +233,18 @@ impl FirFeedForward {
             [vec![0.0; len], vec![0.0; len]],
             [vec![0.0; len], vec![0.0; len]],
         ];
+        let norm2 =
+            |g: &[[Complex<f64>; 2]; 2]| g.iter().flatten().map(|v| v.norm_sqr()).sum::<f64>();
+        let g0 = plant.static_gain();
+        let g0 = g0.iter().flatten().map(|v| v * v).sum::<f64>();
         for (f, g, d) in &grid {
             let w = std::f64::consts::TAU * f * t;
+            // The weight 1/(1 + ‖G‖²/‖G_dc‖²): the output error where the loop responds no
+            // more than statically, the inverse's error across a resonance.
+            let weight = 1.0 / (1.0 + norm2(g) / g0);
             for i in 0..2 {
                 for i2 in 0..2 {
-                    let gg = g[0][i].conj() * g[0][i2] + g[1][i].conj() * g[1][i2];
+                    let gg = weight * (g[0][i].conj() * g[0][i2] + g[1][i].conj() * g[1][i2]);
                     for (l, v) in c[i][i2].iter_mut().enumerate() {
                         let dl = l as f64 - (len as f64 - 1.0);
                         *v += (gg * Complex::from_polar(1.0, w * dl)).re;
@@ -245,7 +252,7 @@ impl FirFeedForward {
                 }
                 // b[i][j][u] = Σ Re(conj(G_oi e^{−jω n_u T}) D δ_oj) = Re(conj(G_ji) D e^{jω n_u T}).
                 for j in 0..2 {
-                    let gd = g[j][i].conj() * d;
+                    let gd = weight * g[j][i].conj() * d;
                     for (u, v) in b[i][j].iter_mut().enumerate() {
                         let n = (n0 + u as i64) as f64;
                         *v += (gd * Complex::from_polar(1.0, w * n)).re;
