@@ -324,3 +324,58 @@ pub fn figure(points: &[SweepPoint], candidates: &[&Controller]) -> Result<Strin
     }
     Ok(fig.to_svg()?)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A steady record at 10 kHz: q1's error 10 nm at 3 f (the reference's own line) and
+    /// 5 nm at 7 f, q2's zero; the reading is the true output plus `reading_error` times
+    /// the true error.
+    fn record(base: f64, reading_error: f64) -> Record {
+        let t = 1e-4;
+        let n = 4000;
+        let mut rec = Record::default();
+        for k in 0..n {
+            let s = k as f64 * t;
+            let w = std::f64::consts::TAU * base * s;
+            let e = 1e-8 * (3.0 * w).sin() + 0.5e-8 * (7.0 * w).cos();
+            let r = [1e-6 * (3.0 * w).sin(), 1e-6 * w.sin()];
+            rec.t.push(s);
+            rec.error[0].push(e);
+            rec.error[1].push(0.0);
+            rec.reference[0].push(r[0]);
+            rec.reference[1].push(r[1]);
+            rec.measured[0].push(r[0] + reading_error * e);
+            rec.measured[1].push(r[1]);
+        }
+        rec
+    }
+
+    /// Reference: Parseval on whole periods: the share of the error's power at the
+    /// reference's lines is 1/(1 + 0.5²) = 0.8 and the largest line is 3 f. Goal: the causes
+    /// follow their definitions: bandwidth when the loop reads its error, aliasing when the
+    /// true error is over twice what it reads, unstable for a non-finite run.
+    #[test]
+    fn the_error_lines_and_the_causes_follow_their_definitions() {
+        let base = 50.0;
+        let rec = record(base, 1.0);
+        let (share, dominant) = lines(&rec, rec.t.len() / 2, base, 1e-4);
+        assert!((share - 0.8).abs() < 1e-9, "{share}");
+        assert!((dominant - 150.0).abs() < 1e-9, "{dominant}");
+        let c = flexstage_control::registry::DEFAULT;
+        let half = [1e-6; 2];
+        let r = score(c, &rec, half, base, 1e-4);
+        assert_eq!(r.cause, Cause::Bandwidth);
+        let rms = (0.5f64 * (1e-16 + 0.25e-16)).sqrt();
+        assert!((r.rms[0] / rms - 1.0).abs() < 1e-9, "{:?}", r.rms);
+        assert!((r.rms_pct[0] - 100.0 * rms / 2e-6).abs() < 1e-9);
+        assert_eq!(
+            score(c, &record(base, 0.3), half, base, 1e-4).cause,
+            Cause::Aliasing
+        );
+        let mut bad = record(base, 1.0);
+        bad.error[1][3000] = f64::NAN;
+        assert_eq!(score(c, &bad, half, base, 1e-4).cause, Cause::Unstable);
+    }
+}
