@@ -106,6 +106,9 @@ pub struct SweepPoint {
     pub results: Vec<SweepResult>,
 }
 
+/// The limit that reduced a point's amplitude and the factor, if one did.
+type Reduced = Option<(Limit, f64)>;
+
 /// What following `r` over `duration` takes from the rig with the feed-forward command of
 /// every candidate (the most demanding of them counts).
 fn feasibility(
@@ -129,7 +132,7 @@ fn fitting_amplitude(
     amplitude: [f64; 2],
     base: f64,
     duration: f64,
-) -> Result<Option<([f64; 2], Option<(Limit, f64)>)>> {
+) -> Result<Option<([f64; 2], Reduced)>> {
     let mut scale = 1.0;
     let mut first: Option<Limit> = None;
     for _ in 0..8 {

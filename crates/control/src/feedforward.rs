@@ -43,6 +43,9 @@ use crate::learning::SensorDatasheet;
 use crate::pi_notch::{PiNotchParams, WithFeedForward};
 use crate::registry::{Design, Stage};
 
+/// A 2 × 2 frequency response.
+type Response = [[Complex<f64>; 2]; 2];
+
 /// The feed-forward a tuned linear design (PI + notch, PID) gets
 /// ([`crate::tuning::TuningParams::feedforward`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -216,7 +219,7 @@ impl FirFeedForward {
         let n0 = -(p.preview as i64);
         let nyquist = 0.5 / t;
         // Per frequency: the response and the target.
-        let grid: Vec<(f64, [[Complex<f64>; 2]; 2], Complex<f64>)> = (0..p.grid)
+        let grid: Vec<(f64, Response, Complex<f64>)> = (0..p.grid)
             .map(|k| {
                 let f = (k as f64 + 0.5) / p.grid as f64 * nyquist;
                 (f, plant.response(f), p.target(f, t))
