@@ -244,6 +244,19 @@ pub enum ScanLimit {
     AmplifierSlew,
 }
 
+impl ScanLimit {
+    /// Its name in the file.
+    pub fn name(self) -> &'static str {
+        match self {
+            ScanLimit::None => "none",
+            ScanLimit::ControllerStroke => "controller-stroke",
+            ScanLimit::AmplifierRange => "amplifier-range",
+            ScanLimit::AmplifierCurrent => "amplifier-current",
+            ScanLimit::AmplifierSlew => "amplifier-slew",
+        }
+    }
+}
+
 /// What limits a controller's error at a scan frequency (`scan_frequency.csv`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -256,6 +269,18 @@ pub enum ScanCause {
     Aliasing,
     /// The run did not stay finite or its error grew.
     Unstable,
+}
+
+impl ScanCause {
+    /// Its name in the file.
+    pub fn name(self) -> &'static str {
+        match self {
+            ScanCause::Bandwidth => "bandwidth",
+            ScanCause::Distortion => "distortion",
+            ScanCause::Aliasing => "aliasing",
+            ScanCause::Unstable => "unstable",
+        }
+    }
 }
 
 /// One row of `scan_frequency.csv`: one controller on the Lissajous 3:1 whose fast component
