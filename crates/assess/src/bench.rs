@@ -9,6 +9,7 @@ use std::sync::Arc;
 use flexstage_control::ControlError;
 use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::Setup;
+use flexstage_control::feasibility::{Feasibility, feasibility_of, static_inverse};
 use flexstage_control::margins::{MarginParams, Margins};
 use flexstage_control::pi_notch::PiNotchParams;
 use flexstage_control::registry::{Controller, Design, Designs, MarginProbe, Stage};
@@ -231,6 +232,47 @@ impl Bench {
         reference: Reference,
     ) -> Result<Box<dyn StageControl>> {
         self.controller_with(&self.setup, c, compensation, reference)
+    }
+
+    /// What following `reference` over `duration` seconds takes from the rig with `c`'s
+    /// feed-forward command: its own filter when it has one (the dynamic inverse with
+    /// preview), else the static inverse through the measured static gain (the identified
+    /// response fit's; the controllers' model's on a bench without one), never the twin's.
+    pub fn feasibility(
+        &self,
+        c: &Controller,
+        reference: &Reference,
+        duration: f64,
+    ) -> Result<Feasibility> {
+        let dt = self.setup.controller.observer.sample_time;
+        let (actuator, amplifier) = (&self.setup.controller.actuator, &self.setup.rig.amplifier);
+        if let Some(ff) = self.design(c)?.feedforward() {
+            let mut run = ff.runner(*reference, dt);
+            return Ok(feasibility_of(
+                reference,
+                duration,
+                dt,
+                actuator,
+                amplifier,
+                |_| run.step().0,
+            )?);
+        }
+        let gain = match &self.identified {
+            Some(fit) => fit.dc_gain,
+            None => self.setup.controller_dc_gain()?,
+        };
+        let inv = static_inverse(gain)?;
+        Ok(feasibility_of(
+            reference,
+            duration,
+            dt,
+            actuator,
+            amplifier,
+            |k| {
+                let q = reference.sample(k as f64 * dt).q;
+                [0, 1].map(|i| inv[i][0] * q[0] + inv[i][1] * q[1])
+            },
+        )?)
     }
 
     /// The twin's linear loop, where margins are measured.

@@ -1,17 +1,31 @@
 //! Error against scan frequency: every candidate on the Lissajous 3:1 whose fast component
 //! (q1, 3 f) runs from 1 % to 30 % of the twin's first resonance, on the twin in the full
-//! rig. Amplitudes start at the scenario's first Lissajous and are halved until the rig can
-//! deliver the scan (amplifier range, current, stroke: `Setup::check_reference`); the RMS is
-//! taken over the second half of the run (after the smooth start), also in % of the range.
+//! rig. Amplitudes start at the scenario's first Lissajous and are scaled down by the factor
+//! the binding limit asks for (controller stroke, amplifier range, current, slew:
+//! [`flexstage_control::feasibility::Feasibility::binding`]) until every candidate's
+//! feed-forward command fits, so each point runs as large as the amplifier allows. The
+//! static gain the check inverts is the measured one (the bench's identified response fit),
+//! never the twin's.
+//!
+//! Every point reports, per candidate and axis, the RMS and the peak error over the second
+//! half of the run (after the smooth start; no cut-off), also in % of the range, and what
+//! limits it ([`Cause`]): a run that did not stay finite or grew (instability); a true error
+//! more than twice the error the loop reads (the reading against the reference), which the
+//! loop cannot see: what the sampled, filtered reading misses of the true output, chiefly the
+//! modes above Nyquist the hold's images excite, folded onto the scan's lines (aliasing); else
+//! the loop's lag at the scan's own lines (bandwidth) or error at other frequencies
+//! (distortion: hysteresis residual, excited modes).
 
+use flexstage_control::actuator::Compensation;
+use flexstage_control::feasibility::{Feasibility, Limit};
 use flexstage_figures::plot::{Figure, Series};
+use flexstage_sim::experiment::{Record, run};
 use flexstage_sim::trajectory::{Reference, Shape};
 
 use flexstage_control::registry::Controller;
 
 use crate::bench::Bench;
 use crate::error::{Result, check};
-use crate::track::{diverged, track_on};
 
 /// Settings of the sweep.
 #[derive(Debug, Clone, PartialEq)]
@@ -25,10 +39,55 @@ pub struct SweepParams {
 impl Default for SweepParams {
     fn default() -> Self {
         SweepParams {
-            fractions: vec![0.01, 0.02, 0.03, 0.05, 0.08, 0.12, 0.2, 0.3],
+            fractions: vec![0.01, 0.02, 0.03, 0.05, 0.08, 0.1, 0.12, 0.2, 0.3],
             periods: 2.0,
         }
     }
+}
+
+/// What limits a candidate's error at a point of the sweep (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Cause {
+    /// Most of the error lies at the reference's own lines (f and 3 f): the loop's lag there.
+    Bandwidth,
+    /// Most of the error lies elsewhere (harmonics of the hysteresis residual, excited modes).
+    Distortion,
+    /// The true error is more than twice the error the loop reads: what the sampled,
+    /// filtered reading misses (modes above Nyquist excited by the hold's images, folded).
+    Aliasing,
+    /// The run did not stay finite, or its error grew over the steady half.
+    Unstable,
+}
+
+impl Cause {
+    /// Its name in files and tables.
+    pub fn name(self) -> &'static str {
+        match self {
+            Cause::Bandwidth => "bandwidth",
+            Cause::Distortion => "distortion",
+            Cause::Aliasing => "aliasing",
+            Cause::Unstable => "unstable",
+        }
+    }
+}
+
+/// One candidate at one point of the sweep.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SweepResult {
+    /// The candidate.
+    pub controller: &'static Controller,
+    /// RMS error per axis over the second half \[m\] (non-finite only for a run that was).
+    pub rms: [f64; 2],
+    /// Largest |error| per axis over the second half \[m\].
+    pub peak: [f64; 2],
+    /// `rms` in % of the range (peak to peak).
+    pub rms_pct: [f64; 2],
+    /// `peak` in % of the range.
+    pub peak_pct: [f64; 2],
+    /// What limits the error.
+    pub cause: Cause,
+    /// Frequency of the largest error line over both axes \[Hz\] (0 when there is none).
+    pub dominant: f64,
 }
 
 /// One point of the sweep.
@@ -40,11 +99,74 @@ pub struct SweepPoint {
     pub frequency: f64,
     /// Amplitudes used (A1, A2) \[m\].
     pub amplitude: [f64; 2],
-    /// Per candidate: steady RMS error per axis \[m\] (∞: diverged), and in % of the range.
-    pub results: Vec<(&'static Controller, [f64; 2], [f64; 2])>,
+    /// The limit that reduced the amplitude from the scenario's, and the factor it was
+    /// reduced by (`None`: not reduced).
+    pub reduced: Option<(Limit, f64)>,
+    /// One result per candidate, in the candidates' order.
+    pub results: Vec<SweepResult>,
+}
+
+/// The limit that reduced a point's amplitude and the factor, if one did.
+type Reduced = Option<(Limit, f64)>;
+
+/// What following `r` over `duration` takes from the rig with the feed-forward command of
+/// every candidate (the most demanding of them counts).
+fn feasibility(
+    bench: &Bench,
+    candidates: &[&'static Controller],
+    r: &Reference,
+    duration: f64,
+) -> Result<Vec<Feasibility>> {
+    candidates
+        .iter()
+        .map(|c| bench.feasibility(c, r, duration))
+        .collect()
+}
+
+/// The amplitude of one point: `amplitude` scaled until every candidate's feed-forward fits
+/// (at most 8 rounds of the binding factor, each with a 3 % allowance), with the first
+/// binding limit and the total factor.
+fn fitting_amplitude(
+    bench: &Bench,
+    candidates: &[&'static Controller],
+    amplitude: [f64; 2],
+    base: f64,
+    duration: f64,
+) -> Result<Option<([f64; 2], Reduced)>> {
+    let mut scale = 1.0;
+    let mut first: Option<Limit> = None;
+    for _ in 0..8 {
+        let r = lissajous(amplitude.map(|a| a * scale), base);
+        let binding = feasibility(bench, candidates, &r, duration)?
+            .iter()
+            .filter_map(Feasibility::binding)
+            .min_by(|a, b| a.1.total_cmp(&b.1));
+        match binding {
+            None => {
+                return Ok(Some((
+                    amplitude.map(|a| a * scale),
+                    first.map(|l| (l, scale)),
+                )));
+            }
+            Some((limit, factor)) => {
+                first.get_or_insert(limit);
+                scale *= 0.97 * factor.min(1.0);
+            }
+        }
+    }
+    Ok(None)
+}
+
+fn lissajous(amplitude: [f64; 2], frequency: f64) -> Reference {
+    Reference::new(Shape::Lissajous {
+        ratio: 3.0,
+        amplitude,
+        frequency,
+    })
 }
 
 /// Runs the sweep for `candidates`, starting from the Lissajous amplitudes `amplitude`.
+/// A point no amplitude makes feasible is left out.
 pub fn sweep(
     bench: &Bench,
     candidates: &[&'static Controller],
@@ -60,53 +182,127 @@ pub fn sweep(
         let fast = frac * f1;
         let base = fast / 3.0;
         let duration = (p.periods / base).max(0.05);
-        let mut amp = amplitude;
-        let mut reference = None;
-        for _ in 0..12 {
-            let r = Reference::new(Shape::Lissajous {
-                ratio: 3.0,
-                amplitude: amp,
-                frequency: base,
-            });
-            if bench
-                .setup
-                .check_reference(&r, duration, Some(bench.twin.dc_gain()))
-                .is_ok()
-            {
-                reference = Some(r);
-                break;
-            }
-            amp = amp.map(|a| 0.5 * a);
-        }
-        let Some(r) = reference else { continue };
+        let Some((amp, reduced)) = fitting_amplitude(bench, candidates, amplitude, base, duration)?
+        else {
+            continue;
+        };
+        let r = lissajous(amp, base);
         let half = r.half_range(duration, t);
         let mut results = Vec::new();
         for &c in candidates {
-            let m = track_on(
-                bench,
-                &bench.setup,
-                &bench.twin,
-                &bench.setup.rig,
-                c,
-                r,
-                duration,
-            )?;
-            let rms = if diverged(&m) {
-                [f64::INFINITY; 2]
-            } else {
-                m.steady_rms
-            };
-            let pct = [0, 1].map(|i| 100.0 * rms[i] / (2.0 * half[i]));
-            results.push((c, rms, pct));
+            let mut ctrl = bench.controller(c, Compensation::Inverse, r)?;
+            let mut plant = bench.twin.plant(&bench.setup.rig)?;
+            let rec = run(ctrl.as_mut(), &mut plant, duration, t, |_| {});
+            results.push(score(c, &rec, half, base, t));
         }
         out.push(SweepPoint {
             fraction: frac,
             frequency: fast,
             amplitude: amp,
+            reduced,
             results,
         });
     }
     Ok(out)
+}
+
+/// The result of one run (module docs): steady RMS and peak, the largest error line, the
+/// share of the error at the reference's lines `base` and 3 `base`, and the error the loop
+/// reads.
+fn score(c: &'static Controller, rec: &Record, half: [f64; 2], base: f64, t: f64) -> SweepResult {
+    let n = rec.t.len();
+    let steady = n / 2;
+    let mut rms = [0.0; 2];
+    let mut peak = [0.0; 2];
+    let mut growth = false;
+    let mut unseen = false;
+    for i in 0..2 {
+        let e = &rec.error[i][steady..];
+        let ms = |s: &[f64]| s.iter().map(|x| x * x).sum::<f64>() / s.len().max(1) as f64;
+        rms[i] = ms(e).sqrt();
+        peak[i] = e.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let q = e.len() / 2;
+        let (a, b) = (ms(&e[..q]), ms(&e[q..]));
+        // Grown by more than 4× in power over a quarter of the run and beyond the reference.
+        growth |= b > 4.0 * a && b.sqrt() > half[i];
+        let read = rec.measured[i][steady..]
+            .iter()
+            .zip(&rec.reference[i][steady..])
+            .map(|(y, r)| (y - r) * (y - r))
+            .sum::<f64>()
+            / e.len().max(1) as f64;
+        unseen |= rms[i] > 2.0 * read.sqrt() && rms[i] > 1e-3 * half[i];
+    }
+    let finite = rms.iter().chain(&peak).all(|v| v.is_finite()) && rec.stopped.is_none();
+    let pct = |v: [f64; 2]| [0, 1].map(|i| 100.0 * v[i] / (2.0 * half[i]));
+    let (share, dominant) = if finite {
+        lines(rec, steady, base, t)
+    } else {
+        (0.0, 0.0)
+    };
+    let cause = if !finite || growth {
+        Cause::Unstable
+    } else if unseen {
+        Cause::Aliasing
+    } else if share >= 0.5 {
+        Cause::Bandwidth
+    } else {
+        Cause::Distortion
+    };
+    SweepResult {
+        controller: c,
+        rms,
+        peak,
+        rms_pct: pct(rms),
+        peak_pct: pct(peak),
+        cause,
+        dominant,
+    }
+}
+
+/// The error's spectrum over the whole base periods of the steady half (a DFT of that
+/// window, both axes): the share of its power at the bins of `base` and 3 `base`, and the
+/// frequency of its largest line (DC excluded).
+fn lines(rec: &Record, steady: usize, base: f64, t: f64) -> (f64, f64) {
+    let per = 1.0 / (base * t);
+    let len = rec.t.len() - steady;
+    let periods = (len as f64 / per).floor().max(1.0);
+    let w = ((periods * per).round() as usize).min(len);
+    if w < 4 {
+        return (0.0, 0.0);
+    }
+    let table: Vec<(f64, f64)> = (0..w)
+        .map(|k| (std::f64::consts::TAU * k as f64 / w as f64).sin_cos())
+        .collect();
+    let df = 1.0 / (w as f64 * t);
+    let own = [base, 3.0 * base].map(|f| (f / df).round() as usize);
+    let (mut total, mut at_own, mut best, mut best_f) = (0.0, 0.0, 0.0, 0.0);
+    for j in 1..w.div_ceil(2) {
+        let mut p = 0.0;
+        for i in 0..2 {
+            let e = &rec.error[i][steady..steady + w];
+            let (mut re, mut im) = (0.0, 0.0);
+            for (k, x) in e.iter().enumerate() {
+                let (s, c) = table[(j * k) % w];
+                re += x * c;
+                im -= x * s;
+            }
+            p += re * re + im * im;
+        }
+        total += p;
+        if own.contains(&j) {
+            at_own += p;
+        }
+        if p > best {
+            best = p;
+            best_f = j as f64 * df;
+        }
+    }
+    if total > 0.0 {
+        (at_own / total, best_f)
+    } else {
+        (0.0, 0.0)
+    }
 }
 
 /// The figure: RMS error (mean of both axes, % of range, on a log axis) against the fast
@@ -122,12 +318,67 @@ pub fn figure(points: &[SweepPoint], candidates: &[&Controller]) -> Result<Strin
         let pts = points
             .iter()
             .filter_map(|p| {
-                let pct = p.results.get(j)?.2;
+                let pct = p.results.get(j)?.rms_pct;
                 let v = 0.5 * (pct[0] + pct[1]);
-                v.is_finite().then(|| (100.0 * p.fraction, v.log10()))
+                (v.is_finite() && v > 0.0).then(|| (100.0 * p.fraction, v.log10()))
             })
             .collect();
         fig = fig.with(Series::line(c.name, pts));
     }
     Ok(fig.to_svg()?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A steady record at 10 kHz: q1's error 10 nm at 3 f (the reference's own line) and
+    /// 5 nm at 7 f, q2's zero; the reading is the true output plus `reading_error` times
+    /// the true error.
+    fn record(base: f64, reading_error: f64) -> Record {
+        let t = 1e-4;
+        let n = 4000;
+        let mut rec = Record::default();
+        for k in 0..n {
+            let s = k as f64 * t;
+            let w = std::f64::consts::TAU * base * s;
+            let e = 1e-8 * (3.0 * w).sin() + 0.5e-8 * (7.0 * w).cos();
+            let r = [1e-6 * (3.0 * w).sin(), 1e-6 * w.sin()];
+            rec.t.push(s);
+            rec.error[0].push(e);
+            rec.error[1].push(0.0);
+            rec.reference[0].push(r[0]);
+            rec.reference[1].push(r[1]);
+            rec.measured[0].push(r[0] + reading_error * e);
+            rec.measured[1].push(r[1]);
+        }
+        rec
+    }
+
+    /// Reference: Parseval on whole periods: the share of the error's power at the
+    /// reference's lines is 1/(1 + 0.5²) = 0.8 and the largest line is 3 f. Goal: the causes
+    /// follow their definitions: bandwidth when the loop reads its error, aliasing when the
+    /// true error is over twice what it reads, unstable for a non-finite run.
+    #[test]
+    fn the_error_lines_and_the_causes_follow_their_definitions() {
+        let base = 50.0;
+        let rec = record(base, 1.0);
+        let (share, dominant) = lines(&rec, rec.t.len() / 2, base, 1e-4);
+        assert!((share - 0.8).abs() < 1e-9, "{share}");
+        assert!((dominant - 150.0).abs() < 1e-9, "{dominant}");
+        let c = flexstage_control::registry::DEFAULT;
+        let half = [1e-6; 2];
+        let r = score(c, &rec, half, base, 1e-4);
+        assert_eq!(r.cause, Cause::Bandwidth);
+        let rms = (0.5f64 * (1e-16 + 0.25e-16)).sqrt();
+        assert!((r.rms[0] / rms - 1.0).abs() < 1e-9, "{:?}", r.rms);
+        assert!((r.rms_pct[0] - 100.0 * rms / 2e-6).abs() < 1e-9);
+        assert_eq!(
+            score(c, &record(base, 0.3), half, base, 1e-4).cause,
+            Cause::Aliasing
+        );
+        let mut bad = record(base, 1.0);
+        bad.error[1][3000] = f64::NAN;
+        assert_eq!(score(c, &bad, half, base, 1e-4).cause, Cause::Unstable);
+    }
 }

@@ -155,9 +155,39 @@ impl PidLaw {
     /// sections. Call [`PidLaw::end_sample`] before the next one.
     #[inline]
     pub fn command(&mut self, y_in: [f64; 2], r: [f64; 2]) -> [f64; 2] {
+        let c = self.feedback(y_in, r);
+        let w = [r[0] + c[0], r[1] + c[1]];
+        let g = &self.g_inv;
+        [
+            g[0][0] * w[0] + g[0][1] * w[1],
+            g[1][0] * w[0] + g[1][1] * w[1],
+        ]
+    }
+
+    /// The command of this sample with an outside feed-forward `x_ff` \[m\] in place of the
+    /// static inverse: x_nom = G_dc⁻¹ N(c) + x_ff, the feedback on the error r − y (r: the
+    /// reference the reading should show). Call [`PidLaw::end_sample`] before the next one.
+    #[inline]
+    pub fn command_with_feedforward(
+        &mut self,
+        y_in: [f64; 2],
+        r: [f64; 2],
+        x_ff: [f64; 2],
+    ) -> [f64; 2] {
+        let c = self.feedback(y_in, r);
+        let g = &self.g_inv;
+        [
+            g[0][0] * c[0] + g[0][1] * c[1] + x_ff[0],
+            g[1][0] * c[0] + g[1][1] * c[1] + x_ff[1],
+        ]
+    }
+
+    /// The feedback N(c) per axis on the error r − y; advances the sections.
+    #[inline]
+    fn feedback(&mut self, y_in: [f64; 2], r: [f64; 2]) -> [f64; 2] {
         let finite = y_in[0].is_finite() && y_in[1].is_finite();
         let y = if finite { y_in } else { self.y_prev };
-        let mut w = [0.0; 2];
+        let mut out = [0.0; 2];
         for i in 0..2 {
             let g = &self.gains[i];
             let e = r[i] - y[i];
@@ -168,15 +198,11 @@ impl PidLaw {
             };
             let c = g.kp * e + g.ki * (self.integral[i] + 0.5 * self.t * e) + g.kd * de;
             let c = self.sections[i][0].step(c);
-            w[i] = r[i] + self.sections[i][1].step(c);
+            out[i] = self.sections[i][1].step(c);
             self.e[i] = e;
         }
         self.y_prev = y;
-        let g = &self.g_inv;
-        [
-            g[0][0] * w[0] + g[0][1] * w[1],
-            g[1][0] * w[0] + g[1][1] * w[1],
-        ]
+        out
     }
 
     /// Ends the sample whose command was `saturated` (clipped by the stroke or the amplifier):

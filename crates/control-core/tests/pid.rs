@@ -69,6 +69,39 @@ fn the_inverse_static_gain_maps_feed_forward_and_feedback() {
     }
 }
 
+/// Reference: x_nom = G_dc⁻¹ N(c) + x_ff (module docs of the law): with x_ff = G_dc⁻¹ r the
+/// command is the static law's to rounding, and any other x_ff enters additively; the
+/// integral advances the same in both.
+#[test]
+fn an_outside_feed_forward_replaces_the_static_inverse() {
+    let g_inv = [[1.1, 0.05], [0.04, 1.2]];
+    let g = gains(0.5, 300.0, 1e-5);
+    let mut stat = PidLaw::new(g, g_inv, T, 1.0).unwrap();
+    let mut with = PidLaw::new(g, g_inv, T, 1.0).unwrap();
+    let mut other = PidLaw::new(g, g_inv, T, 1.0).unwrap();
+    let extra = [2e-7, -1e-7];
+    for k in 0..50 {
+        let r = [3e-6 + 1e-8 * k as f64, 7e-6];
+        let y = [1e-6, 6e-6 - 2e-9 * k as f64];
+        let x_ff = [0, 1].map(|i| g_inv[i][0] * r[0] + g_inv[i][1] * r[1]);
+        let a = stat.command(y, r);
+        let b = with.command_with_feedforward(y, r, x_ff);
+        let c = other.command_with_feedforward(y, r, [x_ff[0] + extra[0], x_ff[1] + extra[1]]);
+        for i in 0..2 {
+            assert!(
+                close(b[i], a[i]),
+                "sample {k}, axis {i}: {} vs {}",
+                b[i],
+                a[i]
+            );
+            assert!(close(c[i] - b[i], extra[i]) || (c[i] - b[i] - extra[i]).abs() < 1e-20);
+        }
+        stat.end_sample(false);
+        with.end_sample(false);
+        other.end_sample(false);
+    }
+}
+
 #[test]
 fn a_clipped_command_freezes_the_integral() {
     let (ki, stroke) = (500.0, 2e-6);

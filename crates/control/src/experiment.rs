@@ -116,10 +116,7 @@ impl Setup {
     ) -> Result<Feasibility> {
         let gain = match dc_gain {
             Some(g) => g,
-            None => {
-                let g = StageModel::new(&self.controller.model)?.dc_gain()?;
-                [[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]]
-            }
+            None => self.controller_dc_gain()?,
         };
         feasibility(
             reference,
@@ -129,6 +126,12 @@ impl Setup {
             &self.controller.actuator,
             &self.rig.amplifier,
         )
+    }
+
+    /// The static gain x_nom → q of the controllers' model.
+    pub fn controller_dc_gain(&self) -> Result<[[f64; 2]; 2]> {
+        let g = StageModel::new(&self.controller.model)?.dc_gain()?;
+        Ok([[g[(0, 0)], g[(0, 1)]], [g[(1, 0)], g[(1, 1)]]])
     }
 
     /// The designed workspace of the controller's model: the image of |x_nom,i| ≤ stroke.

@@ -160,6 +160,7 @@ mod error;
 pub mod estimator;
 pub mod experiment;
 pub mod feasibility;
+pub mod feedforward;
 pub mod fit;
 pub mod learning;
 pub mod margins;

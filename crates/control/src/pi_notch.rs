@@ -30,6 +30,7 @@ use nalgebra::Complex;
 
 use crate::actuator::ActuatorParams;
 use crate::error::{Result, check};
+use crate::feedforward::{FeedForwardRunner, FirFeedForward};
 use crate::registry::{Controller, Design, Stage};
 use crate::target::{TargetController, TargetLaw};
 use crate::tuning::{Structure, tuned};
@@ -47,7 +48,9 @@ pub static PI_NOTCH_FF: Controller = Controller {
 };
 
 fn design_tuned(stage: &Stage<'_>) -> Result<Option<Arc<dyn Design>>> {
-    Ok(tuned(stage, Structure::PiNotch)?.map(|t| Arc::new(t.params) as Arc<dyn Design>))
+    tuned(stage, Structure::PiNotch)?
+        .map(|t| crate::feedforward::design_with(stage, t.params))
+        .transpose()
 }
 
 /// The PI(D) + notch + FF structure is a design: [`PiNotchController`] with these gains.
@@ -207,6 +210,7 @@ pub struct PiNotchController {
     reference: Reference,
     sample_time: f64,
     k: u64,
+    feedforward: Option<FeedForwardRunner>,
 }
 
 impl PiNotchController {
@@ -222,7 +226,58 @@ impl PiNotchController {
             reference,
             sample_time: params.sample_time,
             k: 0,
+            feedforward: None,
         })
+    }
+
+    /// The controller with the feed-forward `ff` (with its preview of the reference) in
+    /// place of the static inverse; its feedback compares the reading with the reference
+    /// delayed by the sensor lag the feed-forward's target includes
+    /// ([`crate::feedforward`]).
+    pub fn with_feedforward(
+        params: PiNotchParams,
+        actuator: ActuatorParams,
+        reference: Reference,
+        ff: &FirFeedForward,
+    ) -> Result<Self> {
+        let mut c = PiNotchController::new(params, actuator, reference)?;
+        c.feedforward = Some(ff.runner(reference, params.sample_time));
+        Ok(c)
+    }
+}
+
+/// A linear design with a feed-forward of its own ([`crate::feedforward`]): the PI(D) +
+/// notch gains and the filter in place of the static inverse. Its margins are those of
+/// `params`: the feed-forward acts outside the loop.
+#[derive(Debug, Clone, PartialEq)]
+pub struct WithFeedForward {
+    /// The feedback and its static gain.
+    pub params: PiNotchParams,
+    /// The feed-forward.
+    pub feedforward: FirFeedForward,
+}
+
+impl Design for WithFeedForward {
+    fn build(
+        &self,
+        actuator: ActuatorParams,
+        _delay: usize,
+        reference: Reference,
+    ) -> Result<Box<dyn StageControl>> {
+        Ok(Box::new(PiNotchController::with_feedforward(
+            self.params,
+            actuator,
+            reference,
+            &self.feedforward,
+        )?))
+    }
+
+    fn linear(&self) -> Option<&PiNotchParams> {
+        Some(&self.params)
+    }
+
+    fn feedforward(&self) -> Option<&FirFeedForward> {
+        Some(&self.feedforward)
     }
 }
 
@@ -231,7 +286,13 @@ impl StageControl for PiNotchController {
     fn step(&mut self, y_in: [f64; 2]) -> Command {
         let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
         let r = self.reference.sample(self.k as f64 * self.sample_time);
-        let act = self.target.step(r.q, y_in);
+        let act = match &mut self.feedforward {
+            Some(ff) => {
+                let (x_ff, feedback) = ff.step();
+                self.target.step_with_feedforward(feedback, y_in, x_ff)
+            }
+            None => self.target.step(r.q, y_in),
+        };
         self.k += 1;
         Command {
             voltage: act.voltage,

@@ -36,7 +36,7 @@ pub static PID_FF_SCENARIO: Controller = Controller {
 
 fn design_tuned(stage: &Stage<'_>) -> Result<Option<Arc<dyn Design>>> {
     match tuned(stage, Structure::Pid)? {
-        Some(t) => Ok(Some(Arc::new(t.params))),
+        Some(t) => Ok(Some(crate::feedforward::design_with(stage, t.params)?)),
         None => design_scenario(stage),
     }
 }

@@ -36,6 +36,7 @@ use flexstage_sim::trajectory::Reference;
 use crate::actuator::ActuatorParams;
 use crate::error::Result;
 use crate::experiment::Setup;
+use crate::feedforward::FirFeedForward;
 use crate::margins::{MarginParams, Margins};
 use crate::pi_notch::PiNotchParams;
 use crate::tuning::TuningParams;
@@ -121,6 +122,13 @@ pub trait Design: std::fmt::Debug + Send + Sync {
     /// that (margins from its transfer function); `None` for a nonlinear controller
     /// (margins by sine injection).
     fn linear(&self) -> Option<&PiNotchParams> {
+        None
+    }
+
+    /// Its feed-forward filter when it has one of its own ([`crate::feedforward`]); `None`
+    /// for the static inverse G_dc⁻¹ q_d (or a feed-forward that is no filter of the
+    /// reference, as the backstepping's).
+    fn feedforward(&self) -> Option<&FirFeedForward> {
         None
     }
 }

@@ -181,7 +181,26 @@ impl TargetController {
     /// non-finite references) holds the last command's x_nom.
     #[inline]
     pub fn step(&mut self, reference: [f64; 2], reading: [f64; 2]) -> Actuated {
-        let mut u = self.law.command(reading, reference);
+        let u = self.law.command(reading, reference);
+        self.actuate(u)
+    }
+
+    /// One sample with an outside feed-forward `x_ff` \[m\] in place of the static inverse
+    /// (`flexstage_control_core::PidLaw::command_with_feedforward`): the feedback on
+    /// `reference` − `reading`, then the actuator stage as in [`TargetController::step`].
+    #[inline]
+    pub fn step_with_feedforward(
+        &mut self,
+        reference: [f64; 2],
+        reading: [f64; 2],
+        x_ff: [f64; 2],
+    ) -> Actuated {
+        let u = self.law.command_with_feedforward(reading, reference, x_ff);
+        self.actuate(u)
+    }
+
+    #[inline]
+    fn actuate(&mut self, mut u: [f64; 2]) -> Actuated {
         if !(u[0].is_finite() && u[1].is_finite()) {
             u = self.last_x_nom;
         }

@@ -53,6 +53,9 @@ pub struct TuningParams {
     pub margins: MarginParams,
     /// Bisection steps on the gain scale (default 30).
     pub steps: usize,
+    /// The feed-forward of the tuned PI + notch and PID (default: the fitted inverse of the
+    /// sampled response with preview, [`crate::feedforward`]).
+    pub feedforward: FeedForward,
 }
 
 impl Default for TuningParams {
@@ -69,9 +72,12 @@ impl Default for TuningParams {
                 ..MarginParams::default()
             },
             steps: 30,
+            feedforward: FeedForward::default(),
         }
     }
 }
+
+pub use crate::feedforward::FeedForward;
 
 impl TuningParams {
     /// Checks the fields.

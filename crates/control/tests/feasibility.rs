@@ -70,3 +70,67 @@ fn default_trajectories_are_inside_the_workspace() {
         assert!(u > 0.1 && u < 0.9, "{}: usage {u}", t.name());
     }
 }
+
+/// Reference: a staircase of slope s through a first-order amplifier of bandwidth f_a (held
+/// over T) starts every sample at the rate ω_a e₀ with e₀ = s T / (1 − e^{−ω_a T}), so its
+/// peak rate is ω_a T / (1 − e^{−ω_a T}) times the mean rate |ΔU|/T of an ideal amplifier:
+/// 2.2228 at 3 kHz and 10 kHz. Goal: the check rates the amplifier's output, not the held
+/// command; a slow sine (rate nearly constant over 1/ω_a) meets the ratio to 1 %.
+#[test]
+fn the_rate_is_the_amplifier_outputs_through_its_bandwidth() {
+    use flexstage_control::feasibility::{feasibility_of, static_inverse};
+    let setup = Setup::from_scenario(&Scenario::paper());
+    let r = Reference::new(Shape::Circle {
+        radius: 2e-6,
+        frequency: 20.0,
+    });
+    let inv = static_inverse(setup.controller_dc_gain().unwrap()).unwrap();
+    let dt = 1e-4;
+    let peak = |bandwidth: f64| {
+        let mut amp = setup.rig.amplifier;
+        amp.bandwidth = bandwidth;
+        feasibility_of(&r, 0.06, dt, &setup.controller.actuator, &amp, |k| {
+            let q = r.sample(k as f64 * dt).q;
+            [0, 1].map(|i| inv[i][0] * q[0] + inv[i][1] * q[1])
+        })
+        .unwrap()
+        .peak_rate
+    };
+    let wt = std::f64::consts::TAU * 3000.0 * dt;
+    let want = wt / (1.0 - (-wt).exp());
+    let ratio = peak(3000.0) / peak(0.0);
+    assert!((ratio / want - 1.0).abs() < 0.01, "{ratio} vs {want}");
+}
+
+/// Goal: the binding limit is named with the factor that meets it: the 200 Hz, 8 µm circle
+/// is limited by the current (0.1 A into 1.5 µF), and the circle scaled by 0.97 × that factor
+/// passes the check; a reference that fits has no binding limit.
+#[test]
+fn the_binding_limit_and_its_factor_make_the_reference_fit() {
+    use flexstage_control::feasibility::{Limit, feasibility_of, static_inverse};
+    let setup = Setup::from_scenario(&Scenario::paper());
+    let inv = static_inverse(setup.controller_dc_gain().unwrap()).unwrap();
+    let dt = 1e-4;
+    let check = |radius: f64| {
+        let r = Reference::new(Shape::Circle {
+            radius,
+            frequency: 200.0,
+        });
+        feasibility_of(
+            &r,
+            0.02,
+            dt,
+            &setup.controller.actuator,
+            &setup.rig.amplifier,
+            |k| {
+                let q = r.sample(k as f64 * dt).q;
+                [0, 1].map(|i| inv[i][0] * q[0] + inv[i][1] * q[1])
+            },
+        )
+        .unwrap()
+    };
+    let (limit, factor) = check(8e-6).binding().expect("too fast");
+    assert_eq!(limit, Limit::AmplifierCurrent);
+    assert!(factor > 0.0 && factor < 1.0, "{factor}");
+    assert_eq!(check(8e-6 * 0.97 * factor).binding(), None);
+}

@@ -189,19 +189,47 @@ pub(crate) fn montecarlo_rows(mc: &MonteCarlo) -> Vec<MonteCarloRow> {
 
 /// The sweep as `scan_frequency.csv` rows: one per point and controller.
 pub(crate) fn scan_rows(points: &[SweepPoint]) -> Vec<ScanRow> {
+    use flexstage_assess::sweep::Cause;
+    use flexstage_control::feasibility::Limit;
+    use flexstage_run::files::track::{ScanCause, ScanLimit};
     points
         .iter()
         .flat_map(|p| {
-            p.results.iter().map(|(c, rms, pct)| ScanRow {
+            let (limit, factor) = match p.reduced {
+                None => (ScanLimit::None, 1.0),
+                Some((l, f)) => (
+                    match l {
+                        Limit::ControllerStroke => ScanLimit::ControllerStroke,
+                        Limit::AmplifierRange => ScanLimit::AmplifierRange,
+                        Limit::AmplifierCurrent => ScanLimit::AmplifierCurrent,
+                        Limit::AmplifierSlew => ScanLimit::AmplifierSlew,
+                    },
+                    f,
+                ),
+            };
+            p.results.iter().map(move |r| ScanRow {
                 fraction_of_f1: p.fraction,
                 fast_frequency_hz: p.frequency,
                 amplitude1_m: p.amplitude[0],
                 amplitude2_m: p.amplitude[1],
-                controller: c.name.to_string(),
-                rms1_nm: rms[0] * 1e9,
-                rms2_nm: rms[1] * 1e9,
-                rms1_pct_range: pct[0],
-                rms2_pct_range: pct[1],
+                amplitude_limit: limit,
+                amplitude_factor: factor,
+                controller: r.controller.name.to_string(),
+                rms1_nm: r.rms[0] * 1e9,
+                rms2_nm: r.rms[1] * 1e9,
+                rms1_pct_range: r.rms_pct[0],
+                rms2_pct_range: r.rms_pct[1],
+                peak1_nm: r.peak[0] * 1e9,
+                peak2_nm: r.peak[1] * 1e9,
+                peak1_pct_range: r.peak_pct[0],
+                peak2_pct_range: r.peak_pct[1],
+                cause: match r.cause {
+                    Cause::Bandwidth => ScanCause::Bandwidth,
+                    Cause::Distortion => ScanCause::Distortion,
+                    Cause::Aliasing => ScanCause::Aliasing,
+                    Cause::Unstable => ScanCause::Unstable,
+                },
+                dominant_hz: r.dominant,
             })
         })
         .collect()

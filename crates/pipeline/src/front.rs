@@ -402,10 +402,10 @@ fn assess_one(
         d.scan = p
             .results
             .iter()
-            .map(|(c, rms, percent)| ScanError {
-                controller: c.name.into(),
-                rms: *rms,
-                percent: *percent,
+            .map(|r| ScanError {
+                controller: r.controller.name.into(),
+                rms: r.rms,
+                percent: r.rms_pct,
                 amplitude: p.amplitude,
             })
             .collect();

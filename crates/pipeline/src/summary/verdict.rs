@@ -741,11 +741,19 @@ mod tests {
             fast_frequency_hz: hz,
             amplitude1_m: 1e-6,
             amplitude2_m: 1e-6,
+            amplitude_limit: flexstage_run::files::track::ScanLimit::None,
+            amplitude_factor: 1.0,
             controller: controller.into(),
             rms1_nm: 0.0,
             rms2_nm: 0.0,
             rms1_pct_range: pct[0],
             rms2_pct_range: pct[1],
+            peak1_nm: 0.0,
+            peak2_nm: 0.0,
+            peak1_pct_range: 2.0 * pct[0],
+            peak2_pct_range: 2.0 * pct[1],
+            cause: flexstage_run::files::track::ScanCause::Bandwidth,
+            dominant_hz: hz,
         }
     }
 

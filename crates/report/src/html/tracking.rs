@@ -7,7 +7,7 @@ use std::sync::Arc;
 use flexstage_figures::cloud::Cloud;
 use flexstage_figures::plot::{Figure, Legend, Multiples, Series};
 use flexstage_run::Table;
-use flexstage_run::files::track::{LEARNING_SUFFIX, MarginRow, MetricsRow};
+use flexstage_run::files::track::{LEARNING_SUFFIX, MarginRow, MetricsRow, ScanLimit, ScanRow};
 use flexstage_run::format::Rows;
 use flexstage_run::layout::Tracking;
 
@@ -78,6 +78,52 @@ fn margin_table(rows: &[MarginRow]) -> (Vec<String>, Vec<Vec<String>>) {
     (header, rows)
 }
 
+/// The scan sweep's table: one row per point and controller, the amplitude limit and what
+/// limits the error.
+fn scan_table(rows: &[ScanRow]) -> (Vec<String>, Vec<Vec<String>>) {
+    let header = [
+        "fast axis [% of f1]",
+        "fast axis [Hz]",
+        "amplitude q1 [µm]",
+        "amplitude limit",
+        "controller",
+        "RMS q1 / q2 [% of range]",
+        "peak q1 / q2 [% of range]",
+        "cause",
+        "largest error line [Hz]",
+    ]
+    .map(String::from)
+    .to_vec();
+    let rows = rows
+        .iter()
+        .map(|r| {
+            vec![
+                fmt_num(100.0 * r.fraction_of_f1),
+                fmt_num(r.fast_frequency_hz),
+                fmt_num(r.amplitude1_m * 1e6),
+                match r.amplitude_limit {
+                    ScanLimit::None => "none".to_string(),
+                    l => format!("{} (× {})", l.name(), fmt_num(r.amplitude_factor)),
+                },
+                r.controller.clone(),
+                format!(
+                    "{} / {}",
+                    fmt_num(r.rms1_pct_range),
+                    fmt_num(r.rms2_pct_range)
+                ),
+                format!(
+                    "{} / {}",
+                    fmt_num(r.peak1_pct_range),
+                    fmt_num(r.peak2_pct_range)
+                ),
+                r.cause.name().to_string(),
+                fmt_num(r.dominant_hz),
+            ]
+        })
+        .collect();
+    (header, rows)
+}
+
 /// Section "tracking".
 pub(super) fn tracking(b: &mut Builder) {
     let track = Tracking::main();
@@ -108,6 +154,17 @@ pub(super) fn tracking(b: &mut Builder) {
             &track.scan_frequency_svg(),
             "RMS error of every controller on the Lissajous 3:1 against the frequency of its \
              fast component, 1–30 % of the twin's first resonance (scan_frequency.csv)",
+        );
+    }
+    let scan: Option<Arc<Rows<ScanRow>>> = b.load(&track.scan_frequency_csv());
+    if let Some(scan) = &scan {
+        let (header, rows) = scan_table(&scan.0);
+        b.table(&header, &rows);
+        b.note(
+            "Scan sweep: each point's amplitude is the scenario's, scaled by the binding \
+             amplifier limit; RMS and peak over the second half of the run; cause: bandwidth \
+             (error at the scan's own lines), distortion (elsewhere), aliasing (the true error \
+             over twice what the loop reads), unstable.",
         );
     }
     // Trajectories in the table's order, each with its controllers.

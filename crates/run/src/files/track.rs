@@ -228,8 +228,64 @@ impl Row for MonteCarloRow {
     const EXACT: bool = false;
 }
 
+/// What reduced a scan's amplitude below the scenario's (`scan_frequency.csv`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ScanLimit {
+    /// Nothing: the scenario's amplitude.
+    None,
+    /// The controller's stroke.
+    ControllerStroke,
+    /// The amplifier's voltage range.
+    AmplifierRange,
+    /// The amplifier's output current into the PEA's capacitance.
+    AmplifierCurrent,
+    /// The amplifier's slew rate.
+    AmplifierSlew,
+}
+
+impl ScanLimit {
+    /// Its name in the file.
+    pub fn name(self) -> &'static str {
+        match self {
+            ScanLimit::None => "none",
+            ScanLimit::ControllerStroke => "controller-stroke",
+            ScanLimit::AmplifierRange => "amplifier-range",
+            ScanLimit::AmplifierCurrent => "amplifier-current",
+            ScanLimit::AmplifierSlew => "amplifier-slew",
+        }
+    }
+}
+
+/// What limits a controller's error at a scan frequency (`scan_frequency.csv`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ScanCause {
+    /// The loop's lag at the reference's own lines.
+    Bandwidth,
+    /// Error at other frequencies (hysteresis residual, excited modes).
+    Distortion,
+    /// The largest error line at a mode above Nyquist folded by the sampling.
+    Aliasing,
+    /// The run did not stay finite or its error grew.
+    Unstable,
+}
+
+impl ScanCause {
+    /// Its name in the file.
+    pub fn name(self) -> &'static str {
+        match self {
+            ScanCause::Bandwidth => "bandwidth",
+            ScanCause::Distortion => "distortion",
+            ScanCause::Aliasing => "aliasing",
+            ScanCause::Unstable => "unstable",
+        }
+    }
+}
+
 /// One row of `scan_frequency.csv`: one controller on the Lissajous 3:1 whose fast component
-/// runs at a fraction of the twin's first resonance.
+/// runs at a fraction of the twin's first resonance, with its steady RMS and peak error (no
+/// cut-off), the limit that reduced the amplitude and what limits the error.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ScanRow {
     /// The fast component's frequency / the first resonance.
@@ -244,6 +300,11 @@ pub struct ScanRow {
     /// Amplitude of q2 \[m\].
     #[serde(serialize_with = "num::exp")]
     pub amplitude2_m: f64,
+    /// The limit that reduced the amplitude from the scenario's.
+    pub amplitude_limit: ScanLimit,
+    /// The factor it was reduced by (1: not reduced).
+    #[serde(serialize_with = "num::display")]
+    pub amplitude_factor: f64,
     /// Controller name.
     pub controller: String,
     /// RMS error of q1 \[nm\], 3 decimals.
@@ -258,6 +319,23 @@ pub struct ScanRow {
     /// RMS error of q2 \[% of range\], 5 decimals.
     #[serde(serialize_with = "num::fixed5")]
     pub rms2_pct_range: f64,
+    /// Largest error of q1 \[nm\], 3 decimals.
+    #[serde(serialize_with = "num::fixed3")]
+    pub peak1_nm: f64,
+    /// Largest error of q2 \[nm\], 3 decimals.
+    #[serde(serialize_with = "num::fixed3")]
+    pub peak2_nm: f64,
+    /// Largest error of q1 \[% of range\], 5 decimals.
+    #[serde(serialize_with = "num::fixed5")]
+    pub peak1_pct_range: f64,
+    /// Largest error of q2 \[% of range\], 5 decimals.
+    #[serde(serialize_with = "num::fixed5")]
+    pub peak2_pct_range: f64,
+    /// What limits the error.
+    pub cause: ScanCause,
+    /// Frequency of the largest error line \[Hz\], 2 decimals.
+    #[serde(rename = "dominant_Hz", serialize_with = "num::fixed2")]
+    pub dominant_hz: f64,
 }
 
 impl Row for ScanRow {
@@ -266,11 +344,19 @@ impl Row for ScanRow {
         "fast_frequency_Hz",
         "amplitude1_m",
         "amplitude2_m",
+        "amplitude_limit",
+        "amplitude_factor",
         "controller",
         "rms1_nm",
         "rms2_nm",
         "rms1_pct_range",
         "rms2_pct_range",
+        "peak1_nm",
+        "peak2_nm",
+        "peak1_pct_range",
+        "peak2_pct_range",
+        "cause",
+        "dominant_Hz",
     ];
     const EXACT: bool = false;
 }

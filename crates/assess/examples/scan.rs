@@ -1,0 +1,201 @@
+//! The scan-frequency sweep of the PI + notch and the PID designed from a stored measured
+//! response, with a chosen feed-forward: the comparison of the fitted inverse with preview
+//! against the static inverse (with and without a one-sample lead), each with the same
+//! feedback, on the twin in the full rig.
+//!
+//! ```text
+//! cargo run --release -p flexstage-assess --example scan -- quick RUN/design/design.json RUN/track/measured_response.csv static|lead|inverse[:CUTOFF_HZ[:PREVIEW[:TAPS]]] [FRACTION ...]
+//! ```
+
+use flexstage_assess::Bench;
+use flexstage_assess::lab::{LabMeasurement, LabParams};
+use flexstage_assess::sweep::{SweepParams, sweep};
+use flexstage_control::experiment::Setup;
+use flexstage_control::feedforward::{FeedForward, FeedForwardParams};
+use flexstage_control::registry::Controller;
+use flexstage_control::tuning::TuningParams;
+use flexstage_identify::measured::MeasuredResponse;
+use flexstage_run::Format;
+use flexstage_run::files::design::DesignFile;
+use flexstage_scenario::{Preset, Scenario};
+use flexstage_twin::DesignedStage;
+
+fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
+    let mut parts = mode.split(':');
+    Ok(match parts.next() {
+        Some("static") => FeedForward::Static,
+        Some("lead") => FeedForward::StaticLead(1),
+        Some("inverse") => {
+            let mut p = FeedForwardParams::default();
+            if let Some(c) = parts.next() {
+                p.cutoff = c.parse()?;
+            }
+            if let Some(v) = parts.next() {
+                p.preview = v.parse()?;
+            }
+            if let Some(v) = parts.next() {
+                p.taps = v.parse()?;
+                p.grid = p.grid.max(4 * (p.preview + p.taps));
+            }
+            if let Some(v) = parts.next() {
+                p.regularization = v.parse()?;
+            }
+            FeedForward::Inverse(p)
+        }
+        _ => return Err("feed-forward: static, lead or inverse[:CUTOFF[:PREVIEW[:TAPS]]]".into()),
+    })
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    let usage = "usage: scan quick|paper DESIGN.json MEASURED.csv MODE [FRACTION ...]";
+    let preset = args
+        .get(1)
+        .and_then(|p| Preset::from_name(p))
+        .ok_or(usage)?;
+    let design = DesignFile::decode(&std::fs::read(args.get(2).ok_or(usage)?)?)?;
+    let measured = std::fs::read(args.get(3).ok_or(usage)?)?;
+    let mode = feedforward(args.get(4).ok_or(usage)?)?;
+    let fractions: Vec<f64> = args[5..]
+        .iter()
+        .map(|a| a.parse())
+        .collect::<Result<_, _>>()?;
+    let DesignedStage {
+        scenario: s, twin, ..
+    } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
+    let lab = LabParams::default();
+    let response = MeasuredResponse::from_csv(&measured[..], "measured response")?;
+    let m = LabMeasurement::from_response(response, &lab.fit)?;
+    let tuning = TuningParams {
+        feedforward: mode,
+        ..TuningParams::default()
+    };
+    let t0 = std::time::Instant::now();
+    let bench = Bench::from_measurement(Setup::from_scenario(&s), twin, tuning, &lab, &m)?;
+    println!("designed in {:.2} s ({mode:?})", t0.elapsed().as_secs_f64());
+    let cands: Vec<&'static Controller> = ["pi-notch-ff", "pid-ff"]
+        .iter()
+        .filter_map(|n| Controller::by_name(n))
+        .collect();
+    for c in &cands {
+        if let Some(mg) = bench.analytic_margins(c, 1)? {
+            println!(
+                "{c}: margins (twin, 1 sample) q1 {:.2} dB / {:.1}°, q2 {:.2} dB / {:.1}°",
+                mg[0].gain_db, mg[0].phase_deg, mg[1].gain_db, mg[1].phase_deg
+            );
+        }
+    }
+    if let Some(ff) = bench.design(cands[0])?.feedforward() {
+        // Scoring only: how far G F is from the target on the loop model and on the twin.
+        let truth = flexstage_assess::bench::modal_plant(
+            &bench.twin,
+            1e-4,
+            1,
+            &bench.setup.rig.amplifier,
+            &bench.setup.rig.sensor,
+        )?;
+        use flexstage_sim::modal::LoopPlant;
+        // The true output's sampled response: no sensor chain.
+        let output = flexstage_assess::bench::modal_plant(
+            &bench.twin,
+            1e-4,
+            1,
+            &bench.setup.rig.amplifier,
+            &flexstage_sim::rig::SensorParams::ideal(),
+        )?;
+        println!(
+            "sensor {:?}, lag {:.3} samples",
+            bench.setup.rig.sensor,
+            ff.lag()
+        );
+        let target = match mode {
+            FeedForward::Inverse(p) => Some(FeedForwardParams { lag: ff.lag(), ..p }),
+            _ => None,
+        };
+        println!("f Hz   |GF - D| (loop model) q1 q2   (twin) q1 q2   |T|");
+        for f in [32.0, 97.0, 322.0, 500.0, 965.0, 1010.0, 1500.0, 3000.0] {
+            let h = ff.response(f, 1e-4);
+            let d = target.map_or(nalgebra::Complex::new(1.0, 0.0), |p| p.target(f, 1e-4));
+            let err = |g: [[nalgebra::Complex<f64>; 2]; 2]| {
+                [0, 1].map(|i| {
+                    (0..2)
+                        .map(|j| {
+                            let gf = g[i][0] * h[0][j] + g[i][1] * h[1][j];
+                            let want = if i == j {
+                                d
+                            } else {
+                                nalgebra::Complex::new(0.0, 0.0)
+                            };
+                            (gf - want).norm()
+                        })
+                        .fold(0.0, f64::max)
+                })
+            };
+            let (a, b) = (err(m.model.response(f)), err(truth.response(f)));
+            let d0 = nalgebra::Complex::new(d.norm(), 0.0);
+            let o = {
+                let g = output.response(f);
+                [0, 1].map(|i| {
+                    (0..2)
+                        .map(|j| {
+                            let gf = g[i][0] * h[0][j] + g[i][1] * h[1][j];
+                            let want = if i == j {
+                                d0
+                            } else {
+                                nalgebra::Complex::new(0.0, 0.0)
+                            };
+                            (gf - want).norm()
+                        })
+                        .fold(0.0, f64::max)
+                })
+            };
+            println!(
+                "{f:6.0}  {:.4} {:.4}   {:.4} {:.4}   output {:.4} {:.4}   {:.4}",
+                a[0],
+                a[1],
+                b[0],
+                b[1],
+                o[0],
+                o[1],
+                d.norm()
+            );
+        }
+    }
+    let mut p = SweepParams::default();
+    if !fractions.is_empty() {
+        p.fractions = fractions;
+    }
+    let amplitude = match s.trajectories.first() {
+        Some(flexstage_scenario::Trajectory::Lissajous { amplitude, .. }) => *amplitude,
+        Some(flexstage_scenario::Trajectory::Circle { radius, .. }) => [*radius; 2],
+        None => return Err("no trajectory".into()),
+    };
+    let t0 = std::time::Instant::now();
+    let points = sweep(&bench, &cands, amplitude, &p)?;
+    println!("swept in {:.1} s", t0.elapsed().as_secs_f64());
+    println!(
+        "f/f1   fast Hz  A1 [µm]  limit (factor)            controller   RMS % q1/q2       peak % q1/q2      cause (dominant Hz)"
+    );
+    for pt in &points {
+        let limit = pt.reduced.map_or("none".to_string(), |(l, f)| {
+            format!("{} ({f:.3})", l.name())
+        });
+        for r in &pt.results {
+            println!(
+                "{:.3}  {:7.1}  {:7.3}  {:<26} {:<12} {:7.3} {:7.3}   {:7.3} {:7.3}   {} ({:.0})",
+                pt.fraction,
+                pt.frequency,
+                pt.amplitude[0] * 1e6,
+                limit,
+                r.controller.name,
+                r.rms_pct[0],
+                r.rms_pct[1],
+                r.peak_pct[0],
+                r.peak_pct[1],
+                r.cause.name(),
+                r.dominant
+            );
+        }
+    }
+    Ok(())
+}
