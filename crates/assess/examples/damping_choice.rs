@@ -17,7 +17,7 @@ use flexstage_sim::modal::LoopPlant;
 
 fn main() {
     let Some(path) = std::env::args().nth(1) else {
-        eprintln!("usage: damping_choice RUN/track/measured_response.csv");
+        eprintln!("usage: damping_choice <the measured response file in a run's track folder>");
         std::process::exit(2);
     };
     let file = std::fs::File::open(&path).expect("the measured response file");

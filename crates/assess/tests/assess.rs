@@ -59,7 +59,9 @@ fn injection_equals_transfer_function_for_the_pi_notch() {
                 if axis == 0 {
                     let off = (e0.arg() - expect.arg()).to_degrees();
                     println!("the chain's share at 20 Hz: {off}°");
-                    assert!(off.abs() > 2.0, "the chain's share at 20 Hz: {off}°");
+                    // 1.6° with the twin's 24 fixed-interface modes (over 2° with 6): 30 × the
+                    // injection's 0.05° agreement.
+                    assert!(off.abs() > 1.0, "the chain's share at 20 Hz: {off}°");
                 }
             }
             assert!(
