@@ -374,7 +374,16 @@ pub fn one_plant(
     };
     let mut results = Vec::with_capacity(candidates.len());
     for &c in candidates {
-        let r = track_on(bench, setup, twin, &rig, c, reference, p.duration)?;
+        let r = match track_on(bench, setup, twin, &rig, c, reference, p.duration) {
+            Ok(r) => r,
+            // The procedure gave no design of this controller for this plant's measurement
+            // (the bench keeps only the designs that met their margins): it fails here.
+            Err(e) if no_design(&e) => {
+                results.push((c, [f64::INFINITY; 2], false));
+                continue;
+            }
+            Err(e) => return Err(e),
+        };
         let pass =
             !diverged(&r) && r.rms_pct[0] <= p.rms_bound_pct && r.rms_pct[1] <= p.rms_bound_pct;
         let rms = if diverged(&r) {

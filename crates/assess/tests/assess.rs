@@ -250,3 +250,32 @@ fn rig_sensor_chain_equals_its_sampled_transfer_function() {
         );
     }
 }
+
+/// Goal: a controller with no design for a plant (the bench keeps only the designs that
+/// met their margins; here the scenario bench, which cannot design the PI + notch without a
+/// sampled response) fails on that plant, and the study goes on with the others, instead of
+/// stopping (the default quick run stopped on a plant whose measured loop gave no PPF design).
+#[test]
+fn a_controller_without_a_design_fails_its_plant_and_the_study_goes_on() {
+    use flexstage_control::pid::PID_FF_SCENARIO;
+    let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
+    let twin = flexstage_twin::Twin::from_scenario(&s, &rho).unwrap();
+    let base = Bench::scenario(Setup::from_scenario(&s), twin).unwrap();
+    assert!(base.design(&PI_NOTCH_FF).is_err());
+    let (r, _) = Reference::from_scenario(&s.trajectories[0]);
+    let p = MonteCarloParams {
+        plants: 2,
+        duration: 0.05,
+        design: PlantDesign::Nominal,
+        ..MonteCarloParams::default()
+    };
+    let mc = monte_carlo(&base, &[&PI_NOTCH_FF, &PID_FF_SCENARIO], r, &p).unwrap();
+    for plant in &mc.plants {
+        assert_eq!(plant.results[0].1, [f64::INFINITY; 2]);
+        assert!(!plant.results[0].2);
+        assert!(
+            plant.results[1].1.iter().all(|x| x.is_finite()),
+            "{plant:?}"
+        );
+    }
+}
