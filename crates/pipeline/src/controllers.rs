@@ -115,7 +115,7 @@ pub fn c_files(f: &ControllerFile) -> Result<CSource> {
 pub struct Exported {
     /// The controllers written (JSON, C and header).
     pub written: Vec<&'static str>,
-    /// The controllers ran but not exported (nonlinear).
+    /// The controllers ran but not exported: no target law (the backstepping's observer and robust law, PPF's damping filter).
     pub nonlinear: Vec<&'static str>,
 }
 

@@ -548,7 +548,7 @@ impl fmt::Display for TrackSummary {
         if !e.nonlinear.is_empty() {
             writeln!(
                 f,
-                "not exported (nonlinear: observer and robust law): {}",
+                "not exported (the C target runs the PI(D) + notch law only): {}",
                 e.nonlinear.join(", ")
             )?;
         }
