@@ -68,7 +68,10 @@ use crate::margins::{Margins, loop_at_a_time, margin};
 use crate::pi_notch::PiNotchParams;
 use crate::registry::{Controller, Design, Stage};
 use crate::target::TargetLaw;
-use crate::tuning::{Structure, TuningParams, closed_loop_stable, notches_for_axis, tune};
+use crate::tuning::{
+    Structure, TuningParams, closed_loop_stable, notches_for_axis, nyquist_grid, tune,
+    unwrapped_phase,
+};
 use flexstage_sim::experiment::{Command, StageControl};
 use flexstage_sim::modal::LoopPlant;
 use flexstage_sim::trajectory::Reference;
@@ -323,41 +326,13 @@ fn damping_loop_stable(d: &Damped<'_>) -> bool {
         let m = d.return_difference(f);
         m[0][0] * m[1][1] - m[0][1] * m[1][0]
     };
-    let lo = 1e-5 * nyquist;
-    let mut grid: Vec<f64> = (0..=400)
-        .map(|k| lo * (nyquist / lo).powf(k as f64 / 400.0))
-        .collect();
-    grid.extend((1..1000).map(|k| nyquist * k as f64 / 1000.0));
-    for (f, zeta) in d.plant.modes() {
-        let w = (zeta.max(1e-4) * f).max(1e-6 * nyquist);
-        grid.extend((-40..=40).map(|k| f + w * k as f64 / 8.0));
+    let mut grid = nyquist_grid(nyquist, d.plant.modes());
+    if grid.last() != Some(&nyquist) {
+        grid.push(nyquist);
     }
-    grid.push(nyquist);
-    grid.retain(|&f| f >= lo && f <= nyquist);
-    grid.sort_by(f64::total_cmp);
-    grid.dedup();
-    let mut phase = 0.0;
-    let mut prev = det(grid[0]);
-    let mut fp = grid[0];
-    let mut stack = Vec::new();
-    for &f in &grid[1..] {
-        stack.push((f, det(f)));
-        while let Some(&(fb, db)) = stack.last() {
-            if prev.norm() < 1e-9 || db.norm() < 1e-9 {
-                return false;
-            }
-            let step = (db / prev).arg();
-            if step.abs() > 0.3 && fb - fp > 1e-9 * nyquist {
-                let fm = 0.5 * (fp + fb);
-                stack.push((fm, det(fm)));
-            } else {
-                phase += step;
-                prev = db;
-                fp = fb;
-                stack.pop();
-            }
-        }
-    }
+    let Some((_, phase)) = unwrapped_phase(det, &grid, nyquist) else {
+        return false;
+    };
     phase.abs() < 0.5 * std::f64::consts::PI
 }
 

@@ -190,34 +190,61 @@ pub fn closed_loop_stable(plant: &dyn LoopPlant, params: &PiNotchParams) -> bool
         let one = Complex::new(1.0, 0.0);
         (one + l[0][0]) * (one + l[1][1]) - l[0][1] * l[1][0]
     };
-    // The grid: log-spaced from 1e-5 of Nyquist, plus each mode's band.
+    let modes = plant.modes().into_iter().map(|(f, zeta)| {
+        let r = f.rem_euclid(2.0 * nyquist);
+        (if r > nyquist { 2.0 * nyquist - r } else { r }, zeta)
+    });
+    let grid = nyquist_grid(nyquist, modes);
+    let Some((first, phase)) = unwrapped_phase(det, &grid, nyquist) else {
+        return false;
+    };
+    let start = first.arg();
+    let n_int = params.axes.iter().filter(|a| a.ki > 0.0).count() as f64;
+    // At ω = 0⁺ det(I + L) → (−j∞)^{n_I} (phase −n_I π/2): the turn from there to the
+    // grid's first point is added; W is then an integer.
+    let from_zero = Complex::from_polar(1.0, start + n_int * std::f64::consts::FRAC_PI_2).arg();
+    let delta = phase + from_zero;
+    let w = (2.0 * delta - n_int * std::f64::consts::PI) / std::f64::consts::TAU;
+    w.abs() < 0.25
+}
+
+/// The frequency grid of a Nyquist test on (0, `nyquist`]: log-spaced from 1e-5 of Nyquist,
+/// linear in thousandths of it, and 81 points across each of `modes` (centre \[Hz\] within
+/// the band, damping ratio) over ± 5 half-power half-widths; sorted, without repeats.
+pub(crate) fn nyquist_grid(nyquist: f64, modes: impl IntoIterator<Item = (f64, f64)>) -> Vec<f64> {
     let lo = 1e-5 * nyquist;
     let mut grid: Vec<f64> = (0..=400)
         .map(|k| lo * (nyquist / lo).powf(k as f64 / 400.0))
         .collect();
     grid.extend((1..1000).map(|k| nyquist * k as f64 / 1000.0));
-    for (f, zeta) in plant.modes() {
-        let fa = {
-            let r = f.rem_euclid(2.0 * nyquist);
-            if r > nyquist { 2.0 * nyquist - r } else { r }
-        };
-        let w = (zeta.max(1e-4) * fa).max(1e-6 * nyquist);
-        grid.extend((-40..=40).map(|k| fa + w * k as f64 / 8.0));
+    for (f, zeta) in modes {
+        let w = (zeta.max(1e-4) * f).max(1e-6 * nyquist);
+        grid.extend((-40..=40).map(|k| f + w * k as f64 / 8.0));
     }
     grid.retain(|&f| f >= lo && f <= nyquist);
     grid.sort_by(f64::total_cmp);
     grid.dedup();
+    grid
+}
+
+/// `det` at the grid's first point and its phase change along `grid`, unwrapped: each
+/// interval is bisected until every step turns by at most 0.3 rad. `None` when `det`
+/// passes within 1e-9 of the origin (a marginal loop).
+pub(crate) fn unwrapped_phase(
+    det: impl Fn(f64) -> Complex<f64>,
+    grid: &[f64],
+    nyquist: f64,
+) -> Option<(Complex<f64>, f64)> {
+    let first = det(grid[0]);
     let mut phase = 0.0;
-    let mut prev = det(grid[0]);
-    let start = prev.arg();
+    let mut prev = first;
     let mut fp = grid[0];
     let mut stack = Vec::new();
     for &f in &grid[1..] {
-        // Bisect [fp, f] until every step turns by at most 0.3 rad.
         stack.push((f, det(f)));
         while let Some(&(fb, db)) = stack.last() {
             if prev.norm() < 1e-9 || db.norm() < 1e-9 {
-                return false;
+                return None;
             }
             let step = (db / prev).arg();
             if step.abs() > 0.3 && fb - fp > 1e-9 * nyquist {
@@ -231,13 +258,7 @@ pub fn closed_loop_stable(plant: &dyn LoopPlant, params: &PiNotchParams) -> bool
             }
         }
     }
-    let n_int = params.axes.iter().filter(|a| a.ki > 0.0).count() as f64;
-    // At ω = 0⁺ det(I + L) → (−j∞)^{n_I} (phase −n_I π/2): the turn from there to the
-    // grid's first point is added; W is then an integer.
-    let from_zero = Complex::from_polar(1.0, start + n_int * std::f64::consts::FRAC_PI_2).arg();
-    let delta = phase + from_zero;
-    let w = (2.0 * delta - n_int * std::f64::consts::PI) / std::f64::consts::TAU;
-    w.abs() < 0.25
+    Some((first, phase))
 }
 
 /// Margins of both loops of `params` on `plant`.
