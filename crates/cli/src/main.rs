@@ -19,7 +19,8 @@ use std::process::ExitCode;
 
 use clap::{Args, Parser, Subcommand};
 use flexstage_pipeline::{
-    DEFAULT_PRESET, PRESETS, RunFolder, RunOptions, Scenario, default_root, default_run,
+    DEFAULT_PRESET, PRESETS, RunFolder, RunOptions, Scenario, TrackOptions, default_root,
+    default_run,
 };
 
 use anyhow::Context;
@@ -240,6 +241,10 @@ struct RunArgs {
     /// Run every stage again, ignoring finished ones.
     #[arg(long)]
     restart: bool,
+    /// Perturbed twins of the tracking stage's Monte-Carlo study (each one measured and every
+    /// controller designed from that measurement, then run on it), 1..=10000.
+    #[arg(long, default_value_t = TrackOptions::default().montecarlo_plants)]
+    montecarlo_plants: usize,
 }
 
 fn main() -> ExitCode {
@@ -432,6 +437,10 @@ fn run(a: RunArgs) -> anyhow::Result<()> {
     let root = a.out.unwrap_or_else(|| default_root(&s));
     let options = RunOptions {
         restart: a.restart,
+        track: TrackOptions {
+            montecarlo_plants: a.montecarlo_plants,
+            ..TrackOptions::default()
+        },
         ..RunOptions::default()
     };
     let summary = flexstage_pipeline::run::run(s, &root, &options, &bars::Bars::default())?;

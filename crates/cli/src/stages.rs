@@ -507,7 +507,7 @@ pub struct TrackArgs {
     #[arg(long, default_value = "auto", value_parser = TWIN_VALIDATIONS, requires = "write_twin")]
     pub twin_validate: String,
     /// Perturbed twins of the Monte-Carlo study on the twin (each one measured and every
-    /// controller designed from that measurement, then run on it), ≥ 1.
+    /// controller designed from that measurement, then run on it), 1..=10000.
     #[arg(long, default_value_t = TrackOptions::default().montecarlo_plants)]
     pub montecarlo_plants: usize,
 }

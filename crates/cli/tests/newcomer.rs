@@ -93,7 +93,15 @@ fn the_subcommands_share_one_run_folder_and_never_overwrite_silently() {
     );
 
     // track: compensation off in its own folder, the default folder kept.
-    let quick = ["--trajectory", "circle", "--variant", "robust"];
+    // (3 Monte-Carlo plants: the study's rates are not what this test checks.)
+    let quick = [
+        "--trajectory",
+        "circle",
+        "--variant",
+        "robust",
+        "--montecarlo-plants",
+        "3",
+    ];
     let out = ok(&dir, &[&["track"][..], &quick].concat());
     assert!(
         out.contains("plant: twin") || out.contains("stage.truth"),

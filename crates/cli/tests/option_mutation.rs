@@ -117,6 +117,18 @@ const OPTIONS: &[OptionRow] = &[
     (&["pea", "simulate"], "--seed", &[], &["0", "4000000000"]),
     (&["track"], "--duration", &["track.duration"], &[]),
     (
+        &["track"],
+        "--montecarlo-plants",
+        &["track.montecarlo_plants"],
+        &[],
+    ),
+    (
+        &["run"],
+        "--montecarlo-plants",
+        &["track.montecarlo_plants"],
+        &[],
+    ),
+    (
         &["track", "--learning"],
         "--trials",
         &["track.learning"],

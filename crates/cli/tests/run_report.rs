@@ -25,7 +25,7 @@ const SECTIONS: [&str; 9] = [
 ];
 
 /// The quick preset as `flexstage init` writes it, made small for CI: a 24 × 12
-/// mesh, 8 stroke samples, 10 design iterations. Every stage and report section still runs.
+/// mesh, 8 stroke samples, 10 design iterations (and 4 Monte-Carlo plants, `run`). Every stage and report section still runs.
 fn tiny_scenario(dir: &std::path::Path) -> PathBuf {
     let path = dir.with_extension("toml");
     let _ = std::fs::remove_file(&path);
@@ -57,6 +57,9 @@ fn run(dir: &PathBuf) -> (String, String) {
         .arg(&scenario)
         .arg("--out")
         .arg(dir)
+        // Every stage and section runs; the Monte-Carlo's pass rates need no 100 plants here.
+        .arg("--montecarlo-plants")
+        .arg("4")
         .output()
         .expect("flexstage runs");
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
@@ -173,6 +176,15 @@ fn run_writes_a_self_contained_report_with_every_section_and_resumes() {
         flexstage_scenario::Scenario::load(&dir.join(layout::PLANT)).expect("plant.toml is valid");
     assert_eq!(plant.stage.truth, reduced);
     assert_eq!(plant.stage.guess.mass, reduced.mass);
+
+    // `run --montecarlo-plants 4` reaches the study: plants 0 to 3, every controller each.
+    let study = std::fs::read_to_string(dir.join(layout::Tracking::main().montecarlo())).unwrap();
+    let plants: std::collections::BTreeSet<&str> = study
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split(',').next())
+        .collect();
+    assert_eq!(plants.into_iter().collect::<Vec<_>>(), ["0", "1", "2", "3"]);
 
     // Resume: every finished stage is skipped.
     let (_, stderr) = run(&dir);

@@ -89,6 +89,10 @@ pub const LEARNING_TRIALS: usize = 20;
 /// The most learning trials (bounded work: with the longest period below, 4·10⁶ samples).
 pub const MAX_LEARNING_TRIALS: usize = 200;
 
+/// The most Monte-Carlo plants (bounded work: a plant is measured, designed on and run, a few
+/// CPU-seconds on the quick design, so 10 000 plants are hours, never unbounded).
+pub const MAX_MONTECARLO_PLANTS: usize = 10_000;
+
 /// The longest period learning accepts \[samples\]: measuring the learning plant takes a
 /// DFT bin at every harmonic, O(N²) (seconds at this N; 0.5 Hz at 10 kHz).
 pub const MAX_LEARNING_PERIOD: usize = 20_000;
@@ -197,10 +201,10 @@ impl TrackOptions {
             )?;
         }
         require(
-            self.montecarlo_plants >= 1,
+            (1..=MAX_MONTECARLO_PLANTS).contains(&self.montecarlo_plants),
             "track.montecarlo_plants",
             self.montecarlo_plants,
-            "≥ 1 plant",
+            "a number of plants in 1..=10000",
         )?;
         Ok(())
     }
