@@ -62,7 +62,7 @@
 //! highest natural frequency below 0.9× Nyquist, lines every 10 Hz, 2 µm peak per PEA; plate
 //! rows prefiltered at 150 Hz, output rows at 1.2× the band's top; Numerov regressors with the
 //! correction at the modes. On the Table 4 stage (Bouc–Wen PEAs, cross terms 5 %, 7.5/10 nm
-//! noise and quantization), seeds 1–4 (`two_band_excitation_meets_the_issue_18_targets_on_the_lumped_plant`):
+//! noise and quantization), seeds 1–4 (`two_band_excitation_meets_the_identification_targets_on_the_lumped_plant`):
 //!
 //! | | K_qo1 | K_qo2 | K_in1 | K_in2 | K_pea1 | K_pea2 | C_qo1 | C_qo2 | k_c |
 //! |---|---|---|---|---|---|---|---|---|---|

@@ -180,7 +180,7 @@ fn two_band(seed: u64, duration: f64) -> (StageParams, f64, flexstage_identify::
 }
 
 #[test]
-fn two_band_excitation_meets_the_issue_18_targets_on_the_lumped_plant() {
+fn two_band_excitation_meets_the_identification_targets_on_the_lumped_plant() {
     // Reference: the simulated lumped stage's truth (Table 4 estimates, cross terms 5 % of
     // √(2K_qo1K_qo2)), Bouc–Wen PEAs, the default sensor noise and quantization, 8 s records
     // (the default), default estimator settings plus the resonance plan.

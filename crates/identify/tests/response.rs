@@ -177,7 +177,7 @@ fn noise_free_steady_state_recovers_the_fit_of_the_exact_modes() {
 }
 
 #[test]
-fn sensor_noise_leaves_the_fit_within_the_issue_18_tolerances() {
+fn sensor_noise_leaves_the_fit_within_the_identification_tolerances() {
     // 20 nm white noise per sample at 100 kHz (the 10 kHz sensor's 6–10 nm times √10), 4 s.
     let e = excitation();
     let truth = ResponseFit::from_modes(&modes(), 0.5 / CONTROLLER_TS, 0.1);

@@ -16,7 +16,7 @@ use flexstage_pipeline::track::{PlantKind, try_build};
 use rayon::prelude::*;
 
 #[test]
-fn twin_identification_meets_the_issue_18_targets_on_the_default_design() {
+fn twin_identification_meets_the_identification_targets_on_the_default_design() {
     let root = std::env::temp_dir().join(format!("flexstage-stagetwin-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&root);
     let folder = RunFolder::open(preset("quick").unwrap(), &root, false).unwrap();
