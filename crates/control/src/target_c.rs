@@ -24,9 +24,13 @@ pub fn is_c_identifier(s: &str) -> bool {
         && s.len() <= 63
 }
 
-/// The C prefix of a controller name: `-` and `.` become `_` (`pi-notch-ff` → `pi_notch_ff`).
+/// The C prefix of a controller name: every character but ASCII letters, digits and `_`
+/// becomes `_` (`pi-notch-ff` → `pi_notch_ff`, `pi-notch-ff+learning-circle` →
+/// `pi_notch_ff_learning_circle`).
 pub fn c_prefix(name: &str) -> String {
-    name.replace(['-', '.'], "_")
+    name.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
 }
 
 /// A `double` literal that reads back to exactly `v` (finite).
@@ -241,12 +245,12 @@ pub fn c_source(law: &TargetLaw, prefix: &str, header_file: &str) -> Result<CSou
         && header_file.len() <= 100
         && header_file
             .chars()
-            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'));
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.' | '+'));
     if !plain {
         return Err(flexstage_numerics::RangeError::new(
             "controller.c_header",
             header_file.to_string(),
-            "a file name of letters, digits, -, _ and . ending in .h",
+            "a file name of letters, digits, -, _, + and . ending in .h",
         )
         .into());
     }

@@ -134,21 +134,58 @@ pub fn c_files(f: &ControllerFile) -> Result<CSource> {
 /// The controllers `track` wrote for a target, and those it did not export.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Exported {
-    /// The controllers written (JSON, C and header).
-    pub written: Vec<&'static str>,
+    /// The controllers written (JSON, C and header; a learned table as
+    /// `<controller>+learning-<trajectory>`).
+    pub written: Vec<String>,
     /// The controllers ran but not exported: no target law (the backstepping's observer,
     /// Kalman estimate and robust law).
     pub nonlinear: Vec<&'static str>,
 }
 
+/// The correction a learning run of `track` learned on one trajectory
+/// ([`write_controllers`] exports it with its controller).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LearnedTable {
+    /// The controller the learning layer ran on.
+    pub controller: &'static Controller,
+    /// The trajectory it learned (the table holds one of its periods).
+    pub trajectory: String,
+    /// c\[k\] \[m\] per sample k of the period, k = 0 at the reference's start.
+    pub table: Vec<[f64; 2]>,
+}
+
+impl LearnedTable {
+    /// The exported controller's name: `<controller>+learning-<trajectory>` (characters of
+    /// the trajectory's name other than letters, digits, `-`, `_` and `.` as `_`).
+    pub fn name(&self) -> String {
+        let trajectory: String = self
+            .trajectory
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        format!(
+            "{}-{trajectory}",
+            crate::track::variant_name(self.controller, true)
+        )
+    }
+}
+
 /// Writes the coefficients file, the C source and the header of every controller of
-/// `controllers` that `designs` holds and that is linear, with the actuator stage `actuator`,
-/// into `out`'s `controllers/` folder.
+/// `controllers` that `designs` holds and that has a target law, and of each of them with a
+/// table of `learned` (as `<controller>+learning-<trajectory>`), with the actuator stage
+/// `actuator`, into `out`'s `controllers/` folder.
 pub(crate) fn write_controllers(
     run: &RunDir,
     out: &Tracking,
     designs: &Designs,
     controllers: &[&'static Controller],
+    learned: &[LearnedTable],
     actuator: ActuatorParams,
 ) -> Result<Exported> {
     let mut done = Exported::default();
@@ -160,12 +197,20 @@ pub(crate) fn write_controllers(
             done.nonlinear.push(c.name);
             continue;
         };
-        let file = controller_file(c, &law);
-        let src = c_files(&file)?;
-        run.store(&out.controller_json(c.name), file)?;
-        run.write(&out.controller_c(c.name), src.source.as_bytes())?;
-        run.write(&out.controller_h(c.name), src.header.as_bytes())?;
-        done.written.push(c.name);
+        let mut files = vec![(c.name.to_string(), controller_file(c, &law))];
+        for l in learned.iter().filter(|l| l.controller == c) {
+            let mut file = controller_file(c, &law.clone().with_learned(l.table.clone()));
+            file.controller = l.name();
+            file.label = format!("{}, with the table learned on {}", c.label, l.trajectory);
+            files.push((l.name(), file));
+        }
+        for (name, file) in files {
+            let src = c_files(&file)?;
+            run.store(&out.controller_json(&name), file)?;
+            run.write(&out.controller_c(&name), src.source.as_bytes())?;
+            run.write(&out.controller_h(&name), src.header.as_bytes())?;
+            done.written.push(name);
+        }
     }
     Ok(done)
 }
@@ -403,6 +448,48 @@ mod tests {
                 bits(&recorded_sequence(&l, 3).unwrap().samples)
             );
         }
+    }
+
+    /// Goal: `track --learning` exports each controller once more with the table it learned
+    /// on each trajectory (`<controller>+learning-<trajectory>`): one period of the circle
+    /// (5000 samples at 10 kHz), not all zero, in the JSON and as the C's table, and the law
+    /// read back is the controller's own with that table.
+    #[test]
+    fn track_with_learning_exports_the_learned_table() {
+        use crate::track::{PlantKind, TrackOptions, track};
+        let root = std::env::temp_dir().join(format!("flexstage-learned-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let folder =
+            crate::RunFolder::open(crate::folder::preset("quick").unwrap(), &root, false).unwrap();
+        let pid = &flexstage_control::pid::PID_FF_SCENARIO;
+        let options = TrackOptions {
+            plant: PlantKind::Lumped,
+            trajectory: Some("circle".into()),
+            controllers: vec![pid],
+            duration: Some(0.05),
+            learning: Some(2),
+            ..TrackOptions::default()
+        };
+        let summary = track(&folder, &options, &crate::progress::Silent).unwrap();
+        let name = "pid-ff-scenario+learning-circle";
+        assert_eq!(summary.exported.written, ["pid-ff-scenario", name]);
+        let dir = summary.dir.join("controllers");
+        let file =
+            ControllerFile::decode(&std::fs::read(dir.join(format!("{name}.json"))).unwrap())
+                .unwrap();
+        let own = ControllerFile::decode(&std::fs::read(dir.join("pid-ff-scenario.json")).unwrap())
+            .unwrap();
+        let table = file.learned_m.clone().unwrap();
+        assert_eq!(table.len(), 5000);
+        assert!(table.iter().any(|c| c[0] != 0.0 && c[1] != 0.0));
+        assert_eq!(
+            target_law(&file).unwrap(),
+            target_law(&own).unwrap().with_learned(table)
+        );
+        let source = std::fs::read_to_string(dir.join(format!("{name}.c"))).unwrap();
+        assert!(source.contains("static const double LEARNED[5000][2]"));
+        assert!(source.contains("#include \"pid-ff-scenario+learning-circle.h\""));
+        std::fs::remove_dir_all(&root).unwrap();
     }
 
     /// A file of another version (than 1 or 2), an unknown compensation or other compensator settings is
