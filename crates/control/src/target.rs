@@ -70,7 +70,8 @@ pub struct TargetInput {
     pub reference: [f64; 2],
     /// The reading y \[m\] (non-finite: a dropout).
     pub reading: [f64; 2],
-    /// The sample's index in the learning period, k mod N (unused without a table).
+    /// The sample's index k from the reference's start (entry k mod N of the learned table
+    /// is used; unused without a table).
     pub index: usize,
 }
 
