@@ -143,7 +143,7 @@ pub struct Exported {
 }
 
 /// The correction a learning run of `track` learned on one trajectory
-/// ([`write_controllers`] exports it with its controller).
+/// (`track` exports it with its controller).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LearnedTable {
     /// The controller the learning layer ran on.
