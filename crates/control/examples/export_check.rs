@@ -2,10 +2,13 @@
 //! sequence the Rust controller recorded (`<prefix>.csv`, [`recorded_sequence`]), for the CI
 //! check that compiles the C and requires it to agree to 1e-12 (`.ci/c-check`). The
 //! controllers are designed as the registry test designs them: the paper scenario on two
-//! decoupled 1 %-damped modes with one sample of delay, inverse compensation. The default
-//! controller is also written with the compensation off and ideal (`<prefix>_off`,
-//! `<prefix>_ideal`), and once with its k_i changed by one part in 10⁹ (`<prefix>_mutated`,
-//! checked against the unchanged sequence), which the check must refuse.
+//! decoupled 1 %-damped modes with one sample of delay, inverse compensation; the PI + notch
+//! and the PID with the FIR inverse of that loop with preview (the default feed-forward), the
+//! PPF controller with its damping filters. The default controller is also written with the
+//! compensation off and ideal (`<prefix>_off`, `<prefix>_ideal`) and with a learned table of
+//! one 20 Hz period (`<prefix>_learning`), and mutated copies that the check must refuse,
+//! each checked against the unchanged sequence (`<prefix>_mutated_*`): its k_i, its largest
+//! FIR tap, its learned table, and the PPF filter's gain, each changed by one part in 10⁹.
 //!
 //! `cargo run --release -p flexstage-control --example export_check -- OUT_DIR`
 
@@ -14,9 +17,11 @@ use std::path::Path;
 
 use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::Setup;
+use flexstage_control::feedforward::FirFeedForward;
 use flexstage_control::registry::{CONTROLLERS, DEFAULT, Designs, Stage};
 use flexstage_control::target::{TargetLaw, c_prefix, recorded_sequence};
 use flexstage_control::tuning::TuningParams;
+use flexstage_control_core::Biquad;
 use flexstage_identify::response::ResponseFit;
 
 fn write(
@@ -24,23 +29,28 @@ fn write(
     prefix: &str,
     law: &TargetLaw,
     sequence_of: &TargetLaw,
-) -> std::io::Result<()> {
-    let src = law
-        .c_source(prefix, &format!("{prefix}.h"))
-        .map_err(std::io::Error::other)?;
+) -> Result<(), Box<dyn std::error::Error>> {
+    let src = law.c_source(prefix, &format!("{prefix}.h"))?;
     std::fs::write(dir.join(format!("{prefix}.h")), src.header)?;
     std::fs::write(dir.join(format!("{prefix}.c")), src.source)?;
-    let seq = recorded_sequence(sequence_of, 2022).map_err(std::io::Error::other)?;
-    let mut csv = String::from("r1,r2,y1,y2,voltage1,voltage2,x_nom1,x_nom2,saturated\n");
-    for s in seq {
-        let c = s.command;
+    let seq = recorded_sequence(sequence_of, 2022)?;
+    let mut csv =
+        String::from("ahead1,ahead2,r1,r2,y1,y2,index,voltage1,voltage2,x_nom1,x_nom2,saturated\n");
+    for q in &seq.primed {
+        let _ = writeln!(csv, "p,{:e},{:e}", q[0], q[1]);
+    }
+    for s in &seq.samples {
+        let (i, c) = (s.input, s.command);
         let _ = writeln!(
             csv,
-            "{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
-            s.reference[0],
-            s.reference[1],
-            s.reading[0],
-            s.reading[1],
+            "{:e},{:e},{:e},{:e},{:e},{:e},{},{:e},{:e},{:e},{:e},{}",
+            i.ahead[0],
+            i.ahead[1],
+            i.reference[0],
+            i.reference[1],
+            i.reading[0],
+            i.reading[1],
+            i.index,
             c.voltage[0],
             c.voltage[1],
             c.x_nom[0],
@@ -48,7 +58,37 @@ fn write(
             u8::from(c.saturated)
         );
     }
-    std::fs::write(dir.join(format!("{prefix}.csv")), csv)
+    std::fs::write(dir.join(format!("{prefix}.csv")), csv)?;
+    println!("{prefix}.c, {prefix}.h, {prefix}.csv");
+    Ok(())
+}
+
+/// A learned table of one 20 Hz period at 10 kHz (the recorded sequence's Lissajous): an
+/// offset and a harmonic of a few nm per axis, as a converged learning layer leaves.
+fn learned_table() -> Vec<[f64; 2]> {
+    (0..500)
+        .map(|k| {
+            let w = std::f64::consts::TAU * k as f64 / 500.0;
+            [2e-9 + 3e-9 * (3.0 * w).sin(), -1e-9 + 4e-9 * w.cos()]
+        })
+        .collect()
+}
+
+/// `ff` with its largest tap entry scaled by `s`.
+fn mutated_tap(ff: &FirFeedForward, s: f64) -> Result<FirFeedForward, Box<dyn std::error::Error>> {
+    let mut taps = ff.taps().to_vec();
+    let (mut at, mut big) = ((0, 0, 0), 0.0);
+    for (n, t) in taps.iter().enumerate() {
+        for (i, row) in t.iter().enumerate() {
+            for (j, v) in row.iter().enumerate() {
+                if v.abs() > big {
+                    (at, big) = ((n, i, j), v.abs());
+                }
+            }
+        }
+    }
+    taps[at.0][at.1][at.2] *= s;
+    Ok(FirFeedForward::from_taps(ff.preview(), taps, ff.lag())?)
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -70,33 +110,51 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     );
     let designs = Designs::for_stage(&stage)?;
     let inverse = setup.actuator(Compensation::Inverse);
+    let scale = 1.0 + 1e-9;
     for c in CONTROLLERS {
         let Some(design) = designs.get(c) else {
             println!("{}: not designed on this stage", c.name);
             continue;
         };
         let Some(law) = TargetLaw::of_design(&**design, inverse)? else {
-            println!("{}: nonlinear, not exported", c.name);
+            println!("{}: no target law (nonlinear), not exported", c.name);
             continue;
         };
         let prefix = c_prefix(c.name);
         write(dir, &prefix, &law, &law)?;
-        println!("{}: {prefix}.c, {prefix}.h, {prefix}.csv", c.name);
-        if c == DEFAULT {
-            for mode in [Compensation::Off, Compensation::Ideal] {
-                let l = TargetLaw::of_design(&**design, setup.actuator(mode))?.ok_or("linear")?;
-                let p = format!(
-                    "{prefix}_{}",
-                    flexstage_control::target::compensation_name(mode)
-                );
-                write(dir, &p, &l, &l)?;
-                println!("{}: {p}.c, {p}.h, {p}.csv", c.name);
-            }
-            let mut mutated = law;
-            mutated.gains[0].ki *= 1.0 + 1e-9;
-            write(dir, &format!("{prefix}_mutated"), &mutated, &law)?;
-            println!("{}: {prefix}_mutated (k_i × (1 + 1e-9), must fail)", c.name);
+        if let Some(d) = law.damping {
+            let mut m = law.clone();
+            let (b, a) = (d[1].numerator(), d[1].denominator());
+            let mut dm = d;
+            dm[1] = Biquad::new(b.map(|v| v * scale), a);
+            m.damping = Some(dm);
+            write(dir, &format!("{prefix}_mutated_damping"), &m, &law)?;
         }
+        if c != DEFAULT {
+            continue;
+        }
+        for mode in [Compensation::Off, Compensation::Ideal] {
+            let l = TargetLaw::of_design(&**design, setup.actuator(mode))?.ok_or("linear")?;
+            let p = format!(
+                "{prefix}_{}",
+                flexstage_control::target::compensation_name(mode)
+            );
+            write(dir, &p, &l, &l)?;
+        }
+        let mut m = law.clone();
+        m.gains[0].ki *= scale;
+        write(dir, &format!("{prefix}_mutated_ki"), &m, &law)?;
+        let ff = law.feedforward.as_ref().ok_or("the default has its FIR")?;
+        let m = law.clone().with_feedforward(mutated_tap(ff, scale)?);
+        write(dir, &format!("{prefix}_mutated_tap"), &m, &law)?;
+        let learning = law.clone().with_learned(learned_table());
+        write(dir, &format!("{prefix}_learning"), &learning, &learning)?;
+        let table = learned_table()
+            .into_iter()
+            .map(|c| c.map(|v| v * scale))
+            .collect();
+        let m = law.clone().with_learned(table);
+        write(dir, &format!("{prefix}_mutated_learned"), &m, &learning)?;
     }
     Ok(())
 }

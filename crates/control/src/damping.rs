@@ -59,20 +59,20 @@
 
 use std::sync::Arc;
 
-use flexstage_control_core::{Biquad, PidLaw};
+use flexstage_control_core::Biquad;
 use nalgebra::{Complex, DMatrix, DVector, Matrix4};
 
-use crate::actuator::{Actuator, ActuatorParams};
+use crate::actuator::ActuatorParams;
 use crate::error::{ControlError, Result};
 use crate::margins::{Margins, loop_at_a_time, margin};
-use crate::pi_notch::PiNotchParams;
+use crate::pi_notch::{PiNotchController, PiNotchParams};
 use crate::registry::{Controller, Design, Stage};
 use crate::target::TargetLaw;
 use crate::tuning::{
     Structure, TuningParams, closed_loop_stable, notches_for_axis, nyquist_grid, tune,
     unwrapped_phase,
 };
-use flexstage_sim::experiment::{Command, StageControl};
+use flexstage_sim::experiment::StageControl;
 use flexstage_sim::modal::LoopPlant;
 use flexstage_sim::trajectory::Reference;
 
@@ -535,7 +535,10 @@ pub fn design(plant: &dyn LoopPlant, tuning: &TuningParams) -> Result<Option<Dam
     }
 }
 
-/// The design steps [`DampedController`].
+/// The design steps the controller of the module docs: the PI + notch + feed-forward law
+/// with G⁻¹ D y added, then the actuator stage, as the target law
+/// ([`crate::target::TargetLaw::with_damping`]) that a real-time target runs
+/// ([`crate::pi_notch::PiNotchController`] steps it).
 impl Design for DampedParams {
     fn build(
         &self,
@@ -543,87 +546,26 @@ impl Design for DampedParams {
         _delay: usize,
         reference: Reference,
     ) -> Result<Box<dyn StageControl>> {
-        Ok(Box::new(DampedController::new(self, actuator, reference)?))
-    }
-}
-
-/// The controller of the module docs: the PI + notch + feed-forward law
-/// (`flexstage_control_core::PidLaw`, as [`crate::target::TargetController`] runs it) plus
-/// G⁻¹ D y, then the actuator stage. No allocation per step.
-#[derive(Debug, Clone)]
-pub struct DampedController {
-    law: PidLaw,
-    filters: [Biquad; 2],
-    g_inv: [[f64; 2]; 2],
-    actuator: Actuator,
-    reference: Reference,
-    sample_time: f64,
-    k: u64,
-    last_y: [f64; 2],
-    last_x_nom: [f64; 2],
-}
-
-impl DampedController {
-    /// Builds the controller of `params` for `reference` with the actuator stage `actuator`.
-    pub fn new(
-        params: &DampedParams,
-        actuator: ActuatorParams,
-        reference: Reference,
-    ) -> Result<DampedController> {
-        reference.validate()?;
-        let law = TargetLaw::of_linear(&params.outer, actuator)?;
-        Ok(DampedController {
-            law: PidLaw::new(
-                law.gains,
-                law.inverse_gain,
-                law.sample_time,
-                actuator.stroke,
-            )?
-            .with_sections(law.sections),
-            filters: params
-                .damping
-                .map(|d| d.map_or(Biquad::new([0.0; 3], [0.0; 2]), |d| d.section())),
-            g_inv: law.inverse_gain,
-            actuator: Actuator::new(actuator)?,
+        Ok(Box::new(PiNotchController::of_law(
+            &self.law(actuator)?,
             reference,
-            sample_time: law.sample_time,
-            k: 0,
-            last_y: [0.0; 2],
-            last_x_nom: [0.0; 2],
-        })
+        )?))
+    }
+
+    fn target(&self, actuator: ActuatorParams) -> Result<Option<TargetLaw>> {
+        self.law(actuator).map(Some)
     }
 }
 
-impl StageControl for DampedController {
-    #[inline]
-    fn step(&mut self, y_in: [f64; 2]) -> Command {
-        let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
-        let y = if dropout { self.last_y } else { y_in };
-        self.last_y = y;
-        let r = self.reference.sample(self.k as f64 * self.sample_time);
-        let mut u = self.law.command(y, r.q);
-        let d = [self.filters[0].step(y[0]), self.filters[1].step(y[1])];
-        for (i, ui) in u.iter_mut().enumerate() {
-            *ui += self.g_inv[i][0] * d[0] + self.g_inv[i][1] * d[1];
-        }
-        if !(u[0].is_finite() && u[1].is_finite()) {
-            u = self.last_x_nom;
-        }
-        let act = self.actuator.command(u, self.sample_time);
-        self.law.end_sample(act.saturated);
-        self.last_x_nom = act.x_nom;
-        self.k += 1;
-        Command {
-            voltage: act.voltage,
-            x_nom: act.x_nom,
-            reference: r.q,
-            saturated: act.saturated,
-            dropout,
-        }
-    }
-
-    fn estimate(&self) -> [f64; 10] {
-        [0.0; 10]
+impl DampedParams {
+    /// The target law of this design with the actuator stage `actuator`: the outer PI +
+    /// notch with the static feed-forward, and each axis's filter as a second-order section
+    /// on its reading (a zero section on an axis without one).
+    pub fn law(&self, actuator: ActuatorParams) -> Result<TargetLaw> {
+        Ok(TargetLaw::of_linear(&self.outer, actuator)?.with_damping(
+            self.damping
+                .map(|d| d.map_or(Biquad::new([0.0; 3], [0.0; 2]), |d| d.section())),
+        ))
     }
 }
 
@@ -753,7 +695,7 @@ mod tests {
         let act = crate::samples::ideal_actuator();
         let r = Reference::new(Shape::Step { target: [0.0; 2] });
         let f = 3900.0 * 0.97;
-        let mut c = DampedController::new(&d, act, r).unwrap();
+        let mut c = d.build(act, 1, r).unwrap();
         let n = 20_000;
         let skip = 4000;
         let (mut re, mut im) = (0.0, 0.0);

@@ -333,22 +333,98 @@ impl FirFeedForward {
 
     /// The filter running on `reference` sampled at `t` \[s\] (module docs).
     pub fn runner(&self, reference: Reference, t: f64) -> FeedForwardRunner {
-        let len = self.taps.len();
         let mut r = FeedForwardRunner {
-            taps: self.taps.clone(),
+            buffer: FirBuffer::new(self),
             preview: self.preview,
             lag: self.lag,
-            buffer: vec![[0.0; 2]; len],
-            head: 0,
             reference,
             t,
             k: 0,
         };
         // The samples before the first step's newest one: q_d((p − u) T), u = len − 1, …, 1.
-        for u in (1..len).rev() {
-            r.push((self.preview as f64 - u as f64) * t);
+        for time in self.prime_times(t) {
+            r.buffer.push(reference.sample(time).q);
         }
         r
+    }
+
+    /// The filter of the taps `taps` (F_n for n = −`preview`, …; at least one, and more than
+    /// `preview`) whose feedback's reference is delayed by `lag` \[samples\], checked: finite
+    /// taps, 0 ≤ lag, preview ≤ 64, at most 576 taps ([`FeedForwardParams::validate`]'s
+    /// ranges). For a filter read back from a file.
+    pub fn from_taps(preview: usize, taps: Vec<[[f64; 2]; 2]>, lag: f64) -> Result<FirFeedForward> {
+        check("feedforward.preview", preview as f64, preview <= 64, "0–64")?;
+        check(
+            "feedforward.taps",
+            taps.len() as f64,
+            taps.len() > preview && taps.len() <= 576,
+            &format!("{} to 576 taps (more than the preview)", preview + 1),
+        )?;
+        check("feedforward.lag", lag, lag >= 0.0, "≥ 0 samples")?;
+        for (n, tap) in taps.iter().enumerate() {
+            for v in tap.iter().flatten() {
+                check(
+                    &format!("feedforward.taps[{n}]"),
+                    *v,
+                    true,
+                    "finite entries",
+                )?;
+            }
+        }
+        Ok(FirFeedForward { preview, taps, lag })
+    }
+
+    /// The times \[s\] at sample time `t` of the reference samples that fill the filter's
+    /// buffer before the first sample, oldest first: (p − u) T for u = L − 1, …, 1 (L the
+    /// number of taps). A controller pushes them ([`FirBuffer::push`]) before its first step.
+    pub fn prime_times(&self, t: f64) -> impl Iterator<Item = f64> + use<> {
+        let p = self.preview as f64;
+        (1..self.taps.len()).rev().map(move |u| (p - u as f64) * t)
+    }
+}
+
+/// The running state of a [`FirFeedForward`]: its taps and the last L reference samples in a
+/// ring buffer. [`FirBuffer::push`] stores the newest sample q_d((k + p) T),
+/// [`FirBuffer::output`] is x_ff,k = Σ_u F_{u−p} q_d((k + p − u) T). The one implementation
+/// of the filter's arithmetic: the simulated controllers, the runner and the target law
+/// ([`crate::target::TargetController`], whose C form repeats it operation by operation) run
+/// it. No allocation per sample.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FirBuffer {
+    taps: Vec<[[f64; 2]; 2]>,
+    /// q_d at (k + p − u) T in slot (head − u) mod L.
+    buffer: Vec<[f64; 2]>,
+    head: usize,
+}
+
+impl FirBuffer {
+    /// The filter `ff` with an empty (zero) buffer.
+    pub fn new(ff: &FirFeedForward) -> FirBuffer {
+        FirBuffer {
+            taps: ff.taps.clone(),
+            buffer: vec![[0.0; 2]; ff.taps.len()],
+            head: 0,
+        }
+    }
+
+    /// Stores `q` \[m\] as the newest sample.
+    #[inline]
+    pub fn push(&mut self, q: [f64; 2]) {
+        self.head = (self.head + 1) % self.buffer.len();
+        self.buffer[self.head] = q;
+    }
+
+    /// The filter's output x_ff \[m\] on the stored samples.
+    #[inline]
+    pub fn output(&self) -> [f64; 2] {
+        let len = self.buffer.len();
+        let mut x = [0.0; 2];
+        for (u, tap) in self.taps.iter().enumerate() {
+            let q = self.buffer[(self.head + len - u) % len];
+            x[0] += tap[0][0] * q[0] + tap[0][1] * q[1];
+            x[1] += tap[1][0] * q[0] + tap[1][1] * q[1];
+        }
+        x
     }
 }
 
@@ -356,12 +432,9 @@ impl FirFeedForward {
 /// gives x_ff,k and the feedback's reference q_d((k − τ) T). No allocation per step.
 #[derive(Debug, Clone)]
 pub struct FeedForwardRunner {
-    taps: Vec<[[f64; 2]; 2]>,
+    buffer: FirBuffer,
     preview: usize,
     lag: f64,
-    /// q_d at (k + p − u) T in slot (head − u) mod len.
-    buffer: Vec<[f64; 2]>,
-    head: usize,
     reference: Reference,
     t: f64,
     k: u64,
@@ -371,15 +444,10 @@ impl FeedForwardRunner {
     /// The next sample: (x_ff,k \[m\], the feedback's reference q_d((k − τ)T) \[m\]).
     #[inline]
     pub fn step(&mut self) -> ([f64; 2], [f64; 2]) {
-        let len = self.buffer.len();
-        self.push((self.k + self.preview as u64) as f64 * self.t);
-        let mut x = [0.0; 2];
-        for (u, tap) in self.taps.iter().enumerate() {
-            let q = self.buffer[(self.head + len - u) % len];
-            x[0] += tap[0][0] * q[0] + tap[0][1] * q[1];
-            x[1] += tap[1][0] * q[0] + tap[1][1] * q[1];
-        }
-        let feedback = self.reference.sample((self.k as f64 - self.lag) * self.t).q;
+        let (ahead, feedback) = sample_times(self.k, self.preview, self.lag, self.t);
+        self.buffer.push(self.reference.sample(ahead).q);
+        let x = self.buffer.output();
+        let feedback = self.reference.sample(feedback).q;
         self.k += 1;
         (x, feedback)
     }
@@ -388,13 +456,13 @@ impl FeedForwardRunner {
     pub fn preview(&self) -> usize {
         self.preview
     }
+}
 
-    /// Stores q_d(`time`) as the newest sample.
-    #[inline]
-    fn push(&mut self, time: f64) {
-        self.head = (self.head + 1) % self.buffer.len();
-        self.buffer[self.head] = self.reference.sample(time).q;
-    }
+/// The times \[s\] at sample `k` (sample time `t`) of the reference the filter reads,
+/// (k + p) T, and of the feedback's reference, (k − τ) T (preview p, lag τ \[samples\]).
+#[inline]
+pub fn sample_times(k: u64, preview: usize, lag: f64, t: f64) -> (f64, f64) {
+    ((k + preview as u64) as f64 * t, (k as f64 - lag) * t)
 }
 
 #[cfg(test)]

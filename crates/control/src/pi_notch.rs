@@ -30,9 +30,9 @@ use nalgebra::Complex;
 
 use crate::actuator::ActuatorParams;
 use crate::error::{Result, check};
-use crate::feedforward::{FeedForwardRunner, FirFeedForward};
+use crate::feedforward::{FirFeedForward, sample_times};
 use crate::registry::{Controller, Design, Stage};
-use crate::target::{TargetController, TargetLaw};
+use crate::target::{TargetController, TargetInput, TargetLaw};
 use crate::tuning::{Structure, tuned};
 use flexstage_sim::experiment::{Command, StageControl};
 use flexstage_sim::trajectory::Reference;
@@ -68,6 +68,10 @@ impl Design for PiNotchParams {
 
     fn linear(&self) -> Option<&PiNotchParams> {
         Some(self)
+    }
+
+    fn target(&self, actuator: ActuatorParams) -> Result<Option<TargetLaw>> {
+        TargetLaw::of_linear(self, actuator).map(Some)
     }
 }
 
@@ -201,8 +205,10 @@ pub fn notch_section(n: &Notch, t: f64) -> Biquad {
     )
 }
 
-/// The PI(D) + notch + feed-forward controller (module docs): the
-/// [`TargetController`] of its [`TargetLaw`] with the reference sampled at each step. No
+/// The PI(D) + notch + feed-forward controller (module docs), and every controller with a
+/// [`TargetLaw`] (its FIR feed-forward, PPF damping, learned table): the
+/// [`TargetController`] of the law with the reference sampled at each step (at kT, and with
+/// the FIR p samples ahead and τ behind, [`crate::feedforward::sample_times`]). No
 /// allocation per step.
 #[derive(Debug, Clone)]
 pub struct PiNotchController {
@@ -210,39 +216,42 @@ pub struct PiNotchController {
     reference: Reference,
     sample_time: f64,
     k: u64,
-    feedforward: Option<FeedForwardRunner>,
+    /// The FIR's preview p and lag τ \[samples\].
+    fir: Option<(usize, f64)>,
+    /// The learned table's period N (1 without one).
+    period: u64,
 }
 
 impl PiNotchController {
-    /// Builds the controller for a reference.
+    /// Builds the controller of the PI(D) + notch + static feed-forward `params` for a
+    /// reference.
     pub fn new(
         params: PiNotchParams,
         actuator: ActuatorParams,
         reference: Reference,
     ) -> Result<Self> {
-        reference.validate()?;
-        Ok(PiNotchController {
-            target: TargetLaw::of_linear(&params, actuator)?.controller()?,
-            reference,
-            sample_time: params.sample_time,
-            k: 0,
-            feedforward: None,
-        })
+        PiNotchController::of_law(&TargetLaw::of_linear(&params, actuator)?, reference)
     }
 
-    /// The controller with the feed-forward `ff` (with its preview of the reference) in
-    /// place of the static inverse; its feedback compares the reading with the reference
-    /// delayed by the sensor lag the feed-forward's target includes
-    /// ([`crate::feedforward`]).
-    pub fn with_feedforward(
-        params: PiNotchParams,
-        actuator: ActuatorParams,
-        reference: Reference,
-        ff: &FirFeedForward,
-    ) -> Result<Self> {
-        let mut c = PiNotchController::new(params, actuator, reference)?;
-        c.feedforward = Some(ff.runner(reference, params.sample_time));
-        Ok(c)
+    /// Builds the controller of `law` for a reference: the FIR's buffer primed with the
+    /// reference before the start ([`FirFeedForward::prime_times`]).
+    pub fn of_law(law: &TargetLaw, reference: Reference) -> Result<Self> {
+        reference.validate()?;
+        let t = law.sample_time;
+        let mut target = law.controller()?;
+        if let Some(ff) = &law.feedforward {
+            for time in ff.prime_times(t) {
+                target.prime(reference.sample(time).q);
+            }
+        }
+        Ok(PiNotchController {
+            target,
+            reference,
+            sample_time: t,
+            k: 0,
+            fir: law.feedforward.as_ref().map(|f| (f.preview(), f.lag())),
+            period: law.learned.as_ref().map_or(1, |l| l.len() as u64),
+        })
     }
 }
 
@@ -264,12 +273,9 @@ impl Design for WithFeedForward {
         _delay: usize,
         reference: Reference,
     ) -> Result<Box<dyn StageControl>> {
-        Ok(Box::new(PiNotchController::with_feedforward(
-            self.params,
-            actuator,
-            reference,
-            &self.feedforward,
-        )?))
+        let law = TargetLaw::of_linear(&self.params, actuator)?
+            .with_feedforward(self.feedforward.clone());
+        Ok(Box::new(PiNotchController::of_law(&law, reference)?))
     }
 
     fn linear(&self) -> Option<&PiNotchParams> {
@@ -279,20 +285,34 @@ impl Design for WithFeedForward {
     fn feedforward(&self) -> Option<&FirFeedForward> {
         Some(&self.feedforward)
     }
+
+    fn target(&self, actuator: ActuatorParams) -> Result<Option<TargetLaw>> {
+        Ok(Some(
+            TargetLaw::of_linear(&self.params, actuator)?
+                .with_feedforward(self.feedforward.clone()),
+        ))
+    }
 }
 
 impl StageControl for PiNotchController {
     #[inline]
     fn step(&mut self, y_in: [f64; 2]) -> Command {
         let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
-        let r = self.reference.sample(self.k as f64 * self.sample_time);
-        let act = match &mut self.feedforward {
-            Some(ff) => {
-                let (x_ff, feedback) = ff.step();
-                self.target.step_with_feedforward(feedback, y_in, x_ff)
+        let t = self.sample_time;
+        let r = self.reference.sample(self.k as f64 * t);
+        let (ahead, reference) = match self.fir {
+            Some((preview, lag)) => {
+                let (a, f) = sample_times(self.k, preview, lag, t);
+                (self.reference.sample(a).q, self.reference.sample(f).q)
             }
-            None => self.target.step(r.q, y_in),
+            None => (r.q, r.q),
         };
+        let act = self.target.step(&TargetInput {
+            ahead,
+            reference,
+            reading: y_in,
+            index: (self.k % self.period) as usize,
+        });
         self.k += 1;
         Command {
             voltage: act.voltage,

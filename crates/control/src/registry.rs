@@ -39,6 +39,7 @@ use crate::experiment::Setup;
 use crate::feedforward::FirFeedForward;
 use crate::margins::{MarginParams, Margins};
 use crate::pi_notch::PiNotchParams;
+use crate::target::TargetLaw;
 use crate::tuning::TuningParams;
 
 /// Every controller, in report order (the default controller first). One line per
@@ -130,6 +131,14 @@ pub trait Design: std::fmt::Debug + Send + Sync {
     /// reference, as the backstepping's).
     fn feedforward(&self) -> Option<&FirFeedForward> {
         None
+    }
+
+    /// The law a real-time target runs for it with the actuator stage `actuator`
+    /// ([`crate::target`]: the one the simulated controller steps); `None` for a controller
+    /// that has none (the backstepping).
+    fn target(&self, actuator: ActuatorParams) -> Result<Option<TargetLaw>> {
+        let _ = actuator;
+        Ok(None)
     }
 }
 

@@ -6,6 +6,8 @@
 
 use std::fmt::Write;
 
+use flexstage_control_core::Biquad;
+
 use crate::actuator::Compensation;
 use crate::error::Result;
 use crate::target::{CSource, TargetLaw};
@@ -22,9 +24,13 @@ pub fn is_c_identifier(s: &str) -> bool {
         && s.len() <= 63
 }
 
-/// The C prefix of a controller name: `-` and `.` become `_` (`pi-notch-ff` → `pi_notch_ff`).
+/// The C prefix of a controller name: every character but ASCII letters, digits and `_`
+/// becomes `_` (`pi-notch-ff` → `pi_notch_ff`, `pi-notch-ff+learning-circle` →
+/// `pi_notch_ff_learning_circle`).
 pub fn c_prefix(name: &str) -> String {
-    name.replace(['-', '.'], "_")
+    name.chars()
+        .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+        .collect()
 }
 
 /// A `double` literal that reads back to exactly `v` (finite).
@@ -163,7 +169,64 @@ fn coefficients(law: &TargetLaw) -> String {
     for l in lines {
         let _ = writeln!(s, "{l}");
     }
+    extensions(law, &mut s);
     s
+}
+
+/// The coefficients of the FIR feed-forward, the PPF filters and the learned table (a
+/// single zero entry where the law has none, unused then).
+fn extensions(law: &TargetLaw, s: &mut String) {
+    let zero_tap = [[[0.0; 2]; 2]];
+    let taps = law.feedforward.as_ref().map_or(&zero_tap[..], |f| f.taps());
+    let _ = writeln!(
+        s,
+        "/* FIR feed-forward: F_n for n = -p, ..., L - p - 1, each row-major 2 x 2 [m/m]. */"
+    );
+    let _ = writeln!(s, "static const double FIR_TAPS[{}][2][2] = {{", taps.len());
+    for t in taps {
+        let _ = writeln!(s, "    {{{}, {}}},", list(&t[0]), list(&t[1]));
+    }
+    let _ = writeln!(s, "}};");
+    let zero = Biquad::new([0.0; 3], [0.0; 2]);
+    let damping = law.damping.unwrap_or([zero; 2]);
+    let _ = writeln!(
+        s,
+        "/* PPF damping filters D_i on the readings: numerators [b0, b1, b2], denominators \
+         [a1, a2]. */"
+    );
+    let _ = writeln!(
+        s,
+        "static const int DAMPING = {};",
+        u8::from(law.damping.is_some())
+    );
+    let _ = writeln!(
+        s,
+        "static const double DAMPING_B[2][3] = {{{}, {}}};",
+        list(&damping[0].numerator()),
+        list(&damping[1].numerator())
+    );
+    let _ = writeln!(
+        s,
+        "static const double DAMPING_A[2][2] = {{{}, {}}};",
+        list(&damping[0].denominator()),
+        list(&damping[1].denominator())
+    );
+    let zero_row = [[0.0; 2]];
+    let table = law.learned.as_deref().unwrap_or(&zero_row[..]);
+    let _ = writeln!(
+        s,
+        "/* Learned correction c[k] [m] per sample k of the period, subtracted from the reading. */"
+    );
+    let _ = writeln!(
+        s,
+        "static const unsigned long LEARNING_ROWS = {};",
+        table.len()
+    );
+    let _ = writeln!(s, "static const double LEARNED[{}][2] = {{", table.len());
+    for c in table {
+        let _ = writeln!(s, "    {},", list(c));
+    }
+    let _ = writeln!(s, "}};");
 }
 
 /// The header and source of `law` with functions and types prefixed `prefix`, the source
@@ -182,19 +245,34 @@ pub fn c_source(law: &TargetLaw, prefix: &str, header_file: &str) -> Result<CSou
         && header_file.len() <= 100
         && header_file
             .chars()
-            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.'));
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.' | '+'));
     if !plain {
         return Err(flexstage_numerics::RangeError::new(
             "controller.c_header",
             header_file.to_string(),
-            "a file name of letters, digits, -, _ and . ending in .h",
+            "a file name of letters, digits, -, _, + and . ending in .h",
         )
         .into());
     }
     law.controller()?;
+    let ff = law.feedforward.as_ref();
     let fill = |t: &str| {
         t.replace("COEFFICIENTS", &coefficients(law))
             .replace("SAMPLE_TIME_LITERAL", &lit(law.sample_time))
+            .replace(
+                "PREVIEW_LITERAL",
+                &ff.map_or(0, |f| f.preview()).to_string(),
+            )
+            .replace("LAG_LITERAL", &lit(ff.map_or(0.0, |f| f.lag())))
+            .replace(
+                "FIR_LENGTH_LITERAL",
+                &ff.map_or(1, |f| f.taps().len()).to_string(),
+            )
+            .replace("FIR_FLAG", if ff.is_some() { "1" } else { "0" })
+            .replace(
+                "LEARNING_PERIOD_LITERAL",
+                &law.learned.as_ref().map_or(0, Vec::len).to_string(),
+            )
             .replace("HEADER_FILE", header_file)
             .replace("PREFIX", prefix)
     };

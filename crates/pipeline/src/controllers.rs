@@ -1,17 +1,19 @@
-//! The tuned controllers taken to a real-time target: every linear design of the registry
-//! (PI + notch, PID) with its actuator stage as a coefficients file
+//! The tuned controllers taken to a real-time target: every registry design with a target law
+//! (PI + notch and PID with their FIR feed-forward, PPF + PI + notch; with learning, the
+//! learned table) with its actuator stage as a coefficients file
 //! (`track/[<conditions>/]controllers/<controller>.json`, [`ControllerFile`]) and a
 //! self-contained C99 source and header generated from it
 //! (`flexstage_control::target::TargetLaw::c_source`). `track` writes them for the
 //! controllers it ran; [`export_controller`] writes the C of any controller file (one edited by
 //! hand, or into another folder). A file read back gives the law it was written from, bitwise.
-//! The backstepping controllers are nonlinear (observer, Kalman estimate, robust law) and are
-//! not exported.
+//! The backstepping controllers (observer, Kalman estimate, robust law) have no target law and
+//! are not exported.
 
 use std::path::{Path, PathBuf};
 
 use flexstage_control::actuator::{ActuatorParams, Compensation};
 use flexstage_control::experiment::Setup;
+use flexstage_control::feedforward::FirFeedForward;
 use flexstage_control::registry::{CONTROLLERS, Controller, Designs, Stage};
 use flexstage_control::target::{CSource, TargetLaw, c_prefix, compensation_name, compensation_of};
 use flexstage_control::tuning::TuningParams;
@@ -19,7 +21,7 @@ use flexstage_control_core::{Biquad, PidGains};
 use flexstage_identify::measured::{FitParams, LabLog, MeasuredResponse, WelchParams};
 use flexstage_piezo::{BoucWenParams, CompensatorParams};
 use flexstage_run::files::controller::{
-    ActuatorFile, AxisFile, ControllerFile, SectionFile, VERSION,
+    ActuatorFile, AxisFile, ControllerFile, FeedForwardFile, SectionFile, VERSION,
 };
 use flexstage_run::layout::Tracking;
 use flexstage_run::{Format, RunDir};
@@ -55,6 +57,18 @@ pub fn controller_file(c: &Controller, law: &TargetLaw) -> ControllerFile {
             compensator_max_iterations: comp.max_iterations,
             hysteresis: a.hysteresis.map(|p| (&p).into()),
         },
+        damping: law.damping.map(|d| {
+            d.map(|s| SectionFile {
+                b: s.numerator(),
+                a: s.denominator(),
+            })
+        }),
+        feedforward: law.feedforward.as_ref().map(|f| FeedForwardFile {
+            preview_samples: f.preview(),
+            lag_samples: f.lag(),
+            taps: f.taps().to_vec(),
+        }),
+        learned_m: law.learned.clone(),
     }
 }
 
@@ -81,6 +95,13 @@ pub fn target_law(f: &ControllerFile) -> Result<TargetLaw> {
             stroke: a.stroke_m,
             compensation: compensation_of(&a.compensation)?,
         },
+        damping: f.damping.map(|d| d.map(|s| Biquad::new(s.b, s.a))),
+        feedforward: f
+            .feedforward
+            .as_ref()
+            .map(|x| FirFeedForward::from_taps(x.preview_samples, x.taps.clone(), x.lag_samples))
+            .transpose()?,
+        learned: f.learned_m.clone(),
     };
     let expected = CompensatorParams::default();
     if a.compensator_tolerance_um != expected.tolerance
@@ -113,20 +134,58 @@ pub fn c_files(f: &ControllerFile) -> Result<CSource> {
 /// The controllers `track` wrote for a target, and those it did not export.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Exported {
-    /// The controllers written (JSON, C and header).
-    pub written: Vec<&'static str>,
-    /// The controllers ran but not exported: no target law (the backstepping's observer and robust law, PPF's damping filter).
+    /// The controllers written (JSON, C and header; a learned table as
+    /// `<controller>+learning-<trajectory>`).
+    pub written: Vec<String>,
+    /// The controllers ran but not exported: no target law (the backstepping's observer,
+    /// Kalman estimate and robust law).
     pub nonlinear: Vec<&'static str>,
 }
 
+/// The correction a learning run of `track` learned on one trajectory
+/// (`track` exports it with its controller).
+#[derive(Debug, Clone, PartialEq)]
+pub struct LearnedTable {
+    /// The controller the learning layer ran on.
+    pub controller: &'static Controller,
+    /// The trajectory it learned (the table holds one of its periods).
+    pub trajectory: String,
+    /// c\[k\] \[m\] per sample k of the period, k = 0 at the reference's start.
+    pub table: Vec<[f64; 2]>,
+}
+
+impl LearnedTable {
+    /// The exported controller's name: `<controller>+learning-<trajectory>` (characters of
+    /// the trajectory's name other than letters, digits, `-`, `_` and `.` as `_`).
+    pub fn name(&self) -> String {
+        let trajectory: String = self
+            .trajectory
+            .chars()
+            .map(|c| {
+                if c.is_ascii_alphanumeric() || matches!(c, '-' | '_' | '.') {
+                    c
+                } else {
+                    '_'
+                }
+            })
+            .collect();
+        format!(
+            "{}-{trajectory}",
+            crate::track::variant_name(self.controller, true)
+        )
+    }
+}
+
 /// Writes the coefficients file, the C source and the header of every controller of
-/// `controllers` that `designs` holds and that is linear, with the actuator stage `actuator`,
-/// into `out`'s `controllers/` folder.
+/// `controllers` that `designs` holds and that has a target law, and of each of them with a
+/// table of `learned` (as `<controller>+learning-<trajectory>`), with the actuator stage
+/// `actuator`, into `out`'s `controllers/` folder.
 pub(crate) fn write_controllers(
     run: &RunDir,
     out: &Tracking,
     designs: &Designs,
     controllers: &[&'static Controller],
+    learned: &[LearnedTable],
     actuator: ActuatorParams,
 ) -> Result<Exported> {
     let mut done = Exported::default();
@@ -138,12 +197,20 @@ pub(crate) fn write_controllers(
             done.nonlinear.push(c.name);
             continue;
         };
-        let file = controller_file(c, &law);
-        let src = c_files(&file)?;
-        run.store(&out.controller_json(c.name), file)?;
-        run.write(&out.controller_c(c.name), src.source.as_bytes())?;
-        run.write(&out.controller_h(c.name), src.header.as_bytes())?;
-        done.written.push(c.name);
+        let mut files = vec![(c.name.to_string(), controller_file(c, &law))];
+        for l in learned.iter().filter(|l| l.controller == c) {
+            let mut file = controller_file(c, &law.clone().with_learned(l.table.clone()));
+            file.controller = l.name();
+            file.label = format!("{}, with the table learned on {}", c.label, l.trajectory);
+            files.push((l.name(), file));
+        }
+        for (name, file) in files {
+            let src = c_files(&file)?;
+            run.store(&out.controller_json(&name), file)?;
+            run.write(&out.controller_c(&name), src.source.as_bytes())?;
+            run.write(&out.controller_h(&name), src.header.as_bytes())?;
+            done.written.push(name);
+        }
     }
     Ok(done)
 }
@@ -327,36 +394,105 @@ mod tests {
 
     /// Goal: a controller written to its JSON file and read back is the same controller,
     /// bitwise: the same coefficients, and the same commands on the recorded sequence (every
-    /// compensation mode, two notches per axis, the scenario's PID).
+    /// compensation mode, two notches per axis, the scenario's PID; the PI + notch and the
+    /// PID with their FIR feed-forward and the PPF controller designed on a sampled two-mode
+    /// stage, and the default with a learned table).
     #[test]
     fn controller_file_reads_back_the_same_controller_bitwise() {
         let setup = Setup::from_scenario(&flexstage_scenario::Scenario::paper());
+        let inverse = setup.actuator(Compensation::Inverse);
         let designs = Designs::for_stage(&Stage::scenario(&setup)).unwrap();
         let pid = &flexstage_control::pid::PID_FF_SCENARIO;
-        let scenario_pid = TargetLaw::of_design(
-            &**designs.get(pid).unwrap(),
-            setup.actuator(Compensation::Inverse),
-        )
-        .unwrap()
-        .unwrap();
-        let laws = [
+        let scenario_pid = TargetLaw::of_design(&**designs.get(pid).unwrap(), inverse)
+            .unwrap()
+            .unwrap();
+        let mut laws = vec![
             (DEFAULT, law(Compensation::Inverse)),
             (DEFAULT, law(Compensation::Off)),
             (DEFAULT, law(Compensation::Ideal)),
             (pid, scenario_pid),
         ];
+        let modes = flexstage_sim::samples::decoupled_modes();
+        let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
+        let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
+        let stage = Stage::new(
+            &setup,
+            Some(&plant),
+            Some(fit),
+            None,
+            TuningParams::default(),
+        );
+        let sampled = Designs::for_stage(&stage).unwrap();
+        for c in [
+            DEFAULT,
+            &flexstage_control::pid::PID_FF,
+            &flexstage_control::damping::PPF_PI_FF,
+        ] {
+            let l = TargetLaw::of_design(&**sampled.get(c).unwrap(), inverse)
+                .unwrap()
+                .unwrap();
+            assert!(l.feedforward.is_some() || l.damping.is_some(), "{c}");
+            laws.push((c, l));
+        }
+        let table = (0..500)
+            .map(|k| [1e-9 / (1.0 + k as f64), -3e-9 * (k as f64 * 0.1).sin()])
+            .collect();
+        let learned = laws[4].1.clone().with_learned(table);
+        laws.push((DEFAULT, learned));
         for (c, l) in laws {
             let bytes = controller_file(c, &l).encode().unwrap();
             let back = target_law(&ControllerFile::decode(&bytes).unwrap()).unwrap();
             assert_eq!(back, l);
             assert_eq!(
-                bits(&recorded_sequence(&back, 3).unwrap()),
-                bits(&recorded_sequence(&l, 3).unwrap())
+                bits(&recorded_sequence(&back, 3).unwrap().samples),
+                bits(&recorded_sequence(&l, 3).unwrap().samples)
             );
         }
     }
 
-    /// A file of another version, an unknown compensation or other compensator settings is
+    /// Goal: `track --learning` exports each controller once more with the table it learned
+    /// on each trajectory (`<controller>+learning-<trajectory>`): one period of the circle
+    /// (5000 samples at 10 kHz), not all zero, in the JSON and as the C's table, and the law
+    /// read back is the controller's own with that table.
+    #[test]
+    fn track_with_learning_exports_the_learned_table() {
+        use crate::track::{PlantKind, TrackOptions, track};
+        let root = std::env::temp_dir().join(format!("flexstage-learned-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let folder =
+            crate::RunFolder::open(crate::folder::preset("quick").unwrap(), &root, false).unwrap();
+        let pid = &flexstage_control::pid::PID_FF_SCENARIO;
+        let options = TrackOptions {
+            plant: PlantKind::Lumped,
+            trajectory: Some("circle".into()),
+            controllers: vec![pid],
+            duration: Some(0.05),
+            learning: Some(2),
+            ..TrackOptions::default()
+        };
+        let summary = track(&folder, &options, &crate::progress::Silent).unwrap();
+        let name = "pid-ff-scenario+learning-circle";
+        assert_eq!(summary.exported.written, ["pid-ff-scenario", name]);
+        let dir = summary.dir.join("controllers");
+        let file =
+            ControllerFile::decode(&std::fs::read(dir.join(format!("{name}.json"))).unwrap())
+                .unwrap();
+        let own = ControllerFile::decode(&std::fs::read(dir.join("pid-ff-scenario.json")).unwrap())
+            .unwrap();
+        let table = file.learned_m.clone().unwrap();
+        assert_eq!(table.len(), 5000);
+        assert!(table.iter().any(|c| c[0] != 0.0 && c[1] != 0.0));
+        assert_eq!(
+            target_law(&file).unwrap(),
+            target_law(&own).unwrap().with_learned(table)
+        );
+        let source = std::fs::read_to_string(dir.join(format!("{name}.c"))).unwrap();
+        assert!(source.contains("static const double LEARNED[5000][2]"));
+        assert!(source.contains("#include \"pid-ff-scenario+learning-circle.h\""));
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    /// A file of another version (than 1 or 2), an unknown compensation or other compensator settings is
     /// refused with the field named.
     #[test]
     fn a_bad_controller_file_is_refused_naming_the_field() {
@@ -365,6 +501,10 @@ mod tests {
         v.version = 99;
         let e = ControllerFile::decode(&flexstage_run::format::json(&v).unwrap()).unwrap_err();
         assert!(e.contains("format version 99"), "{e}");
+        // A version 1 file (no damping, FIR or learned table) still reads.
+        v.version = 1;
+        let back = ControllerFile::decode(&flexstage_run::format::json(&v).unwrap()).unwrap();
+        assert_eq!(target_law(&back).unwrap(), law(Compensation::Inverse));
         let mut v = file.clone();
         v.actuator.compensation = "sometimes".into();
         let e = target_law(&v).unwrap_err().to_string();

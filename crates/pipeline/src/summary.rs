@@ -541,14 +541,17 @@ impl fmt::Display for TrackSummary {
         if !e.written.is_empty() {
             writeln!(
                 f,
-                "for a real-time target (JSON, C99 source and header in controllers/): {}",
+                "for a real-time target (JSON, C99 source and header in controllers/; the law \
+                 as simulated: PI(D) + notch, FIR feed-forward with preview, PPF, learned \
+                 tables): {}",
                 e.written.join(", ")
             )?;
         }
         if !e.nonlinear.is_empty() {
             writeln!(
                 f,
-                "not exported (the C target runs the PI(D) + notch law only): {}",
+                "not exported (no target law: the backstepping's K-filter observer, Kalman \
+                 estimate and robust law are not ported to C): {}",
                 e.nonlinear.join(", ")
             )?;
         }

@@ -815,11 +815,25 @@ pub fn track_on(
     let dt = plant.scenario.simulation.sample_time;
     let samples: f64 = jobs.iter().map(|(j, _)| j.samples(dt)).sum();
     progress.start("track", samples.round() as u64);
-    let records: Vec<Result<Record>> = jobs
+    let runs: Vec<Result<(Record, Option<Learned>)>> = jobs
         .par_iter()
         .map(|(j, _)| run_job(&setup, &designs, &sim, options.compensation, j, progress))
         .collect();
     progress.finish();
+    let mut learned = Vec::new();
+    let mut records = Vec::with_capacity(runs.len());
+    for ((j, _), run) in jobs.iter().zip(runs) {
+        records.push(run.map(|(record, table)| {
+            if let Some(table) = table {
+                learned.push(crate::controllers::LearnedTable {
+                    controller: j.controller,
+                    trajectory: j.trajectory.to_string(),
+                    table,
+                });
+            }
+            record
+        }));
+    }
     let out = Tracking::variant(&options.conditions(folder));
     let replaced = folder.has_results(out.dir());
     let (rows, paths) = write_results(folder.dir(), &out, &jobs, records, dt)?;
@@ -864,6 +878,7 @@ pub fn track_on(
         &out,
         &designs,
         &options.controllers,
+        &learned,
         setup.actuator(options.compensation),
     )?;
     crate::error::require_converged_tracking(&rows)?;
@@ -883,7 +898,11 @@ pub fn track_on(
     })
 }
 
-/// One (trajectory, controller) run on the simulated stage.
+/// The correction a learning run learned, per sample of its period \[m\].
+type Learned = Vec<[f64; 2]>;
+
+/// One (trajectory, controller) run on the simulated stage, with the table it learned when
+/// it learned one.
 fn run_job(
     setup: &Setup,
     designs: &Designs,
@@ -891,7 +910,7 @@ fn run_job(
     compensation: Compensation,
     j: &Job,
     progress: &dyn Progress,
-) -> Result<Record> {
+) -> Result<(Record, Option<Learned>)> {
     let advance = |n: usize| progress.advance(n as u64);
     let design = &**designs
         .get(j.controller)
@@ -903,7 +922,7 @@ fn run_job(
         return run_learning(setup, design, sim, actuator, j, learn, progress);
     }
     // As `flexstage_control::experiment::{experiment_on, experiment_with_progress}`, watched.
-    Ok(match sim {
+    let record = match sim {
         Simulated::Twin(twin) => {
             let mut p = twin.plant(&setup.rig)?;
             let mut c = design.build(actuator, setup.controller.delay, j.reference)?;
@@ -915,7 +934,8 @@ fn run_job(
             let mut p = flexstage_sim::plant::Plant::new(setup.plant.clone())?;
             run_watched(c.as_mut(), &mut p, j.duration, dt, &watch, advance)
         }
-    })
+    };
+    Ok((record, None))
 }
 
 /// The rig's readings of a fresh simulated stage (the twin in its rig, or the lumped model).
@@ -932,8 +952,9 @@ fn readings(setup: &Setup, sim: &Simulated) -> Result<(Box<dyn StagePlant>, usiz
 
 /// One (trajectory, controller) run with the learning layer (module docs): the learning
 /// plant measured from the readings of fresh loops, the layer designed from it, `trials`
-/// periods of learning, then the scored run (learning on). A learning phase that the watch
-/// stops is returned as the record.
+/// periods of learning, then the scored run (learning on), with the correction learned over
+/// its last complete period (what the layer replays when frozen; the exported table). A
+/// learning phase that the watch stops is returned as the record, with no table.
 fn run_learning(
     setup: &Setup,
     design: &dyn Design,
@@ -942,7 +963,7 @@ fn run_learning(
     j: &Job,
     learn: Learn,
     progress: &dyn Progress,
-) -> Result<Record> {
+) -> Result<(Record, Option<Learned>)> {
     let dt = setup.controller.observer.sample_time;
     let infeasible = |e: PipelineError| ControlError::Infeasible {
         what: "learning loop".into(),
@@ -975,17 +996,13 @@ fn run_learning(
     for _ in 0..learn.trials {
         let trial = run_watched(&mut c, plant.as_mut(), period, dt, &watch, advance);
         if trial.stopped.is_some() {
-            return Ok(trial);
+            return Ok((trial, None));
         }
     }
-    Ok(run_watched(
-        &mut c,
-        plant.as_mut(),
-        j.duration,
-        dt,
-        &watch,
-        advance,
-    ))
+    let record = run_watched(&mut c, plant.as_mut(), j.duration, dt, &watch, advance);
+    let table =
+        (record.stopped.is_none() && c.ilc().periods() > 0).then(|| c.ilc().learned().to_vec());
+    Ok((record, table))
 }
 
 /// An error beyond this many times the reference's range (peak to peak, the larger axis)

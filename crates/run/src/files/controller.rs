@@ -1,7 +1,9 @@
 //! `track/[<conditions>/]controllers/<controller>.json`: a tuned linear controller as a
-//! real-time target runs it — the PID + notch + static feed-forward law with its inverse
-//! hysteresis actuator stage (Eq. 19–21 and 36 of Actuators 2022, 11(7), 179), every
-//! coefficient as the simulation used it. `flexstage-control`'s `TargetLaw` is the same law
+//! real-time target runs it — the PID + notch law with its feed-forward (the static inverse,
+//! or the FIR inverse with preview), the PPF damping filters and a learned correction table
+//! when it has them, and its inverse hysteresis actuator stage (Eq. 19–21 and 36 of
+//! Actuators 2022, 11(7), 179), every coefficient as the simulation used it. Version 2 added
+//! `damping`, `feedforward` and `learned_m`; a version 1 file (none of them) still reads. `flexstage-control`'s `TargetLaw` is the same law
 //! in memory; the C source and header next to the file are generated from it.
 
 use serde::{Deserialize, Serialize};
@@ -9,7 +11,7 @@ use serde::{Deserialize, Serialize};
 use crate::format::{Format, check_version, from_json, json};
 
 /// The format version of a controller file.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// One second-order section y = (b₀ + b₁ z⁻¹ + b₂ z⁻²)/(1 + a₁ z⁻¹ + a₂ z⁻²) u.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -75,6 +77,31 @@ pub struct ControllerFile {
     pub inverse_static_gain: [[f64; 2]; 2],
     /// The actuator stage.
     pub actuator: ActuatorFile,
+    /// The PPF damping filters D_i on each axis's reading, added as G_dc⁻¹ D(y) (a zero
+    /// section b = [0, 0, 0] on an axis without one); absent: no damping loop.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damping: Option<[SectionFile; 2]>,
+    /// The FIR feed-forward with preview in place of the static inverse G_dc⁻¹ q_d;
+    /// absent: the static inverse.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub feedforward: Option<FeedForwardFile>,
+    /// The learned correction c\[k\] \[m\] per sample k of the period (q1, q2), subtracted
+    /// from the reading; absent: no learning.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub learned_m: Option<Vec<[f64; 2]>>,
+}
+
+/// The FIR feed-forward: x_ff,k = Σ_n F_n q_d,k−n, n = −p, …, L − p − 1 \[m\].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FeedForwardFile {
+    /// Preview p: the future reference samples the filter reads.
+    pub preview_samples: usize,
+    /// The lag τ of the feedback's reference q_d((k − τ) T) \[samples\] (the sensor chain's
+    /// datasheet lag).
+    pub lag_samples: f64,
+    /// The taps F_n (2 × 2, row-major) for n = −p, …, L − p − 1.
+    pub taps: Vec<[[f64; 2]; 2]>,
 }
 
 impl Format for ControllerFile {
@@ -84,7 +111,9 @@ impl Format for ControllerFile {
 
     fn decode(bytes: &[u8]) -> Result<Self, String> {
         let v: ControllerFile = from_json(bytes)?;
-        check_version(v.version, VERSION)?;
+        if v.version != 1 {
+            check_version(v.version, VERSION)?;
+        }
         Ok(v)
     }
 }
