@@ -21,6 +21,7 @@ compared value differs, 1 otherwise.
 
 import argparse
 import csv
+import difflib
 import hashlib
 import json
 import math
@@ -204,6 +205,30 @@ def without_dxf_stamps(data):
     return b"\n".join(out)
 
 
+def html_parts(text):
+    """An HTML page's embedded figures (inline SVG, PNG data URIs) and its text lines without them."""
+    svg = re.findall(r"<svg\b.*?</svg>", text, flags=re.S)
+    png = re.findall(r"data:image/png;base64,[A-Za-z0-9+/=]+", text)
+    text = re.sub(r"<svg\b.*?</svg>", "<svg/>", text, flags=re.S)
+    text = re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "PNG", text)
+    text = re.sub(r"<style>.*?</style>", "", text, flags=re.S)
+    return svg + png, re.sub(r">\s*<", ">\n<", text).split("\n")
+
+
+def compare_html(rel, a_text, b_text, report):
+    """A report page: its embedded figures compared as a set, then its text line by line."""
+    a_figs, a_lines = html_parts(a_text.decode())
+    b_figs, b_lines = html_parts(b_text.decode())
+    same = len(set(a_figs) & set(b_figs))
+    lines = [
+        (math.inf, "text", x, "")
+        for x in difflib.unified_diff(a_lines, b_lines, lineterm="", n=0)
+        if x[:1] in "+-" and not x.startswith(("+++", "---"))
+    ]
+    report.append((rel, f"bytes differ; embedded figures {len(a_figs)} vs {len(b_figs)}, {same} equal; "
+                        f"{len(lines)} text lines differ", lines))
+
+
 def compare_bytes(rel, a_root, b_root, totals, report):
     """Compare a figure or other file byte for byte, then by the numbers in its text."""
     with open(os.path.join(a_root, rel), "rb") as f:
@@ -225,6 +250,9 @@ def compare_bytes(rel, a_root, b_root, totals, report):
         if a_text == b_text:
             report.append((rel, "bytes differ only in the creation date and GUIDs of the header", []))
             return
+    if rel.endswith(".html"):
+        compare_html(rel, a_text, b_text, report)
+        return
     if rel.endswith(".png"):
         digest = lambda data: hashlib.sha256(data).hexdigest()[:12]
         report.append((rel, f"bytes differ (png {digest(a)} vs {digest(b)})", []))
@@ -266,7 +294,10 @@ def main():
     for rel, line, diffs in report:
         print(f"{rel}: {line}")
         for rel_diff, key, x, y in diffs[: args.details]:
-            print(f"    {key}: {x!r} vs {y!r} (rel {rel_diff:.3g})")
+            if key == "text":
+                print(f"    {x[:160]}")
+            else:
+                print(f"    {key}: {x!r} vs {y!r} (rel {rel_diff:.3g})")
     structured = sum(1 for r in common if r.endswith(STRUCTURED))
     print()
     print(f"files in both: {len(common)} ({structured} CSV/JSON/TOML compared by value, "
