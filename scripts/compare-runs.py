@@ -270,15 +270,8 @@ def compare_bytes(rel, a_root, b_root, totals, report):
     report.append((rel, f"bytes differ; {len(diffs)} of {len(na)} numbers differ, max rel {diffs[0][0]:.3g}", diffs))
 
 
-def main():
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("a", help="first run folder (before)")
-    parser.add_argument("b", help="second run folder (after)")
-    parser.add_argument("--ignore", default=DEFAULT_IGNORE, help="regex of value names counted apart")
-    parser.add_argument("--details", type=int, default=0, help="print the N largest differences per file")
-    args = parser.parse_args()
-    a_root, b_root = os.path.abspath(args.a), os.path.abspath(args.b)
-    ignore = re.compile(args.ignore)
+def compare(a_root, b_root, ignore):
+    """Totals and per-file lines of the comparison of two run folders (absolute paths)."""
     a_files, b_files = files(a_root), files(b_root)
     totals = dict.fromkeys(
         ["values", "equal", "differ", "ignored", "only_a", "only_b", "files_differ",
@@ -291,6 +284,77 @@ def main():
             compare_structured(rel, a_root, b_root, ignore, totals, report)
         else:
             compare_bytes(rel, a_root, b_root, totals, report)
+    totals["common"] = common
+    totals["files_only_a"] = sorted(a_files - b_files)
+    totals["files_only_b"] = sorted(b_files - a_files)
+    return totals, report
+
+
+def self_test():
+    """Two small run folders with known differences give the known counts: a one-ulp change
+    in a CSV cell named by its row's text (each folder's path as <run>), a text change in TOML,
+    a JSON key on one side, wall-clock time and version ignored, an SVG with one number
+    changed, a file on one side."""
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        a_root, b_root = os.path.join(tmp, "a"), os.path.join(tmp, "b")
+        x = 0.1 + 0.2
+        next_x = math.nextafter(x, 1.0)
+        content = {
+            "a": {
+                "t.csv": f"name,v,path\nk,{x!r},{a_root}/f\nk,2,{a_root}/f\n",
+                "s.json": '{"version": 1, "time": 3.5, "m": {"f": [1.5, 2.5]}}',
+                "p.toml": 'x = 1.0\n[s]\ny = "a"\n',
+                "f.svg": "<svg><path d='M0 0L1 2'/></svg>",
+                "g.svg": "<svg><path d='M0 0L1 2'/></svg>",
+                "only_a.csv": "v\n1\n",
+            },
+            "b": {
+                "t.csv": f"name,v,path\nk,{next_x!r},{b_root}/f\nk,2,{b_root}/f\n",
+                "s.json": '{"version": 2, "time": 9.0, "m": {"f": [1.5, 2.5], "g": 1}}',
+                "p.toml": 'x = 1.0\n[s]\ny = "b"\n',
+                "f.svg": "<svg><path d='M0 0L1 2'/></svg>",
+                "g.svg": "<svg><path d='M0 0 L1 2.5'/></svg>",
+            },
+        }
+        for side, named in content.items():
+            os.makedirs(os.path.join(tmp, side))
+            for name, text in named.items():
+                with open(os.path.join(tmp, side, name), "w") as f:
+                    f.write(text)
+        totals, report = compare(a_root, b_root, re.compile(DEFAULT_IGNORE))
+    lines = dict((rel, line) for rel, line, _ in report)
+    expected = {
+        "values": 10, "equal": 8, "differ": 2, "ignored": 2, "only_a": 0, "only_b": 1,
+        "files_differ": 2, "bytes_equal": 1, "bytes_differ": 1,
+        "files_only_a": ["only_a.csv"], "files_only_b": [],
+    }
+    failed = [(k, totals[k], v) for k, v in expected.items() if totals[k] != v]
+    rel = (next_x - x) / next_x
+    if totals["max_rel"] != math.inf or f"1 differ (max rel {rel:.3g} at k|<run>/f#0/v" not in lines["t.csv"]:
+        failed.append(("t.csv", lines["t.csv"], f"one ulp, rel {rel:.3g}"))
+    if "1 of 4 numbers differ" not in lines["g.svg"]:
+        failed.append(("g.svg", lines["g.svg"], "1 of 4 numbers differ"))
+    for item in failed:
+        print("self-test failed: %s is %r, expected %r" % item)
+    print("self-test:", "failed" if failed else "ok")
+    return 1 if failed else 0
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("a", nargs="?", help="first run folder (before)")
+    parser.add_argument("b", nargs="?", help="second run folder (after)")
+    parser.add_argument("--ignore", default=DEFAULT_IGNORE, help="regex of value names counted apart")
+    parser.add_argument("--details", type=int, default=0, help="print the N largest differences per file")
+    parser.add_argument("--self-test", action="store_true", help="check the script on two small folders")
+    args = parser.parse_args()
+    if args.self_test:
+        return self_test()
+    if not (args.a and args.b):
+        parser.error("two run folders are needed")
+    totals, report = compare(os.path.abspath(args.a), os.path.abspath(args.b), re.compile(args.ignore))
     for rel, line, diffs in report:
         print(f"{rel}: {line}")
         for rel_diff, key, x, y in diffs[: args.details]:
@@ -298,6 +362,7 @@ def main():
                 print(f"    {x[:160]}")
             else:
                 print(f"    {key}: {x!r} vs {y!r} (rel {rel_diff:.3g})")
+    common = totals["common"]
     structured = sum(1 for r in common if r.endswith(STRUCTURED))
     print()
     print(f"files in both: {len(common)} ({structured} CSV/JSON/TOML compared by value, "
@@ -307,8 +372,8 @@ def main():
           f"(max relative difference {totals['max_rel']:.3g}); ignored by name: {totals['ignored']}")
     print(f"names only in A: {totals['only_a']}; only in B: {totals['only_b']}; unreadable: {totals['unreadable']}")
     print(f"other files: {totals['bytes_equal']} bytes equal, {totals['bytes_differ']} differ")
-    print(f"files only in A: {sorted(a_files - b_files)}")
-    print(f"files only in B: {sorted(b_files - a_files)}")
+    print(f"files only in A: {totals['files_only_a']}")
+    print(f"files only in B: {totals['files_only_b']}")
     return 1 if totals["differ"] else 0
 
 
