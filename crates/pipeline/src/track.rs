@@ -1344,6 +1344,27 @@ mod tests {
     }
 
     #[test]
+    fn a_damaged_pea_estimates_file_is_an_error_not_the_scenario() {
+        // Goal: without estimates the compensator keeps the scenario's PEAs and says so; an
+        // estimates file that exists but does not parse stops `track` with its name, never
+        // falls back to the scenario silently.
+        let root = std::env::temp_dir().join(format!("flexstage-peaest-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let s = crate::folder::preset("quick").unwrap();
+        let folder = RunFolder::open(s.clone(), &root, false).unwrap();
+        let mut setup = Setup::from_scenario(&s);
+        let used = identified_peas(&folder, &mut setup).unwrap();
+        assert_eq!(used, ["scenario [hysteresis]", "scenario [hysteresis]"]);
+        let rel = layout::PeaIdentification { pea: 2 }.estimates();
+        folder.dir().write(&rel, b"d_p = 1\n").unwrap();
+        let e = identified_peas(&folder, &mut setup)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains(&rel), "{e}");
+        std::fs::remove_dir_all(&root).unwrap();
+    }
+
+    #[test]
     fn params_of_another_run_are_refused_unless_allowed() {
         let base = std::env::temp_dir().join(format!("flexstage-foreign-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&base);
