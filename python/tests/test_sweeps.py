@@ -27,7 +27,7 @@ def client():
 
 @pytest.fixture(scope="module")
 def study(run):
-    return fs.MonteCarloStudy.of_run(run, controllers=["pi-notch-ff", "pid-ff"], plants=6,
+    return fs.MonteCarloStudy.of_run(run, controllers=["pi-notch-ff", "pid-ff"], plants=3,
                                      duration=0.1, progress=False)
 
 
@@ -67,7 +67,7 @@ def test_batches_cover_every_plant_once_in_order():
 
 def test_study_recipe_pickles(study):
     again = pickle.loads(pickle.dumps(study))
-    assert again.key == study.key and again.plants == 6
+    assert again.key == study.key and again.plants == 3
     with pytest.raises(TypeError, match="nosuch"):
         fs.MonteCarloStudy(study.scenario_json, study.files, study.controllers, {"nosuch": 1})
     bad = fs.MonteCarloStudy(study.scenario_json, study.files, study.controllers,
@@ -90,8 +90,8 @@ def test_monte_carlo_on_two_workers_equals_serial(study, client):
     threads = study.run(progress=False)
     one_by_one = sweeps.monte_carlo(study)
     spread = sweeps.monte_carlo(study, client)  # one plant per task
-    batched = sweeps.monte_carlo(study, client, per_worker=1)  # plants 0–2 and 3–5
-    assert [p.index for p in spread.plants] == list(range(6))
+    batched = sweeps.monte_carlo(study, client, per_worker=1)  # plants 0–1 and 2
+    assert [p.index for p in spread.plants] == list(range(3))
     assert fs.same(threads, one_by_one) and fs.same(threads, spread)
     assert fs.same(threads, batched)
     p = spread.plants[0]
