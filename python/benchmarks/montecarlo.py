@@ -14,10 +14,15 @@ after each run (others share the machine: wall times depend on it, CPU times muc
 Pairs alternate which mode runs first. Every Dask result is checked bitwise against the
 serial one.
 
-    python3 python/benchmarks/montecarlo.py RUN_FOLDER [--plants 100] [--pairs 5] [--per-worker 4]
+    python3 python/benchmarks/montecarlo.py RUN_FOLDER [--plants 100] [--pairs 5] [--per-worker N]
+        [--no-warm] [--no-warmup]
 
-``--per-worker``: batches of plants per worker thread (``sweeps.monte_carlo``'s; 50 gives a
-task per plant, as before batching).
+``--per-worker``: batches of plants per worker thread (``sweeps.monte_carlo``'s; default a
+task per plant). ``--no-warm``: time each study once (no second, warm run in the same
+processes). ``--no-warmup``: no serial run before the pairs (the first pair's serial run,
+which runs first, gives the reference result). Each Dask figure also splits the CPU into
+the measuring process (client and scheduler) and its children (the worker processes and
+their nannies).
 
 ``RUN_FOLDER`` holds a finished design (``flexstage design --out RUN_FOLDER``); the recipe is
 written beside it as ``montecarlo-<plants>.pickle`` on first use.
@@ -33,24 +38,28 @@ import statistics
 import subprocess
 import sys
 import time
-from typing import Any, Dict, List
+from typing import Any, Dict, List, Optional
 
 CONTROLLERS = ("pi-notch-ff", "robust", "nonrobust", "pid-ff")
 
 
-def _cpu_tree() -> float:
+def _cpu_split() -> List[float]:
     """User + system seconds of this process and of its live children (recursively)."""
     import psutil
 
     me = psutil.Process()
-    total = 0.0
-    for p in [me, *me.children(recursive=True)]:
+    split = [0.0, 0.0]
+    for k, p in enumerate([me, *me.children(recursive=True)]):
         try:
             t = p.cpu_times()
         except psutil.NoSuchProcess:
             continue
-        total += t.user + t.system
-    return total
+        split[min(k, 1)] += t.user + t.system
+    return split
+
+
+def _cpu_tree() -> float:
+    return sum(_cpu_split())
 
 
 def _import_flexstage() -> str:
@@ -59,7 +68,7 @@ def _import_flexstage() -> str:
     return flexstage.__file__
 
 
-def child(recipe: str, mode: str, out: str, per_worker: int) -> None:
+def child(recipe: str, mode: str, out: str, per_worker: Optional[int], warm: bool) -> None:
     """One measurement in this (fresh) process, its figures as JSON on the last line: the
     study from its recipe (``wall``, ``cpu``: the set-up inside), then the same study again
     (``warm_wall``, ``warm_cpu``: set up already, in this process or in every worker)."""
@@ -72,7 +81,7 @@ def child(recipe: str, mode: str, out: str, per_worker: int) -> None:
         def once() -> Any:
             return study.run(progress=False)
 
-        figures, result = _timed(once)
+        figures, result = _timed(once, warm)
     else:
         from distributed import Client, LocalCluster
 
@@ -83,7 +92,7 @@ def child(recipe: str, mode: str, out: str, per_worker: int) -> None:
             def once() -> Any:
                 return sweeps.monte_carlo(study, client, per_worker=per_worker)
 
-            figures, result = _timed(once)
+            figures, result = _timed(once, warm)
     equal = None
     if os.path.exists(out):
         with open(out, "rb") as f:
@@ -96,11 +105,16 @@ def child(recipe: str, mode: str, out: str, per_worker: int) -> None:
     print(json.dumps(figures))
 
 
-def _timed(once: Any) -> Any:
-    """Wall and CPU seconds of ``once()`` cold and warm, and the (identical) result."""
-    c0, t0 = _cpu_tree(), time.perf_counter()
+def _timed(once: Any, warm: bool) -> Any:
+    """Wall and CPU seconds of ``once()`` cold and (``warm``) warm, and the (identical)
+    result; the cold CPU also split into this process and its children."""
+    c0, t0 = _cpu_split(), time.perf_counter()
     result = once()
-    seconds, cpu = time.perf_counter() - t0, _cpu_tree() - c0
+    seconds, c1 = time.perf_counter() - t0, _cpu_split()
+    cpu, own = sum(c1) - sum(c0), c1[0] - c0[0]
+    if not warm:
+        return {"wall": seconds, "cpu": cpu, "cpu_own": own, "warm_wall": None,
+                "warm_cpu": None}, result
     c0, t0 = _cpu_tree(), time.perf_counter()
     again = once()
     warm, warm_cpu = time.perf_counter() - t0, _cpu_tree() - c0
@@ -108,7 +122,8 @@ def _timed(once: Any) -> Any:
 
     if not fs.same(result, again):
         sys.exit("the second run of the study differs from the first")
-    return {"wall": seconds, "cpu": cpu, "warm_wall": warm, "warm_cpu": warm_cpu}, result
+    return {"wall": seconds, "cpu": cpu, "cpu_own": own, "warm_wall": warm,
+            "warm_cpu": warm_cpu}, result
 
 
 def recipe_of(folder: str, plants: int) -> str:
@@ -125,11 +140,13 @@ def recipe_of(folder: str, plants: int) -> str:
     return path
 
 
-def measure(recipe: str, mode: str, out: str, per_worker: int) -> Dict[str, Any]:
+def measure(recipe: str, mode: str, out: str, per_worker: Optional[int],
+            warm: bool) -> Dict[str, Any]:
     load = os.getloadavg()[0]
+    extra = ([] if per_worker is None else ["--per-worker", str(per_worker)]) + \
+        ([] if warm else ["--no-warm"])
     done = subprocess.run([sys.executable, __file__, os.path.dirname(recipe), "--child", mode,
-                           recipe, out, "--per-worker", str(per_worker)],
-                          capture_output=True, text=True)
+                           recipe, out, *extra], capture_output=True, text=True)
     if done.returncode != 0:
         sys.exit(f"{mode} failed:\n{done.stderr}")
     figures = json.loads(done.stdout.strip().splitlines()[-1])
@@ -142,51 +159,53 @@ def main() -> None:
     ap.add_argument("folder")
     ap.add_argument("--plants", type=int, default=100)
     ap.add_argument("--pairs", type=int, default=5)
-    ap.add_argument("--per-worker", type=int, default=4)
+    ap.add_argument("--per-worker", type=int, default=None)
+    ap.add_argument("--no-warm", action="store_true")
+    ap.add_argument("--no-warmup", action="store_true")
     ap.add_argument("--child", nargs=3, metavar=("MODE", "RECIPE", "OUT"), help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.child:
         mode, recipe, out = args.child
-        child(recipe, mode, out, args.per_worker)
+        child(recipe, mode, out, args.per_worker, not args.no_warm)
         return
     recipe = recipe_of(args.folder, args.plants)
     out = os.path.join(args.folder, f"montecarlo-{args.plants}-serial.pickle")
     if os.path.exists(out):
         os.remove(out)
-    # Warm-up: the serial reference result, the file caches.
-    measure(recipe, "serial", out, args.per_worker)
-    ratios: List[float] = []
-    warm: List[float] = []
+    warm = not args.no_warm
+    if not args.no_warmup:  # the serial reference result, the file caches
+        measure(recipe, "serial", out, args.per_worker, warm)
     rows: List[Dict[str, Any]] = []
     for k in range(args.pairs):
         order = ("serial", "dask") if k % 2 == 0 else ("dask", "serial")
-        pair = {m: measure(recipe, m, out, args.per_worker) for m in order}
+        pair = {m: measure(recipe, m, out, args.per_worker, warm) for m in order}
         if not pair["dask"]["equal_to_serial"]:
             sys.exit("the Dask result differs from the serial one")
-        ratio = pair["dask"]["wall"] / pair["serial"]["wall"]
-        ratios.append(ratio)
         for m in order:
             f = pair[m]
             rows.append(f)
-            print(f"pair {k + 1} {m:6}: {f['wall']:6.2f} s wall {f['cpu']:6.2f} s CPU; warm "
-                  f"{f['warm_wall']:6.2f} s wall {f['warm_cpu']:6.2f} s CPU "
+            again = (f"; warm {f['warm_wall']:6.2f} s wall {f['warm_cpu']:6.2f} s CPU"
+                     if warm else "")
+            print(f"pair {k + 1} {m:6}: {f['wall']:6.2f} s wall {f['cpu']:6.2f} s CPU "
+                  f"(this process {f['cpu_own']:.2f} s){again} "
                   f"(load {f['load']:.2f} → {f['load_after']:.2f})", flush=True)
-        warm.append(pair["dask"]["warm_wall"] / pair["serial"]["warm_wall"])
-        print(f"pair {k + 1} dask / serial wall {ratio:.3f}, CPU "
-              f"{pair['dask']['cpu'] / pair['serial']['cpu']:.3f}; warm wall {warm[-1]:.3f}",
-              flush=True)
+        d, s_ = pair["dask"], pair["serial"]
+        again = f"; warm wall {d['warm_wall'] / s_['warm_wall']:.3f}" if warm else ""
+        print(f"pair {k + 1} dask / serial wall {d['wall'] / s_['wall']:.3f}, CPU "
+              f"{d['cpu'] / s_['cpu']:.3f}{again}", flush=True)
+    pairs = [(rows[2 * k], rows[2 * k + 1]) for k in range(args.pairs)]
+    by = [{r["mode"]: r for r in p} for p in pairs]
+    for key in ("wall", "cpu") + (("warm_wall",) if warm else ()):
+        ratios = [b["dask"][key] / b["serial"][key] for b in by]
+        print(f"dask / serial {key} per pair: {', '.join(f'{r:.3f}' for r in ratios)}; "
+              f"median {statistics.median(ratios):.3f}")
     for m in ("serial", "dask"):
         walls = [r["wall"] for r in rows if r["mode"] == m]
         cpus = [r["cpu"] for r in rows if r["mode"] == m]
-        warms = [r["warm_wall"] for r in rows if r["mode"] == m]
         print(f"{m:6}: wall median {statistics.median(walls):.2f} s "
-              f"[{min(walls):.2f}, {max(walls):.2f}], CPU median {statistics.median(cpus):.2f} s;"
-              f" warm wall median {statistics.median(warms):.2f} s")
-    print(f"dask / serial wall per pair: {', '.join(f'{r:.3f}' for r in ratios)}; median "
-          f"{statistics.median(ratios):.3f}; warm: {', '.join(f'{r:.3f}' for r in warm)}, "
-          f"median {statistics.median(warm):.3f}; loads {min(r['load'] for r in rows):.2f}–"
-          f"{max(r['load'] for r in rows):.2f}; results bitwise equal: yes")
-
+              f"[{min(walls):.2f}, {max(walls):.2f}], CPU median {statistics.median(cpus):.2f} s")
+    print(f"loads {min(r['load'] for r in rows):.2f}–{max(r['load_after'] for r in rows):.2f}; "
+          "results bitwise equal: yes")
 
 if __name__ == "__main__":
     main()

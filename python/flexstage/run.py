@@ -208,17 +208,22 @@ class Run:
               controllers: Optional[Sequence[str]] = None, compensation: str = "inverse",
               params: Optional[PathLike] = None, allow_foreign_params: bool = False,
               duration: Optional[float] = None, plant: str = "twin",
-              learning: Optional[int] = None, progress: Any = True) -> Tracking:
+              learning: Optional[int] = None, montecarlo_plants: Optional[int] = None,
+              progress: Any = True) -> Tracking:
         """The simulated tracking experiment (Section 4, Figures 9–11; ``flexstage track``):
         ``trajectory`` of the scenario (default all), ``controllers`` among the registry's
         (``flexstage.CONTROLLERS``; default ``flexstage.DEFAULT_CONTROLLERS``) on
         the twin (``plant="lumped"``: the 8-state model). ``learning``: also run every
         controller with iterative learning for that many trials (periodic trajectories
-        only; ``flexstage track --learning --trials N``), rows ``<controller>+learning``."""
+        only; ``flexstage track --learning --trials N``), rows ``<controller>+learning``.
+        ``montecarlo_plants``: perturbed twins of the Monte-Carlo study on the twin, ≥ 1
+        (default 100, each measured in its rig and designed on: seconds apiece;
+        ``flexstage track --montecarlo-plants N``)."""
         ctrl = None if controllers is None else [str(c) for c in controllers]
         out, conditions = self._n.track(reporter(progress), plant, trajectory, ctrl,
                                         compensation, None if params is None else str(params),
-                                        allow_foreign_params, duration, learning)
+                                        allow_foreign_params, duration, learning,
+                                        montecarlo_plants)
         return self._tracking(conditions, **_common(out))
 
     def report(self) -> Path:

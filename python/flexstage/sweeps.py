@@ -1,17 +1,20 @@
-"""Sweeps on a Dask cluster: one task per design or per batch of plants, results gathered as
+"""Sweeps on a Dask cluster: one task per design or per plant, results gathered as
 the same objects as the serial calls, bitwise, whatever the number of workers.
 
 * :func:`designs`: a list of scenarios (e.g. the resonance bounds of a workspace–resonance
   front), one design each. A design is deterministic (parallel sums in fixed chunks, in
   order), so a worker computes the same bits as this process.
 * :func:`monte_carlo`: the Monte-Carlo study of a run (:class:`flexstage.MonteCarloStudy`),
-  one task per batch of consecutive plants (16 batches per worker thread by default: a
-  task costs the scheduler and the worker a round trip of milliseconds, a plant seconds,
-  measured and designed on, and plants vary several-fold in cost, so small batches keep
-  the workers evenly loaded to the end). The study's recipe is sent to every worker once
-  (``client.scatter(..., broadcast=True)``); each worker sets the study up once (the
-  nominal twin) and keeps it. Plant ``i`` depends on the seed and
-  ``i`` alone, so neither the batches nor the number of workers change a bit.
+  one task per plant by default: a plant costs seconds (measured in its rig, every
+  controller designed from the measurement, then run) and plants differ several-fold in
+  cost, so the finest tasks keep the workers evenly loaded to the end, and a task's round
+  trip (milliseconds) is small beside a plant; ``per_worker`` batches consecutive plants
+  instead. A plant runs on the worker thread that computes it (measured: its CPU time is
+  that thread's; it starts no threads), so a worker process uses as many cores as it has
+  threads. The study's recipe is
+  sent to every worker once (``client.scatter(..., broadcast=True)``); each worker sets the
+  study up once (the nominal twin) and keeps it. Plant ``i`` depends on the seed and ``i``
+  alone, so neither the tasks nor the number of workers change a bit.
 
 Give a ``dask.distributed.Client`` you already run; without one (``client=None``) the same
 tasks run here, one after the other. Dask is needed only when a client is given.
@@ -66,9 +69,41 @@ def designs(scenarios: Sequence[Scenario], client: Any = None, *,
     return client.gather(futures)
 
 
+#: The heap's trim and mmap thresholds while plants run [bytes] (glibc's own grow up to
+#: 64 and 32 MiB; 32 MiB is the largest mmap threshold glibc takes).
+TRIM_THRESHOLD = 32 << 20
+
+
+def keep_freed_heap(threshold: int = TRIM_THRESHOLD) -> bool:
+    """Raises glibc's heap trim and mmap thresholds of this process to ``threshold`` when
+    the environment set a smaller trim threshold, as Dask's nanny does for its workers
+    (``MALLOC_TRIM_THRESHOLD_=65536``, ``distributed.nanny.pre-spawn-environ``). That
+    setting also fixes the mmap threshold at 128 KiB (glibc stops adapting it), so every
+    buffer of 128 KiB or more is mapped and unmapped each time, and its pages come back as
+    page faults: a plant, which allocates and frees its buffers thousands of times, took
+    100 × the minor faults and +8 % CPU (measured). Returns whether it changed them (not on
+    other C libraries, nor without the variable)."""
+    import ctypes
+
+    try:
+        current = int(os.environ.get("MALLOC_TRIM_THRESHOLD_", ""))
+    except ValueError:
+        return False
+    if current >= threshold:
+        return False
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (AttributeError, OSError):
+        return False
+    m_trim_threshold, m_mmap_threshold = -1, -3
+    return bool(mallopt(m_trim_threshold, threshold)) and bool(mallopt(m_mmap_threshold,
+                                                                        threshold))
+
+
 def plants_task(first: int, stop: int, study: MonteCarloStudy) -> List[PlantResult]:
-    """Plants ``first`` to ``stop - 1`` of ``study`` (set up once per process). Runs in a
-    Dask worker or here."""
+    """Plants ``first`` to ``stop - 1`` of ``study`` (set up once per process), the heap
+    kept (:func:`keep_freed_heap`). Runs in a Dask worker or here."""
+    keep_freed_heap()
     return [study.plant(i) for i in range(first, stop)]
 
 
@@ -85,17 +120,20 @@ def batches(plants: int, workers: int, per_worker: int = 16) -> List[Tuple[int, 
 
 
 def monte_carlo(study: MonteCarloStudy, client: Any = None, *,
-                per_worker: int = 16) -> MonteCarlo:
-    """The study on ``client``, ``per_worker`` batches of consecutive plants per worker
-    thread (else here, one plant after the other; :meth:`MonteCarloStudy.run` uses this
-    process's threads instead). The result is the same, bitwise, whatever the batches and
-    workers."""
+                per_worker: Optional[int] = None) -> MonteCarlo:
+    """The study on ``client``, one task per plant (``per_worker``: that many batches of
+    consecutive plants per worker thread instead), else here, one plant after the other
+    (:meth:`MonteCarloStudy.run` uses this process's threads instead). The result is the
+    same, bitwise, whatever the tasks and workers."""
     n = study.plants
     if client is None:
         plants = plants_task(0, n, study)
     else:
-        workers = max(1, sum(client.nthreads().values()))  # task slots
-        cuts = batches(n, workers, per_worker)
+        if per_worker is None:
+            cuts = [(i, i + 1) for i in range(n)]
+        else:
+            workers = max(1, sum(client.nthreads().values()))  # task slots
+            cuts = batches(n, workers, per_worker)
         [shared] = client.scatter([study], broadcast=True)
         futures = client.map(plants_task, [a for a, _ in cuts], [b for _, b in cuts],
                              study=shared, pure=False)

@@ -451,7 +451,7 @@ impl PyRun {
     }
 
     /// Tracking; returns the outcome and the folder's conditions name ("" for `track/`).
-    #[pyo3(signature = (reporter, plant, trajectory, controllers, compensation, params, allow_foreign_params, duration, learning))]
+    #[pyo3(signature = (reporter, plant, trajectory, controllers, compensation, params, allow_foreign_params, duration, learning, montecarlo_plants = None))]
     #[allow(clippy::too_many_arguments)]
     fn track(
         &self,
@@ -465,6 +465,7 @@ impl PyRun {
         allow_foreign_params: bool,
         duration: Option<f64>,
         learning: Option<usize>,
+        montecarlo_plants: Option<usize>,
     ) -> PyResult<(Outcome, String)> {
         let folder = self.folder()?;
         let options = TrackOptions {
@@ -476,7 +477,8 @@ impl PyRun {
             allow_foreign_params,
             duration,
             learning,
-            montecarlo_plants: TrackOptions::default().montecarlo_plants,
+            montecarlo_plants: montecarlo_plants
+                .unwrap_or(TrackOptions::default().montecarlo_plants),
         };
         let s = blocking(py, reporter.as_ref(), |p| {
             flexstage_pipeline::track(folder, &options, p)

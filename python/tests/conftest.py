@@ -42,5 +42,7 @@ def run(tmp_path_factory: pytest.TempPathFactory):
 
 @pytest.fixture(scope="session")
 def tracked(run):
-    """One tracking case (circle, PI + notch + feedforward)."""
-    return run.track(trajectory="circle", controllers=["pi-notch-ff"], progress=False)
+    """One tracking case (circle, PI + notch + feedforward), its Monte-Carlo study on two
+    perturbed twins (100 by default, seconds apiece: the tests check the bindings)."""
+    return run.track(trajectory="circle", controllers=["pi-notch-ff"], montecarlo_plants=2,
+                     progress=False)
