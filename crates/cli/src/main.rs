@@ -158,7 +158,7 @@ Examples:
 design's tracking error at --scan-hz in the legend), front.csv, front.json, and per design \
 d<k>/design.json (usable as --design for analyze, export, reduce), outline.svg, modes.vtu. \
 The controllers are designed on each design's twin as `track` designs them. The paper preset \
-took 34 minutes on two cores shared with other jobs (load 7; 13 CPU-minutes).
+takes about 7 minutes on two quiet cores (12 CPU-minutes).
 
 Examples:
   flexstage front                               # quick preset, 5 designs, 250 Hz scan

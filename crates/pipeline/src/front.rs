@@ -500,7 +500,11 @@ fn front_svg(f: &FrontFile) -> Result<String> {
         let (x, y) = (d.design.area * 1e12, f1);
         fig = fig.with(
             Series::closed(
-                format!("d{}: {f1:.0} Hz, {err}", d.index),
+                format!(
+                    "d{}: {f1:.0} Hz, {err}{}",
+                    d.index,
+                    if d.safe { "" } else { ", NOT safe" }
+                ),
                 vec![(x - rx, y), (x, y + ry), (x + rx, y), (x, y - ry)],
             )
             .with_color(i + 1),
