@@ -113,6 +113,16 @@ pub(crate) fn verification(v: &Verification) -> file::VerificationFile {
                     message: f.message.clone(),
                 })
                 .collect(),
+            filled: m
+                .filled
+                .iter()
+                .map(|f| file::FilledPocket {
+                    at: f.at,
+                    area: f.area,
+                    inscribed: f.inscribed,
+                    mass: f.mass,
+                })
+                .collect(),
         },
         verdict: file::Verdict {
             safe: v.verdict.safe,

@@ -168,11 +168,6 @@ pub fn export(folder: &RunFolder, options: &ExportOptions) -> Result<ExportSumma
     let replaced = folder.has_results(files::DIR);
     let run = folder.dir();
     let unit = options.unit;
-    let mut files = vec![
-        run.write(files::DXF, &outline.to_dxf(unit)?)?,
-        run.write(files::SVG, outline.to_svg(unit).as_bytes())?,
-        run.write(files::STL, &outline.to_stl(s.mesh.thickness, unit))?,
-    ];
     let (mut verification, mut verify_error) = (None, None);
     if Problem::is_mechanism(s) && options.verify.is_some() {
         verify_error = Some(
@@ -184,17 +179,35 @@ pub fn export(folder: &RunFolder, options: &ExportOptions) -> Result<ExportSumma
         let p = o.params(&s.limits);
         p.validate()?;
         match flexstage_verify::verify(s, &rho, &outline.loops, &p) {
-            Ok(v) => {
-                let mut text = v.summary_lines().join("\n");
-                text.push('\n');
-                run.store(files::VERIFICATION_JSON, crate::convert::verification(&v))?;
-                files.push(run.path(files::VERIFICATION_JSON));
-                files.push(run.write(files::VERIFICATION_TXT, text.as_bytes())?);
-                files.push(run.write(files::BODY_FITTED_VTU, v.to_vtu().as_bytes())?);
-                verification = Some(Box::new(v));
-            }
+            Ok(v) => verification = Some(Box::new(v)),
             Err(e) => verify_error = Some(e.to_string()),
         }
+    }
+    // The drawing of the part as made: pockets too small for the start hole left solid, as
+    // the verification checked it.
+    let filled: Vec<usize> = verification
+        .as_ref()
+        .map(|v| {
+            v.manufacturing
+                .filled
+                .iter()
+                .map(|f| f.outline_loop)
+                .collect()
+        })
+        .unwrap_or_default();
+    let outline = outline.with_filled(&filled);
+    let mut files = vec![
+        run.write(files::DXF, &outline.to_dxf(unit)?)?,
+        run.write(files::SVG, outline.to_svg(unit).as_bytes())?,
+        run.write(files::STL, &outline.to_stl(s.mesh.thickness, unit))?,
+    ];
+    if let Some(v) = &verification {
+        let mut text = v.summary_lines().join("\n");
+        text.push('\n');
+        run.store(files::VERIFICATION_JSON, crate::convert::verification(v))?;
+        files.push(run.path(files::VERIFICATION_JSON));
+        files.push(run.write(files::VERIFICATION_TXT, text.as_bytes())?);
+        files.push(run.write(files::BODY_FITTED_VTU, v.to_vtu().as_bytes())?);
     }
     Ok(ExportSummary {
         design: options.design.clone(),

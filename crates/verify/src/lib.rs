@@ -59,7 +59,7 @@ pub mod verify;
 pub mod vtu;
 
 pub use error::{Result, VerifyError};
-pub use manufacture::{Finding, FindingKind, Manufacturability, Severity};
+pub use manufacture::{FilledPocket, Finding, FindingKind, Manufacturability, Severity};
 pub use params::{
     AL6061_T6_FATIGUE_STRENGTH, AL6061_T6_YIELD_STRENGTH, DEFAULT_SAFETY_FACTOR, VerifyParams,
 };

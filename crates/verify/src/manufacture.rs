@@ -76,6 +76,25 @@ pub struct Manufacturability {
     pub pockets: usize,
     /// Findings, errors first.
     pub findings: Vec<Finding>,
+    /// Pockets too small for the start hole that the verified part has filled (left solid, as
+    /// the CAD/CAM step leaves them; [`small_pockets`]). Empty when [`check`] runs on an
+    /// outline as drawn.
+    pub filled: Vec<FilledPocket>,
+}
+
+/// A closed pocket too small for the wire's start hole, left solid in the part as made.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct FilledPocket {
+    /// Index of its loop in the outline as drawn.
+    pub outline_loop: usize,
+    /// Centre of its largest inscribed disc \[m\].
+    pub at: [f64; 2],
+    /// Area \[m²\].
+    pub area: f64,
+    /// Diameter of its largest inscribed disc \[m\] (smaller than the start hole).
+    pub inscribed: f64,
+    /// Mass the filling adds \[kg\] (area × plate thickness × density).
+    pub mass: f64,
 }
 
 impl Manufacturability {
@@ -200,6 +219,44 @@ fn mm(p: [f64; 2]) -> [f64; 2] {
     [p[0] * 1e3, p[1] * 1e3]
 }
 
+/// The widest void disc inside hole loop `h`: its diameter and centre.
+fn inscribed(b: &Boundary, balls: &Balls, h: usize) -> (f64, [f64; 2]) {
+    let (lo, hi) = (b.start[h], b.start[h + 1]);
+    let i = (lo..hi)
+        .max_by(|&i, &j| balls.void[i].radius.total_cmp(&balls.void[j].radius))
+        .expect("a hole has samples");
+    (2.0 * balls.void[i].radius, balls.void[i].center)
+}
+
+/// The closed pockets of `geometry` (sampled as `b` with discs `balls`) whose largest inscribed
+/// disc is narrower than `start_hole` \[m\]: no start hole fits, so the wire cannot cut them
+/// and the CAD/CAM step leaves them solid. Returns each one's loop in `geometry` with its place,
+/// area and inscribed diameter (`outline_loop` and `mass` are the caller's: set to the loop
+/// index in `geometry` and 0).
+pub fn small_pockets(
+    geometry: &Geometry,
+    b: &Boundary,
+    balls: &Balls,
+    start_hole: f64,
+) -> Vec<FilledPocket> {
+    let mut small = Vec::new();
+    for part in &geometry.parts {
+        for &h in &part.holes {
+            let (d, c) = inscribed(b, balls, h);
+            if d < start_hole {
+                small.push(FilledPocket {
+                    outline_loop: h,
+                    at: c,
+                    area: -crate::geometry::signed_area(&geometry.loops[h]),
+                    inscribed: d,
+                    mass: 0.0,
+                });
+            }
+        }
+    }
+    small
+}
+
 /// Runs the checks on the kept parts (`geometry`, sampled as `b` with discs `balls`) and
 /// reports `islands` (parts of the full outline that no port or support holds: area \[m²\] and
 /// centroid \[m\]).
@@ -290,11 +347,7 @@ pub fn check(
     for part in &geometry.parts {
         for &h in &part.holes {
             pockets += 1;
-            let (lo, hi) = (b.start[h], b.start[h + 1]);
-            let i = (lo..hi)
-                .max_by(|&i, &j| balls.void[i].radius.total_cmp(&balls.void[j].radius))
-                .expect("a hole has samples");
-            let (d, c) = (2.0 * balls.void[i].radius, balls.void[i].center);
+            let (d, c) = inscribed(b, balls, h);
             let area = -crate::geometry::signed_area(&geometry.loops[h]);
             let fits = d >= limits.start_hole;
             findings.push(Finding {
@@ -341,5 +394,6 @@ pub fn check(
         islands: islands.len(),
         pockets,
         findings,
+        filled: Vec::new(),
     }
 }

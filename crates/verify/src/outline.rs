@@ -346,6 +346,39 @@ impl Outline {
         }
     }
 
+    /// The outline with the holes `holes` (indices into [`Outline::loops`]) filled: their loops
+    /// dropped and their interiors added to the cap triangles (ear clipping), so the DXF, SVG
+    /// and STL draw the part with those pockets left solid and the STL stays closed. Indices
+    /// that are not holes are ignored.
+    pub fn with_filled(&self, holes: &[usize]) -> Outline {
+        let areas = self.signed_areas();
+        let fill: Vec<usize> = holes
+            .iter()
+            .copied()
+            .filter(|&k| k < self.loops.len() && areas[k] < 0.0)
+            .collect();
+        let mut cap_triangles = self.cap_triangles.clone();
+        for &k in &fill {
+            // A hole runs clockwise; its interior, counter-clockwise, is the reversed loop.
+            let ccw: Vec<usize> = self.loop_indices[k].iter().rev().copied().collect();
+            cap_triangles.extend(ear_clip(&self.cap_points, &ccw));
+        }
+        let keep = |k: &usize| !fill.contains(k);
+        Outline {
+            loops: (0..self.loops.len())
+                .filter(keep)
+                .map(|k| self.loops[k].clone())
+                .collect(),
+            domain: self.domain,
+            cap_triangles,
+            cap_points: self.cap_points.clone(),
+            loop_indices: (0..self.loops.len())
+                .filter(keep)
+                .map(|k| self.loop_indices[k].clone())
+                .collect(),
+        }
+    }
+
     /// Signed area of each loop \[m²\] (positive: outer boundary, negative: hole).
     pub fn signed_areas(&self) -> Vec<f64> {
         self.loops.iter().map(|l| signed_area(l)).collect()
@@ -546,6 +579,57 @@ fn normal(t: &[[f64; 3]; 3]) -> [f64; 3] {
     ];
     let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
     if l > 0.0 { n.map(|x| x / l) } else { [0.0; 3] }
+}
+
+/// Twice the signed area of the triangle `a b c` (positive counter-clockwise).
+fn cross(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> f64 {
+    (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+}
+
+/// Triangles of the simple counter-clockwise polygon `poly` (indices into `points`) by ear
+/// clipping (Meisters 1975, "Polygons have ears", Amer. Math. Monthly 82:648–651): a convex
+/// vertex whose triangle holds no other vertex is cut off until three remain. Where rounding
+/// leaves no strict ear (collinear runs), the most convex vertex is cut, a triangle of zero
+/// area at worst, so every polygon edge stays an edge of exactly one triangle.
+fn ear_clip(points: &[[f64; 2]], poly: &[usize]) -> Vec<[usize; 3]> {
+    let mut v = poly.to_vec();
+    let mut tris = Vec::with_capacity(v.len().saturating_sub(2));
+    while v.len() > 3 {
+        let n = v.len();
+        let corner = |i: usize| (v[(i + n - 1) % n], v[i], v[(i + 1) % n]);
+        let is_ear = |i: usize| {
+            let (a, b, c) = corner(i);
+            let (pa, pb, pc) = (points[a], points[b], points[c]);
+            cross(pa, pb, pc) > 0.0
+                && v.iter().all(|&j| {
+                    let q = points[j];
+                    q == pa
+                        || q == pb
+                        || q == pc
+                        || cross(pa, pb, q) < 0.0
+                        || cross(pb, pc, q) < 0.0
+                        || cross(pc, pa, q) < 0.0
+                })
+        };
+        let i = (0..n).find(|&i| is_ear(i)).unwrap_or_else(|| {
+            (0..n)
+                .max_by(|&i, &j| {
+                    let area = |i: usize| {
+                        let (a, b, c) = corner(i);
+                        cross(points[a], points[b], points[c])
+                    };
+                    area(i).total_cmp(&area(j))
+                })
+                .expect("more than three vertices")
+        });
+        let (a, b, c) = corner(i);
+        tris.push([a, b, c]);
+        v.remove(i);
+    }
+    if v.len() == 3 {
+        tris.push([v[0], v[1], v[2]]);
+    }
+    tris
 }
 
 fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -882,6 +966,75 @@ mod tests {
         }
         assert!(edges.values().all(|&c| c == 0), "open STL");
         assert!((fine.area() - o.area()).abs() < 0.002 * o.area());
+    }
+
+    /// Directed-edge balance and divergence-theorem volume of a binary STL: a closed,
+    /// consistently oriented surface has every directed edge cancelled by its reverse.
+    fn stl_closed_volume(stl: &[u8]) -> (bool, f64) {
+        let n = u32::from_le_bytes(stl[80..84].try_into().unwrap()) as usize;
+        let f = |o: usize| f32::from_le_bytes(stl[o..o + 4].try_into().unwrap()) as f64;
+        let key = |v: [f64; 3]| v.map(|x| (x * 1e5).round() as i64);
+        let mut edges: HashMap<[[i64; 3]; 2], i32> = HashMap::new();
+        let mut volume = 0.0;
+        for k in 0..n {
+            let b = 84 + 50 * k + 12;
+            let v: Vec<[f64; 3]> = (0..3)
+                .map(|m| [f(b + 12 * m), f(b + 4 + 12 * m), f(b + 8 + 12 * m)])
+                .collect();
+            volume += (v[0][0] * (v[1][1] * v[2][2] - v[1][2] * v[2][1])
+                - v[0][1] * (v[1][0] * v[2][2] - v[1][2] * v[2][0])
+                + v[0][2] * (v[1][0] * v[2][1] - v[1][1] * v[2][0]))
+                / 6.0;
+            for m in 0..3 {
+                let (a, bb) = (key(v[m]), key(v[(m + 1) % 3]));
+                *edges.entry([a, bb]).or_default() += 1;
+                *edges.entry([bb, a]).or_default() -= 1;
+            }
+        }
+        (edges.values().all(|&c| c == 0), volume)
+    }
+
+    #[test]
+    fn filled_pocket_leaves_a_closed_part_with_the_pocket_solid() {
+        // Goal: filling a hole drops its loop, adds exactly its area to the part (the signed
+        // areas of the loops are exact polygon areas) and keeps the STL closed with volume =
+        // area × t, for a smoothed and refined (curved, non-convex) pocket as for a square
+        // one; the other hole and the outer loop stay as they were, and an index that is not
+        // a hole is ignored.
+        let (nl, nw, h, t) = (30, 12, 1e-3, 2e-3);
+        let o = Outline::extract(nl, nw, h, h, 0.5, 5, |i, j| {
+            let small = (6..8).contains(&i) && (5..7).contains(&j);
+            // A C-shaped pocket: a solid tongue reaches into it from its left side.
+            let tongue = (18..22).contains(&i) && (5..7).contains(&j);
+            let notch = (18..24).contains(&i) && (3..9).contains(&j) && !tongue;
+            if small || notch { 0.0 } else { 1.0 }
+        })
+        .refined(0.1e-3);
+        assert_eq!(
+            o.loops.len(),
+            3,
+            "outer, the 2 × 2 pocket, the notched pocket"
+        );
+        let areas = o.signed_areas();
+        assert!(areas[1] < 0.0 && areas[2] < 0.0, "loops 1 and 2 are holes");
+        for (k, kept) in [(1, 2), (2, 1)] {
+            let filled = o.with_filled(&[k, 0, 99]);
+            assert_eq!(filled.loops.len(), 2);
+            assert_eq!(filled.loops[1], o.loops[kept]);
+            assert_eq!(filled.loops[0], o.loops[0]);
+            assert!(
+                (filled.area() - (o.area() - areas[k])).abs() < 1e-12 * o.area(),
+                "{} vs {}",
+                filled.area(),
+                o.area() - areas[k]
+            );
+            let (closed, volume) = stl_closed_volume(&filled.to_stl(t, Unit::Millimetres));
+            assert!(closed, "open STL after filling loop {k}");
+            let exact = filled.area() * 1e6 * t * 1e3;
+            assert!((volume - exact).abs() < 1e-5 * exact, "{volume} vs {exact}");
+        }
+        let (closed, volume) = stl_closed_volume(&o.to_stl(t, Unit::Millimetres));
+        assert!(closed && (volume - o.area() * 1e9 * t).abs() < 1e-5 * o.area() * 1e9 * t);
     }
 
     #[test]

@@ -127,6 +127,8 @@ pub struct Verification {
     pub allowable: f64,
     /// Yield strength \[Pa\] (for reference).
     pub yield_strength: f64,
+    /// Diameter of the wire's start hole \[m\] the pockets were checked against.
+    pub start_hole: f64,
     /// Body-fitted re-analysis.
     pub body_fitted: BodyFitted,
     /// The design mesh's values (if compared).
@@ -314,14 +316,17 @@ impl Prepared {
     }
 }
 
-/// Keeps the parts that ports or supports hold, finds their medial discs and checks
-/// manufacturability.
+/// Keeps the parts that ports or supports hold, fills their pockets too small for the start
+/// hole (the part as made: [`manufacture::small_pockets`]), finds the medial discs of what is
+/// left and checks manufacturability. `areal_density` \[kg/m²\] (thickness × density) weighs
+/// the filling.
 fn prepare(
     geometry: &Geometry,
     anchors: &[[f64; 2]],
     port_radius: f64,
     sizing: &Sizing,
     p: &VerifyParams,
+    areal_density: f64,
 ) -> Result<(Prepared, Manufacturability)> {
     let mut held = vec![false; geometry.parts.len()];
     for &a in anchors {
@@ -336,45 +341,65 @@ fn prepare(
         .filter(|(_, h)| !**h)
         .map(|(part, _)| (part.area, part.centroid))
         .collect();
-    let kept_loops: Vec<Vec<[f64; 2]>> = geometry
+    // The loops of the held parts, by their index in the outline as drawn.
+    let mut kept_index: Vec<usize> = geometry
         .parts
         .iter()
         .zip(&held)
         .filter(|(_, h)| **h)
-        .flat_map(|(part, _)| {
-            std::iter::once(part.outer)
-                .chain(part.holes.iter().copied())
-                .map(|k| geometry.loops[k].clone())
-        })
+        .flat_map(|(part, _)| std::iter::once(part.outer).chain(part.holes.iter().copied()))
         .collect();
-    if kept_loops.is_empty() {
+    if kept_index.is_empty() {
         return Err(VerifyError::Outline(
             "no part of the outline touches a port or support".into(),
         ));
     }
-    let kept = Geometry::new(kept_loops)?;
     let spacing = (0.1 * p.min_ligament.min(p.min_gap)).clamp(p.min_element, 0.1e-3);
-    let boundary = Boundary::sample(&kept, spacing);
     // Discs larger than every width that matters (the limits, the start hole, the element
     // size times the elements across) need not be measured: they are capped.
     let r_cap = 0.75
         * (p.min_ligament.max(p.min_gap).max(p.start_hole_diameter))
             .max(sizing.max_element * sizing.elements_across);
-    let balls = medial_balls(&boundary, r_cap);
+    let analyse = |index: &[usize]| -> Result<Prepared> {
+        let kept = Geometry::new(index.iter().map(|&k| geometry.loops[k].clone()).collect())?;
+        let boundary = Boundary::sample(&kept, spacing);
+        let balls = medial_balls(&boundary, r_cap);
+        Ok(Prepared {
+            kept,
+            boundary,
+            balls,
+        })
+    };
+    let mut prepared = analyse(&kept_index)?;
+    let mut filled = manufacture::small_pockets(
+        &prepared.kept,
+        &prepared.boundary,
+        &prepared.balls,
+        p.start_hole_diameter,
+    );
+    if !filled.is_empty() {
+        let gone: Vec<usize> = filled.iter().map(|f| kept_index[f.outline_loop]).collect();
+        for f in &mut filled {
+            f.outline_loop = kept_index[f.outline_loop];
+            f.mass = f.area * areal_density;
+        }
+        kept_index.retain(|k| !gone.contains(k));
+        prepared = analyse(&kept_index)?;
+    }
     let limits = Limits {
         min_ligament: p.min_ligament,
         min_gap: p.min_gap,
         start_hole: p.start_hole_diameter,
     };
-    let report = manufacture::check(&kept, &boundary, &balls, &islands, &limits);
-    Ok((
-        Prepared {
-            kept,
-            boundary,
-            balls,
-        },
-        report,
-    ))
+    let mut report = manufacture::check(
+        &prepared.kept,
+        &prepared.boundary,
+        &prepared.balls,
+        &islands,
+        &limits,
+    );
+    report.filled = filled;
+    Ok((prepared, report))
 }
 
 /// Checks that every connected part of the mesh is held against rigid motion by the
@@ -608,7 +633,9 @@ pub fn verify(
         .map(|s| s.point)
         .chain(supports.iter().map(|s| s.0))
         .collect();
-    let (prepared, manufacturing) = prepare(&geometry, &anchors, port_radius, &sizing, p)?;
+    let areal_density = scenario.mesh.thickness * scenario.material.density;
+    let (prepared, manufacturing) =
+        prepare(&geometry, &anchors, port_radius, &sizing, p, areal_density)?;
     let model = build_model(
         scenario,
         prepared.mesh(&sizing)?,
@@ -690,6 +717,7 @@ pub fn verify(
     Ok(Verification {
         allowable: p.allowable_stress(),
         yield_strength: p.yield_strength,
+        start_hole: p.start_hole_diameter,
         body_fitted,
         design_mesh,
         manufacturing,
@@ -882,6 +910,24 @@ impl Verification {
                 crate::manufacture::Severity::Note => "note",
             };
             out.push(format!("  {tag}: {}", f.message));
+        }
+        if !m.filled.is_empty() {
+            out.push(format!(
+                "  filled: {} pocket(s) too small for a Ø {:.2} mm start hole, left solid (+{:.3} g); \
+                 the stress, frequencies and mass above are of the part with them filled",
+                m.filled.len(),
+                self.start_hole * 1e3,
+                m.filled.iter().map(|f| f.mass).sum::<f64>() * 1e3
+            ));
+            for f in &m.filled {
+                out.push(format!(
+                    "    {:.3} mm² at {} (largest inscribed Ø {:.3} mm), +{:.4} g",
+                    f.area * 1e6,
+                    mm(f.at),
+                    f.inscribed * 1e3,
+                    f.mass * 1e3
+                ));
+            }
         }
         out.push(if self.verdict.safe {
             "verdict: safe (stress within the allowable, no manufacturability error)".into()

@@ -2,7 +2,7 @@
 //! typed errors.
 
 use flexstage_scenario::{Preset, Scenario};
-use flexstage_verify::{VerifyError, VerifyParams, samples, verify};
+use flexstage_verify::{FindingKind, VerifyError, VerifyParams, samples, verify};
 
 fn fast() -> VerifyParams {
     VerifyParams {
@@ -133,4 +133,53 @@ fn a_void_port_is_a_clear_error() {
     let rho = vec![1.0; s.mesh.nl * s.mesh.nw];
     let e = verify(&s, &rho, &loops, &fast()).unwrap_err().to_string();
     assert!(e.contains("PEA2") && e.contains("120.00"), "{e}");
+}
+
+#[test]
+fn a_pocket_too_small_for_the_start_hole_is_verified_filled_and_a_large_one_is_kept() {
+    // Defect: two closed pockets in the bridge's output block, a Ø 0.6 mm one (no Ø 1 mm start
+    // hole fits: the CAD/CAM step leaves it solid) and a Ø 3 mm one (cut through a start
+    // hole). Goal: the small one is reported filled with its place, area (π r² of the
+    // 200-gon within 0.1 %), inscribed diameter and added mass (area × thickness × density),
+    // and is no manufacturability error; the large one stays a pocket (a note); and every
+    // body-fitted value is exactly that of the outline drawn without the small pocket: the
+    // part as it will be made is what is checked.
+    let (s, rho, loops) = samples::bridge_design(Preset::Quick);
+    let (small_at, large_at) = ([0.054, 0.053], [0.066, 0.053]);
+    let mut with_both = loops.clone();
+    with_both.push(samples::circle(small_at, 0.3e-3, 200, false));
+    with_both.push(samples::circle(large_at, 1.5e-3, 200, false));
+    let mut large_only = loops.clone();
+    large_only.push(samples::circle(large_at, 1.5e-3, 200, false));
+    let v = verify(&s, &rho, &with_both, &fast()).unwrap();
+    let m = &v.manufacturing;
+    assert_eq!(m.filled.len(), 1, "{:#?}", m.filled);
+    let f = m.filled[0];
+    assert_eq!(f.outline_loop, loops.len());
+    assert!(
+        f.inscribed < 1e-3 && (f.inscribed - 0.6e-3).abs() < 0.02e-3,
+        "{f:?}"
+    );
+    assert!((f.at[0] - small_at[0]).hypot(f.at[1] - small_at[1]) < 0.05e-3);
+    let area = std::f64::consts::PI * 0.3e-3_f64.powi(2);
+    assert!((f.area - area).abs() < 1e-3 * area, "{} vs {area}", f.area);
+    let mass = f.area * s.mesh.thickness * s.material.density;
+    assert!((f.mass - mass).abs() < 1e-12 * mass);
+    assert_eq!(m.pockets, 1, "the large pocket stays");
+    assert!(m.findings.iter().any(|x| x.kind == FindingKind::Pocket));
+    assert!(
+        m.findings
+            .iter()
+            .all(|x| x.kind != FindingKind::PocketTooSmall)
+    );
+    assert!(v.verdict.manufacturable, "{:?}", v.verdict);
+    let text = v.summary_lines().join("\n");
+    assert!(text.contains("filled: 1 pocket(s)"), "{text}");
+    let made = verify(&s, &rho, &large_only, &fast()).unwrap();
+    assert!(made.manufacturing.filled.is_empty());
+    let (a, b) = (&v.body_fitted, &made.body_fitted);
+    assert_eq!(a.mass, b.mass);
+    assert_eq!(a.stress.von_mises, b.stress.von_mises);
+    assert_eq!(a.frequencies, b.frequencies);
+    assert_eq!(a.elements, b.elements);
 }

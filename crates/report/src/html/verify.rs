@@ -95,7 +95,7 @@ pub(super) fn verification(b: &mut Builder) {
     b.table(&header, &comparison(&v));
     let m = &v.manufacturing;
     let width = |w: &Option<Width>| val(w.map(|w| w.width), 1e3, " mm");
-    b.kv(&[
+    let mut rows = vec![
         ("thinnest ligament".into(), width(&m.min_ligament)),
         ("narrowest gap".into(), width(&m.min_gap)),
         (
@@ -106,7 +106,19 @@ pub(super) fn verification(b: &mut Builder) {
             "closed pockets (start holes)".into(),
             val(Some(m.pockets as f64), 1.0, ""),
         ),
-    ]);
+    ];
+    if !m.filled.is_empty() {
+        rows.push((
+            "pockets too small for a start hole, left solid (checked filled)".into(),
+            format!(
+                "{} ({} mm², +{} g)",
+                m.filled.len(),
+                val(Some(m.filled.iter().map(|f| f.area).sum()), 1e6, ""),
+                val(Some(m.filled.iter().map(|f| f.mass).sum()), 1e3, "")
+            ),
+        ));
+    }
+    b.kv(&rows);
     let findings: Vec<Vec<String>> = m
         .findings
         .iter()
@@ -183,6 +195,7 @@ mod tests {
                 islands: 0,
                 pockets: 0,
                 findings: Vec::new(),
+                filled: Vec::new(),
             },
             verdict: Verdict {
                 safe: false,

@@ -154,6 +154,24 @@ pub struct Manufacturing {
     pub pockets: usize,
     /// Every finding.
     pub findings: Vec<Finding>,
+    /// Pockets too small for the start hole, left solid in the part as made (the stress,
+    /// frequencies and mass are of the filled part). Absent when none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub filled: Vec<FilledPocket>,
+}
+
+/// A pocket too small for the wire's start hole, filled (left solid) in the part as made.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FilledPocket {
+    /// Centre of its largest inscribed disc (x, y) \[m\].
+    pub at: [f64; 2],
+    /// Area \[m²\].
+    pub area: f64,
+    /// Diameter of its largest inscribed disc \[m\].
+    pub inscribed: f64,
+    /// Mass added by the filling \[kg\].
+    pub mass: f64,
 }
 
 /// The verdict.
