@@ -25,7 +25,7 @@ fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
     Ok(match parts.next() {
         Some("static") => FeedForward::Static,
         Some("lead") => FeedForward::StaticLead(1),
-        Some("inverse") => {
+        Some(name @ ("inverse" | "lifted")) => {
             let mut p = FeedForwardParams::default();
             if let Some(c) = parts.next() {
                 p.cutoff = c.parse()?;
@@ -40,10 +40,86 @@ fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
             if let Some(v) = parts.next() {
                 p.regularization = v.parse()?;
             }
-            FeedForward::Inverse(p)
+            if name == "lifted" {
+                FeedForward::Lifted(p)
+            } else {
+                FeedForward::Inverse(p)
+            }
         }
-        _ => return Err("feed-forward: static, lead or inverse[:CUTOFF[:PREVIEW[:TAPS]]]".into()),
+        _ => {
+            return Err(
+                "feed-forward: static, lead, inverse or lifted[:CUTOFF[:PREVIEW[:TAPS[:RHO]]]]"
+                    .into(),
+            );
+        }
     })
+}
+
+/// Per point and candidate: the true error on the substeps (RMS, % of range) against the
+/// error at the samples, its q1 and q2 content at the axis's line f and at the hold's images
+/// f_s − f and f_s + f, and the intersample bound of the measured lifted response at f.
+fn between(
+    bench: &Bench,
+    cands: &[&'static Controller],
+    points: &[flexstage_assess::sweep::SweepPoint],
+    lifted: &flexstage_identify::measured::LiftedResponse,
+) -> Result<(), Box<dyn std::error::Error>> {
+    use flexstage_identify::measured::intersample_bound;
+    let fs = 1.0 / bench.setup.rig.sample_time;
+    println!(
+        "f/f1   controller    RMS between % q1/q2   at samples % q1/q2   q1 nm at f, fs-f, fs+f   q2 nm at f, fs-f, fs+f   bound % of amplitude q1/q2 (RMS % range)"
+    );
+    let lines = lifted.lines();
+    let nearest = |f: f64| {
+        lines
+            .iter()
+            .enumerate()
+            .min_by(|a, b| (a.1.f - f).abs().total_cmp(&(b.1.f - f).abs()))
+            .map_or(0, |(n, _)| n)
+    };
+    for pt in points {
+        let base = pt.frequency / 3.0;
+        let axis_f = [pt.frequency, base];
+        let bound = [0, 1].map(|i| intersample_bound(&lifted.harmonics(nearest(axis_f[i])))[i]);
+        for (j, r) in pt.results.iter().enumerate() {
+            let reference = flexstage_sim::trajectory::Reference::new(
+                flexstage_sim::trajectory::Shape::Lissajous {
+                    ratio: 3.0,
+                    amplitude: pt.amplitude,
+                    frequency: base,
+                },
+            );
+            let duration = (2.0 / base).max(0.05);
+            let (_, b) =
+                flexstage_assess::sweep::run_between(bench, cands[j], reference, duration)?;
+            let amp = |i: usize| {
+                let f = axis_f[i];
+                [f, fs - f, fs + f].map(|x| b.amplitude(i, x) * 1e9)
+            };
+            let (a1, a2) = (amp(0), amp(1));
+            let range = pt.amplitude.map(|a| 2.0 * a);
+            println!(
+                "{:.3}  {:<12} {:7.3} {:7.3}        {:7.3} {:7.3}        {:6.2} {:6.2} {:6.2}     {:6.2} {:6.2} {:6.2}     {:.4} {:.4} ({:.3} {:.3})",
+                pt.fraction,
+                r.controller.name,
+                100.0 * r.rms_between[0] / range[0],
+                100.0 * r.rms_between[1] / range[1],
+                r.rms_pct[0],
+                r.rms_pct[1],
+                a1[0],
+                a1[1],
+                a1[2],
+                a2[0],
+                a2[1],
+                a2[2],
+                bound[0],
+                bound[1],
+                100.0 * bound[0] / (2.0 * std::f64::consts::SQRT_2),
+                100.0 * bound[1] / (2.0 * std::f64::consts::SQRT_2),
+            );
+        }
+    }
+    Ok(())
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -71,7 +147,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ..TuningParams::default()
     };
     let t0 = std::time::Instant::now();
-    let bench = Bench::from_measurement(Setup::from_scenario(&s), twin, tuning, &lab, &m)?;
+    let setup = Setup::from_scenario(&s);
+    let ratio: usize = std::env::var("FAST_ADC_RATIO").map_or(Ok(10), |v| v.parse())?;
+    let lifted = flexstage_assess::lab::measure_lifted(&twin, &setup, &lab, ratio)?;
+    println!(
+        "lifted response measured (L = {ratio}) in {:.2} s",
+        t0.elapsed().as_secs_f64()
+    );
+    let bench = Bench::from_measurements(setup, twin, tuning, &lab, &m, Some(&lifted))?;
     println!("designed in {:.2} s ({mode:?})", t0.elapsed().as_secs_f64());
     let cands: Vec<&'static Controller> = ["pi-notch-ff", "pid-ff"]
         .iter()
@@ -110,6 +193,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         let target = match mode {
             FeedForward::Inverse(p) => Some(FeedForwardParams { lag: ff.lag(), ..p }),
+            FeedForward::Lifted(p) => Some(FeedForwardParams { lag: ff.lag(), ..p }),
             _ => None,
         };
         println!("f Hz   |GF - D| (loop model) q1 q2   (twin) q1 q2   |T|");
@@ -197,5 +281,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
     }
+    between(&bench, &cands, &points, &lifted)?;
     Ok(())
 }
