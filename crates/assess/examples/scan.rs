@@ -4,8 +4,12 @@
 //! feedback, on the twin in the full rig.
 //!
 //! ```text
-//! cargo run --release -p flexstage-assess --example scan -- quick RUN/design/design.json RUN/track/measured_response.csv static|lead|inverse[:CUTOFF_HZ[:PREVIEW[:TAPS]]] [FRACTION ...]
+//! cargo run --release -p flexstage-assess --example scan -- quick RUN/design/design.json RUN/track/measured_response.csv|measure static|lead|inverse|lifted[:CUTOFF_HZ[:PREVIEW[:TAPS[:RHO]]]] [FRACTION ...]
 //! ```
+//!
+//! `measure` measures the twin here as `track` does; the lifted response (a fast ADC on the
+//! sensor, `FAST_ADC_RATIO` samples per controller sample, default 10) is always measured:
+//! for `lifted` and for the intersample bound printed per point.
 
 use flexstage_assess::Bench;
 use flexstage_assess::lab::{LabMeasurement, LabParams};
@@ -64,10 +68,9 @@ fn between(
     points: &[flexstage_assess::sweep::SweepPoint],
     lifted: &flexstage_identify::measured::LiftedResponse,
 ) -> Result<(), Box<dyn std::error::Error>> {
-    use flexstage_identify::measured::intersample_bound;
     let fs = 1.0 / bench.setup.rig.sample_time;
     println!(
-        "f/f1   controller    RMS between % q1/q2   at samples % q1/q2   q1 nm at f, fs-f, fs+f   q2 nm at f, fs-f, fs+f   bound % of amplitude q1/q2 (RMS % range)"
+        "f/f1   controller    RMS between % q1/q2   at samples % q1/q2   q1 nm at f, fs-f, fs+f   q2 nm at f, fs-f, fs+f   bound (f, f_s ∓ f) % of amplitude q1/q2 (RMS % range)"
     );
     let lines = lifted.lines();
     let nearest = |f: f64| {
@@ -77,10 +80,42 @@ fn between(
             .min_by(|a, b| (a.1.f - f).abs().total_cmp(&(b.1.f - f).abs()))
             .map_or(0, |(n, _)| n)
     };
+    for f in [33.0, 99.0, 330.0, 990.0] {
+        let h = lifted.harmonics(nearest(f));
+        let mags: Vec<String> = h.iter().map(|m| format!("{:.4}", m[0][0].norm())).collect();
+        let l = h.len();
+        let (a, b, c) = (h[0][0][0].norm(), h[l - 1][0][0].norm(), h[1][0][0].norm());
+        println!(
+            "lifted q1/x1 at {:.0} Hz: |H_m| m = 0..L-1: {}; single image |b|/sqrt(|a|²+|b|²) {:.4} (f_s − f), {:.4} (f_s + f)",
+            lines[nearest(f)].f,
+            mags.join(" "),
+            b / (a * a + b * b).sqrt(),
+            c / (a * a + c * c).sqrt()
+        );
+    }
     for pt in points {
         let base = pt.frequency / 3.0;
         let axis_f = [pt.frequency, base];
-        let bound = [0, 1].map(|i| intersample_bound(&lifted.harmonics(nearest(axis_f[i])))[i]);
+        // The bound over the baseband and the two images f_s ∓ f (m = −1, +1) per axis
+        // (the brief's single-image form with both images): |b|²/(|a|² + |b|²), each image's
+        // power less its noise (the estimate's variance, from the phases' standard
+        // deviations: E|Ĥ_m|² = |H_m|² + Σ_p std_p²/L²). The higher harmonics are under the
+        // fast ADC's noise floor (about 0.02 of |H_0|, measured) and left out.
+        let bound = [0, 1].map(|i| {
+            let n = nearest(axis_f[i]);
+            let h = lifted.harmonics(n);
+            let l = h.len();
+            let var = lines[n]
+                .phase
+                .iter()
+                .map(|ph| ph.std[i][i].powi(2))
+                .sum::<f64>()
+                / (l * l) as f64;
+            let a2 = h[0][i][i].norm_sqr();
+            let b2 =
+                (h[1][i][i].norm_sqr() - var).max(0.0) + (h[l - 1][i][i].norm_sqr() - var).max(0.0);
+            (b2 / (a2 + b2)).sqrt()
+        });
         for (j, r) in pt.results.iter().enumerate() {
             let reference = flexstage_sim::trajectory::Reference::new(
                 flexstage_sim::trajectory::Shape::Lissajous {
@@ -90,8 +125,32 @@ fn between(
                 },
             );
             let duration = (2.0 / base).max(0.05);
-            let (_, b) =
+            let (rec, b) =
                 flexstage_assess::sweep::run_between(bench, cands[j], reference, duration)?;
+            // Check: the substep error at the sample instants is the record's error.
+            let s = bench.setup.rig.substeps;
+            let gap = (1..rec.t.len())
+                .map(|k| (b.error[0][k * s - 1] - rec.error[0][k]).abs())
+                .fold(0.0, f64::max);
+            if std::env::var("SCAN_DUMP").is_ok() {
+                let k0 = rec.t.len() / 2;
+                for k in k0 - 3..k0 + 4 {
+                    println!(
+                        "  k {k} x_nom {:.1} nm voltage {:.3} V reference {:.1} nm measured {:.1} truth {:.1}",
+                        rec.x_nom[0][k] * 1e9,
+                        rec.voltage[0][k],
+                        rec.reference[0][k] * 1e9,
+                        rec.measured[0][k] * 1e9,
+                        rec.truth[0][k] * 1e9
+                    );
+                }
+                for j in k0 * s..(k0 + 3) * s {
+                    println!("  {j} {:.3} nm", b.error[0][j] * 1e9);
+                }
+            }
+            if gap > 1e-12 {
+                println!("  (substep error at the samples differs from the record's by {gap:e} m)");
+            }
             let amp = |i: usize| {
                 let f = axis_f[i];
                 [f, fs - f, fs + f].map(|x| b.amplitude(i, x) * 1e9)
@@ -99,7 +158,7 @@ fn between(
             let (a1, a2) = (amp(0), amp(1));
             let range = pt.amplitude.map(|a| 2.0 * a);
             println!(
-                "{:.3}  {:<12} {:7.3} {:7.3}        {:7.3} {:7.3}        {:6.2} {:6.2} {:6.2}     {:6.2} {:6.2} {:6.2}     {:.4} {:.4} ({:.3} {:.3})",
+                "{:.3}  {:<12} {:7.3} {:7.3}        {:7.3} {:7.3}        {:6.2} {:6.2} {:6.2}     {:6.2} {:6.2} {:6.2}     {:.2} {:.2} ({:.3} {:.3})",
                 pt.fraction,
                 r.controller.name,
                 100.0 * r.rms_between[0] / range[0],
@@ -112,8 +171,8 @@ fn between(
                 a2[0],
                 a2[1],
                 a2[2],
-                bound[0],
-                bound[1],
+                100.0 * bound[0],
+                100.0 * bound[1],
                 100.0 * bound[0] / (2.0 * std::f64::consts::SQRT_2),
                 100.0 * bound[1] / (2.0 * std::f64::consts::SQRT_2),
             );
@@ -130,7 +189,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .and_then(|p| Preset::from_name(p))
         .ok_or(usage)?;
     let design = DesignFile::decode(&std::fs::read(args.get(2).ok_or(usage)?)?)?;
-    let measured = std::fs::read(args.get(3).ok_or(usage)?)?;
+    let measured_path = args.get(3).ok_or(usage)?;
     let mode = feedforward(args.get(4).ok_or(usage)?)?;
     let fractions: Vec<f64> = args[5..]
         .iter()
@@ -140,8 +199,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         scenario: s, twin, ..
     } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
     let lab = LabParams::default();
-    let response = MeasuredResponse::from_csv(&measured[..], "measured response")?;
-    let m = LabMeasurement::from_response(response, &lab.fit)?;
+    // `measure`: the twin measured here as `track` measures it.
+    let m = if measured_path == "measure" {
+        flexstage_assess::lab::measure(&twin, &Setup::from_scenario(&s), &lab)?
+    } else {
+        let measured = std::fs::read(measured_path)?;
+        let response = MeasuredResponse::from_csv(&measured[..], "measured response")?;
+        LabMeasurement::from_response(response, &lab.fit)?
+    };
     let tuning = TuningParams {
         feedforward: mode,
         ..TuningParams::default()
@@ -243,6 +308,39 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 o[1],
                 d.norm()
             );
+        }
+    }
+    if let Ok(level) = std::env::var("SCAN_STATIC") {
+        // The true output between the samples under a constant command.
+        use flexstage_sim::rig::StagePlant;
+        let level: f64 = level.parse()?;
+        let mut plant = bench.twin.plant(&bench.setup.rig)?;
+        plant.record_substeps();
+        let mut act = flexstage_control::actuator::Actuator::new(
+            bench
+                .setup
+                .actuator(flexstage_control::actuator::Compensation::Inverse),
+        )?;
+        for k in 0..3000 {
+            let x = [level, 0.0];
+            let v = act.command(x, 1e-4).voltage;
+            plant.measure();
+            plant.apply(&flexstage_sim::experiment::Command {
+                voltage: v,
+                x_nom: x,
+                reference: [0.0; 2],
+                saturated: false,
+                dropout: false,
+            });
+            if k >= 2997 {
+                let q: Vec<String> = plant
+                    .output_substeps()
+                    .iter()
+                    .map(|q| format!("{:.1}", q[0] * 1e9))
+                    .collect();
+                println!("sample {k}: q1 nm {}", q.join(" "));
+                println!("  x_nom {:?} voltage {:?}", plant.x_nom(), plant.voltage());
+            }
         }
     }
     let mut p = SweepParams::default();
