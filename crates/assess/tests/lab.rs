@@ -141,7 +141,8 @@ fn full_rig_measurement_agrees_with_the_scoring_loop_only_with_the_amplifier() {
 /// measured by a fast ADC at 10 × f_s on the sensor's output of the linear rig (noise-free, 80
 /// substeps), with the sensor's datasheet filter divided out harmonic by harmonic, is at
 /// phase 0 that loop to 1e-3 of the largest entry at every line, while the sampled response
-/// through the sensor chain is further from it (the filter's phase on the folded modes).
+/// through the sensor chain is further from it (the filter's phase on the folded modes;
+/// measured 8.1e-5 and 0.37).
 #[test]
 fn lifted_response_at_phase_zero_is_the_output_at_the_samples() {
     let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
