@@ -96,26 +96,10 @@ fn between(
     for pt in points {
         let base = pt.frequency / 3.0;
         let axis_f = [pt.frequency, base];
-        // The bound over the baseband and the two images f_s ∓ f (m = −1, +1) per axis
-        // (the brief's single-image form with both images): |b|²/(|a|² + |b|²), each image's
-        // power less its noise (the estimate's variance, from the phases' standard
-        // deviations: E|Ĥ_m|² = |H_m|² + Σ_p std_p²/L²). The higher harmonics are under the
-        // fast ADC's noise floor (about 0.02 of |H_0|, measured) and left out.
-        let bound = [0, 1].map(|i| {
-            let n = nearest(axis_f[i]);
-            let h = lifted.harmonics(n);
-            let l = h.len();
-            let var = lines[n]
-                .phase
-                .iter()
-                .map(|ph| ph.std[i][i].powi(2))
-                .sum::<f64>()
-                / (l * l) as f64;
-            let a2 = h[0][i][i].norm_sqr();
-            let b2 =
-                (h[1][i][i].norm_sqr() - var).max(0.0) + (h[l - 1][i][i].norm_sqr() - var).max(0.0);
-            (b2 / (a2 + b2)).sqrt()
-        });
+        // The bound over the baseband and the two images f_s ∓ f, each image's power less
+        // its noise (the higher harmonics are under the fast ADC's noise floor, about 0.02
+        // of |H_0|, measured).
+        let bound = [0, 1].map(|i| lifted.image_bound(nearest(axis_f[i]))[i]);
         for (j, r) in pt.results.iter().enumerate() {
             let reference = flexstage_sim::trajectory::Reference::new(
                 flexstage_sim::trajectory::Shape::Lissajous {

@@ -274,6 +274,49 @@ impl LiftedResponse {
     }
 }
 
+impl LiftedResponse {
+    /// The bound of line `n` per axis over its baseband and the hold's two images f_s ∓ f
+    /// ([`image_bound`] with each image's noise variance Σ_p std_p²/L², from the phases'
+    /// standard deviations): the harmonics beyond them are left out, as under a fast ADC's
+    /// noise floor.
+    pub fn image_bound(&self, n: usize) -> [f64; 2] {
+        let h = self.harmonics(n);
+        let l = h.len();
+        let var = [0, 1].map(|i| {
+            self.lines[n]
+                .phase
+                .iter()
+                .map(|ph| ph.std[i][i].powi(2))
+                .sum::<f64>()
+                / (l * l) as f64
+        });
+        let images: Vec<_> = if l > 2 {
+            vec![h[1], h[l - 1]]
+        } else {
+            h[1..].to_vec()
+        };
+        image_bound(&h[0], &images, var)
+    }
+}
+
+/// The single-image bound per axis i of the diagonal (the brief's |b|/√(|a|² + |b|²)):
+/// a = H_0,ii, |b|² = Σ over `images` of max(|H_m,ii|² − `var`_i, 0) (each image's power less
+/// the estimate's noise variance).
+pub fn image_bound(h0: &[[C64; 2]; 2], images: &[[[C64; 2]; 2]], var: [f64; 2]) -> [f64; 2] {
+    [0, 1].map(|i| {
+        let a2 = h0[i][i].norm_sqr();
+        let b2: f64 = images
+            .iter()
+            .map(|h| (h[i][i].norm_sqr() - var[i]).max(0.0))
+            .sum();
+        if a2 + b2 > 0.0 {
+            (b2 / (a2 + b2)).sqrt()
+        } else {
+            1.0
+        }
+    })
+}
+
 /// The harmonics of the lifted `g` at `f` (module docs).
 pub fn to_harmonics(g: &[[[C64; 2]; 2]], f: f64, t: f64) -> Vec<[[C64; 2]; 2]> {
     let l = g.len();
@@ -365,7 +408,7 @@ mod tests {
 
     /// Reference: the harmonics of a lifted response built from known harmonics are those
     /// harmonics (the two maps are inverse), and the bound of a SISO baseband a with one
-    /// image b is |b|/√(|a|² + |b|²).
+    /// image b is |b|/√(|a|² + |b|²), in the 2 × 2 form and the single-image form.
     #[test]
     fn harmonics_round_trip_and_the_single_image_bound() {
         let t = 1e-4;
@@ -388,6 +431,11 @@ mod tests {
         let want = b.norm() / (a.norm_sqr() + b.norm_sqr()).sqrt();
         let bound = intersample_bound(&back);
         assert!((bound[0] - want).abs() < 1e-12 && (bound[1] - want).abs() < 1e-12);
+        let single = image_bound(&back[0], &[back[1], back[4]], [0.0; 2]);
+        assert!((single[0] - want).abs() < 1e-12 && (single[1] - want).abs() < 1e-12);
+        // Noise variance above the image's power: no image left.
+        let none = image_bound(&back[0], &[back[4]], [1.0; 2]);
+        assert_eq!(none, [0.0; 2]);
     }
 
     /// Goal: a bad ratio is refused naming the field.
