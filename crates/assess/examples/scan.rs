@@ -327,6 +327,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
+    // Truth knobs to diagnose the error (never to design): `SCAN_TRUTH=quiet,creep,sensor`
+    // runs the scans without the rig's noise and floor, without creep, with an ideal sensor.
+    let mut bench = bench;
+    if let Ok(knobs) = std::env::var("SCAN_TRUTH") {
+        let rig = &mut bench.setup.rig;
+        for k in knobs.split(',') {
+            match k {
+                "quiet" => {
+                    rig.noise_std = [0.0; 2];
+                    rig.resolution = [0.0; 2];
+                    rig.sensor.flicker_corner = 0.0;
+                    rig.floor.velocity_rms = 0.0;
+                }
+                "creep" => rig.creep.factor = 0.0,
+                "sensor" => {
+                    rig.sensor.bandwidth = 0.0;
+                    rig.sensor.anti_alias = 0.0;
+                }
+                _ => return Err(format!("SCAN_TRUTH: quiet, creep, sensor; not {k}").into()),
+            }
+        }
+        println!("truth knobs (diagnosis only): {knobs}");
+    }
     let mut p = SweepParams::default();
     if !fractions.is_empty() {
         p.fractions = fractions;
