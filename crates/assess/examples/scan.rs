@@ -4,7 +4,7 @@
 //! feedback, on the twin in the full rig.
 //!
 //! ```text
-//! cargo run --release -p flexstage-assess --example scan -- quick RUN/design/design.json RUN/track/measured_response.csv|measure static|lead|inverse|lifted[:CUTOFF_HZ[:PREVIEW[:TAPS[:RHO]]]] [FRACTION ...]
+//! cargo run --release -p flexstage-assess --example scan -- quick RUN/design/design.json RUN/track/measured_response.csv|measure static|lead|inverse|lifted|lifted0[:CUTOFF_HZ[:PREVIEW[:TAPS[:RHO]]]] [FRACTION ...]
 //! ```
 //!
 //! `measure` measures the twin here as `track` does; the lifted response (a fast ADC on the
@@ -29,7 +29,7 @@ fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
     Ok(match parts.next() {
         Some("static") => FeedForward::Static,
         Some("lead") => FeedForward::StaticLead(1),
-        Some(name @ ("inverse" | "lifted")) => {
+        Some(name @ ("inverse" | "lifted" | "lifted0")) => {
             let mut p = FeedForwardParams::default();
             if let Some(c) = parts.next() {
                 p.cutoff = c.parse()?;
@@ -44,7 +44,7 @@ fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
             if let Some(v) = parts.next() {
                 p.regularization = v.parse()?;
             }
-            if name == "lifted" {
+            if name.starts_with("lifted") {
                 FeedForward::Lifted(p)
             } else {
                 FeedForward::Inverse(p)
@@ -203,7 +203,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "lifted response measured (L = {ratio}) in {:.2} s",
         t0.elapsed().as_secs_f64()
     );
-    let bench = Bench::from_measurements(setup, twin, tuning, &lab, &m, Some(&lifted))?;
+    // `lifted0`: the lifted fit on phase 0 alone (the output at the samples).
+    let fitted = if args[4].starts_with("lifted0") {
+        lifted.at_samples()
+    } else {
+        lifted.clone()
+    };
+    let bench = Bench::from_measurements(setup, twin, tuning, &lab, &m, Some(&fitted))?;
     println!("designed in {:.2} s ({mode:?})", t0.elapsed().as_secs_f64());
     let cands: Vec<&'static Controller> = ["pi-notch-ff", "pid-ff"]
         .iter()

@@ -266,6 +266,23 @@ impl LiftedResponse {
         &self.lines
     }
 
+    /// Phase 0 alone (L = 1): the response to the output at the samples, the sensor divided
+    /// out.
+    pub fn at_samples(&self) -> LiftedResponse {
+        LiftedResponse {
+            sample_time: self.sample_time,
+            ratio: 1,
+            lines: self
+                .lines
+                .iter()
+                .map(|l| LiftedLine {
+                    f: l.f,
+                    phase: l.phase[..1].to_vec(),
+                })
+                .collect(),
+        }
+    }
+
     /// The harmonics H_m, m = 0..L−1 (module docs), of line `n`.
     pub fn harmonics(&self, n: usize) -> Vec<[[C64; 2]; 2]> {
         let line = &self.lines[n];
