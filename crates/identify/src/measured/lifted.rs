@@ -316,7 +316,7 @@ impl LiftedResponse {
     }
 }
 
-/// The single-image bound per axis i of the diagonal (the brief's |b|/√(|a|² + |b|²)):
+/// The single-image bound per axis i of the diagonal, |b|/√(|a|² + |b|²):
 /// a = H_0,ii, |b|² = Σ over `images` of max(|H_m,ii|² − `var`_i, 0) (each image's power less
 /// the estimate's noise variance).
 pub fn image_bound(h0: &[[C64; 2]; 2], images: &[[[C64; 2]; 2]], var: [f64; 2]) -> [f64; 2] {
