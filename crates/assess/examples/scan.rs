@@ -4,8 +4,12 @@
 //! feedback, on the twin in the full rig.
 //!
 //! ```text
-//! cargo run --release -p flexstage-assess --example scan -- quick RUN/design/design.json RUN/track/measured_response.csv static|lead|inverse[:CUTOFF_HZ[:PREVIEW[:TAPS]]] [FRACTION ...]
+//! cargo run --release -p flexstage-assess --example scan -- quick RUN/design/design.json RUN/track/measured_response.csv|measure static|lead|inverse|lifted|lifted0[:CUTOFF_HZ[:PREVIEW[:TAPS[:RHO]]]] [FRACTION ...]
 //! ```
+//!
+//! `measure` measures the twin here as `track` does; the lifted response (a fast ADC on the
+//! sensor, `FAST_ADC_RATIO` samples per controller sample, default 10) is always measured:
+//! for `lifted` and for the intersample bound printed per point.
 
 use flexstage_assess::Bench;
 use flexstage_assess::lab::{LabMeasurement, LabParams};
@@ -25,7 +29,7 @@ fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
     Ok(match parts.next() {
         Some("static") => FeedForward::Static,
         Some("lead") => FeedForward::StaticLead(1),
-        Some("inverse") => {
+        Some(name @ ("inverse" | "lifted" | "lifted0")) => {
             let mut p = FeedForwardParams::default();
             if let Some(c) = parts.next() {
                 p.cutoff = c.parse()?;
@@ -40,10 +44,125 @@ fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
             if let Some(v) = parts.next() {
                 p.regularization = v.parse()?;
             }
-            FeedForward::Inverse(p)
+            if name.starts_with("lifted") {
+                FeedForward::Lifted(p)
+            } else {
+                FeedForward::Inverse(p)
+            }
         }
-        _ => return Err("feed-forward: static, lead or inverse[:CUTOFF[:PREVIEW[:TAPS]]]".into()),
+        _ => {
+            return Err(
+                "feed-forward: static, lead, inverse or lifted[:CUTOFF[:PREVIEW[:TAPS[:RHO]]]]"
+                    .into(),
+            );
+        }
     })
+}
+
+/// Per point and candidate: the true error on the substeps (RMS, % of range) against the
+/// error at the samples, its q1 and q2 content at the axis's line f and at the hold's images
+/// f_s − f and f_s + f, and the intersample bound of the measured lifted response at f.
+fn between(
+    bench: &Bench,
+    cands: &[&'static Controller],
+    points: &[flexstage_assess::sweep::SweepPoint],
+    lifted: &flexstage_identify::measured::LiftedResponse,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let fs = 1.0 / bench.setup.rig.sample_time;
+    println!(
+        "f/f1   controller    RMS between % q1/q2   at samples % q1/q2   q1 nm at f, fs-f, fs+f   q2 nm at f, fs-f, fs+f   bound (f, f_s ∓ f) % of amplitude q1/q2 (RMS % range)"
+    );
+    let lines = lifted.lines();
+    let nearest = |f: f64| {
+        lines
+            .iter()
+            .enumerate()
+            .min_by(|a, b| (a.1.f - f).abs().total_cmp(&(b.1.f - f).abs()))
+            .map_or(0, |(n, _)| n)
+    };
+    for f in [33.0, 99.0, 330.0, 990.0] {
+        let h = lifted.harmonics(nearest(f));
+        let mags: Vec<String> = h.iter().map(|m| format!("{:.4}", m[0][0].norm())).collect();
+        let l = h.len();
+        let (a, b, c) = (h[0][0][0].norm(), h[l - 1][0][0].norm(), h[1][0][0].norm());
+        println!(
+            "lifted q1/x1 at {:.0} Hz: |H_m| m = 0..L-1: {}; single image |b|/sqrt(|a|²+|b|²) {:.4} (f_s − f), {:.4} (f_s + f)",
+            lines[nearest(f)].f,
+            mags.join(" "),
+            b / (a * a + b * b).sqrt(),
+            c / (a * a + c * c).sqrt()
+        );
+    }
+    for pt in points {
+        let base = pt.frequency / 3.0;
+        let axis_f = [pt.frequency, base];
+        // The bound over the baseband and the two images f_s ∓ f, each image's power less
+        // its noise (the higher harmonics are under the fast ADC's noise floor, about 0.02
+        // of |H_0|, measured).
+        let bound = [0, 1].map(|i| lifted.image_bound(nearest(axis_f[i]))[i]);
+        for (j, r) in pt.results.iter().enumerate() {
+            let reference = flexstage_sim::trajectory::Reference::new(
+                flexstage_sim::trajectory::Shape::Lissajous {
+                    ratio: 3.0,
+                    amplitude: pt.amplitude,
+                    frequency: base,
+                },
+            );
+            let duration = (2.0 / base).max(0.05);
+            let (rec, b) =
+                flexstage_assess::sweep::run_between(bench, cands[j], reference, duration)?;
+            // Check: the substep error at the sample instants is the record's error.
+            let s = bench.setup.rig.substeps;
+            let gap = (1..rec.t.len())
+                .map(|k| (b.error[0][k * s - 1] - rec.error[0][k]).abs())
+                .fold(0.0, f64::max);
+            if std::env::var("SCAN_DUMP").is_ok() {
+                let k0 = rec.t.len() / 2;
+                for k in k0 - 3..k0 + 4 {
+                    println!(
+                        "  k {k} x_nom {:.1} nm voltage {:.3} V reference {:.1} nm measured {:.1} truth {:.1}",
+                        rec.x_nom[0][k] * 1e9,
+                        rec.voltage[0][k],
+                        rec.reference[0][k] * 1e9,
+                        rec.measured[0][k] * 1e9,
+                        rec.truth[0][k] * 1e9
+                    );
+                }
+                for j in k0 * s..(k0 + 3) * s {
+                    println!("  {j} {:.3} nm", b.error[0][j] * 1e9);
+                }
+            }
+            if gap > 1e-12 {
+                println!("  (substep error at the samples differs from the record's by {gap:e} m)");
+            }
+            let amp = |i: usize| {
+                let f = axis_f[i];
+                [f, fs - f, fs + f].map(|x| b.amplitude(i, x) * 1e9)
+            };
+            let (a1, a2) = (amp(0), amp(1));
+            let range = pt.amplitude.map(|a| 2.0 * a);
+            println!(
+                "{:.3}  {:<12} {:7.3} {:7.3}        {:7.3} {:7.3}        {:6.2} {:6.2} {:6.2}     {:6.2} {:6.2} {:6.2}     {:.2} {:.2} ({:.3} {:.3})",
+                pt.fraction,
+                r.controller.name,
+                100.0 * r.rms_between[0] / range[0],
+                100.0 * r.rms_between[1] / range[1],
+                r.rms_pct[0],
+                r.rms_pct[1],
+                a1[0],
+                a1[1],
+                a1[2],
+                a2[0],
+                a2[1],
+                a2[2],
+                100.0 * bound[0],
+                100.0 * bound[1],
+                100.0 * bound[0] / (2.0 * std::f64::consts::SQRT_2),
+                100.0 * bound[1] / (2.0 * std::f64::consts::SQRT_2),
+            );
+        }
+    }
+    Ok(())
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -54,7 +173,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .and_then(|p| Preset::from_name(p))
         .ok_or(usage)?;
     let design = DesignFile::decode(&std::fs::read(args.get(2).ok_or(usage)?)?)?;
-    let measured = std::fs::read(args.get(3).ok_or(usage)?)?;
+    let measured_path = args.get(3).ok_or(usage)?;
     let mode = feedforward(args.get(4).ok_or(usage)?)?;
     let fractions: Vec<f64> = args[5..]
         .iter()
@@ -64,14 +183,33 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         scenario: s, twin, ..
     } = DesignedStage::new(&Scenario::preset(preset), &design.rho)?;
     let lab = LabParams::default();
-    let response = MeasuredResponse::from_csv(&measured[..], "measured response")?;
-    let m = LabMeasurement::from_response(response, &lab.fit)?;
+    // `measure`: the twin measured here as `track` measures it.
+    let m = if measured_path == "measure" {
+        flexstage_assess::lab::measure(&twin, &Setup::from_scenario(&s), &lab)?
+    } else {
+        let measured = std::fs::read(measured_path)?;
+        let response = MeasuredResponse::from_csv(&measured[..], "measured response")?;
+        LabMeasurement::from_response(response, &lab.fit)?
+    };
     let tuning = TuningParams {
         feedforward: mode,
         ..TuningParams::default()
     };
     let t0 = std::time::Instant::now();
-    let bench = Bench::from_measurement(Setup::from_scenario(&s), twin, tuning, &lab, &m)?;
+    let setup = Setup::from_scenario(&s);
+    let ratio: usize = std::env::var("FAST_ADC_RATIO").map_or(Ok(10), |v| v.parse())?;
+    let lifted = flexstage_assess::lab::measure_lifted(&twin, &setup, &lab, ratio)?;
+    println!(
+        "lifted response measured (L = {ratio}) in {:.2} s",
+        t0.elapsed().as_secs_f64()
+    );
+    // `lifted0`: the lifted fit on phase 0 alone (the output at the samples).
+    let fitted = if args[4].starts_with("lifted0") {
+        lifted.at_samples()
+    } else {
+        lifted.clone()
+    };
+    let bench = Bench::from_measurements(setup, twin, tuning, &lab, &m, Some(&fitted))?;
     println!("designed in {:.2} s ({mode:?})", t0.elapsed().as_secs_f64());
     let cands: Vec<&'static Controller> = ["pi-notch-ff", "pid-ff"]
         .iter()
@@ -110,6 +248,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         );
         let target = match mode {
             FeedForward::Inverse(p) => Some(FeedForwardParams { lag: ff.lag(), ..p }),
+            FeedForward::Lifted(p) => Some(FeedForwardParams { lag: ff.lag(), ..p }),
             _ => None,
         };
         println!("f Hz   |GF - D| (loop model) q1 q2   (twin) q1 q2   |T|");
@@ -161,6 +300,62 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
     }
+    if let Ok(level) = std::env::var("SCAN_STATIC") {
+        // The true output between the samples under a constant command.
+        use flexstage_sim::rig::StagePlant;
+        let level: f64 = level.parse()?;
+        let mut plant = bench.twin.plant(&bench.setup.rig)?;
+        plant.record_substeps();
+        let mut act = flexstage_control::actuator::Actuator::new(
+            bench
+                .setup
+                .actuator(flexstage_control::actuator::Compensation::Inverse),
+        )?;
+        for k in 0..3000 {
+            let x = [level, 0.0];
+            let v = act.command(x, 1e-4).voltage;
+            plant.measure();
+            plant.apply(&flexstage_sim::experiment::Command {
+                voltage: v,
+                x_nom: x,
+                reference: [0.0; 2],
+                saturated: false,
+                dropout: false,
+            });
+            if k >= 2997 {
+                let q: Vec<String> = plant
+                    .output_substeps()
+                    .iter()
+                    .map(|q| format!("{:.1}", q[0] * 1e9))
+                    .collect();
+                println!("sample {k}: q1 nm {}", q.join(" "));
+                println!("  x_nom {:?} voltage {:?}", plant.x_nom(), plant.voltage());
+            }
+        }
+    }
+    // Truth knobs to diagnose the error (never to design): `SCAN_TRUTH=quiet,creep,sensor`
+    // runs the scans without the rig's noise and floor, without creep, with an ideal sensor.
+    let mut bench = bench;
+    if let Ok(knobs) = std::env::var("SCAN_TRUTH") {
+        let rig = &mut bench.setup.rig;
+        for k in knobs.split(',') {
+            match k {
+                "quiet" => {
+                    rig.noise_std = [0.0; 2];
+                    rig.resolution = [0.0; 2];
+                    rig.sensor.flicker_corner = 0.0;
+                    rig.floor.velocity_rms = 0.0;
+                }
+                "creep" => rig.creep.factor = 0.0,
+                "sensor" => {
+                    rig.sensor.bandwidth = 0.0;
+                    rig.sensor.anti_alias = 0.0;
+                }
+                _ => return Err(format!("SCAN_TRUTH: quiet, creep, sensor; not {k}").into()),
+            }
+        }
+        println!("truth knobs (diagnosis only): {knobs}");
+    }
     let mut p = SweepParams::default();
     if !fractions.is_empty() {
         p.fractions = fractions;
@@ -197,5 +392,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             );
         }
     }
+    between(&bench, &cands, &points, &lifted)?;
     Ok(())
 }

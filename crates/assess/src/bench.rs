@@ -14,7 +14,7 @@ use flexstage_control::margins::{MarginParams, Margins};
 use flexstage_control::pi_notch::PiNotchParams;
 use flexstage_control::registry::{Controller, Design, Designs, MarginProbe, Stage};
 use flexstage_control::tuning::{TuningParams, loop_margins};
-use flexstage_identify::measured::{ZFilter, ZFit};
+use flexstage_identify::measured::{LiftedResponse, ZFilter, ZFit};
 use flexstage_identify::response::{RESPONSE_SHARE, ResponseFit};
 use flexstage_sim::experiment::StageControl;
 use flexstage_sim::modal::{LoopPlant, ModalPlant};
@@ -91,7 +91,16 @@ impl Bench {
         let fit = identified.unwrap_or_else(|| {
             ResponseFit::from_modes(&twin.modal.plant_modes(), nyquist, RESPONSE_SHARE)
         });
-        Bench::designed(setup, twin, tuning, &plant, fit, Sizing::Twin, identified)
+        Bench::designed(
+            setup,
+            twin,
+            tuning,
+            &plant,
+            fit,
+            Sizing::Twin,
+            identified,
+            None,
+        )
     }
 
     /// The twin with the controllers of the scenario's settings alone (nothing tuned, no
@@ -139,16 +148,40 @@ impl Bench {
         lab: &crate::lab::LabParams,
         measured: &crate::lab::LabMeasurement,
     ) -> Result<Bench> {
+        Bench::from_measurements(setup, twin, tuning, lab, measured, None)
+    }
+
+    /// [`Bench::from_measurement`] with the lifted response of the output measured by a
+    /// fast ADC (`lifted`, [`crate::lab::measure_lifted`]), which a
+    /// `flexstage_control::feedforward::FeedForward::Lifted` tuning fits its feed-forward to.
+    pub fn from_measurements(
+        setup: Setup,
+        twin: Twin,
+        tuning: TuningParams,
+        lab: &crate::lab::LabParams,
+        measured: &crate::lab::LabMeasurement,
+        lifted: Option<&LiftedResponse>,
+    ) -> Result<Bench> {
         let tuning = lab.allowing(&tuning)?;
         let response = measured.loop_model();
         let fit = measured.response_fit();
         let sizing = Sizing::Measured(&measured.model);
-        Bench::designed(setup, twin, tuning, &response, fit, sizing, Some(fit))
+        Bench::designed(
+            setup,
+            twin,
+            tuning,
+            &response,
+            fit,
+            sizing,
+            Some(fit),
+            lifted,
+        )
     }
 
     /// Every registry controller designed on the sampled loop `response` with its response
     /// fit `fit`, the backstepping sized by its margins on the loop `sizing` names; the
     /// bench's setup keeps the controllers' model fitted to `fit`.
+    #[allow(clippy::too_many_arguments)]
     fn designed(
         mut setup: Setup,
         twin: Twin,
@@ -157,6 +190,7 @@ impl Bench {
         fit: ResponseFit,
         sizing: Sizing<'_>,
         identified: Option<ResponseFit>,
+        lifted: Option<&LiftedResponse>,
     ) -> Result<Bench> {
         let linear = LinearLoop {
             twin: &twin,
@@ -173,13 +207,14 @@ impl Bench {
                 &measured
             }
         };
-        let stage = Stage::new(
+        let mut stage = Stage::new(
             &setup,
             Some(response),
             Some(fit),
             Some(probe),
             tuning.clone(),
         );
+        stage.lifted = lifted;
         let designs = Designs::for_stage(&stage)?;
         let (model, coupling) = stage.controller_model();
         drop(stage);

@@ -10,7 +10,8 @@ use flexstage_control::actuator::{Actuator, Compensation};
 use flexstage_control::experiment::Setup;
 use flexstage_identify::frequency::C64;
 use flexstage_identify::measured::{
-    FitParams, LabLog, MeasuredResponse, MultisinePlan, ZFit, run_log,
+    FastAdc, FastLog, FitParams, LabLog, LiftedResponse, MeasuredResponse, MultisinePlan, ZFit,
+    run_fast_log, run_log,
 };
 use flexstage_identify::response::{RESPONSE_SHARE, ResponseFit};
 use flexstage_sim::modal::LoopPlant;
@@ -103,6 +104,55 @@ pub fn lab_logs(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<([LabLog; 2
         })?)
     };
     Ok(([log(0)?, log(1)?], plan))
+}
+
+/// The lifted response of `twin`'s output in the rig of `setup`: the experiments of
+/// [`lab_logs`] (the same plan, commands, seeds) with a fast ADC of `ratio` samples per
+/// controller sample on the sensor's analog output, its white noise the rig's
+/// (`noise_std`, none when `p.noise` is off), and the sensor's datasheet filter (the rig's
+/// sensor chain) divided out ([`LiftedResponse::from_multisine`]).
+pub fn measure_lifted(
+    twin: &Twin,
+    setup: &Setup,
+    p: &LabParams,
+    ratio: usize,
+) -> Result<LiftedResponse> {
+    let mut rig = setup.rig.clone();
+    if !p.noise {
+        rig.noise_std = [0.0; 2];
+        rig.resolution = [0.0; 2];
+        rig.sensor.flicker_corner = 0.0;
+        rig.floor.velocity_rms = 0.0;
+    }
+    let plan = p
+        .plan
+        .clone()
+        .unwrap_or_else(|| MultisinePlan::new(rig.sample_time));
+    let log = |input: usize| -> Result<FastLog> {
+        let mut r = rig.clone();
+        r.seed = rig.seed.wrapping_add(101 * (input as u64 + 1));
+        let adc = FastAdc {
+            ratio,
+            noise_std: r.noise_std,
+            seed: r.seed.wrapping_mul(17).wrapping_add(3),
+        };
+        let mut plant = twin.plant(&r)?;
+        let mut actuator = Actuator::new(setup.actuator(p.compensation))?;
+        let t = r.sample_time;
+        Ok(run_fast_log(
+            &mut plant,
+            t,
+            &plan.commands(input)?,
+            |x| actuator.command(x, t).voltage,
+            &adc,
+        )?)
+    };
+    let (a, b) = (log(0)?, log(1)?);
+    Ok(LiftedResponse::from_multisine(
+        [&a, &b],
+        &plan,
+        &setup.rig.sensor,
+    )?)
 }
 
 /// Measures `twin` in the rig of `setup` (module docs).

@@ -27,6 +27,7 @@ use std::collections::HashMap;
 use std::rc::Rc;
 use std::sync::Arc;
 
+use flexstage_identify::measured::LiftedResponse;
 use flexstage_identify::response::ResponseFit;
 use flexstage_scenario::StageParams;
 use flexstage_sim::experiment::StageControl;
@@ -165,6 +166,9 @@ pub struct Stage<'a> {
     pub probe: Option<&'a dyn MarginProbe>,
     /// The tuning procedure's settings (margin targets, search budget).
     pub tuning: TuningParams,
+    /// The lifted response of the stage's output measured with a fast ADC
+    /// ([`crate::feedforward::FeedForward::Lifted`]); `None` without one.
+    pub lifted: Option<&'a LiftedResponse>,
     shared: RefCell<HashMap<&'static str, Rc<dyn Any>>>,
 }
 
@@ -190,6 +194,7 @@ impl<'a> Stage<'a> {
             fit,
             probe,
             tuning,
+            lifted: None,
             shared: RefCell::new(HashMap::new()),
         }
     }

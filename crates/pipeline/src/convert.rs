@@ -228,6 +228,8 @@ pub(crate) fn scan_rows(points: &[SweepPoint]) -> Vec<ScanRow> {
                 rms1_nm: r.rms[0] * 1e9,
                 rms2_nm: r.rms[1] * 1e9,
                 rms1_pct_range: r.rms_pct[0],
+                rms1_between_pct_range: r.rms_between_pct[0],
+                rms2_between_pct_range: r.rms_between_pct[1],
                 rms2_pct_range: r.rms_pct[1],
                 peak1_nm: r.peak[0] * 1e9,
                 peak2_nm: r.peak[1] * 1e9,

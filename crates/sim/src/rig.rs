@@ -695,6 +695,9 @@ struct Rig {
     u_path: Vec<f64>,
     /// The true output after every substep (preallocated).
     q_path: Vec<[f64; 2]>,
+    /// The sensor chain's analog output after every substep (empty unless recorded:
+    /// [`RigPlant::record_substeps`]).
+    s_path: Vec<[f64; 2]>,
 }
 
 impl Rig {
@@ -762,6 +765,7 @@ impl Rig {
             path: vec![[0.0; 2]; params.substeps + 1],
             u_path: vec![0.0; params.substeps + 1],
             q_path: vec![[0.0; 2]; params.substeps],
+            s_path: Vec::new(),
             params,
         })
     }
@@ -933,6 +937,39 @@ impl<M: Mechanics> RigPlant<M> {
         &mut self.mechanics
     }
 
+    /// Records from now on, per sample, the sensor chain's analog output and the true output
+    /// after every substep ([`RigPlant::sensed_substeps`], [`RigPlant::output_substeps`]).
+    pub fn record_substeps(&mut self) {
+        self.rig.s_path = vec![self.sensed(); self.rig.params.substeps];
+    }
+
+    /// The sensor chain's analog output now \[m\] (the true output through the sensor
+    /// electronics and the anti-aliasing filter, before the ADC's noise and quantization):
+    /// what a lab's fast ADC (an oscilloscope or DAQ on the sensor's output) digitizes.
+    pub fn sensed(&self) -> [f64; 2] {
+        if self.rig.params.sensor.is_filtered() {
+            self.rig.sensor.output()
+        } else {
+            self.mechanics.output()
+        }
+    }
+
+    /// The sensor chain's analog output ([`RigPlant::sensed`]) after every substep of the
+    /// last sample, once recorded ([`RigPlant::record_substeps`]; empty before).
+    pub fn sensed_substeps(&self) -> &[[f64; 2]] {
+        &self.rig.s_path
+    }
+
+    /// The true output after every substep of the last sample, once recorded
+    /// ([`RigPlant::record_substeps`]): the simulation's truth, to score a result only.
+    pub fn output_substeps(&self) -> &[[f64; 2]] {
+        if self.rig.s_path.is_empty() {
+            &[]
+        } else {
+            &self.rig.q_path
+        }
+    }
+
     /// Advances one sample with `cmd` (after the delay).
     pub fn step(&mut self, cmd: &Command) {
         let target = self.rig.take(cmd);
@@ -942,13 +979,14 @@ impl<M: Mechanics> RigPlant<M> {
         self.rig.floor.advance();
         let f1 = self.rig.floor.value();
         let filtered = self.rig.params.sensor.is_filtered();
+        let recorded = !self.rig.s_path.is_empty();
         let mut q0 = if filtered {
             self.mechanics.output()
         } else {
             [0.0; 2]
         };
         self.rig.actuate(target, h);
-        if filtered {
+        if filtered || recorded {
             self.mechanics.advance_sample(
                 &self.rig.path,
                 [f0, f1],
@@ -956,7 +994,16 @@ impl<M: Mechanics> RigPlant<M> {
             );
             for k in 0..n {
                 let q1 = self.rig.q_path[k];
-                self.rig.sensor.step(q0, q1);
+                if filtered {
+                    self.rig.sensor.step(q0, q1);
+                }
+                if recorded {
+                    self.rig.s_path[k] = if filtered {
+                        self.rig.sensor.output()
+                    } else {
+                        q1
+                    };
+                }
                 q0 = q1;
             }
         } else {

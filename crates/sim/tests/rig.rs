@@ -312,3 +312,38 @@ fn deliverable_stroke_is_less_than_the_nominal_30_um() {
         assert!(s.controller.stroke <= down.min(up));
     }
 }
+
+/// Reference: the mechanics' output is x_nom at the end of each substep (`Direct`), and with
+/// an ideal actuator x_nom steps at the start of the sample. Goal: once recorded, the true
+/// output on every substep is that output, the sensed output with an ideal sensor is the
+/// output, and with a first-order sensor the sensed output after the last substep is what
+/// `sensed` reads at the next sample; nothing is recorded before `record_substeps`.
+#[test]
+fn substeps_are_recorded_as_a_fast_adc_sees_the_sensor() {
+    let mut r = quiet();
+    r.actuator = PlantActuator::Ideal;
+    r.delay = 0;
+    r.sensor = SensorParams::ideal();
+    let mut p = plant(r.clone(), false);
+    p.apply(&command([0.0; 2], [1e-6, 2e-6]));
+    assert!(p.sensed_substeps().is_empty() && p.output_substeps().is_empty());
+    p.record_substeps();
+    p.apply(&command([0.0; 2], [3e-6, 4e-6]));
+    assert_eq!(p.output_substeps().len(), r.substeps);
+    for (q, s) in p.output_substeps().iter().zip(p.sensed_substeps()) {
+        assert_eq!(*q, [3e-6, 4e-6]);
+        assert_eq!(q, s);
+    }
+    r.sensor = SensorParams {
+        bandwidth: 2000.0,
+        flicker_corner: 0.0,
+        anti_alias: 0.0,
+    };
+    let mut p = plant(r.clone(), false);
+    p.record_substeps();
+    p.apply(&command([0.0; 2], [1e-6, 0.0]));
+    let path = p.sensed_substeps().to_vec();
+    assert_eq!(path[r.substeps - 1], p.sensed());
+    assert!(path.windows(2).all(|w| w[1][0] > w[0][0]) && path[0][0] > 0.0);
+    assert!(path[r.substeps - 1][0] < 1e-6);
+}

@@ -47,6 +47,7 @@
 
 mod experiment;
 mod fit;
+mod lifted;
 mod log;
 mod multisine;
 mod welch;
@@ -59,6 +60,10 @@ use flexstage_numerics::records::{NumericCsv, RecordError};
 
 pub use experiment::{Drive, MultisinePlan, run_log};
 pub use fit::{FitParams, ZFilter, ZFit};
+pub use lifted::{
+    FastAdc, FastLog, LiftedLine, LiftedResponse, from_harmonics, harmonic_frequency, image_bound,
+    intersample_bound, run_fast_log, to_harmonics,
+};
 pub use log::{LOG_COLUMNS, LabLog};
 pub use welch::WelchParams;
 

@@ -87,7 +87,7 @@ impl MeasuredResponse {
 }
 
 /// Mean, standard deviation of the mean and coherence of per-period estimates.
-fn period_statistics(f: f64, hs: &[[[C64; 2]; 2]]) -> MeasuredLine {
+pub(crate) fn period_statistics(f: f64, hs: &[[[C64; 2]; 2]]) -> MeasuredLine {
     let p = hs.len() as f64;
     let mut line = MeasuredLine {
         f,

@@ -754,6 +754,8 @@ mod tests {
             peak2_pct_range: 2.0 * pct[1],
             cause: flexstage_run::files::track::ScanCause::Bandwidth,
             dominant_hz: hz,
+            rms1_between_pct_range: f64::NAN,
+            rms2_between_pct_range: f64::NAN,
         }
     }
 

@@ -336,6 +336,18 @@ pub struct ScanRow {
     /// Frequency of the largest error line \[Hz\], 2 decimals.
     #[serde(rename = "dominant_Hz", serialize_with = "num::fixed2")]
     pub dominant_hz: f64,
+    /// RMS error of q1 on every substep of the simulation, between the samples too
+    /// \[% of range\], 5 decimals (NaN in a file written before the column existed).
+    #[serde(default = "not_recorded", serialize_with = "num::fixed5")]
+    pub rms1_between_pct_range: f64,
+    /// RMS error of q2 on every substep \[% of range\], 5 decimals.
+    #[serde(default = "not_recorded", serialize_with = "num::fixed5")]
+    pub rms2_between_pct_range: f64,
+}
+
+/// The value of a column a file written before it existed lacks.
+fn not_recorded() -> f64 {
+    f64::NAN
 }
 
 impl Row for ScanRow {
@@ -357,6 +369,8 @@ impl Row for ScanRow {
         "peak2_pct_range",
         "cause",
         "dominant_Hz",
+        "rms1_between_pct_range",
+        "rms2_between_pct_range",
     ];
     const EXACT: bool = false;
 }
