@@ -151,4 +151,4 @@ pub use error::{Result, TwinError};
 pub use reference::{Agreement, ModeCheck, ReferenceParams, ValidationParams, Validity, validate};
 pub use stage::TwinStage;
 pub use structure::StageFe;
-pub use twin::{Twin, TwinParams, plant};
+pub use twin::{SCAN_REACH, Twin, TwinParams, plant};
