@@ -56,6 +56,7 @@ pub fn controller_file(c: &Controller, law: &TargetLaw) -> ControllerFile {
             compensator_tolerance_um: comp.tolerance,
             compensator_max_iterations: comp.max_iterations,
             hysteresis: a.hysteresis.map(|p| (&p).into()),
+            max_voltage_step_v: a.max_voltage_step,
         },
         damping: law.damping.map(|d| {
             d.map(|s| SectionFile {
@@ -94,6 +95,7 @@ pub fn target_law(f: &ControllerFile) -> Result<TargetLaw> {
             bias_voltage: a.bias_voltage_v,
             stroke: a.stroke_m,
             compensation: compensation_of(&a.compensation)?,
+            max_voltage_step: a.max_voltage_step_v,
         },
         damping: f.damping.map(|d| d.map(|s| Biquad::new(s.b, s.a))),
         feedforward: f
