@@ -7,7 +7,7 @@
 use std::sync::Arc;
 
 use flexstage_control::ControlError;
-use flexstage_control::actuator::Compensation;
+use flexstage_control::actuator::{ActuatorParams, Compensation};
 use flexstage_control::experiment::Setup;
 use flexstage_control::feasibility::{Feasibility, feasibility_of, static_inverse};
 use flexstage_control::margins::{MarginParams, Margins};
@@ -400,7 +400,12 @@ impl LinearLoop<'_> {
 /// the command), predicting over the controllers' delay.
 fn at_rest(setup: &Setup, design: &dyn Design) -> Result<Box<dyn StageControl>> {
     let r = Reference::new(flexstage_sim::trajectory::Shape::Step { target: [0.0; 2] });
-    let actuator = setup.actuator(Compensation::Ideal);
+    // The linear loop's margins: without the rate limit, a nonlinearity that the small
+    // injected signals must not meet.
+    let actuator = ActuatorParams {
+        max_voltage_step: 0.0,
+        ..setup.actuator(Compensation::Ideal)
+    };
     Ok(design.build(actuator, setup.controller.delay, r)?)
 }
 

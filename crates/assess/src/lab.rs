@@ -6,7 +6,7 @@
 //! logs and fitted by a z-domain model. [`crate::Bench::measured`] designs the controllers
 //! from this and nothing of the twin's truth.
 
-use flexstage_control::actuator::{Actuator, Compensation};
+use flexstage_control::actuator::{Actuator, ActuatorParams, Compensation};
 use flexstage_control::experiment::Setup;
 use flexstage_identify::frequency::C64;
 use flexstage_identify::measured::{
@@ -97,7 +97,12 @@ pub fn lab_logs(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<([LabLog; 2
         let mut r = rig.clone();
         r.seed = rig.seed.wrapping_add(101 * (input as u64 + 1));
         let mut plant = twin.plant(&r)?;
-        let mut actuator = Actuator::new(setup.actuator(p.compensation))?;
+        // The excitation is open loop: the controllers' rate limit (their anti-windup) is
+        // not part of the lab's drive, which meets the amplifier's own limits in the rig.
+        let mut actuator = Actuator::new(ActuatorParams {
+            max_voltage_step: 0.0,
+            ..setup.actuator(p.compensation)
+        })?;
         let t = r.sample_time;
         Ok(run_log(&mut plant, t, &plan.commands(input)?, |x| {
             actuator.command(x, t).voltage

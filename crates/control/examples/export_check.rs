@@ -8,7 +8,8 @@
 //! compensation off and ideal (`<prefix>_off`, `<prefix>_ideal`) and with a learned table of
 //! one 20 Hz period (`<prefix>_learning`), and mutated copies that the check must refuse,
 //! each checked against the unchanged sequence (`<prefix>_mutated_*`): its k_i, its largest
-//! FIR tap, its learned table, and the PPF filter's gain, each changed by one part in 10⁹.
+//! FIR tap, its learned table, its rate limit (the amplifier's, from the paper scenario's
+//! datasheet values) and the PPF filter's gain, each changed by one part in 10⁹.
 //!
 //! `cargo run --release -p flexstage-control --example export_check -- OUT_DIR`
 
@@ -144,6 +145,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let mut m = law.clone();
         m.gains[0].ki *= scale;
         write(dir, &format!("{prefix}_mutated_ki"), &m, &law)?;
+        let mut m = law.clone();
+        m.actuator.max_voltage_step *= scale;
+        write(dir, &format!("{prefix}_mutated_rate"), &m, &law)?;
         let ff = law.feedforward.as_ref().ok_or("the default has its FIR")?;
         let m = law.clone().with_feedforward(mutated_tap(ff, scale)?);
         write(dir, &format!("{prefix}_mutated_tap"), &m, &law)?;

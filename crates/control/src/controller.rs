@@ -377,7 +377,12 @@ impl BacksteppingController {
         Ok(BacksteppingController {
             filter,
             kalman,
-            actuator: Actuator::new(params.actuator)?,
+            // The rate limit is the linear laws' anti-windup (their integrators); the
+            // backstepping keeps the unlimited command its design assumes.
+            actuator: Actuator::new(ActuatorParams {
+                max_voltage_step: 0.0,
+                ..params.actuator
+            })?,
             velocity,
             inner: params.inner,
             disturbance_feedback: if params.disturbance_feedback {

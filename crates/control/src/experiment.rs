@@ -86,6 +86,7 @@ impl Setup {
                     bias_voltage,
                     stroke: s.controller.stroke,
                     compensation: Compensation::Inverse,
+                    max_voltage_step: amplifier_step(s),
                 },
             },
             pid: PidParams {
@@ -244,4 +245,12 @@ pub fn experiment_on(
         setup.controller.observer.sample_time,
         progress,
     ))
+}
+
+/// The linear controllers' rate limit [V per sample] from what the lab knows: the scenario's
+/// amplifier (datasheet bandwidth, slew rate and current limit, the PEA's capacitance) and
+/// sample time ([`crate::actuator::max_voltage_step`]).
+fn amplifier_step(s: &Scenario) -> f64 {
+    let a = RigParams::from_scenario(s).amplifier;
+    crate::actuator::max_voltage_step(a.bandwidth, a.max_rate(), s.simulation.sample_time)
 }

@@ -13,5 +13,6 @@ pub fn ideal_actuator() -> crate::actuator::ActuatorParams {
         bias_voltage: 0.5 * (h.voltage_min + h.voltage_max),
         stroke: 1e-3,
         compensation: crate::actuator::Compensation::Ideal,
+        max_voltage_step: 0.0,
     }
 }

@@ -498,7 +498,12 @@ mod tests {
             sample_time: 1e-4,
         };
         let setup = crate::experiment::Setup::from_scenario(&flexstage_scenario::Scenario::paper());
-        TargetLaw::of_linear(&p, setup.actuator(compensation)).unwrap()
+        // A rate limit the Lissajous of the recorded sequence passes and its step meets.
+        let actuator = ActuatorParams {
+            max_voltage_step: 8.0,
+            ..setup.actuator(compensation)
+        };
+        TargetLaw::of_linear(&p, actuator).unwrap()
     }
 
     /// The law of `law(Compensation::Inverse)` with a FIR feed-forward of 3 preview and 5
@@ -535,7 +540,7 @@ mod tests {
     }
 
     /// The recorded sequence reaches the branches of the step (dropout, clipping by the
-    /// stroke and the amplifier, the unclipped loop), and replaying it gives it back bitwise,
+    /// stroke, the amplifier range and the rate limit, the unclipped loop), and replaying it gives it back bitwise,
     /// with the static feed-forward in every compensation mode and with the FIR, the PPF
     /// filters and the learned table.
     #[test]
@@ -555,8 +560,15 @@ mod tests {
             );
             assert!(seq.samples.iter().any(|r| r.input.reading[0].is_nan()));
             let clipped = seq.samples.iter().filter(|r| r.command.saturated).count();
+            let limited = seq
+                .samples
+                .iter()
+                .filter(|r| r.command.rate_limited)
+                .count();
             let mode = l.actuator.compensation;
             assert!(clipped > 100 && clipped < 1000, "{mode:?}: {clipped}");
+            println!("{mode:?}: {clipped} samples clipped, {limited} by the rate limit");
+            assert!(limited > 10 && limited < clipped, "{mode:?}: {limited}");
             assert_eq!(
                 largest_relative_difference(&seq.replay(&l).unwrap(), &seq.commands()),
                 0.0
@@ -607,7 +619,7 @@ mod tests {
 
     /// The check can fail: a coefficient changed by one part in 10⁹ (a gain, a notch
     /// coefficient, the inverse static gain, a Bouc–Wen parameter of the compensator, a FIR
-    /// tap, a PPF filter coefficient, the learned table) moves some command of the recorded
+    /// tap, a PPF filter coefficient, the rate limit, the learned table) moves some command of the recorded
     /// sequence by more than the 1e-12 the C check accepts.
     #[test]
     fn a_mutated_coefficient_fails_the_check() {
@@ -645,6 +657,9 @@ mod tests {
         d[0] = Biquad::new(b, [a[0] * scale, a[1]]);
         m.damping = Some(d);
         mutants.push(("PPF a1", m));
+        let mut m = l.clone();
+        m.actuator.max_voltage_step *= scale;
+        mutants.push(("rate limit", m));
         let mut m = l.clone();
         for c in m.learned.as_mut().unwrap() {
             c[1] *= scale;

@@ -165,6 +165,13 @@ fn coefficients(law: &TargetLaw) -> String {
             comp.max_iterations
         ),
         format!("static const int COMPENSATION = {mode};"),
+        "/* Largest change of a voltage per sample [V] (the amplifier's current and slew); 0: no \
+         rate limit. */"
+            .to_string(),
+        format!(
+            "static const double MAX_VOLTAGE_STEP = {};",
+            lit(a.max_voltage_step)
+        ),
     ];
     for l in lines {
         let _ = writeln!(s, "{l}");

@@ -115,13 +115,23 @@ impl InverseCompensator {
     /// \[µm\] when the drive ramps to it over `dt` \[s\]. No allocation.
     #[inline]
     pub fn step(&mut self, x_desired: f64, dt: f64) -> Compensated {
+        let (lo, hi) = (self.settings.u_min, self.settings.u_max);
+        self.step_within(x_desired, dt, lo, hi)
+    }
+
+    /// [`InverseCompensator::step`] with the voltage confined to `[u_min, u_max]` this sample
+    /// (a window inside the amplifier range, e.g. a rate limit around the last voltage;
+    /// `u_min ≤ u_max`): the voltage in the window whose model output is closest to
+    /// `x_desired` (the model's output rises with the voltage), `saturated` when the window
+    /// clipped it. With the amplifier range as the window it is [`InverseCompensator::step`].
+    #[inline]
+    pub fn step_within(&mut self, x_desired: f64, dt: f64, u_min: f64, u_max: f64) -> Compensated {
         let p = *self.model.params();
         let (u0, h0) = (self.model.u(), self.model.h());
         let CompensatorParams {
-            u_min,
-            u_max,
             tolerance,
             max_iterations,
+            ..
         } = self.settings;
         let g = |u: f64| {
             let h = advance(&p, u0, h0, u, dt);

@@ -87,6 +87,40 @@ fn unreachable_reference_saturates_at_the_amplifier_limit() {
     assert!(c.saturated && c.u == settings.u_min);
 }
 
+/// A window inside the amplifier range (a rate limit): the voltage is the unconstrained
+/// solution when that lies inside the window (within the solver's tolerance), else the
+/// window's bound, flagged as saturated, and the model's state is that of the voltage.
+#[test]
+fn a_voltage_window_clips_the_solution_to_its_bounds() {
+    let p = BoucWenParams::PEA1;
+    let settings = CompensatorParams::default();
+    let mut free = InverseCompensator::new(p, settings).unwrap();
+    let mut windowed = InverseCompensator::new(p, settings).unwrap();
+    let mut clipped = 0;
+    for k in 0..400 {
+        let x = 20.0 * (1.0 - (std::f64::consts::TAU * k as f64 / 200.0).cos());
+        let u0 = windowed.model().u();
+        let (lo, hi) = ((u0 - 9.0).max(0.0), (u0 + 9.0).min(1000.0));
+        let f = free.clone().step(x, 1e-4);
+        let w = windowed.step_within(x, 1e-4, lo, hi);
+        if f.u >= lo && f.u <= hi {
+            assert!((w.u - f.u).abs() < 1e-3, "{k}: {} vs {}", w.u, f.u);
+            assert_eq!(w.saturated, f.saturated);
+        } else {
+            clipped += 1;
+            assert!(
+                w.saturated && (w.u == lo || w.u == hi),
+                "{k}: {} in [{lo}, {hi}]",
+                w.u
+            );
+            assert_eq!(w.u == hi, f.u >= hi);
+        }
+        free.set_state(w.u, w.h);
+        assert_eq!(windowed.model().u(), w.u);
+    }
+    assert!(clipped > 50 && clipped < 350, "{clipped}");
+}
+
 #[test]
 fn invalid_settings_name_the_field() {
     let bad = CompensatorParams {

@@ -56,6 +56,7 @@ pub fn controller_file(c: &Controller, law: &TargetLaw) -> ControllerFile {
             compensator_tolerance_um: comp.tolerance,
             compensator_max_iterations: comp.max_iterations,
             hysteresis: a.hysteresis.map(|p| (&p).into()),
+            max_voltage_step_v: a.max_voltage_step,
         },
         damping: law.damping.map(|d| {
             d.map(|s| SectionFile {
@@ -94,6 +95,7 @@ pub fn target_law(f: &ControllerFile) -> Result<TargetLaw> {
             bias_voltage: a.bias_voltage_v,
             stroke: a.stroke_m,
             compensation: compensation_of(&a.compensation)?,
+            max_voltage_step: a.max_voltage_step_v,
         },
         damping: f.damping.map(|d| d.map(|s| Biquad::new(s.b, s.a))),
         feedforward: f
@@ -492,7 +494,7 @@ mod tests {
         std::fs::remove_dir_all(&root).unwrap();
     }
 
-    /// A file of another version (than 1 or 2), an unknown compensation or other compensator settings is
+    /// A file of another version (than 1, 2 or 3), an unknown compensation or other compensator settings is
     /// refused with the field named.
     #[test]
     fn a_bad_controller_file_is_refused_naming_the_field() {
@@ -505,6 +507,17 @@ mod tests {
         v.version = 1;
         let back = ControllerFile::decode(&flexstage_run::format::json(&v).unwrap()).unwrap();
         assert_eq!(target_law(&back).unwrap(), law(Compensation::Inverse));
+        // A version 2 file has no rate limit: it reads as the law without one.
+        assert!(file.actuator.max_voltage_step_v > 0.0);
+        let mut json: serde_json::Value =
+            serde_json::from_slice(&flexstage_run::format::json(&file).unwrap()).unwrap();
+        json["version"] = 2.into();
+        let actuator = json["actuator"].as_object_mut().unwrap();
+        assert!(actuator.remove("max_voltage_step_v").is_some());
+        let old = ControllerFile::decode(&serde_json::to_vec(&json).unwrap()).unwrap();
+        let mut want = law(Compensation::Inverse);
+        want.actuator.max_voltage_step = 0.0;
+        assert_eq!(target_law(&old).unwrap(), want);
         let mut v = file.clone();
         v.actuator.compensation = "sometimes".into();
         let e = target_law(&v).unwrap_err().to_string();

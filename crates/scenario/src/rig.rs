@@ -217,7 +217,7 @@ impl Default for Twin {
     fn default() -> Twin {
         Twin {
             coverage: 3.0,
-            min_modes: 24,
+            min_modes: 40,
             damping_ratio: 0.01,
             nonlinear: true,
             fit_points: 5,

@@ -17,8 +17,10 @@
 //!    spring is a design device and is left out.
 //! 2. **Craig–Bampton reduction** ([`craig_bampton`]): interface = the two PEA input DOFs and
 //!    both output DOFs (the sensor point), static constraint modes plus fixed-interface modes
-//!    until these reach twice the covered band (coverage × the first resonance, default 3×,
-//!    at least 6 modes). Statics to the PEA forces are exact.
+//!    until these reach twice the twin's reach (the larger of coverage × the first resonance,
+//!    default 3×, and f_s + [`SCAN_REACH`] × it: the hold's images and folded modes of the
+//!    sweep's fastest scan), at least `twin.min_modes` (default 40). Statics to the PEA
+//!    forces are exact.
 //! 3. **Damping** ([`modal`]): Rayleigh `C = a_M M + b_K K`, ζ = `twin.damping_ratio` (default
 //!    1 %, aluminium flexures 0.5–2 %) at the first resonance and at coverage × it; the full
 //!    reference uses the same C, so both are damped alike.
@@ -38,8 +40,9 @@
 //!
 //! * Modes above the covered band: an input with content far above it (an ideal voltage
 //!   jump) excites FE modes the twin does not have well converged (a 50 µs step, reported by
-//!   [`reference::validate`] as "fast step": 1.7 / 0.3 % of range with the default 24
-//!   fixed-interface modes on the quick design, 10.7 / 4.7 % with 6). The default rig cannot move the PEAs that fast
+//!   [`reference::validate`] as "fast step": 0.76 / 0.45 % of range with the default 40
+//!   fixed-interface modes on the quick design, 2.17 / 0.51 % with 24, where the modes at
+//!   11–15 kHz had not converged; example `reach`). The default rig cannot move the PEAs that fast
 //!   (0.1 A into 1.5 µF is 67 V/ms).
 //! * Out-of-plane motion, contact, thermal drift, the PEAs' own mass and internal dynamics
 //!   beyond the plate mass, the electrical dynamics of the PEA beyond `i = C dU/dt`,
@@ -151,4 +154,4 @@ pub use error::{Result, TwinError};
 pub use reference::{Agreement, ModeCheck, ReferenceParams, ValidationParams, Validity, validate};
 pub use stage::TwinStage;
 pub use structure::StageFe;
-pub use twin::{Twin, TwinParams, plant};
+pub use twin::{SCAN_REACH, Twin, TwinParams, plant};

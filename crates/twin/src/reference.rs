@@ -8,8 +8,8 @@
 //! * **Agreement**: per axis, the largest |q_twin − q_full| over the run, relative to the range
 //!   (peak to peak) of the full model's output — [`agreement`].
 //! * **Modes**: the twin's natural frequencies against the FE modal analysis of the assembled
-//!   stage (same mass, springs and plates), for every mode the twin claims (below coverage ×
-//!   the first resonance) — [`mode_check`].
+//!   stage (same mass, springs and plates), for every mode the twin claims (below its reach,
+//!   [`Twin::covered_frequency`]) — [`mode_check`].
 //! * [`validate`] runs a step and a 200 Hz sine (defaults of [`ValidationParams`]) and collects
 //!   all of it with the reference's cost: the report's "validity of the twin".
 //!
@@ -236,8 +236,8 @@ pub struct ModeCheck {
     pub damping: f64,
 }
 
-/// The twin's modes below coverage × the first resonance (at least one) against the FE modal
-/// analysis (shift-invert Lanczos) of the same assembled stage.
+/// The twin's modes below its reach ([`Twin::covered_frequency`], at least one) against the
+/// FE modal analysis (shift-invert Lanczos) of the same assembled stage.
 pub fn mode_check(twin: &Twin) -> Result<Vec<ModeCheck>> {
     let fe = &twin.fe;
     let limit = twin.covered_frequency();

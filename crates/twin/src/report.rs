@@ -30,7 +30,7 @@ pub struct ModeRow {
     pub common: f64,
     /// Static output per unit differential input |q2/x| of this mode's term.
     pub differential: f64,
-    /// Whether the twin claims the mode (below coverage × the first resonance).
+    /// Whether the twin claims the mode (below its reach, `Twin::covered_frequency`).
     pub claimed: bool,
 }
 

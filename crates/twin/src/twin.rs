@@ -29,7 +29,15 @@ pub struct TwinParams {
     pub fit_points: usize,
     /// Half-width of the fit's stroke square \[m\], in (0, 1e-3].
     pub fit_amplitude: f64,
+    /// The sampled loop's rate f_s \[Hz\] (0: no sampled loop), ≥ 0: the twin's reach covers
+    /// f_s + [`SCAN_REACH`] × the first resonance ([`Twin::covered_frequency`]).
+    pub sample_rate: f64,
 }
+
+/// The fastest scan the sweep runs, as a fraction of the first resonance (`flexstage_assess`'s
+/// sweep: 1–30 % of f1). The loop sees the zero-order hold's images of such a scan at
+/// f_s ± f and the modes that fold onto it from about f_s, so the twin covers f_s + this × f1.
+pub const SCAN_REACH: f64 = 0.3;
 
 impl TwinParams {
     /// The parameters of a scenario: `[twin]`, with the fit over ± `fit_span` ×
@@ -43,6 +51,7 @@ impl TwinParams {
             nonlinear: t.nonlinear,
             fit_points: t.fit_points,
             fit_amplitude: t.fit_span * s.actuators.stroke_amplitude,
+            sample_rate: 1.0 / s.simulation.sample_time,
         }
     }
 
@@ -71,6 +80,12 @@ impl TwinParams {
             self.fit_points as f64,
             (3..=15).contains(&self.fit_points),
             "an integer in [3, 15]",
+        )?;
+        check(
+            "simulation.sample_time (twin sample rate)",
+            self.sample_rate,
+            self.sample_rate.is_finite() && self.sample_rate >= 0.0,
+            "a rate ≥ 0 Hz",
         )?;
         check(
             "twin fit amplitude",
@@ -106,8 +121,9 @@ pub const FIXED_INTERFACE_FACTOR: f64 = 2.0;
 
 impl Twin {
     /// Builds the twin of `fe`: Craig–Bampton with at least `min_modes` fixed-interface modes,
-    /// doubled until they reach [`FIXED_INTERFACE_FACTOR`] × `coverage` × the first resonance
-    /// (at most 40), Rayleigh damping, the nonlinear fit.
+    /// doubled until they reach [`FIXED_INTERFACE_FACTOR`] × the twin's reach (the larger of
+    /// `coverage` × the first resonance and f_s + [`SCAN_REACH`] × it; at most 40), Rayleigh
+    /// damping, the nonlinear fit.
     pub fn build(fe: StageFe, params: &TwinParams) -> Result<Twin> {
         params.validate()?;
         let mut m = params.min_modes;
@@ -120,7 +136,7 @@ impl Twin {
                 .last()
                 .copied()
                 .unwrap_or(0.0);
-            if top >= FIXED_INTERFACE_FACTOR * params.coverage * f1 || m >= MAX_MODES {
+            if top >= FIXED_INTERFACE_FACTOR * reach(params, f1) || m >= MAX_MODES {
                 break (cb, f1);
             }
             m = (2 * m).min(MAX_MODES);
@@ -177,15 +193,23 @@ impl Twin {
         self.modal.modes.iter().map(|m| m.frequency).collect()
     }
 
-    /// The frequency up to which the twin claims its modes: coverage × the first resonance.
+    /// The twin's reach \[Hz\], the frequency up to which it claims its modes: the larger of
+    /// coverage × the first resonance and f_s + [`SCAN_REACH`] × it (the hold's images and
+    /// the folded modes of the sweep's fastest scan).
     pub fn covered_frequency(&self) -> f64 {
-        self.params.coverage * self.first_resonance()
+        reach(&self.params, self.first_resonance())
     }
 
     /// Static gain x_nom → q of the linear twin.
     pub fn dc_gain(&self) -> [[f64; 2]; 2] {
         self.modal.dc_gain()
     }
+}
+
+/// The reach of a twin of parameters `p` and first resonance `f1` \[Hz\]
+/// ([`Twin::covered_frequency`]).
+fn reach(p: &TwinParams, f1: f64) -> f64 {
+    (p.coverage * f1).max(p.sample_rate + SCAN_REACH * f1)
 }
 
 /// The twin of `scenario`'s design `rho`, in the scenario's rig, at rest: the plant `track`

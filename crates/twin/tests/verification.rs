@@ -71,9 +71,15 @@ fn twin_modes_match_the_fe_modal_analysis_within_half_a_percent() {
         );
         assert!(m.relative.abs() < 0.005, "{m:?}");
     }
-    // The twin claims every mode below coverage × f1 (3 × f1 here) and keeps at least
-    // `min_modes` (24) fixed-interface modes reaching twice that band.
-    assert!(t.reduction.modes() >= t.params.min_modes && t.params.min_modes == 24);
+    // The twin claims every mode below its reach, the larger of coverage × f1 (3 × f1) and
+    // f_s + 0.3 f1 (10 kHz + 0.3 f1: the hold's images and folded modes of the sweep's
+    // fastest scan), and keeps at least `min_modes` (40) fixed-interface modes reaching
+    // twice that band.
+    let f1 = t.first_resonance();
+    let reach = (3.0 * f1).max(1e4 + 0.3 * f1);
+    assert!((t.covered_frequency() - reach).abs() < 1e-9 * reach);
+    assert!(t.covered_frequency() >= 1e4 + 0.3 * f1);
+    assert!(t.reduction.modes() >= t.params.min_modes && t.params.min_modes == 40);
     let top = *t.reduction.fixed_interface_frequencies.last().unwrap();
     assert!(top >= 2.0 * t.covered_frequency(), "{top} Hz");
     assert!(checks.last().unwrap().twin <= t.covered_frequency());

@@ -21,8 +21,11 @@ pub(super) fn validity_rows(v: &TwinValidity) -> Vec<(String, String)> {
             ),
         ),
         (
-            "band covered".into(),
-            format!("up to {} Hz", fmt_num(v.covered_frequency_hz)),
+            "reach (modes claimed)".into(),
+            format!(
+                "up to {} Hz (coverage × f1 or f_s + 0.3 f1, the larger)",
+                fmt_num(v.covered_frequency_hz)
+            ),
         ),
         (
             "geometric-nonlinearity correction".into(),

@@ -3,7 +3,8 @@
 //! or the FIR inverse with preview), the PPF damping filters and a learned correction table
 //! when it has them, and its inverse hysteresis actuator stage (Eq. 19–21 and 36 of
 //! Actuators 2022, 11(7), 179), every coefficient as the simulation used it. Version 2 added
-//! `damping`, `feedforward` and `learned_m`; a version 1 file (none of them) still reads. `flexstage-control`'s `TargetLaw` is the same law
+//! `damping`, `feedforward` and `learned_m`, version 3 the actuator's rate limit
+//! `max_voltage_step_v`; version 1 and 2 files (none of them: no rate limit) still read. `flexstage-control`'s `TargetLaw` is the same law
 //! in memory; the C source and header next to the file are generated from it.
 
 use serde::{Deserialize, Serialize};
@@ -11,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use crate::format::{Format, check_version, from_json, json};
 
 /// The format version of a controller file.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 /// One second-order section y = (b₀ + b₁ z⁻¹ + b₂ z⁻²)/(1 + a₁ z⁻¹ + a₂ z⁻²) u.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -57,6 +58,11 @@ pub struct ActuatorFile {
     pub compensator_max_iterations: u32,
     /// Bouc–Wen parameters of PEA1 and PEA2 (Eq. 18; µm, V, s as in Table A1).
     pub hysteresis: [flexstage_scenario::BoucWen; 2],
+    /// Largest change of a voltage per sample \[V\] (the amplifier's current and slew
+    /// limits; the integrator holds on a sample it clips); absent or 0: no rate limit
+    /// (version 1 and 2 files).
+    #[serde(default)]
+    pub max_voltage_step_v: f64,
 }
 
 /// A controller file (module docs).
@@ -111,7 +117,7 @@ impl Format for ControllerFile {
 
     fn decode(bytes: &[u8]) -> Result<Self, String> {
         let v: ControllerFile = from_json(bytes)?;
-        if v.version != 1 {
+        if v.version != 1 && v.version != 2 {
             check_version(v.version, VERSION)?;
         }
         Ok(v)

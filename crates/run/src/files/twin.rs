@@ -72,7 +72,9 @@ pub struct TwinValidity {
     pub frequencies_hz: Vec<f64>,
     /// The twin's damping ratios, per mode.
     pub damping_ratios: Vec<f64>,
-    /// Coverage × the first resonance \[Hz\]: the band whose modes the twin claims.
+    /// The twin's reach \[Hz\], the band whose modes it claims: the larger of coverage × the
+    /// first resonance and the sampling rate + 0.3 × it (the hold's images and the folded
+    /// modes of the sweep's fastest scan, 30 % of f1).
     pub covered_frequency_hz: f64,
     /// Whether the geometric-nonlinearity correction is in.
     pub nonlinear: bool,
