@@ -1,0 +1,165 @@
+//! The C99 form of a [`BacksteppingLaw`]: the templates `c/backstepping.h.in` and
+//! `c/backstepping.c.in` (the step of [`crate::target_backstepping::BacksteppingTarget`]
+//! written out in C, operation by operation in the Rust order, with nalgebra's order of the
+//! matrix–vector sums: column by column) with the law's coefficients compiled in as
+//! `static const` constants, and the actuator stage's functions taken from the linear
+//! controllers' template `c/controller.c.in`, so that both exports share one actuator stage.
+
+use std::fmt::Write;
+
+use crate::controller::{Inner, Velocity};
+use crate::error::Result;
+use crate::target::CSource;
+use crate::target_backstepping::BacksteppingLaw;
+use crate::target_c::{actuator_lines, learned_lines, list, lit};
+
+const HEADER: &str = include_str!("../c/backstepping.h.in");
+const SOURCE: &str = include_str!("../c/backstepping.c.in");
+const LINEAR_SOURCE: &str = include_str!("../c/controller.c.in");
+
+/// The actuator stage's functions of the linear template (`clamp` to `section`, the
+/// functions before the linear law's `init`); they read the actuator constants of
+/// [`actuator_lines`] and the state's `pea_voltage`, `pea_h`.
+pub(crate) fn actuator_stage() -> &'static str {
+    let start = LINEAR_SOURCE
+        .find("static double clamp(")
+        .expect("c/controller.c.in defines clamp");
+    let end = LINEAR_SOURCE
+        .find("void PREFIX_init(")
+        .expect("c/controller.c.in defines PREFIX_init");
+    &LINEAR_SOURCE[start..end]
+}
+
+/// A matrix as a C initializer, row by row.
+fn rows<const C: usize>(m: impl Iterator<Item = [f64; C]>) -> String {
+    let r: Vec<String> = m.map(|row| format!("    {}", list(&row))).collect();
+    format!("{{\n{}\n}}", r.join(",\n"))
+}
+
+fn coefficients(law: &BacksteppingLaw) -> String {
+    let mut s = String::new();
+    let p = &law.law;
+    let mat10 = |m: &crate::observer::Matrix10| {
+        rows((0..10).map(|i| std::array::from_fn::<f64, 10, _>(|j| m[(i, j)])))
+    };
+    let mat10x2 = |m: &crate::observer::Matrix10x2| rows((0..10).map(|i| [m[(i, 0)], m[(i, 1)]]));
+    let mat2 = |m: &nalgebra::Matrix2<f64>| rows((0..2).map(|i| [m[(i, 0)], m[(i, 1)]]));
+    let b = rows((0..8).map(|i| std::array::from_fn::<f64, 8, _>(|j| law.b[(i, j)])));
+    let sections = |f: fn(&flexstage_control_core::Biquad) -> Vec<f64>| {
+        let axes: Vec<String> = law
+            .notches
+            .iter()
+            .map(|ax| format!("{{{}, {}}}", list(&f(&ax[0])), list(&f(&ax[1]))))
+            .collect();
+        format!("{{{}}}", axes.join(", "))
+    };
+    let flag = |on: bool| if on { "1" } else { "0" };
+    let mut lines = vec![
+        "#define COMPENSATION_INVERSE 0".to_string(),
+        "#define COMPENSATION_OFF 1".to_string(),
+        "#define COMPENSATION_IDEAL 2".to_string(),
+        "/* One micrometre in metres (the Bouc-Wen model works in um, V, s). */".to_string(),
+        "static const double MICROMETRE = 1e-6;".to_string(),
+        "/* Sample time T [s]. */".to_string(),
+        format!(
+            "static const double SAMPLE_TIME = {};",
+            lit(law.sample_time)
+        ),
+        "/* Per axis, the notches on the reading: numerators [b0, b1, b2], denominators \
+         [a1, a2]; their low-frequency delay tau_i [s]. */"
+            .to_string(),
+        format!(
+            "static const double NOTCH_B[2][2][3] = {};",
+            sections(|b| b.numerator().to_vec())
+        ),
+        format!(
+            "static const double NOTCH_A[2][2][2] = {};",
+            sections(|b| b.denominator().to_vec())
+        ),
+        format!(
+            "static const double NOTCH_DELAY[2] = {};",
+            list(&law.notch_delay)
+        ),
+        "/* The K-filter (Eq. 37-42): F = Phi - L C, L, Gamma; the nominal sampled model Phi \
+         of the prediction; state [z (8), d (2)]. */"
+            .to_string(),
+        format!("static const double FILTER_F[10][10] = {};", mat10(&law.f)),
+        format!("static const double FILTER_L[10][2] = {};", mat10x2(&law.l)),
+        format!("static const double GAMMA[10][2] = {};", mat10x2(&law.gamma)),
+        format!("static const double PHI[10][10] = {};", mat10(&law.phi)),
+        "/* B of the controller's model (Eq. 36), row-major; G^-1 (A24), D^-1 (Eq. 44). */"
+            .to_string(),
+        format!("static const double MODEL_B[8][8] = {b};"),
+        format!("static const double G_INV[2][2] = {};", mat2(&law.g_inv)),
+        format!("static const double D_INV[2][2] = {};", mat2(&law.d_inv)),
+        "/* Per axis: k_eps [1/s], k_eta [1/s], k [1/s]; rho_eta [m/s^2], rho_eps [m/s]; \
+         boundary layers phi_s [m/s], phi_a [m]; the robust terms on (1) or off (0). */"
+            .to_string(),
+        format!(
+            "static const double LAW_GAINS[2][3] = {{{}, {}}};",
+            list(&[p.error_gain[0], p.eta_gain[0], p.feedback_gain[0]]),
+            list(&[p.error_gain[1], p.eta_gain[1], p.feedback_gain[1]])
+        ),
+        format!(
+            "static const double LAW_BOUNDS[2][2] = {{{}, {}}};",
+            list(&[p.eta_bound[0], p.a_bound[0]]),
+            list(&[p.eta_bound[1], p.a_bound[1]])
+        ),
+        format!(
+            "static const double BOUNDARY_LAYER[2] = {};",
+            list(&p.boundary_layer)
+        ),
+        format!(
+            "static const double ROBUST = {};",
+            lit(if p.robust { 1.0 } else { 0.0 })
+        ),
+        "/* The law's inner state: the estimate (1) or the commanded xi_d (0); q dot by finite \
+         difference without delay (1); the estimated model error cancelled (1.0) or not. */"
+            .to_string(),
+        format!(
+            "static const int INNER_ESTIMATE = {};",
+            flag(law.inner == Inner::Estimate)
+        ),
+        format!(
+            "static const int VELOCITY_FINITE_DIFFERENCE = {};",
+            flag(law.velocity == Velocity::FiniteDifference)
+        ),
+        format!(
+            "static const double DISTURBANCE_FEEDBACK = {};",
+            lit(if law.disturbance_feedback { 1.0 } else { 0.0 })
+        ),
+    ];
+    lines.extend(actuator_lines(&law.actuator));
+    for l in lines {
+        let _ = writeln!(s, "{l}");
+    }
+    learned_lines(law.learned.as_deref(), &mut s);
+    s
+}
+
+/// The header and source of `law` with functions and types prefixed `prefix`, the source
+/// including the header as `header_file` ([`BacksteppingLaw::c_source`]); the law is checked
+/// first ([`BacksteppingLaw::controller`]).
+pub fn c_source(law: &BacksteppingLaw, prefix: &str, header_file: &str) -> Result<CSource> {
+    crate::target_c::check_names(prefix, header_file)?;
+    law.controller()?;
+    let fill = |t: &str| {
+        t.replace("COEFFICIENTS", &coefficients(law))
+            .replace("ACTUATOR_STAGE", actuator_stage())
+            .replace("SAMPLE_TIME_LITERAL", &lit(law.sample_time))
+            .replace("DELAY_LITERAL", &law.delay.to_string())
+            .replace("LEAD_LITERAL", &lit(law.lead()))
+            .replace("NOTCH_DELAY_1_LITERAL", &lit(law.notch_delay[0]))
+            .replace("NOTCH_DELAY_2_LITERAL", &lit(law.notch_delay[1]))
+            .replace(
+                "LEARNING_PERIOD_LITERAL",
+                &law.learned.as_ref().map_or(0, Vec::len).to_string(),
+            )
+            .replace("HEADER_FILE", header_file)
+            .replace("PREFIX", prefix)
+    };
+    Ok(CSource {
+        header: fill(HEADER),
+        source: fill(SOURCE),
+    })
+}
