@@ -377,3 +377,279 @@ impl BacksteppingTarget {
         }
     }
 }
+
+/// One sample of a recorded sequence ([`recorded_sequence`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Recorded {
+    /// What the controller took (the reading NaN during the dropout).
+    pub input: BacksteppingInput,
+    /// What it commanded.
+    pub output: BacksteppingOutput,
+}
+
+/// A recorded sequence of a [`BacksteppingTarget`] ([`recorded_sequence`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordedSequence {
+    /// The samples.
+    pub samples: Vec<Recorded>,
+}
+
+impl RecordedSequence {
+    /// The commands of the samples.
+    pub fn commands(&self) -> Vec<Actuated> {
+        self.samples.iter().map(|r| r.output.command).collect()
+    }
+
+    /// The commands of a fresh controller of `law` given the same inputs.
+    pub fn replay(&self, law: &BacksteppingLaw) -> Result<Vec<Actuated>> {
+        let mut c = law.controller()?;
+        Ok(self
+            .samples
+            .iter()
+            .map(|r| c.step(&r.input).command)
+            .collect())
+    }
+}
+
+/// A fixed seeded sequence of `law`'s controller in a closed loop that reaches every branch
+/// of its step, as [`crate::target::recorded_sequence`] for the linear law: the law's own
+/// nominal sampled model (Φ, Γ from the commanded x_nom to the output, the model error d at
+/// zero) with the law's delay and 2 nm RMS of reading noise (seed `seed`), following a 3:1
+/// Lissajous (±8 µm, ±16 µm at 20 Hz, from rest) given at the law's reference times
+/// ([`BacksteppingLaw::reference_at`]), with a sensor dropout of five samples (NaN readings)
+/// and, from sample 2000 to 2400, the reference 40 µm further on q1 and 40 µm back on q2,
+/// which the stroke and the amplifier clip; with a learned table, the index k mod N.
+pub fn recorded_sequence(law: &BacksteppingLaw, seed: u64) -> Result<RecordedSequence> {
+    use flexstage_sim::trajectory::Shape;
+    let mut c = law.controller()?;
+    let reference = Reference::new(Shape::Lissajous {
+        ratio: 3.0,
+        amplitude: [8e-6, 16e-6],
+        frequency: 20.0,
+    });
+    let period = law.learned.as_ref().map_or(1, Vec::len);
+    let mut noise = flexstage_numerics::noise::GaussianNoise::new(2e-9, seed);
+    let mut x = Vector10::zeros();
+    let mut queue = [[0.0; 2]; MAX_DELAY + 1];
+    let mut samples = Vec::with_capacity(crate::target::RECORDED_SAMPLES);
+    for k in 0..crate::target::RECORDED_SAMPLES {
+        let reading = if (1500..1505).contains(&k) {
+            [f64::NAN; 2]
+        } else {
+            [x[0] + noise.sample(), x[1] + noise.sample()]
+        };
+        let mut r = law.reference_at(&reference, k as u64);
+        if (2000..2400).contains(&k) {
+            r.q = [r.q[0] + 40e-6, r.q[1] - 40e-6];
+        }
+        let input = BacksteppingInput {
+            reading,
+            reference: r,
+            index: k % period,
+        };
+        let output = c.step(&input);
+        // The command acts `delay` samples later.
+        queue[law.delay] = output.command.x_nom;
+        let u = queue[0];
+        queue.copy_within(1..=MAX_DELAY, 0);
+        x = law.phi * x + law.gamma * Vector2::new(u[0], u[1]);
+        samples.push(Recorded { input, output });
+    }
+    Ok(RecordedSequence { samples })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::actuator::Compensation;
+    use crate::registry::{Designs, Stage};
+    use crate::target::largest_relative_difference;
+    use crate::tuning::TuningParams;
+
+    /// The `robust` (or `nonrobust`) design of the registry on the paper scenario over two
+    /// decoupled 1 %-damped modes with one sample of delay (the model fitted to the
+    /// response, the PI + notch's notches on the reading), with inverse compensation.
+    fn design(robust: bool) -> (std::sync::Arc<dyn crate::registry::Design>, ActuatorParams) {
+        let setup = crate::experiment::Setup::from_scenario(&flexstage_scenario::Scenario::paper());
+        let modes = flexstage_sim::samples::decoupled_modes();
+        let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
+        let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
+        let stage = Stage::new(
+            &setup,
+            Some(&plant),
+            Some(fit),
+            None,
+            TuningParams::default(),
+        );
+        let designs = Designs::for_stage(&stage).unwrap();
+        let c = if robust {
+            &crate::controller::ROBUST
+        } else {
+            &crate::controller::NONROBUST
+        };
+        (
+            designs.get(c).unwrap().clone(),
+            setup.actuator(Compensation::Inverse),
+        )
+    }
+
+    /// The law of [`design`] predicting over `delay` samples.
+    fn law(robust: bool, delay: usize) -> BacksteppingLaw {
+        let (d, actuator) = design(robust);
+        d.backstepping(actuator, delay).unwrap().unwrap()
+    }
+
+    fn table() -> Vec<[f64; 2]> {
+        (0..500)
+            .map(|k| {
+                let w = std::f64::consts::TAU * k as f64 / 500.0;
+                [2e-9 + 3e-9 * w.sin(), -1e-9 + 2e-9 * (2.0 * w).cos()]
+            })
+            .collect()
+    }
+
+    /// The recorded sequence reaches the branches of the step (dropout, clipping by the
+    /// stroke and the amplifier, the unclipped loop), stays finite, and replaying it gives
+    /// it back bitwise: robust with 0, 1 and 2 samples of delay, non-robust, with a learned
+    /// table.
+    #[test]
+    fn recorded_sequence_reaches_every_branch_and_replays_bitwise() {
+        let laws = [
+            law(true, 1),
+            law(true, 0),
+            law(true, 2),
+            law(false, 1),
+            law(true, 1).with_learned(table()),
+        ];
+        for l in laws {
+            assert!(l.notches.iter().flatten().any(|s| *s != Biquad::IDENTITY));
+            let seq = recorded_sequence(&l, 7).unwrap();
+            assert!(seq.samples.iter().any(|r| r.output.dropout));
+            let clipped = seq
+                .samples
+                .iter()
+                .filter(|r| r.output.command.saturated)
+                .count();
+            assert!(clipped > 10 && clipped < 1500, "delay {}: {clipped}", l.delay);
+            assert!(
+                seq.samples
+                    .iter()
+                    .all(|r| r.output.command.voltage.iter().all(|v| v.is_finite()))
+            );
+            assert_eq!(
+                largest_relative_difference(&seq.replay(&l).unwrap(), &seq.commands()),
+                0.0
+            );
+        }
+    }
+
+    /// Goal: the simulated controller steps the target law: a registry design's
+    /// `BacksteppingController` (sampling its reference itself) gives, sample by sample, the
+    /// commands of the [`BacksteppingTarget`] of its [`BacksteppingLaw`] given the reference
+    /// at [`BacksteppingLaw::reference_at`] (the C's interface), bitwise, with 0 and 1
+    /// samples of delay: the law the design exports is the one it simulates.
+    #[test]
+    fn the_simulated_controller_is_the_target_law_bitwise() {
+        use flexstage_sim::experiment::StageControl;
+        use flexstage_sim::trajectory::Shape;
+        let r = Reference::new(Shape::Lissajous {
+            ratio: 3.0,
+            amplitude: [5e-6, 9e-6],
+            frequency: 20.0,
+        });
+        let (d, actuator) = design(true);
+        for delay in [0, 1] {
+            let l = d.backstepping(actuator, delay).unwrap().unwrap();
+            let mut sim = d.build(actuator, delay, r).unwrap();
+            let mut target = l.controller().unwrap();
+            let mut y = [0.0; 2];
+            for k in 0..2000u64 {
+                let want = target.step(&BacksteppingInput {
+                    reading: y,
+                    reference: l.reference_at(&r, k),
+                    index: k as usize,
+                });
+                let got = sim.step(y);
+                assert_eq!(
+                    got.x_nom.map(f64::to_bits),
+                    want.command.x_nom.map(f64::to_bits)
+                );
+                assert_eq!(
+                    got.voltage.map(f64::to_bits),
+                    want.command.voltage.map(f64::to_bits)
+                );
+                y = [0.9 * got.x_nom[0], 1.1 * got.x_nom[1]];
+            }
+        }
+    }
+
+    /// The check can fail: a coefficient changed by one part in 10⁹ (an entry of F, L, Γ,
+    /// Φ, B, G⁻¹, D⁻¹, a gain of the law, a notch coefficient, a Bouc–Wen parameter of the
+    /// compensator, the learned table) moves some command of the recorded sequence by more
+    /// than the 1e-12 the C check accepts.
+    #[test]
+    fn a_mutated_coefficient_fails_the_check() {
+        let l = law(true, 2).with_learned(table());
+        let seq = recorded_sequence(&l, 7).unwrap();
+        let commands = seq.commands();
+        let s = 1.0 + 1e-9;
+        let mut mutants: Vec<(&str, BacksteppingLaw)> = Vec::new();
+        let mut m = l.clone();
+        m.f[(4, 0)] *= s;
+        mutants.push(("F", m));
+        let mut m = l.clone();
+        m.l[(5, 1)] *= s;
+        mutants.push(("L", m));
+        let mut m = l.clone();
+        m.gamma[(6, 0)] *= s;
+        mutants.push(("Gamma", m));
+        let mut m = l.clone();
+        m.phi[(4, 0)] *= s;
+        mutants.push(("Phi", m));
+        let mut m = l.clone();
+        m.b[(6, 2)] *= s;
+        mutants.push(("B", m));
+        let mut m = l.clone();
+        m.g_inv[(0, 1)] *= s;
+        mutants.push(("G^-1", m));
+        let mut m = l.clone();
+        m.d_inv[(1, 1)] *= s;
+        mutants.push(("D^-1", m));
+        let mut m = l.clone();
+        m.law.error_gain[0] *= s;
+        mutants.push(("k_eps", m));
+        let mut m = l.clone();
+        m.law.feedback_gain[1] *= s;
+        mutants.push(("k", m));
+        let mut m = l.clone();
+        let n = m.notches[0][0];
+        let (b, a) = (n.numerator(), n.denominator());
+        m.notches[0][0] = Biquad::new([b[0], b[1] * s, b[2]], a);
+        mutants.push(("notch b1", m));
+        let mut m = l.clone();
+        m.actuator.hysteresis[0].a_bw *= s;
+        mutants.push(("A_bw", m));
+        let mut m = l.clone();
+        for c in m.learned.as_mut().unwrap() {
+            c[0] *= s;
+        }
+        mutants.push(("learned table", m));
+        for (what, m) in mutants {
+            let d = largest_relative_difference(&seq.replay(&m).unwrap(), &commands);
+            assert!(d > 1e-12, "{what}: {d}");
+        }
+    }
+
+    /// A non-finite coefficient and a delay beyond two samples are refused naming the field.
+    #[test]
+    fn a_bad_law_is_refused_naming_the_field() {
+        let mut m = law(true, 1);
+        m.f[(3, 3)] = f64::NAN;
+        let e = m.controller().unwrap_err().to_string();
+        assert!(e.contains("backstepping.f"), "{e}");
+        let mut m = law(true, 1);
+        m.delay = 3;
+        let e = m.controller().unwrap_err().to_string();
+        assert!(e.contains("backstepping.delay"), "{e}");
+    }
+}
