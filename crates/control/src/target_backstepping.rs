@@ -400,6 +400,53 @@ impl RecordedSequence {
         self.samples.iter().map(|r| r.output.command).collect()
     }
 
+    /// The sequence as the C check reads it (`c/check_backstepping.c`): a header line, then
+    /// per sample k, the reading, the index, the reference times of `law` (the law recorded)
+    /// per axis, the reference (q_d, its three derivatives, each q1, q2), the voltages, x_nom,
+    /// the saturation and dropout flags; every number in its shortest round-trip form.
+    pub fn to_csv(&self, law: &BacksteppingLaw) -> String {
+        use std::fmt::Write as _;
+        let mut csv = String::from(
+            "k,y1,y2,index,t1,t2,q1,q2,dq1,dq2,ddq1,ddq2,dddq1,dddq2,voltage1,voltage2,\
+             x_nom1,x_nom2,saturated,dropout\n",
+        );
+        for (k, s) in self.samples.iter().enumerate() {
+            let (i, c) = (s.input, s.output.command);
+            let r = i.reference;
+            let t = [0, 1].map(|a| law.reference_time(k as u64, a));
+            let numbers = [
+                i.reading[0],
+                i.reading[1],
+                i.index as f64,
+                t[0],
+                t[1],
+                r.q[0],
+                r.q[1],
+                r.dq[0],
+                r.dq[1],
+                r.ddq[0],
+                r.ddq[1],
+                r.dddq[0],
+                r.dddq[1],
+                c.voltage[0],
+                c.voltage[1],
+                c.x_nom[0],
+                c.x_nom[1],
+            ];
+            let _ = write!(csv, "{k}");
+            for v in numbers {
+                let _ = write!(csv, ",{v:e}");
+            }
+            let _ = writeln!(
+                csv,
+                ",{},{}",
+                u8::from(c.saturated),
+                u8::from(s.output.dropout)
+            );
+        }
+        csv
+    }
+
     /// The commands of a fresh controller of `law` given the same inputs.
     pub fn replay(&self, law: &BacksteppingLaw) -> Result<Vec<Actuated>> {
         let mut c = law.controller()?;
