@@ -58,12 +58,12 @@ use flexstage_scenario::StageParams;
 
 use crate::actuator::{Actuator, ActuatorParams};
 use crate::backstepping::{Law, LawOutput, LawParams};
-use crate::target_backstepping::{BacksteppingInput, BacksteppingLaw, BacksteppingTarget};
 use crate::error::{Result, check};
 use crate::estimator::{KalmanDesign, KalmanParams};
 use crate::observer::{FILTER_LEN, KFilter, ObserverDesign, ObserverParams, Vector10};
 use crate::pi_notch::{Notch, notch_section};
 use crate::registry::{Controller, Design, Stage};
+use crate::target_backstepping::{BacksteppingInput, BacksteppingLaw, BacksteppingTarget};
 use crate::tuning::{Structure, tuned};
 use flexstage_control_core::Biquad;
 use flexstage_sim::experiment::{Command, StageControl};
@@ -327,7 +327,12 @@ pub const STATE_LEN: usize = FILTER_LEN + 6;
 /// estimate.
 pub fn designed(
     params: &ControllerParams,
-) -> Result<(BacksteppingLaw, StageModel, ObserverDesign, Option<KalmanDesign>)> {
+) -> Result<(
+    BacksteppingLaw,
+    StageModel,
+    ObserverDesign,
+    Option<KalmanDesign>,
+)> {
     params.validate()?;
     let model = StageModel::with_coupling(&params.model, params.coupling)?;
     // With the Kalman estimate only the sampled model (Φ, Γ) of the design is used: a
@@ -493,7 +498,10 @@ impl StageControl for BacksteppingController {
             x_nom: out.command.x_nom,
             // The reference of this sample (what the output is scored against now), also
             // when the law aimed at a later one.
-            reference: self.reference.sample(self.k as f64 * self.law.sample_time).q,
+            reference: self
+                .reference
+                .sample(self.k as f64 * self.law.sample_time)
+                .q,
             saturated: out.command.saturated,
             dropout: out.dropout,
         };

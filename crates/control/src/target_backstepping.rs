@@ -29,7 +29,7 @@ use flexstage_control_core::Biquad;
 use flexstage_sim::model::Matrix8;
 use flexstage_sim::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
 use flexstage_sim::trajectory::{RefSample, Reference};
-use nalgebra::{Matrix2, Vector2};
+use nalgebra::{Matrix2, SMatrix, Vector2};
 
 use crate::actuator::{Actuated, Actuator, ActuatorParams};
 use crate::backstepping::{Law, LawOutput, LawParams};
@@ -76,6 +76,16 @@ pub struct BacksteppingLaw {
     /// The learned correction c\[k\] \[m\] per sample of the period, subtracted from the
     /// reading; `None`: no learning.
     pub learned: Option<Vec<[f64; 2]>>,
+}
+
+/// The matrix of `rows` (row-major, as the coefficients file stores it).
+pub fn matrix<const R: usize, const C: usize>(rows: &[[f64; C]; R]) -> SMatrix<f64, R, C> {
+    SMatrix::from_fn(|i, j| rows[i][j])
+}
+
+/// The rows of `m` ([`matrix`] back).
+pub fn rows<const R: usize, const C: usize>(m: &SMatrix<f64, R, C>) -> [[f64; C]; R] {
+    std::array::from_fn(|i| std::array::from_fn(|j| m[(i, j)]))
 }
 
 /// What a [`BacksteppingTarget`] takes at sample k.
@@ -160,7 +170,10 @@ impl BacksteppingLaw {
         finite("backstepping.model_b", &mut self.b.iter().copied())?;
         finite("backstepping.g_inv", &mut self.g_inv.iter().copied())?;
         finite("backstepping.d_inv", &mut self.d_inv.iter().copied())?;
-        finite("backstepping.notch_delay", &mut self.notch_delay.into_iter())?;
+        finite(
+            "backstepping.notch_delay",
+            &mut self.notch_delay.into_iter(),
+        )?;
         for s in self.notches.iter().flatten() {
             let mut v = s.numerator().into_iter().chain(s.denominator());
             finite("backstepping.notches", &mut v)?;
@@ -577,7 +590,11 @@ mod tests {
                 .iter()
                 .filter(|r| r.output.command.saturated)
                 .count();
-            assert!(clipped > 10 && clipped < 1500, "delay {}: {clipped}", l.delay);
+            assert!(
+                clipped > 10 && clipped < 1500,
+                "delay {}: {clipped}",
+                l.delay
+            );
             assert!(
                 seq.samples
                     .iter()

@@ -54,7 +54,8 @@ fn coefficients(law: &BacksteppingLaw) -> String {
         format!("{{{}}}", axes.join(", "))
     };
     let flag = |on: bool| if on { "1" } else { "0" };
-    let mut lines = vec![
+    let mut lines =
+        vec![
         "#define COMPENSATION_INVERSE 0".to_string(),
         "#define COMPENSATION_OFF 1".to_string(),
         "#define COMPENSATION_IDEAL 2".to_string(),

@@ -880,6 +880,11 @@ pub fn track_on(
         &options.controllers,
         &learned,
         setup.actuator(options.compensation),
+        match sim {
+            // The minimal loop has no delay: the controller predicts over none.
+            Simulated::Twin(_) => setup.controller.delay,
+            Simulated::Lumped => 0,
+        },
     )?;
     crate::error::require_converged_tracking(&rows)?;
     Ok(TrackSummary {
