@@ -17,7 +17,8 @@
 //! order, `<math.h>` only); `docs/controller-export.md` says how to call it.
 //!
 //! The backstepping controllers (K-filter observer, Kalman estimate, robust law) have no
-//! [`TargetLaw`]: [`TargetLaw::of_design`] gives `None` for them.
+//! [`TargetLaw`] ([`TargetLaw::of_design`] gives `None` for them): their law is
+//! [`crate::target_backstepping::BacksteppingLaw`].
 
 use flexstage_control_core::{Biquad, PidGains, PidLaw};
 use flexstage_piezo::CompensatorParams;

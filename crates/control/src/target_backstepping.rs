@@ -704,6 +704,31 @@ mod tests {
         }
     }
 
+    /// Goal: `track` can export every controller it runs: each registry controller designed
+    /// on a sampled stage has a linear target law or a backstepping law.
+    #[test]
+    fn every_registry_controller_has_a_target_law() {
+        let (_, actuator) = design(true);
+        let setup = crate::experiment::Setup::from_scenario(&flexstage_scenario::Scenario::paper());
+        let modes = flexstage_sim::samples::decoupled_modes();
+        let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
+        let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
+        let stage = Stage::new(
+            &setup,
+            Some(&plant),
+            Some(fit),
+            None,
+            TuningParams::default(),
+        );
+        let designs = Designs::for_stage(&stage).unwrap();
+        for c in crate::registry::CONTROLLERS {
+            let d = designs.get(c).unwrap();
+            let linear = crate::target::TargetLaw::of_design(&**d, actuator).unwrap();
+            let bs = d.backstepping(actuator, 1).unwrap();
+            assert!(linear.is_some() != bs.is_some(), "{c}");
+        }
+    }
+
     /// A non-finite coefficient and a delay beyond two samples are refused naming the field.
     #[test]
     fn a_bad_law_is_refused_naming_the_field() {
