@@ -160,10 +160,10 @@ fn actuator_of(a: &ActuatorFile) -> Result<ActuatorParams> {
 /// The law a coefficients file holds, checked.
 #[derive(Debug, Clone, PartialEq)]
 pub enum FileLaw {
-    /// The linear law (PI(D) + notch, feed-forward, PPF).
-    Linear(TargetLaw),
-    /// The backstepping law.
-    Backstepping(BacksteppingLaw),
+    /// The linear law (PI(D) + notch, feed-forward, PPF; boxed as the other).
+    Linear(Box<TargetLaw>),
+    /// The backstepping law (boxed: its matrices are 3 kB).
+    Backstepping(Box<BacksteppingLaw>),
 }
 
 /// The law of a coefficients file, checked (every coefficient in its range, the
@@ -171,9 +171,9 @@ pub enum FileLaw {
 pub fn file_law(f: &ControllerFile) -> Result<FileLaw> {
     match (&f.backstepping, &f.axes, &f.inverse_static_gain) {
         (Some(b), None, None) if f.damping.is_none() && f.feedforward.is_none() => {
-            Ok(FileLaw::Backstepping(backstepping_law(f, b)?))
+            Ok(FileLaw::Backstepping(Box::new(backstepping_law(f, b)?)))
         }
-        (None, Some(axes), Some(g)) => Ok(FileLaw::Linear(target_law(f, axes, *g)?)),
+        (None, Some(axes), Some(g)) => Ok(FileLaw::Linear(Box::new(target_law(f, axes, *g)?))),
         _ => Err(PipelineError::Option {
             option: "controller file: backstepping, axes, inverse_static_gain, damping, \
                      feedforward",
@@ -334,25 +334,23 @@ pub(crate) fn write_controllers(
         let Some(design) = designs.get(c) else {
             continue;
         };
-        let law =
-            match TargetLaw::of_design(&**design, actuator)? {
-                Some(l) => FileLaw::Linear(l),
-                None => FileLaw::Backstepping(design.backstepping(actuator, delay)?.ok_or_else(
-                    || PipelineError::Option {
-                        option: "controller",
-                        value: c.name.to_string(),
-                        expected: "a controller with a target law (linear or backstepping)".into(),
-                    },
-                )?),
-            };
-        let file_of = |table: Option<Vec<[f64; 2]>>| match &law {
-            FileLaw::Linear(l) => {
-                let l = l.clone();
-                controller_file(c, &table.map_or(l.clone(), |t| l.with_learned(t)))
+        let law = match TargetLaw::of_design(&**design, actuator)? {
+            Some(l) => FileLaw::Linear(Box::new(l)),
+            None => {
+                let law = design.backstepping(actuator, delay)?;
+                FileLaw::Backstepping(Box::new(law.ok_or_else(|| PipelineError::Option {
+                    option: "controller",
+                    value: c.name.to_string(),
+                    expected: "a controller with a target law (linear or backstepping)".into(),
+                })?))
             }
-            FileLaw::Backstepping(l) => {
-                let l = l.clone();
-                backstepping_file(c, &table.map_or(l.clone(), |t| l.with_learned(t)))
+        };
+        let file_of = |table: Option<Vec<[f64; 2]>>| match (&law, table) {
+            (FileLaw::Linear(l), None) => controller_file(c, l),
+            (FileLaw::Linear(l), Some(t)) => controller_file(c, &(**l).clone().with_learned(t)),
+            (FileLaw::Backstepping(l), None) => backstepping_file(c, l),
+            (FileLaw::Backstepping(l), Some(t)) => {
+                backstepping_file(c, &(**l).clone().with_learned(t))
             }
         };
         let mut files = vec![(c.name.to_string(), file_of(None))];
@@ -540,7 +538,7 @@ mod tests {
     /// The linear law of a file.
     fn linear(f: &ControllerFile) -> TargetLaw {
         match file_law(f).unwrap() {
-            FileLaw::Linear(l) => l,
+            FileLaw::Linear(l) => *l,
             FileLaw::Backstepping(_) => panic!("{}: a linear law expected", f.controller),
         }
     }
@@ -667,7 +665,7 @@ mod tests {
             let file = backstepping_file(c, &l);
             let bytes = file.encode().unwrap();
             let back = match file_law(&ControllerFile::decode(&bytes).unwrap()).unwrap() {
-                FileLaw::Backstepping(b) => b,
+                FileLaw::Backstepping(b) => *b,
                 FileLaw::Linear(_) => panic!("a backstepping law expected"),
             };
             assert_eq!(back, l);
@@ -735,7 +733,7 @@ mod tests {
             let f = ControllerFile::decode(&std::fs::read(dir.join(format!("{n}.json"))).unwrap())
                 .unwrap();
             match file_law(&f).unwrap() {
-                FileLaw::Backstepping(b) => b,
+                FileLaw::Backstepping(b) => *b,
                 FileLaw::Linear(_) => panic!("{n}: a backstepping law expected"),
             }
         };

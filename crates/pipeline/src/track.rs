@@ -356,7 +356,7 @@ pub struct TrackSummary {
     /// The rig's sample time \[s\] (delay margins in samples).
     pub sample_time: f64,
     /// The controllers written for a real-time target (`controllers/` of the result
-    /// folder: coefficients JSON, C99 source and header), and those not exported.
+    /// folder: coefficients JSON, C99 source and header).
     pub exported: crate::controllers::Exported,
 }
 
