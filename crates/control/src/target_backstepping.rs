@@ -477,8 +477,10 @@ impl RecordedSequence {
 /// zero) with the law's delay and 2 nm RMS of reading noise (seed `seed`), following a 3:1
 /// Lissajous (±8 µm, ±16 µm at 20 Hz, from rest) given at the law's reference times
 /// ([`BacksteppingLaw::reference_at`]), with a sensor dropout of five samples (NaN readings)
-/// and, from sample 2000 to 2400, the reference 40 µm further on q1 and 40 µm back on q2,
-/// which the stroke and the amplifier clip; with a learned table, the index k mod N.
+/// and, from sample 2000 to 2400, the reference 40 µm further on q1 and 40 µm back on q2;
+/// the stroke clips that jump and the Lissajous's peaks (the amplifier range, behind the
+/// stroke, is not reached: the linear law's sequence reaches it in the same actuator stage);
+/// with a learned table, the index k mod N.
 pub fn recorded_sequence(law: &BacksteppingLaw, seed: u64) -> Result<RecordedSequence> {
     use flexstage_sim::trajectory::Shape;
     let mut c = law.controller()?;
@@ -569,7 +571,7 @@ mod tests {
     }
 
     /// The recorded sequence reaches the branches of the step (dropout, clipping by the
-    /// stroke and the amplifier, the unclipped loop), stays finite, and replaying it gives
+    /// stroke, the unclipped loop), stays finite, and replaying it gives
     /// it back bitwise: robust with 0, 1 and 2 samples of delay, non-robust, with a learned
     /// table.
     #[test]
