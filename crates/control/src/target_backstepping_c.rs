@@ -10,7 +10,7 @@ use std::fmt::Write;
 use crate::controller::{Inner, Velocity};
 use crate::error::Result;
 use crate::target::CSource;
-use crate::target_backstepping::BacksteppingLaw;
+use crate::target_backstepping::{BacksteppingLaw, rows};
 use crate::target_c::{actuator_lines, learned_lines, list, lit};
 
 const HEADER: &str = include_str!("../c/backstepping.h.in");
@@ -31,51 +31,42 @@ pub(crate) fn actuator_stage() -> &'static str {
 }
 
 /// A matrix as a C initializer, row by row.
-fn rows<const C: usize>(m: impl Iterator<Item = [f64; C]>) -> String {
-    let r: Vec<String> = m.map(|row| format!("    {}", list(&row))).collect();
+fn init<const R: usize, const C: usize>(m: &[[f64; C]; R]) -> String {
+    let r: Vec<String> = m.iter().map(|row| format!("    {}", list(row))).collect();
     format!("{{\n{}\n}}", r.join(",\n"))
 }
 
-fn coefficients(law: &BacksteppingLaw) -> String {
-    let mut s = String::new();
-    let p = &law.law;
-    let mat10 = |m: &crate::observer::Matrix10| {
-        rows((0..10).map(|i| std::array::from_fn::<f64, 10, _>(|j| m[(i, j)])))
+/// The notch sections of `law` as a C initializer [axis][section][coefficient]: the
+/// numerators (`numerator`) or the denominators.
+fn sections(law: &BacksteppingLaw, numerator: bool) -> String {
+    let c = |s: &flexstage_control_core::Biquad| {
+        if numerator {
+            list(&s.numerator())
+        } else {
+            list(&s.denominator())
+        }
     };
-    let mat10x2 = |m: &crate::observer::Matrix10x2| rows((0..10).map(|i| [m[(i, 0)], m[(i, 1)]]));
-    let mat2 = |m: &nalgebra::Matrix2<f64>| rows((0..2).map(|i| [m[(i, 0)], m[(i, 1)]]));
-    let b = rows((0..8).map(|i| std::array::from_fn::<f64, 8, _>(|j| law.b[(i, j)])));
-    let sections = |f: fn(&flexstage_control_core::Biquad) -> Vec<f64>| {
-        let axes: Vec<String> = law
-            .notches
-            .iter()
-            .map(|ax| format!("{{{}, {}}}", list(&f(&ax[0])), list(&f(&ax[1]))))
-            .collect();
-        format!("{{{}}}", axes.join(", "))
-    };
-    let flag = |on: bool| if on { "1" } else { "0" };
-    let mut lines =
-        vec![
-        "#define COMPENSATION_INVERSE 0".to_string(),
-        "#define COMPENSATION_OFF 1".to_string(),
-        "#define COMPENSATION_IDEAL 2".to_string(),
-        "/* One micrometre in metres (the Bouc-Wen model works in um, V, s). */".to_string(),
-        "static const double MICROMETRE = 1e-6;".to_string(),
-        "/* Sample time T [s]. */".to_string(),
-        format!(
-            "static const double SAMPLE_TIME = {};",
-            lit(law.sample_time)
-        ),
+    let axes: Vec<String> = law
+        .notches
+        .iter()
+        .map(|ax| format!("{{{}, {}}}", c(&ax[0]), c(&ax[1])))
+        .collect();
+    format!("{{{}}}", axes.join(", "))
+}
+
+/// The C constants of the notches, the K-filter and the model.
+fn model_lines(law: &BacksteppingLaw) -> Vec<String> {
+    vec![
         "/* Per axis, the notches on the reading: numerators [b0, b1, b2], denominators \
          [a1, a2]; their low-frequency delay tau_i [s]. */"
             .to_string(),
         format!(
             "static const double NOTCH_B[2][2][3] = {};",
-            sections(|b| b.numerator().to_vec())
+            sections(law, true)
         ),
         format!(
             "static const double NOTCH_A[2][2][2] = {};",
-            sections(|b| b.denominator().to_vec())
+            sections(law, false)
         ),
         format!(
             "static const double NOTCH_DELAY[2] = {};",
@@ -84,15 +75,45 @@ fn coefficients(law: &BacksteppingLaw) -> String {
         "/* The K-filter (Eq. 37-42): F = Phi - L C, L, Gamma; the nominal sampled model Phi \
          of the prediction; state [z (8), d (2)]. */"
             .to_string(),
-        format!("static const double FILTER_F[10][10] = {};", mat10(&law.f)),
-        format!("static const double FILTER_L[10][2] = {};", mat10x2(&law.l)),
-        format!("static const double GAMMA[10][2] = {};", mat10x2(&law.gamma)),
-        format!("static const double PHI[10][10] = {};", mat10(&law.phi)),
+        format!(
+            "static const double FILTER_F[10][10] = {};",
+            init(&rows(&law.f))
+        ),
+        format!(
+            "static const double FILTER_L[10][2] = {};",
+            init(&rows(&law.l))
+        ),
+        format!(
+            "static const double GAMMA[10][2] = {};",
+            init(&rows(&law.gamma))
+        ),
+        format!(
+            "static const double PHI[10][10] = {};",
+            init(&rows(&law.phi))
+        ),
         "/* B of the controller's model (Eq. 36), row-major; G^-1 (A24), D^-1 (Eq. 44). */"
             .to_string(),
-        format!("static const double MODEL_B[8][8] = {b};"),
-        format!("static const double G_INV[2][2] = {};", mat2(&law.g_inv)),
-        format!("static const double D_INV[2][2] = {};", mat2(&law.d_inv)),
+        format!(
+            "static const double MODEL_B[8][8] = {};",
+            init(&rows(&law.b))
+        ),
+        format!(
+            "static const double G_INV[2][2] = {};",
+            init(&rows(&law.g_inv))
+        ),
+        format!(
+            "static const double D_INV[2][2] = {};",
+            init(&rows(&law.d_inv))
+        ),
+    ]
+}
+
+/// The C constants of the law's gains and switches.
+fn law_lines(law: &BacksteppingLaw) -> Vec<String> {
+    let p = &law.law;
+    let flag = |on: bool| if on { "1" } else { "0" };
+    let one = |on: bool| lit(if on { 1.0 } else { 0.0 });
+    vec![
         "/* Per axis: k_eps [1/s], k_eta [1/s], k [1/s]; rho_eta [m/s^2], rho_eps [m/s]; \
          boundary layers phi_s [m/s], phi_a [m]; the robust terms on (1) or off (0). */"
             .to_string(),
@@ -110,10 +131,7 @@ fn coefficients(law: &BacksteppingLaw) -> String {
             "static const double BOUNDARY_LAYER[2] = {};",
             list(&p.boundary_layer)
         ),
-        format!(
-            "static const double ROBUST = {};",
-            lit(if p.robust { 1.0 } else { 0.0 })
-        ),
+        format!("static const double ROBUST = {};", one(p.robust)),
         "/* The law's inner state: the estimate (1) or the commanded xi_d (0); q dot by finite \
          difference without delay (1); the estimated model error cancelled (1.0) or not. */"
             .to_string(),
@@ -127,9 +145,27 @@ fn coefficients(law: &BacksteppingLaw) -> String {
         ),
         format!(
             "static const double DISTURBANCE_FEEDBACK = {};",
-            lit(if law.disturbance_feedback { 1.0 } else { 0.0 })
+            one(law.disturbance_feedback)
+        ),
+    ]
+}
+
+fn coefficients(law: &BacksteppingLaw) -> String {
+    let mut s = String::new();
+    let mut lines = vec![
+        "#define COMPENSATION_INVERSE 0".to_string(),
+        "#define COMPENSATION_OFF 1".to_string(),
+        "#define COMPENSATION_IDEAL 2".to_string(),
+        "/* One micrometre in metres (the Bouc-Wen model works in um, V, s). */".to_string(),
+        "static const double MICROMETRE = 1e-6;".to_string(),
+        "/* Sample time T [s]. */".to_string(),
+        format!(
+            "static const double SAMPLE_TIME = {};",
+            lit(law.sample_time)
         ),
     ];
+    lines.extend(model_lines(law));
+    lines.extend(law_lines(law));
     lines.extend(actuator_lines(&law.actuator));
     for l in lines {
         let _ = writeln!(s, "{l}");

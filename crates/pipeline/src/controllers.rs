@@ -747,8 +747,8 @@ mod tests {
         std::fs::remove_dir_all(&root).unwrap();
     }
 
-    /// A file of another version (than 1 or 2), an unknown compensation or other compensator settings is
-    /// refused with the field named.
+    /// A file of another version (than 1, 2 or 3), an unknown compensation or other
+    /// compensator settings is refused with the field named.
     #[test]
     fn a_bad_controller_file_is_refused_naming_the_field() {
         let file = controller_file(DEFAULT, &law(Compensation::Inverse));
