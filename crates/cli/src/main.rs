@@ -182,15 +182,16 @@ Examples:
     /// A tuned controller for a real-time target: its C99 source and header from its
     /// coefficients file (written by `track` as <run>/track/controllers/<controller>.json).
     #[command(
-        after_help = "`track` already writes every controller it ran that has a target law (PI + \
-notch, PIDs with their FIR feed-forward, PPF; with --learning also with the learned table) as \
-<controller>.json, .c and .h in <run>/track/controllers/ (or the conditions' folder). This \
-command writes the C of one coefficients file again, e.g. after editing a gain, or into a \
-firmware tree: <DIR>/<controller>.c and .h, C99 with <math.h> only, functions \
-<controller>_init, _prime and _step (other characters as _). The backstepping controllers \
-are not exported. docs/controller-export.md says how to call them at 10 kHz.
+        after_help = "`track` already writes every controller it ran (PI + notch, PIDs with their \
+FIR feed-forward, PPF, the robust and non-robust backstepping; with --learning also with the \
+learned table) as <controller>.json, .c and .h in <run>/track/controllers/ (or the conditions' \
+folder). This command writes the C of one coefficients file again, e.g. after editing a gain, \
+or into a firmware tree: <DIR>/<controller>.c and .h, C99 with <math.h> only, functions \
+<controller>_init, _prime and _step (other characters as _; the backstepping's step takes the \
+reference's first three derivatives, and _reference_time says when). \
+docs/controller-export.md says how to call them at 10 kHz.
 
-With --response or --log it designs the controllers with a target law (PI + notch, PID, PPF) from a measured loop alone, no design or twin: a measured response or a time log of your stage at the controller's sample time (formats in docs/formats.md). The actuator settings (the PEAs' hysteresis model for the inverse compensation, the stroke) come from --scenario FILE, or from --preset (default: paper). It writes <controller>.json, .c and .h of each.
+With --response or --log it designs the linear controllers (PI + notch, PID, PPF) from a measured loop alone, no design or twin (not the backstepping: its gains are sized by margins measured on the running loop, which a response alone does not give): a measured response or a time log of your stage at the controller's sample time (formats in docs/formats.md). The actuator settings (the PEAs' hysteresis model for the inverse compensation, the stroke) come from --scenario FILE, or from --preset (default: paper). It writes <controller>.json, .c and .h of each.
 
 Examples:
   flexstage controller runs/quick/track/controllers/pi-notch-ff.json

@@ -10,6 +10,12 @@
 //! each checked against the unchanged sequence (`<prefix>_mutated_*`): its k_i, its largest
 //! FIR tap, its learned table, its rate limit (the amplifier's, from the paper scenario's
 //! datasheet values) and the PPF filter's gain, each changed by one part in 10⁹.
+//! The backstepping controllers (`robust`, `nonrobust`) are written with their own law and
+//! sequence ([`BacksteppingLaw`], checked by `c/check_backstepping.c`) predicting over the
+//! stage's one sample of delay; `robust` also over none and two (`robust_delay0`,
+//! `robust_delay2`), with the compensation off (`robust_off`), with the learned table
+//! (`robust_learning`), and mutated: an entry of its filter matrix F, its G⁻¹ and its
+//! learned table, each changed by one part in 10⁹ (`robust_mutated_*`).
 //!
 //! `cargo run --release -p flexstage-control --example export_check -- OUT_DIR`
 
@@ -19,8 +25,9 @@ use std::path::Path;
 use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::Setup;
 use flexstage_control::feedforward::FirFeedForward;
-use flexstage_control::registry::{CONTROLLERS, DEFAULT, Designs, Stage};
+use flexstage_control::registry::{CONTROLLERS, DEFAULT, Design, Designs, Stage};
 use flexstage_control::target::{TargetLaw, c_prefix, recorded_sequence};
+use flexstage_control::target_backstepping::{self as bs, BacksteppingLaw};
 use flexstage_control::tuning::TuningParams;
 use flexstage_control_core::Biquad;
 use flexstage_identify::response::ResponseFit;
@@ -61,6 +68,65 @@ fn write(
     }
     std::fs::write(dir.join(format!("{prefix}.csv")), csv)?;
     println!("{prefix}.c, {prefix}.h, {prefix}.csv");
+    Ok(())
+}
+
+fn write_backstepping(
+    dir: &Path,
+    prefix: &str,
+    law: &BacksteppingLaw,
+    sequence_of: &BacksteppingLaw,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let src = law.c_source(prefix, &format!("{prefix}.h"))?;
+    std::fs::write(dir.join(format!("{prefix}.h")), src.header)?;
+    std::fs::write(dir.join(format!("{prefix}.c")), src.source)?;
+    let seq = bs::recorded_sequence(sequence_of, 2022)?;
+    std::fs::write(dir.join(format!("{prefix}.csv")), seq.to_csv(sequence_of))?;
+    println!("{prefix}.c, {prefix}.h, {prefix}.csv (backstepping)");
+    Ok(())
+}
+
+/// The backstepping design `design` written as C with its variants and mutated copies
+/// (module docs; the variants and mutants for `robust` only).
+fn backstepping(
+    dir: &Path,
+    prefix: &str,
+    design: &dyn Design,
+    setup: &Setup,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let inverse = setup.actuator(Compensation::Inverse);
+    let of = |actuator, delay| -> Result<BacksteppingLaw, Box<dyn std::error::Error>> {
+        Ok(design
+            .backstepping(actuator, delay)?
+            .ok_or("a backstepping design")?)
+    };
+    let law = of(inverse, 1)?;
+    write_backstepping(dir, prefix, &law, &law)?;
+    if prefix != "robust" {
+        return Ok(());
+    }
+    for (name, l) in [
+        ("delay0", of(inverse, 0)?),
+        ("delay2", of(inverse, 2)?),
+        ("off", of(setup.actuator(Compensation::Off), 1)?),
+    ] {
+        write_backstepping(dir, &format!("{prefix}_{name}"), &l, &l)?;
+    }
+    let scale = 1.0 + 1e-9;
+    let mut m = law.clone();
+    m.f[(4, 0)] *= scale;
+    write_backstepping(dir, &format!("{prefix}_mutated_f"), &m, &law)?;
+    let mut m = law.clone();
+    m.g_inv[(1, 0)] *= scale;
+    write_backstepping(dir, &format!("{prefix}_mutated_g_inv"), &m, &law)?;
+    let learning = law.clone().with_learned(learned_table());
+    write_backstepping(dir, &format!("{prefix}_learning"), &learning, &learning)?;
+    let table = learned_table()
+        .into_iter()
+        .map(|c| c.map(|v| v * scale))
+        .collect();
+    let m = law.clone().with_learned(table);
+    write_backstepping(dir, &format!("{prefix}_mutated_learned"), &m, &learning)?;
     Ok(())
 }
 
@@ -118,7 +184,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             continue;
         };
         let Some(law) = TargetLaw::of_design(&**design, inverse)? else {
-            println!("{}: no target law (nonlinear), not exported", c.name);
+            backstepping(dir, &c_prefix(c.name), &**design, &setup)?;
             continue;
         };
         let prefix = c_prefix(c.name);

@@ -189,6 +189,18 @@ impl Law {
         })
     }
 
+    /// The law of the model matrix `b` (Eq. 36) with G⁻¹ = `g_inv` given (as
+    /// [`Law::g_inv`] of a law made by [`Law::new`]).
+    pub fn with_inverse(b: Matrix8, g_inv: Matrix2<f64>, params: LawParams) -> Result<Law> {
+        params.validate()?;
+        Ok(Law { b, g_inv, params })
+    }
+
+    /// G⁻¹ (A24).
+    pub fn g_inv(&self) -> Matrix2<f64> {
+        self.g_inv
+    }
+
     /// The settings.
     pub fn params(&self) -> &LawParams {
         &self.params

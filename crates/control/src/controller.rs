@@ -55,21 +55,21 @@
 //! appears, the previous command is repeated and ξ_d restarts from the estimate.
 
 use flexstage_scenario::StageParams;
-use nalgebra::Vector2;
 
 use crate::actuator::{Actuator, ActuatorParams};
 use crate::backstepping::{Law, LawOutput, LawParams};
 use crate::error::{Result, check};
 use crate::estimator::{KalmanDesign, KalmanParams};
-use crate::observer::{DISTURBANCE, FILTER_LEN, KFilter, ObserverDesign, ObserverParams, Vector10};
+use crate::observer::{FILTER_LEN, KFilter, ObserverDesign, ObserverParams, Vector10};
 use crate::pi_notch::{Notch, notch_section};
 use crate::registry::{Controller, Design, Stage};
+use crate::target_backstepping::{BacksteppingInput, BacksteppingLaw, BacksteppingTarget};
 use crate::tuning::{Structure, tuned};
 use flexstage_control_core::Biquad;
 use flexstage_sim::experiment::{Command, StageControl};
 use flexstage_sim::model::StageModel;
-use flexstage_sim::model::state::{Q_O, Q_O_DOT, X_IN, X_IN_DOT};
-use flexstage_sim::trajectory::{RefSample, Reference};
+use flexstage_sim::model::state::{Q_O, X_IN};
+use flexstage_sim::trajectory::Reference;
 use std::sync::Arc;
 
 /// Where the controller takes the output velocity q̇ from.
@@ -222,6 +222,17 @@ impl Design for Backstepping {
         p.delay = delay;
         Ok(Box::new(BacksteppingController::new(&p, reference)?))
     }
+
+    fn backstepping(
+        &self,
+        actuator: ActuatorParams,
+        delay: usize,
+    ) -> Result<Option<BacksteppingLaw>> {
+        let mut p = self.0.clone();
+        p.actuator = actuator;
+        p.delay = delay;
+        Ok(Some(designed(&p)?.0))
+    }
 }
 
 /// The backstepping's settings for a stage (once per stage, shared by both variants): the
@@ -309,117 +320,111 @@ pub const MAX_DELAY: usize = 2;
 /// Number of numbers in [`BacksteppingController::state`].
 pub const STATE_LEN: usize = FILTER_LEN + 6;
 
-/// The backstepping robust controller of Section 3.2.2 with its K-filter and compensation.
+/// The backstepping law of `params` as a target runs it, with the designs it comes from:
+/// the controller's model, the observer design (its Φ and Γ; with the K-filter also L and F)
+/// and the Kalman design when the estimator is [`Estimator::Kalman`]. Checks the design: B0
+/// Hurwitz (Eq. 39) and F Schur with the K-filter, the Kalman error matrix with the Kalman
+/// estimate.
+pub fn designed(
+    params: &ControllerParams,
+) -> Result<(
+    BacksteppingLaw,
+    StageModel,
+    ObserverDesign,
+    Option<KalmanDesign>,
+)> {
+    params.validate()?;
+    let model = StageModel::with_coupling(&params.model, params.coupling)?;
+    // With the Kalman estimate only the sampled model (Φ, Γ) of the design is used: a
+    // K-filter injection that would be unstable on this model is no reason to refuse.
+    let design = match params.estimator {
+        Estimator::KFilter => ObserverDesign::new(&model, &params.observer)?,
+        Estimator::Kalman(_) => ObserverDesign::sampled_model(&model, &params.observer)?,
+    };
+    let law = Law::new(&model, params.law)?;
+    let d_inv = model
+        .d
+        .try_inverse()
+        .ok_or_else(|| crate::error::ControlError::Singular { what: "D".into() })?;
+    let kalman = match &params.estimator {
+        Estimator::KFilter => None,
+        Estimator::Kalman(k) => Some(KalmanDesign::new(&model, params.observer.sample_time, k)?),
+    };
+    let filter = match &kalman {
+        None => KFilter::new(&design),
+        Some(k) => KFilter::with_gain(&design.phi, &design.gamma, &k.l),
+    };
+    let (f, l, gamma) = filter.matrices();
+    let t = params.observer.sample_time;
+    let target = BacksteppingLaw {
+        sample_time: t,
+        delay: params.delay,
+        phi: design.phi,
+        gamma,
+        f,
+        l,
+        b: model.b,
+        g_inv: law.g_inv(),
+        d_inv,
+        law: params.law,
+        velocity: if kalman.is_some() {
+            Velocity::Observer
+        } else {
+            params.velocity
+        },
+        inner: params.inner,
+        disturbance_feedback: params.disturbance_feedback,
+        notches: params
+            .measurement_notches
+            .map(|a| a.map(|n| n.map_or(Biquad::IDENTITY, |n| notch_section(&n, t)))),
+        notch_delay: params
+            .measurement_notches
+            .map(|a| a.iter().flatten().map(|n| notch_delay(n, t)).sum()),
+        // The rate limit is the linear laws' anti-windup (their integrators); the
+        // backstepping keeps the unlimited command its design assumes.
+        actuator: ActuatorParams {
+            max_voltage_step: 0.0,
+            ..params.actuator
+        },
+        learned: None,
+    };
+    Ok((target, model, design, kalman))
+}
+
+/// The backstepping robust controller of Section 3.2.2 with its K-filter and compensation:
+/// the target law of [`designed`] ([`BacksteppingTarget`]) given the reference it follows,
+/// sampled at the times the law takes it ([`BacksteppingLaw::reference_at`]).
 #[derive(Debug, Clone)]
 pub struct BacksteppingController {
     model: StageModel,
     design: ObserverDesign,
     kalman: Option<KalmanDesign>,
-    law: Law,
-    filter: KFilter,
-    actuator: Actuator,
-    velocity: Velocity,
-    inner: Inner,
-    disturbance_feedback: f64,
-    notch: [[Biquad; 2]; 2],
-    notch_delay: [f64; 2],
-    /// Samples the law's reference is taken earlier (module docs, "Reference timing").
-    lead: f64,
+    law: BacksteppingLaw,
+    target: BacksteppingTarget,
     reference: Reference,
-    d_inv: nalgebra::Matrix2<f64>,
-    t: f64,
     k: u64,
-    delay: usize,
-    /// Commands x_nom issued but not yet acting, oldest first (`pending[0]` acts during the
-    /// current sample when `delay` ≥ 1).
-    pending: [[f64; 2]; MAX_DELAY],
-    xi_d: [f64; 2],
-    y_prev: [f64; 2],
-    v_prev: [f64; 2],
-    have_prev: bool,
-    last: Command,
-    last_law: LawOutput,
 }
 
 impl BacksteppingController {
     /// Builds the controller (with the K-filter, its design checked: B0 Hurwitz, Eq. 39; F
     /// Schur; with the Kalman estimate, the Kalman error matrix checked instead).
     pub fn new(params: &ControllerParams, reference: Reference) -> Result<Self> {
-        params.validate()?;
         reference.validate()?;
-        let model = StageModel::with_coupling(&params.model, params.coupling)?;
-        // With the Kalman estimate only the sampled model (Φ, Γ) of the design is used: a
-        // K-filter injection that would be unstable on this model is no reason to refuse.
-        let design = match params.estimator {
-            Estimator::KFilter => ObserverDesign::new(&model, &params.observer)?,
-            Estimator::Kalman(_) => ObserverDesign::sampled_model(&model, &params.observer)?,
-        };
-        let law = Law::new(&model, params.law)?;
-        let d_inv = model
-            .d
-            .try_inverse()
-            .ok_or_else(|| crate::error::ControlError::Singular { what: "D".into() })?;
-        let kalman = match &params.estimator {
-            Estimator::KFilter => None,
-            Estimator::Kalman(k) => {
-                Some(KalmanDesign::new(&model, params.observer.sample_time, k)?)
-            }
-        };
-        let filter = match &kalman {
-            None => KFilter::new(&design),
-            Some(k) => KFilter::with_gain(&design.phi, &design.gamma, &k.l),
-        };
-        let velocity = if kalman.is_some() {
-            Velocity::Observer
-        } else {
-            params.velocity
-        };
+        let (law, model, design, kalman) = designed(params)?;
         Ok(BacksteppingController {
-            filter,
-            kalman,
-            // The rate limit is the linear laws' anti-windup (their integrators); the
-            // backstepping keeps the unlimited command its design assumes.
-            actuator: Actuator::new(ActuatorParams {
-                max_voltage_step: 0.0,
-                ..params.actuator
-            })?,
-            velocity,
-            inner: params.inner,
-            disturbance_feedback: if params.disturbance_feedback {
-                1.0
-            } else {
-                0.0
-            },
-            lead: if params.delay > 0 { 0.5 } else { 0.0 },
-            notch_delay: params.measurement_notches.map(|a| {
-                a.iter()
-                    .flatten()
-                    .map(|n| notch_delay(n, params.observer.sample_time))
-                    .sum()
-            }),
-            notch: params.measurement_notches.map(|a| {
-                a.map(|n| {
-                    n.map_or(Biquad::IDENTITY, |n| {
-                        notch_section(&n, params.observer.sample_time)
-                    })
-                })
-            }),
-            reference,
-            d_inv,
-            t: params.observer.sample_time,
-            k: 0,
-            delay: params.delay,
-            pending: [[0.0; 2]; MAX_DELAY],
-            xi_d: [0.0; 2],
-            y_prev: [0.0; 2],
-            v_prev: [0.0; 2],
-            have_prev: false,
-            last: Command::default(),
-            last_law: LawOutput::default(),
+            target: law.controller()?,
+            law,
             model,
             design,
-            law,
+            kalman,
+            reference,
+            k: 0,
         })
+    }
+
+    /// The law it steps (what a target runs, [`crate::target_backstepping`]).
+    pub fn law(&self) -> &BacksteppingLaw {
+        &self.law
     }
 
     /// The controller's model.
@@ -439,201 +444,78 @@ impl BacksteppingController {
 
     /// The law's intermediate values at the last sample (s, a, ε_a, v, …).
     pub fn last_law(&self) -> &LawOutput {
-        &self.last_law
+        &self.target.last_law
     }
 
     /// The actuator stage.
     pub fn actuator(&self) -> &Actuator {
-        &self.actuator
+        &self.target.actuator
     }
 
     /// The linear part of the controller state: [ζ, Ω₁, Ω₂ ([`FILTER_LEN`]), ξ_d (2),
     /// y_{k−1} (2), v_{k−1} (2)], for the closed-loop pole computation.
     pub fn state(&self) -> [f64; STATE_LEN] {
+        let c = &self.target;
         let mut s = [0.0; STATE_LEN];
-        s[..FILTER_LEN].copy_from_slice(&self.filter.state());
-        s[FILTER_LEN..FILTER_LEN + 2].copy_from_slice(&self.xi_d);
-        s[FILTER_LEN + 2..FILTER_LEN + 4].copy_from_slice(&self.y_prev);
-        s[FILTER_LEN + 4..].copy_from_slice(&self.v_prev);
+        s[..FILTER_LEN].copy_from_slice(&c.filter.state());
+        s[FILTER_LEN..FILTER_LEN + 2].copy_from_slice(&c.xi_d);
+        s[FILTER_LEN + 2..FILTER_LEN + 4].copy_from_slice(&c.y_prev);
+        s[FILTER_LEN + 4..].copy_from_slice(&c.v_prev);
         s
     }
 
     /// Sets the state from [`BacksteppingController::state`]'s layout (the previous
     /// measurement is then taken as available).
     pub fn set_state(&mut self, s: &[f64; STATE_LEN]) {
+        let c = &mut self.target;
         let mut f = [0.0; FILTER_LEN];
         f.copy_from_slice(&s[..FILTER_LEN]);
-        self.filter.set_state(&f);
+        c.filter.set_state(&f);
         let r = &s[FILTER_LEN..];
-        self.xi_d = [r[0], r[1]];
-        self.y_prev = [r[2], r[3]];
-        self.v_prev = [r[4], r[5]];
-        self.have_prev = true;
+        c.xi_d = [r[0], r[1]];
+        c.y_prev = [r[2], r[3]];
+        c.v_prev = [r[4], r[5]];
+        c.have_prev = true;
     }
 
     /// Starts the estimate at `z` and ξ_d at its input displacements (e.g. the rest state).
     pub fn reset_estimate(&mut self, z: [f64; 8]) {
+        let c = &mut self.target;
         let mut x = Vector10::zeros();
         x.fixed_rows_mut::<8>(0).copy_from_slice(&z);
-        self.filter.reset(x);
-        self.xi_d = X_IN.map(|i| z[i]);
-        self.y_prev = Q_O.map(|i| z[i]);
-        self.have_prev = true;
-    }
-
-    /// The estimate [ẑ, d̂] predicted to the sample at which the next command acts: the
-    /// filter's ẑ_{k+1|k} advanced by the nominal model (Φ, Γ of the observer design,
-    /// without injection) with the commands still pending, `delay − 1` samples.
-    #[inline]
-    fn predicted(&self) -> Vector10 {
-        let mut z = self.filter.estimate();
-        for u in &self.pending[1..self.delay] {
-            z = self.design.phi * z + self.design.gamma * nalgebra::Vector2::new(u[0], u[1]);
-        }
-        z
-    }
-
-    /// The reference sample at step k.
-    #[inline]
-    fn reference_at(&self, k: u64) -> RefSample {
-        self.reference.sample(k as f64 * self.t)
-    }
-
-    /// The reference the law aims the (notch-filtered) output at, at step k: each axis's
-    /// reference earlier by its notches' low-frequency delay (the field's docs) and by half
-    /// a sample, because the input transformation (44*) evaluates ξ_d at mid-sample (module
-    /// docs, "Reference timing").
-    #[inline]
-    fn law_reference_at(&self, k: u64) -> RefSample {
-        let t = (k as f64 - self.lead) * self.t;
-        let [d0, d1] = self.notch_delay;
-        let mut r = self.reference.sample(t - d0);
-        if d1 != d0 {
-            let b = self.reference.sample(t - d1);
-            r.q[1] = b.q[1];
-            r.dq[1] = b.dq[1];
-            r.ddq[1] = b.ddq[1];
-            r.dddq[1] = b.dddq[1];
-        }
-        r
+        c.filter.reset(x);
+        c.xi_d = X_IN.map(|i| z[i]);
+        c.y_prev = Q_O.map(|i| z[i]);
+        c.have_prev = true;
     }
 }
 
 impl StageControl for BacksteppingController {
     #[inline]
     fn step(&mut self, y_in: [f64; 2]) -> Command {
-        let t = self.t;
-        let dropout = !(y_in[0].is_finite() && y_in[1].is_finite());
-        let y_raw = if dropout { self.y_prev } else { y_in };
-        let mut y = y_raw;
-        for (i, n) in self.notch.iter_mut().enumerate() {
-            let a = n[0].step(y[i]);
-            y[i] = n[1].step(a);
-        }
-        let r = self.law_reference_at(self.k + self.delay as u64);
-        // With a delay, the estimate is first advanced with the command acting now, then
-        // predicted to the sample at which the new command acts (module docs, "Delay").
-        let zh = if self.delay > 0 {
-            self.filter.step(y, self.pending[0]);
-            self.predicted()
-        } else {
-            self.filter.estimate()
-        };
-        let (q, q_dot) = if self.delay > 0 {
-            (Q_O.map(|i| zh[i]), Q_O_DOT.map(|i| zh[i]))
-        } else {
-            let v = match self.velocity {
-                Velocity::FiniteDifference if self.have_prev => [
-                    (y_raw[0] - self.y_prev[0]) / t,
-                    (y_raw[1] - self.y_prev[1]) / t,
-                ],
-                _ => Q_O_DOT.map(|i| zh[i]),
-            };
-            (y, v)
-        };
-        // η̂ = [z1, z2, ẑ3, ẑ4, q̇1, q̇2] and ξ̂̇ = [ẑ7, ẑ8] (Section 3.2.2, after Eq. 44).
-        let (xi, xi_dot) = match self.inner {
-            Inner::Estimate => (X_IN.map(|i| zh[i]), X_IN_DOT.map(|i| zh[i])),
-            Inner::Command => (self.xi_d, self.v_prev),
-        };
-        let mut eta = [0.0; 6];
-        for i in 0..2 {
-            eta[Q_O[i]] = q[i];
-            eta[X_IN[i]] = xi[i];
-            eta[Q_O_DOT[i]] = q_dot[i];
-        }
-        let delta = DISTURBANCE.map(|i| self.disturbance_feedback * zh[i]);
-        let law = self.law.evaluate(&eta, &xi_dot, &delta, &r);
-        let v = law.v;
-        let v_dot = if self.have_prev {
-            [(v[0] - self.v_prev[0]) / t, (v[1] - self.v_prev[1]) / t]
-        } else {
-            [0.0; 2]
-        };
-        // Input transformation (44*), with ξ_d at mid-sample.
-        let b = &self.model.b;
-        let ([q1, q2], [x1, x2], [v1, v2], [w1, w2]) = (Q_O, X_IN, Q_O_DOT, X_IN_DOT);
-        let mut rhs = Vector2::zeros();
-        for i in 0..2 {
-            let row = X_IN_DOT[i];
-            let xi_mid = [self.xi_d[0] + 0.5 * t * v[0], self.xi_d[1] + 0.5 * t * v[1]];
-            rhs[i] = v_dot[i]
-                - (b[(row, q1)] * q[0]
-                    + b[(row, q2)] * q[1]
-                    + b[(row, v1)] * q_dot[0]
-                    + b[(row, v2)] * q_dot[1]
-                    + b[(row, x1)] * xi_mid[0]
-                    + b[(row, x2)] * xi_mid[1]
-                    + b[(row, w1)] * v[0]
-                    + b[(row, w2)] * v[1]);
-        }
-        let u = self.d_inv * rhs;
-        let mut u = [u[0], u[1]];
-        let finite = u[0].is_finite() && u[1].is_finite();
-        if !finite {
-            u = self.last.x_nom;
-        }
-        let act = self.actuator.command(u, t);
-        let mut cmd = Command {
-            voltage: act.voltage,
-            x_nom: act.x_nom,
+        let out = self.target.step(&BacksteppingInput {
+            reading: y_in,
+            reference: self.law.reference_at(&self.reference, self.k),
+            index: self.k as usize,
+        });
+        let cmd = Command {
+            voltage: out.command.voltage,
+            x_nom: out.command.x_nom,
             // The reference of this sample (what the output is scored against now), also
             // when the law aimed at a later one.
-            reference: self.reference_at(self.k).q,
-            saturated: act.saturated,
-            dropout,
+            reference: self
+                .reference
+                .sample(self.k as f64 * self.law.sample_time)
+                .q,
+            saturated: out.command.saturated,
+            dropout: out.dropout,
         };
-        if !(cmd.voltage[0].is_finite() && cmd.voltage[1].is_finite()) {
-            cmd.voltage = self.last.voltage;
-            cmd.x_nom = self.last.x_nom;
-        }
-        if self.delay == 0 {
-            self.filter.step(y, cmd.x_nom);
-        } else {
-            self.pending.copy_within(1..self.delay, 0);
-            self.pending[self.delay - 1] = cmd.x_nom;
-        }
-        if !finite {
-            let z = self.filter.estimate();
-            self.xi_d = X_IN.map(|i| z[i]);
-            self.v_prev = [0.0; 2];
-        } else {
-            if !cmd.saturated {
-                self.xi_d[0] += t * v[0];
-                self.xi_d[1] += t * v[1];
-            }
-            self.v_prev = v;
-        }
-        self.y_prev = y_raw;
-        self.have_prev = true;
         self.k += 1;
-        self.last = cmd;
-        self.last_law = law;
         cmd
     }
 
     fn estimate(&self) -> [f64; 10] {
-        let z = self.filter.estimate();
+        let z = self.target.filter.estimate();
         let mut out = [0.0; 10];
         out.copy_from_slice(z.as_slice());
         out

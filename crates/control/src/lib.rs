@@ -45,6 +45,9 @@
 //! * [`target`]: a linear controller as a real-time target runs it (`step(reference,
 //!   reading) -> command`, the law the PI + notch and PID step), its coefficients, and its
 //!   self-contained C99 source and header;
+//! * [`target_backstepping`]: the backstepping controller as a real-time target runs it (the
+//!   law the simulated `robust` and `nonrobust` step, the reference's first three
+//!   derivatives supplied from outside), its coefficients and its C99 source and header;
 //! * [`samples`]: settings with known answers.
 //!
 //! ```
@@ -170,6 +173,8 @@ pub mod pid;
 pub mod registry;
 pub mod samples;
 pub mod target;
+pub mod target_backstepping;
+mod target_backstepping_c;
 mod target_c;
 pub mod tuning;
 

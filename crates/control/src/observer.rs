@@ -250,6 +250,23 @@ impl KFilter {
         }
     }
 
+    /// A filter at zero with the error matrix `f` = Φ − L C, the injection gain `l` and the
+    /// input matrix `gamma` as they are ([`KFilter::matrices`] of another filter).
+    pub fn from_matrices(f: &Matrix10, l: &Matrix10x2, gamma: &Matrix10x2) -> KFilter {
+        KFilter {
+            f: *f,
+            l: *l,
+            gamma: *gamma,
+            zeta: Vector10::zeros(),
+            omega: [Vector10::zeros(); 2],
+        }
+    }
+
+    /// The filter's matrices (F, L, Γ).
+    pub fn matrices(&self) -> (Matrix10, Matrix10x2, Matrix10x2) {
+        (self.f, self.l, self.gamma)
+    }
+
     /// The estimate [ẑ_k, d̂_k] = ζ + Ω₁ + Ω₂ (Eq. 40).
     #[inline]
     pub fn estimate(&self) -> Vector10 {

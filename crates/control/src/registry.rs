@@ -41,6 +41,7 @@ use crate::feedforward::FirFeedForward;
 use crate::margins::{MarginParams, Margins};
 use crate::pi_notch::PiNotchParams;
 use crate::target::TargetLaw;
+use crate::target_backstepping::BacksteppingLaw;
 use crate::tuning::TuningParams;
 
 /// Every controller, in report order (the default controller first). One line per
@@ -139,6 +140,18 @@ pub trait Design: std::fmt::Debug + Send + Sync {
     /// that has none (the backstepping).
     fn target(&self, actuator: ActuatorParams) -> Result<Option<TargetLaw>> {
         let _ = actuator;
+        Ok(None)
+    }
+
+    /// The backstepping law a real-time target runs for it with the actuator stage
+    /// `actuator`, predicting over `delay` samples ([`crate::target_backstepping`]: the one
+    /// the simulated controller steps); `None` for a controller that is no backstepping.
+    fn backstepping(
+        &self,
+        actuator: ActuatorParams,
+        delay: usize,
+    ) -> Result<Option<BacksteppingLaw>> {
+        let _ = (actuator, delay);
         Ok(None)
     }
 }

@@ -17,7 +17,8 @@
 //! order, `<math.h>` only); `docs/controller-export.md` says how to call it.
 //!
 //! The backstepping controllers (K-filter observer, Kalman estimate, robust law) have no
-//! [`TargetLaw`]: [`TargetLaw::of_design`] gives `None` for them.
+//! [`TargetLaw`] ([`TargetLaw::of_design`] gives `None` for them): their law is
+//! [`crate::target_backstepping::BacksteppingLaw`].
 
 use flexstage_control_core::{Biquad, PidGains, PidLaw};
 use flexstage_piezo::CompensatorParams;
@@ -191,16 +192,7 @@ impl TargetLaw {
     /// the preloaded state (U_b \[V\], h_b \[µm\]), the rest displacement x_bias \[µm\] and the
     /// mean virgin slope κ \[µm/V\] ([`crate::actuator`]).
     pub fn preload(&self) -> [Preload; 2] {
-        let a = &self.actuator;
-        a.hysteresis.map(|p| {
-            let (u, h, x_bias) = preload(&p, a.bias_voltage);
-            Preload {
-                voltage: u,
-                h,
-                x_bias,
-                slope: mean_slope(&p, a.voltage_range),
-            }
-        })
+        preload_of(&self.actuator)
     }
 
     /// The compensator's settings (the actuator stage's: its amplifier range, the default
@@ -215,6 +207,20 @@ impl TargetLaw {
     pub fn c_source(&self, prefix: &str, header_file: &str) -> Result<CSource> {
         crate::target_c::c_source(self, prefix, header_file)
     }
+}
+
+/// The constants the actuator stage `a` derives from its parameters at start-up, per PEA
+/// ([`TargetLaw::preload`]).
+pub fn preload_of(a: &ActuatorParams) -> [Preload; 2] {
+    a.hysteresis.map(|p| {
+        let (u, h, x_bias) = preload(&p, a.bias_voltage);
+        Preload {
+            voltage: u,
+            h,
+            x_bias,
+            slope: mean_slope(&p, a.voltage_range),
+        }
+    })
 }
 
 /// The actuator stage's start-up constants of one PEA ([`TargetLaw::preload`]).

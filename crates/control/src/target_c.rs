@@ -8,7 +8,7 @@ use std::fmt::Write;
 
 use flexstage_control_core::Biquad;
 
-use crate::actuator::Compensation;
+use crate::actuator::{ActuatorParams, Compensation};
 use crate::error::Result;
 use crate::target::{CSource, TargetLaw};
 
@@ -38,21 +38,13 @@ pub(crate) fn lit(v: f64) -> String {
     format!("{v:e}")
 }
 
-fn list(v: &[f64]) -> String {
+pub(crate) fn list(v: &[f64]) -> String {
     let items: Vec<String> = v.iter().map(|&x| lit(x)).collect();
     format!("{{{}}}", items.join(", "))
 }
 
 fn coefficients(law: &TargetLaw) -> String {
     let mut s = String::new();
-    let a = &law.actuator;
-    let pre = law.preload();
-    let comp = law.compensator();
-    let mode = match a.compensation {
-        Compensation::Inverse => "COMPENSATION_INVERSE",
-        Compensation::Off => "COMPENSATION_OFF",
-        Compensation::Ideal => "COMPENSATION_IDEAL",
-    };
     let gains: Vec<String> = law
         .gains
         .iter()
@@ -80,13 +72,8 @@ fn coefficients(law: &TargetLaw) -> String {
             )
         })
         .collect();
-    let bw: Vec<String> = a
-        .hysteresis
-        .iter()
-        .map(|p| list(&[p.d_p, p.a_bw, p.b_bw, p.gamma_bw, p.delta_bw]))
-        .collect();
     let g = law.inverse_gain;
-    let lines = [
+    let mut lines = vec![
         "#define COMPENSATION_INVERSE 0".to_string(),
         "#define COMPENSATION_OFF 1".to_string(),
         "#define COMPENSATION_IDEAL 2".to_string(),
@@ -118,6 +105,41 @@ fn coefficients(law: &TargetLaw) -> String {
             list(&g[0]),
             list(&g[1])
         ),
+    ];
+    lines.extend(actuator_lines(&law.actuator));
+    lines.extend([
+        "/* Largest change of a voltage per sample [V] (the amplifier's current and slew); 0: no \
+         rate limit. */"
+            .to_string(),
+        format!(
+            "static const double MAX_VOLTAGE_STEP = {};",
+            lit(law.actuator.max_voltage_step)
+        ),
+    ]);
+    for l in lines {
+        let _ = writeln!(s, "{l}");
+    }
+    extensions(law, &mut s);
+    s
+}
+
+/// The C constants of the actuator stage `a` (stroke, amplifier range, bias, compensation
+/// mode, the compensator's Bouc–Wen parameters, preload and settings), the names the
+/// actuator functions of `c/controller.c.in` read.
+pub(crate) fn actuator_lines(a: &ActuatorParams) -> Vec<String> {
+    let pre = crate::target::preload_of(a);
+    let comp = a.compensator();
+    let mode = match a.compensation {
+        Compensation::Inverse => "COMPENSATION_INVERSE",
+        Compensation::Off => "COMPENSATION_OFF",
+        Compensation::Ideal => "COMPENSATION_IDEAL",
+    };
+    let bw: Vec<String> = a
+        .hysteresis
+        .iter()
+        .map(|p| list(&[p.d_p, p.a_bw, p.b_bw, p.gamma_bw, p.delta_bw]))
+        .collect();
+    vec![
         "/* Largest |x_nom| [m]. */".to_string(),
         format!("static const double STROKE = {};", lit(a.stroke)),
         "/* Amplifier range [V] and preload bias voltage U_b [V]. */".to_string(),
@@ -165,19 +187,7 @@ fn coefficients(law: &TargetLaw) -> String {
             comp.max_iterations
         ),
         format!("static const int COMPENSATION = {mode};"),
-        "/* Largest change of a voltage per sample [V] (the amplifier's current and slew); 0: no \
-         rate limit. */"
-            .to_string(),
-        format!(
-            "static const double MAX_VOLTAGE_STEP = {};",
-            lit(a.max_voltage_step)
-        ),
-    ];
-    for l in lines {
-        let _ = writeln!(s, "{l}");
-    }
-    extensions(law, &mut s);
-    s
+    ]
 }
 
 /// The coefficients of the FIR feed-forward, the PPF filters and the learned table (a
@@ -218,8 +228,14 @@ fn extensions(law: &TargetLaw, s: &mut String) {
         list(&damping[0].denominator()),
         list(&damping[1].denominator())
     );
+    learned_lines(law.learned.as_deref(), s);
+}
+
+/// The learned table `table` (a single zero entry where there is none, unused then) as the
+/// C constants `LEARNING_ROWS` and `LEARNED`.
+pub(crate) fn learned_lines(table: Option<&[[f64; 2]]>, s: &mut String) {
     let zero_row = [[0.0; 2]];
-    let table = law.learned.as_deref().unwrap_or(&zero_row[..]);
+    let table = table.unwrap_or(&zero_row[..]);
     let _ = writeln!(
         s,
         "/* Learned correction c[k] [m] per sample k of the period, subtracted from the reading. */"
@@ -236,10 +252,8 @@ fn extensions(law: &TargetLaw, s: &mut String) {
     let _ = writeln!(s, "}};");
 }
 
-/// The header and source of `law` with functions and types prefixed `prefix`, the source
-/// including the header as `header_file` ([`TargetLaw::c_source`]); the law is checked first
-/// ([`TargetLaw::controller`]).
-pub fn c_source(law: &TargetLaw, prefix: &str, header_file: &str) -> Result<CSource> {
+/// Refuses a prefix that is no C identifier and a header name that is no plain file name.
+pub(crate) fn check_names(prefix: &str, header_file: &str) -> Result<()> {
     if !is_c_identifier(prefix) {
         return Err(flexstage_numerics::RangeError::new(
             "controller.c_prefix",
@@ -261,6 +275,14 @@ pub fn c_source(law: &TargetLaw, prefix: &str, header_file: &str) -> Result<CSou
         )
         .into());
     }
+    Ok(())
+}
+
+/// The header and source of `law` with functions and types prefixed `prefix`, the source
+/// including the header as `header_file` ([`TargetLaw::c_source`]); the law is checked first
+/// ([`TargetLaw::controller`]).
+pub fn c_source(law: &TargetLaw, prefix: &str, header_file: &str) -> Result<CSource> {
+    check_names(prefix, header_file)?;
     law.controller()?;
     let ff = law.feedforward.as_ref();
     let fill = |t: &str| {

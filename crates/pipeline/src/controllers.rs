@@ -1,27 +1,30 @@
-//! The tuned controllers taken to a real-time target: every registry design with a target law
-//! (PI + notch and PID with their FIR feed-forward, PPF + PI + notch; with learning, the
+//! The tuned controllers taken to a real-time target: every registry design (PI + notch and
+//! PID with their FIR feed-forward, PPF + PI + notch through their linear target law; the
+//! backstepping through its own, with the rig's delay it predicts over; with learning, the
 //! learned table) with its actuator stage as a coefficients file
 //! (`track/[<conditions>/]controllers/<controller>.json`, [`ControllerFile`]) and a
 //! self-contained C99 source and header generated from it
-//! (`flexstage_control::target::TargetLaw::c_source`). `track` writes them for the
-//! controllers it ran; [`export_controller`] writes the C of any controller file (one edited by
-//! hand, or into another folder). A file read back gives the law it was written from, bitwise.
-//! The backstepping controllers (observer, Kalman estimate, robust law) have no target law and
-//! are not exported.
+//! (`flexstage_control::target::TargetLaw::c_source`,
+//! `flexstage_control::target_backstepping::BacksteppingLaw::c_source`). `track` writes them
+//! for the controllers it ran; [`export_controller`] writes the C of any controller file (one
+//! edited by hand, or into another folder). A file read back gives the law it was written
+//! from, bitwise.
 
 use std::path::{Path, PathBuf};
 
 use flexstage_control::actuator::{ActuatorParams, Compensation};
+use flexstage_control::controller::{Inner, Velocity};
 use flexstage_control::experiment::Setup;
 use flexstage_control::feedforward::FirFeedForward;
 use flexstage_control::registry::{CONTROLLERS, Controller, Designs, Stage};
 use flexstage_control::target::{CSource, TargetLaw, c_prefix, compensation_name, compensation_of};
+use flexstage_control::target_backstepping::{BacksteppingLaw, matrix, rows};
 use flexstage_control::tuning::TuningParams;
 use flexstage_control_core::{Biquad, PidGains};
 use flexstage_identify::measured::{FitParams, LabLog, MeasuredResponse, WelchParams};
 use flexstage_piezo::{BoucWenParams, CompensatorParams};
 use flexstage_run::files::controller::{
-    ActuatorFile, AxisFile, ControllerFile, FeedForwardFile, SectionFile, VERSION,
+    ActuatorFile, AxisFile, BacksteppingFile, ControllerFile, FeedForwardFile, SectionFile, VERSION,
 };
 use flexstage_run::layout::Tracking;
 use flexstage_run::{Format, RunDir};
@@ -29,82 +32,104 @@ use flexstage_scenario::Scenario;
 
 use crate::error::{PipelineError, Result};
 
+/// The file of the actuator stage `a`.
+fn actuator_file(a: &ActuatorParams) -> ActuatorFile {
+    let comp = a.compensator();
+    ActuatorFile {
+        compensation: compensation_name(a.compensation).to_string(),
+        stroke_m: a.stroke,
+        voltage_range_v: a.voltage_range,
+        bias_voltage_v: a.bias_voltage,
+        compensator_tolerance_um: comp.tolerance,
+        compensator_max_iterations: comp.max_iterations,
+        hysteresis: a.hysteresis.map(|p| (&p).into()),
+        max_voltage_step_v: a.max_voltage_step,
+    }
+}
+
+fn section_file(s: &Biquad) -> SectionFile {
+    SectionFile {
+        b: s.numerator(),
+        a: s.denominator(),
+    }
+}
+
 /// The coefficients file of `law`, the law of the registry controller `c`.
 pub fn controller_file(c: &Controller, law: &TargetLaw) -> ControllerFile {
-    let a = &law.actuator;
-    let comp = law.compensator();
     ControllerFile {
         version: VERSION,
         controller: c.name.to_string(),
         label: c.label.to_string(),
         sample_time_s: law.sample_time,
-        axes: [0, 1].map(|i| AxisFile {
+        axes: Some([0, 1].map(|i| AxisFile {
             kp: law.gains[i].kp,
             ki_per_s: law.gains[i].ki,
             kd_s: law.gains[i].kd,
-            sections: law.sections[i].map(|s| SectionFile {
-                b: s.numerator(),
-                a: s.denominator(),
-            }),
-        }),
-        inverse_static_gain: law.inverse_gain,
-        actuator: ActuatorFile {
-            compensation: compensation_name(a.compensation).to_string(),
-            stroke_m: a.stroke,
-            voltage_range_v: a.voltage_range,
-            bias_voltage_v: a.bias_voltage,
-            compensator_tolerance_um: comp.tolerance,
-            compensator_max_iterations: comp.max_iterations,
-            hysteresis: a.hysteresis.map(|p| (&p).into()),
-            max_voltage_step_v: a.max_voltage_step,
-        },
-        damping: law.damping.map(|d| {
-            d.map(|s| SectionFile {
-                b: s.numerator(),
-                a: s.denominator(),
-            })
-        }),
+            sections: law.sections[i].map(|s| section_file(&s)),
+        })),
+        inverse_static_gain: Some(law.inverse_gain),
+        actuator: actuator_file(&law.actuator),
+        damping: law.damping.map(|d| d.map(|s| section_file(&s))),
         feedforward: law.feedforward.as_ref().map(|f| FeedForwardFile {
             preview_samples: f.preview(),
             lag_samples: f.lag(),
             taps: f.taps().to_vec(),
         }),
         learned_m: law.learned.clone(),
+        backstepping: None,
     }
 }
 
-/// The law of a coefficients file, checked (every coefficient in its range, the
-/// compensator settings the ones this flexstage runs).
-pub fn target_law(f: &ControllerFile) -> Result<TargetLaw> {
-    let a = &f.actuator;
-    let law = TargetLaw {
-        gains: f.axes.map(|x| PidGains {
-            kp: x.kp,
-            ki: x.ki_per_s,
-            kd: x.kd_s,
+/// The coefficients file of the backstepping law `law` of the registry controller `c`.
+pub fn backstepping_file(c: &Controller, law: &BacksteppingLaw) -> ControllerFile {
+    let p = &law.law;
+    ControllerFile {
+        version: VERSION,
+        controller: c.name.to_string(),
+        label: c.label.to_string(),
+        sample_time_s: law.sample_time,
+        axes: None,
+        inverse_static_gain: None,
+        actuator: actuator_file(&law.actuator),
+        damping: None,
+        feedforward: None,
+        learned_m: law.learned.clone(),
+        backstepping: Some(BacksteppingFile {
+            delay_samples: law.delay,
+            robust: p.robust,
+            error_gain_per_s: p.error_gain,
+            eta_gain_per_s: p.eta_gain,
+            feedback_gain_per_s: p.feedback_gain,
+            eta_bound_m_per_s2: p.eta_bound,
+            a_bound_m_per_s: p.a_bound,
+            boundary_layer: p.boundary_layer,
+            velocity: match law.velocity {
+                Velocity::Observer => "observer",
+                Velocity::FiniteDifference => "finite-difference",
+            }
+            .to_string(),
+            inner: match law.inner {
+                Inner::Estimate => "estimate",
+                Inner::Command => "command",
+            }
+            .to_string(),
+            disturbance_feedback: law.disturbance_feedback,
+            notches: law.notches.map(|a| a.map(|s| section_file(&s))),
+            notch_delay_s: law.notch_delay,
+            model_b: rows(&law.b),
+            g_inv: rows(&law.g_inv),
+            d_inv: rows(&law.d_inv),
+            phi: rows(&law.phi),
+            gamma: rows(&law.gamma),
+            filter_f: rows(&law.f),
+            filter_l: rows(&law.l),
         }),
-        sections: f.axes.map(|x| x.sections.map(|s| Biquad::new(s.b, s.a))),
-        inverse_gain: f.inverse_static_gain,
-        sample_time: f.sample_time_s,
-        actuator: ActuatorParams {
-            hysteresis: [
-                BoucWenParams::from(&a.hysteresis[0]),
-                BoucWenParams::from(&a.hysteresis[1]),
-            ],
-            voltage_range: a.voltage_range_v,
-            bias_voltage: a.bias_voltage_v,
-            stroke: a.stroke_m,
-            compensation: compensation_of(&a.compensation)?,
-            max_voltage_step: a.max_voltage_step_v,
-        },
-        damping: f.damping.map(|d| d.map(|s| Biquad::new(s.b, s.a))),
-        feedforward: f
-            .feedforward
-            .as_ref()
-            .map(|x| FirFeedForward::from_taps(x.preview_samples, x.taps.clone(), x.lag_samples))
-            .transpose()?,
-        learned: f.learned_m.clone(),
-    };
+    }
+}
+
+/// The actuator stage of a file, checked against the compensator settings this flexstage
+/// runs.
+fn actuator_of(a: &ActuatorFile) -> Result<ActuatorParams> {
     let expected = CompensatorParams::default();
     if a.compensator_tolerance_um != expected.tolerance
         || a.compensator_max_iterations != expected.max_iterations
@@ -121,6 +146,120 @@ pub fn target_law(f: &ControllerFile) -> Result<TargetLaw> {
             ),
         });
     }
+    Ok(ActuatorParams {
+        hysteresis: [
+            BoucWenParams::from(&a.hysteresis[0]),
+            BoucWenParams::from(&a.hysteresis[1]),
+        ],
+        voltage_range: a.voltage_range_v,
+        bias_voltage: a.bias_voltage_v,
+        stroke: a.stroke_m,
+        compensation: compensation_of(&a.compensation)?,
+        max_voltage_step: a.max_voltage_step_v,
+    })
+}
+
+/// The law a coefficients file holds, checked.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FileLaw {
+    /// The linear law (PI(D) + notch, feed-forward, PPF; boxed as the other).
+    Linear(Box<TargetLaw>),
+    /// The backstepping law (boxed: its matrices are 3 kB).
+    Backstepping(Box<BacksteppingLaw>),
+}
+
+/// The law of a coefficients file, checked (every coefficient in its range, the
+/// compensator settings the ones this flexstage runs).
+pub fn file_law(f: &ControllerFile) -> Result<FileLaw> {
+    match (&f.backstepping, &f.axes, &f.inverse_static_gain) {
+        (Some(b), None, None) if f.damping.is_none() && f.feedforward.is_none() => {
+            Ok(FileLaw::Backstepping(Box::new(backstepping_law(f, b)?)))
+        }
+        (None, Some(axes), Some(g)) => Ok(FileLaw::Linear(Box::new(target_law(f, axes, *g)?))),
+        _ => Err(PipelineError::Option {
+            option: "controller file: backstepping, axes, inverse_static_gain, damping, \
+                     feedforward",
+            value: f.controller.clone(),
+            expected: "either the linear law (axes, inverse_static_gain, optionally damping \
+                       and feedforward) or the backstepping law alone"
+                .into(),
+        }),
+    }
+}
+
+fn target_law(f: &ControllerFile, axes: &[AxisFile; 2], g: [[f64; 2]; 2]) -> Result<TargetLaw> {
+    let law = TargetLaw {
+        gains: axes.map(|x| PidGains {
+            kp: x.kp,
+            ki: x.ki_per_s,
+            kd: x.kd_s,
+        }),
+        sections: axes.map(|x| x.sections.map(|s| Biquad::new(s.b, s.a))),
+        inverse_gain: g,
+        sample_time: f.sample_time_s,
+        actuator: actuator_of(&f.actuator)?,
+        damping: f.damping.map(|d| d.map(|s| Biquad::new(s.b, s.a))),
+        feedforward: f
+            .feedforward
+            .as_ref()
+            .map(|x| FirFeedForward::from_taps(x.preview_samples, x.taps.clone(), x.lag_samples))
+            .transpose()?,
+        learned: f.learned_m.clone(),
+    };
+    law.controller()?;
+    Ok(law)
+}
+
+fn backstepping_law(f: &ControllerFile, b: &BacksteppingFile) -> Result<BacksteppingLaw> {
+    use flexstage_control::backstepping::LawParams;
+    let choice = |option: &'static str, value: &str, accepted: &[&str]| PipelineError::Option {
+        option,
+        value: value.to_string(),
+        expected: accepted.join(" or "),
+    };
+    let velocity = match b.velocity.as_str() {
+        "observer" => Velocity::Observer,
+        "finite-difference" => Velocity::FiniteDifference,
+        v => {
+            return Err(choice(
+                "backstepping.velocity",
+                v,
+                &["observer", "finite-difference"],
+            ));
+        }
+    };
+    let inner = match b.inner.as_str() {
+        "estimate" => Inner::Estimate,
+        "command" => Inner::Command,
+        v => return Err(choice("backstepping.inner", v, &["estimate", "command"])),
+    };
+    let law = BacksteppingLaw {
+        sample_time: f.sample_time_s,
+        delay: b.delay_samples,
+        phi: matrix(&b.phi),
+        gamma: matrix(&b.gamma),
+        f: matrix(&b.filter_f),
+        l: matrix(&b.filter_l),
+        b: matrix(&b.model_b),
+        g_inv: matrix(&b.g_inv),
+        d_inv: matrix(&b.d_inv),
+        law: LawParams {
+            error_gain: b.error_gain_per_s,
+            eta_gain: b.eta_gain_per_s,
+            feedback_gain: b.feedback_gain_per_s,
+            robust: b.robust,
+            eta_bound: b.eta_bound_m_per_s2,
+            a_bound: b.a_bound_m_per_s,
+            boundary_layer: b.boundary_layer,
+        },
+        velocity,
+        inner,
+        disturbance_feedback: b.disturbance_feedback,
+        notches: b.notches.map(|a| a.map(|s| Biquad::new(s.b, s.a))),
+        notch_delay: b.notch_delay_s,
+        actuator: actuator_of(&f.actuator)?,
+        learned: f.learned_m.clone(),
+    };
     law.controller()?;
     Ok(law)
 }
@@ -129,19 +268,19 @@ pub fn target_law(f: &ControllerFile) -> Result<TargetLaw> {
 /// controller's name with `-` as `_` (`pi_notch_ff_step`), the header named
 /// `<controller>.h`.
 pub fn c_files(f: &ControllerFile) -> Result<CSource> {
-    let law = target_law(f)?;
-    Ok(law.c_source(&c_prefix(&f.controller), &format!("{}.h", f.controller))?)
+    let (prefix, header) = (c_prefix(&f.controller), format!("{}.h", f.controller));
+    Ok(match file_law(f)? {
+        FileLaw::Linear(law) => law.c_source(&prefix, &header)?,
+        FileLaw::Backstepping(law) => law.c_source(&prefix, &header)?,
+    })
 }
 
-/// The controllers `track` wrote for a target, and those it did not export.
+/// The controllers `track` wrote for a target.
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct Exported {
     /// The controllers written (JSON, C and header; a learned table as
     /// `<controller>+learning-<trajectory>`).
     pub written: Vec<String>,
-    /// The controllers ran but not exported: no target law (the backstepping's observer,
-    /// Kalman estimate and robust law).
-    pub nonlinear: Vec<&'static str>,
 }
 
 /// The correction a learning run of `track` learned on one trajectory
@@ -179,9 +318,10 @@ impl LearnedTable {
 }
 
 /// Writes the coefficients file, the C source and the header of every controller of
-/// `controllers` that `designs` holds and that has a target law, and of each of them with a
-/// table of `learned` (as `<controller>+learning-<trajectory>`), with the actuator stage
-/// `actuator`, into `out`'s `controllers/` folder.
+/// `controllers` that `designs` holds (its linear target law, or its backstepping law
+/// predicting over `delay` samples), and of each of them with a table of `learned` (as
+/// `<controller>+learning-<trajectory>`), with the actuator stage `actuator`, into `out`'s
+/// `controllers/` folder. A design with neither law is an error.
 pub(crate) fn write_controllers(
     run: &RunDir,
     out: &Tracking,
@@ -189,19 +329,35 @@ pub(crate) fn write_controllers(
     controllers: &[&'static Controller],
     learned: &[LearnedTable],
     actuator: ActuatorParams,
+    delay: usize,
 ) -> Result<Exported> {
     let mut done = Exported::default();
     for &c in controllers {
         let Some(design) = designs.get(c) else {
             continue;
         };
-        let Some(law) = TargetLaw::of_design(&**design, actuator)? else {
-            done.nonlinear.push(c.name);
-            continue;
+        let law = match TargetLaw::of_design(&**design, actuator)? {
+            Some(l) => FileLaw::Linear(Box::new(l)),
+            None => {
+                let law = design.backstepping(actuator, delay)?;
+                FileLaw::Backstepping(Box::new(law.ok_or_else(|| PipelineError::Option {
+                    option: "controller",
+                    value: c.name.to_string(),
+                    expected: "a controller with a target law (linear or backstepping)".into(),
+                })?))
+            }
         };
-        let mut files = vec![(c.name.to_string(), controller_file(c, &law))];
+        let file_of = |table: Option<Vec<[f64; 2]>>| match (&law, table) {
+            (FileLaw::Linear(l), None) => controller_file(c, l),
+            (FileLaw::Linear(l), Some(t)) => controller_file(c, &(**l).clone().with_learned(t)),
+            (FileLaw::Backstepping(l), None) => backstepping_file(c, l),
+            (FileLaw::Backstepping(l), Some(t)) => {
+                backstepping_file(c, &(**l).clone().with_learned(t))
+            }
+        };
+        let mut files = vec![(c.name.to_string(), file_of(None))];
         for l in learned.iter().filter(|l| l.controller == c) {
-            let mut file = controller_file(c, &law.clone().with_learned(l.table.clone()));
+            let mut file = file_of(Some(l.table.clone()));
             file.controller = l.name();
             file.label = format!("{}, with the table learned on {}", c.label, l.trajectory);
             files.push((l.name(), file));
@@ -381,6 +537,14 @@ mod tests {
         TargetLaw::of_linear(&p, setup.actuator(compensation)).unwrap()
     }
 
+    /// The linear law of a file.
+    fn linear(f: &ControllerFile) -> TargetLaw {
+        match file_law(f).unwrap() {
+            FileLaw::Linear(l) => *l,
+            FileLaw::Backstepping(_) => panic!("{}: a linear law expected", f.controller),
+        }
+    }
+
     fn bits(seq: &[Recorded]) -> Vec<u64> {
         seq.iter()
             .flat_map(|r| {
@@ -443,7 +607,7 @@ mod tests {
         laws.push((DEFAULT, learned));
         for (c, l) in laws {
             let bytes = controller_file(c, &l).encode().unwrap();
-            let back = target_law(&ControllerFile::decode(&bytes).unwrap()).unwrap();
+            let back = linear(&ControllerFile::decode(&bytes).unwrap());
             assert_eq!(back, l);
             assert_eq!(
                 bits(&recorded_sequence(&back, 3).unwrap().samples),
@@ -452,10 +616,85 @@ mod tests {
         }
     }
 
+    /// Goal: the backstepping controllers written to their JSON file and read back are the
+    /// same laws, bitwise: the same coefficients and the same commands on their recorded
+    /// sequence (`robust` with one and two samples of delay, with a learned table,
+    /// `nonrobust`, designed on a sampled two-mode stage); and a file of version 2 with the
+    /// backstepping, or with both laws, is refused.
+    #[test]
+    fn backstepping_file_reads_back_the_same_controller_bitwise() {
+        use flexstage_control::controller::{NONROBUST, ROBUST};
+        use flexstage_control::target_backstepping::recorded_sequence;
+        let setup = Setup::from_scenario(&flexstage_scenario::Scenario::paper());
+        let inverse = setup.actuator(Compensation::Inverse);
+        let modes = flexstage_sim::samples::decoupled_modes();
+        let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
+        let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
+        let stage = Stage::new(
+            &setup,
+            Some(&plant),
+            Some(fit),
+            None,
+            TuningParams::default(),
+        );
+        let designs = Designs::for_stage(&stage).unwrap();
+        let of = |c, delay| {
+            designs
+                .get(c)
+                .unwrap()
+                .backstepping(inverse, delay)
+                .unwrap()
+                .unwrap()
+        };
+        let table: Vec<[f64; 2]> = (0..500)
+            .map(|k| [1e-9 / (1.0 + k as f64), -3e-9 * (k as f64 * 0.1).sin()])
+            .collect();
+        let laws = [
+            (&ROBUST, of(&ROBUST, 1)),
+            (&ROBUST, of(&ROBUST, 2)),
+            (&ROBUST, of(&ROBUST, 1).with_learned(table)),
+            (&NONROBUST, of(&NONROBUST, 1)),
+        ];
+        let commands = |l: &BacksteppingLaw| -> Vec<u64> {
+            recorded_sequence(l, 3)
+                .unwrap()
+                .commands()
+                .iter()
+                .flat_map(|c| [c.voltage, c.x_nom].into_iter().flatten().map(f64::to_bits))
+                .collect()
+        };
+        for (c, l) in laws {
+            let file = backstepping_file(c, &l);
+            let bytes = file.encode().unwrap();
+            let back = match file_law(&ControllerFile::decode(&bytes).unwrap()).unwrap() {
+                FileLaw::Backstepping(b) => *b,
+                FileLaw::Linear(_) => panic!("a backstepping law expected"),
+            };
+            assert_eq!(back, l);
+            assert_eq!(commands(&back), commands(&l));
+            let src = c_files(&file).unwrap();
+            assert!(src.header.contains("#define robust_BACKSTEPPING 1") || c != &ROBUST);
+        }
+        let mut v = backstepping_file(&ROBUST, &of(&ROBUST, 1));
+        v.version = 2;
+        let e = ControllerFile::decode(&flexstage_run::format::json(&v).unwrap()).unwrap_err();
+        assert!(e.contains("backstepping"), "{e}");
+        let mut v = backstepping_file(&ROBUST, &of(&ROBUST, 1));
+        v.axes = controller_file(DEFAULT, &law(Compensation::Inverse)).axes;
+        v.inverse_static_gain = Some([[1.0, 0.0], [0.0, 1.0]]);
+        let e = ControllerFile::decode(&flexstage_run::format::json(&v).unwrap()).unwrap_err();
+        assert!(e.contains("not both"), "{e}");
+        let mut v = backstepping_file(&ROBUST, &of(&ROBUST, 1));
+        v.backstepping.as_mut().unwrap().inner = "guess".into();
+        let e = file_law(&v).unwrap_err().to_string();
+        assert!(e.contains("backstepping.inner"), "{e}");
+    }
+
     /// Goal: `track --learning` exports each controller once more with the table it learned
     /// on each trajectory (`<controller>+learning-<trajectory>`): one period of the circle
     /// (5000 samples at 10 kHz), not all zero, in the JSON and as the C's table, and the law
-    /// read back is the controller's own with that table.
+    /// read back is the controller's own with that table; the backstepping as well, with
+    /// the minimal loop's delay (none).
     #[test]
     fn track_with_learning_exports_the_learned_table() {
         use crate::track::{PlantKind, TrackOptions, track};
@@ -467,14 +706,17 @@ mod tests {
         let options = TrackOptions {
             plant: PlantKind::Lumped,
             trajectory: Some("circle".into()),
-            controllers: vec![pid],
+            controllers: vec![pid, &flexstage_control::controller::ROBUST],
             duration: Some(0.05),
             learning: Some(2),
             ..TrackOptions::default()
         };
         let summary = track(&folder, &options, &crate::progress::Silent).unwrap();
         let name = "pid-ff-scenario+learning-circle";
-        assert_eq!(summary.exported.written, ["pid-ff-scenario", name]);
+        assert_eq!(
+            summary.exported.written,
+            ["pid-ff-scenario", name, "robust", "robust+learning-circle"]
+        );
         let dir = summary.dir.join("controllers");
         let file =
             ControllerFile::decode(&std::fs::read(dir.join(format!("{name}.json"))).unwrap())
@@ -484,18 +726,31 @@ mod tests {
         let table = file.learned_m.clone().unwrap();
         assert_eq!(table.len(), 5000);
         assert!(table.iter().any(|c| c[0] != 0.0 && c[1] != 0.0));
-        assert_eq!(
-            target_law(&file).unwrap(),
-            target_law(&own).unwrap().with_learned(table)
-        );
+        assert_eq!(linear(&file), linear(&own).with_learned(table));
         let source = std::fs::read_to_string(dir.join(format!("{name}.c"))).unwrap();
         assert!(source.contains("static const double LEARNED[5000][2]"));
         assert!(source.contains("#include \"pid-ff-scenario+learning-circle.h\""));
+        // The backstepping with its table, predicting over no delay (the minimal loop).
+        let read = |n: &str| {
+            let f = ControllerFile::decode(&std::fs::read(dir.join(format!("{n}.json"))).unwrap())
+                .unwrap();
+            match file_law(&f).unwrap() {
+                FileLaw::Backstepping(b) => *b,
+                FileLaw::Linear(_) => panic!("{n}: a backstepping law expected"),
+            }
+        };
+        let robust = read("robust+learning-circle");
+        assert_eq!(robust.delay, 0);
+        assert_eq!(robust.learned.as_ref().map(Vec::len), Some(5000));
+        assert_eq!(
+            robust,
+            read("robust").with_learned(robust.learned.clone().unwrap())
+        );
         std::fs::remove_dir_all(&root).unwrap();
     }
 
-    /// A file of another version (than 1, 2 or 3), an unknown compensation or other compensator settings is
-    /// refused with the field named.
+    /// A file of another version (than 1, 2 or 3), an unknown compensation or other
+    /// compensator settings is refused with the field named.
     #[test]
     fn a_bad_controller_file_is_refused_naming_the_field() {
         let file = controller_file(DEFAULT, &law(Compensation::Inverse));
@@ -506,7 +761,7 @@ mod tests {
         // A version 1 file (no damping, FIR or learned table) still reads.
         v.version = 1;
         let back = ControllerFile::decode(&flexstage_run::format::json(&v).unwrap()).unwrap();
-        assert_eq!(target_law(&back).unwrap(), law(Compensation::Inverse));
+        assert_eq!(linear(&back), law(Compensation::Inverse));
         // A version 2 file has no rate limit: it reads as the law without one.
         assert!(file.actuator.max_voltage_step_v > 0.0);
         let mut json: serde_json::Value =
@@ -517,18 +772,18 @@ mod tests {
         let old = ControllerFile::decode(&serde_json::to_vec(&json).unwrap()).unwrap();
         let mut want = law(Compensation::Inverse);
         want.actuator.max_voltage_step = 0.0;
-        assert_eq!(target_law(&old).unwrap(), want);
+        assert_eq!(linear(&old), want);
         let mut v = file.clone();
         v.actuator.compensation = "sometimes".into();
-        let e = target_law(&v).unwrap_err().to_string();
+        let e = file_law(&v).unwrap_err().to_string();
         assert!(e.contains("actuator.compensation"), "{e}");
         let mut v = file.clone();
         v.actuator.compensator_max_iterations = 3;
-        let e = target_law(&v).unwrap_err().to_string();
+        let e = file_law(&v).unwrap_err().to_string();
         assert!(e.contains("compensator_max_iterations"), "{e}");
         let mut v = file;
-        v.axes[1].ki_per_s = -1.0;
-        let e = target_law(&v).unwrap_err().to_string();
+        v.axes.as_mut().unwrap()[1].ki_per_s = -1.0;
+        let e = file_law(&v).unwrap_err().to_string();
         assert!(e.contains("pid.ki"), "{e}");
     }
 

@@ -542,17 +542,9 @@ impl fmt::Display for TrackSummary {
             writeln!(
                 f,
                 "for a real-time target (JSON, C99 source and header in controllers/; the law \
-                 as simulated: PI(D) + notch, FIR feed-forward with preview, PPF, learned \
-                 tables): {}",
+                 as simulated: PI(D) + notch, FIR feed-forward with preview, PPF, the \
+                 backstepping with its observer and prediction, learned tables): {}",
                 e.written.join(", ")
-            )?;
-        }
-        if !e.nonlinear.is_empty() {
-            writeln!(
-                f,
-                "not exported (no target law: the backstepping's K-filter observer, Kalman \
-                 estimate and robust law are not ported to C): {}",
-                e.nonlinear.join(", ")
             )?;
         }
         f.write_str(&self.margins_table())

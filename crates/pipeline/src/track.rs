@@ -356,7 +356,7 @@ pub struct TrackSummary {
     /// The rig's sample time \[s\] (delay margins in samples).
     pub sample_time: f64,
     /// The controllers written for a real-time target (`controllers/` of the result
-    /// folder: coefficients JSON, C99 source and header), and those not exported.
+    /// folder: coefficients JSON, C99 source and header).
     pub exported: crate::controllers::Exported,
 }
 
@@ -880,6 +880,11 @@ pub fn track_on(
         &options.controllers,
         &learned,
         setup.actuator(options.compensation),
+        match sim {
+            // The minimal loop has no delay: the controller predicts over none.
+            Simulated::Twin(_) => setup.controller.delay,
+            Simulated::Lumped => 0,
+        },
     )?;
     crate::error::require_converged_tracking(&rows)?;
     Ok(TrackSummary {

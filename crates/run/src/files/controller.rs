@@ -2,10 +2,15 @@
 //! real-time target runs it — the PID + notch law with its feed-forward (the static inverse,
 //! or the FIR inverse with preview), the PPF damping filters and a learned correction table
 //! when it has them, and its inverse hysteresis actuator stage (Eq. 19–21 and 36 of
-//! Actuators 2022, 11(7), 179), every coefficient as the simulation used it. Version 2 added
-//! `damping`, `feedforward` and `learned_m`, version 3 the actuator's rate limit
-//! `max_voltage_step_v`; version 1 and 2 files (none of them: no rate limit) still read. `flexstage-control`'s `TargetLaw` is the same law
-//! in memory; the C source and header next to the file are generated from it.
+//! Actuators 2022, 11(7), 179), every coefficient as the simulation used it; or the
+//! backstepping controller (`backstepping`: the K-filter observer, the prediction over the
+//! rig's delay, the robust law of Appendix D, the input transformation of Eq. 44, the notches
+//! on the reading) with the same actuator stage and learned table. Version 2 added
+//! `damping`, `feedforward` and `learned_m`, version 3 `backstepping` (with which `axes` and
+//! `inverse_static_gain` are absent) and the actuator's rate limit `max_voltage_step_v`;
+//! version 1 and 2 files (no rate limit) still read.
+//! `flexstage-control`'s `TargetLaw` and `BacksteppingLaw` are the same laws in memory; the C
+//! source and header next to the file are generated from them.
 
 use serde::{Deserialize, Serialize};
 
@@ -77,10 +82,13 @@ pub struct ControllerFile {
     pub label: String,
     /// Sample time T \[s\] the coefficients are designed for.
     pub sample_time_s: f64,
-    /// Feedback per output axis (q1, q2).
-    pub axes: [AxisFile; 2],
-    /// G_dc⁻¹, row-major: x_nom = G_dc⁻¹ (q_d + N(c)) \[m\].
-    pub inverse_static_gain: [[f64; 2]; 2],
+    /// Feedback per output axis (q1, q2) of the linear law; absent for the backstepping.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub axes: Option<[AxisFile; 2]>,
+    /// G_dc⁻¹, row-major: x_nom = G_dc⁻¹ (q_d + N(c)) \[m\], of the linear law; absent for
+    /// the backstepping.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub inverse_static_gain: Option<[[f64; 2]; 2]>,
     /// The actuator stage.
     pub actuator: ActuatorFile,
     /// The PPF damping filters D_i on each axis's reading, added as G_dc⁻¹ D(y) (a zero
@@ -95,6 +103,56 @@ pub struct ControllerFile {
     /// from the reading; absent: no learning.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub learned_m: Option<Vec<[f64; 2]>>,
+    /// The backstepping law in place of the linear one (version 3); absent: the linear law.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub backstepping: Option<BacksteppingFile>,
+}
+
+/// The backstepping controller's law (Section 3.2.2, Appendix D of Actuators 2022, 11(7),
+/// 179, as `flexstage_control::controller` corrects it): every matrix row-major.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BacksteppingFile {
+    /// Samples d of the rig's delay the estimate is predicted over (0–2).
+    pub delay_samples: usize,
+    /// The robust terms a_s, v_s on (`robust`) or off (`nonrobust`).
+    pub robust: bool,
+    /// Error gains k_ε \[1/s\] per axis.
+    pub error_gain_per_s: [f64; 2],
+    /// Linear feedback gains k_η \[1/s\] per axis (> 1).
+    pub eta_gain_per_s: [f64; 2],
+    /// Feedback gains k \[1/s\] per axis.
+    pub feedback_gain_per_s: [f64; 2],
+    /// Disturbance bounds ρ_η \[m/s²\] per axis.
+    pub eta_bound_m_per_s2: [f64; 2],
+    /// Disturbance bounds ρ_ε \[m/s\] per axis.
+    pub a_bound_m_per_s: [f64; 2],
+    /// Boundary layers φ_s \[m/s\], φ_a \[m\] (0: sgn).
+    pub boundary_layer: [f64; 2],
+    /// The output velocity without delay: `observer` (the estimate) or `finite-difference`.
+    pub velocity: String,
+    /// The law's inner state: `estimate` (ξ̂, ξ̂̇) or `command` (ξ_d and the last v).
+    pub inner: String,
+    /// Whether the law cancels the estimated model error Δ̂_η.
+    pub disturbance_feedback: bool,
+    /// Per axis, the two notch sections on the reading (the identity where there is none).
+    pub notches: [[SectionFile; 2]; 2],
+    /// Per axis, the notches' low-frequency delay τ_i \[s\] the reference is taken earlier.
+    pub notch_delay_s: [f64; 2],
+    /// B of the controller's model (Eq. 36, 8 × 8).
+    pub model_b: [[f64; 8]; 8],
+    /// G⁻¹ of the law (A24).
+    pub g_inv: [[f64; 2]; 2],
+    /// D⁻¹ of the input transformation (Eq. 44).
+    pub d_inv: [[f64; 2]; 2],
+    /// Φ of the observer's augmented model [z, d] sampled at T (10 × 10): the prediction.
+    pub phi: [[f64; 10]; 10],
+    /// Γ (10 × 2): the input filters and the prediction.
+    pub gamma: [[f64; 2]; 10],
+    /// The filter's error matrix F = Φ − L C (10 × 10).
+    pub filter_f: [[f64; 10]; 10],
+    /// The filter's injection gain L (10 × 2).
+    pub filter_l: [[f64; 2]; 10],
 }
 
 /// The FIR feed-forward: x_ff,k = Σ_n F_n q_d,k−n, n = −p, …, L − p − 1 \[m\].
@@ -117,8 +175,17 @@ impl Format for ControllerFile {
 
     fn decode(bytes: &[u8]) -> Result<Self, String> {
         let v: ControllerFile = from_json(bytes)?;
-        if v.version != 1 && v.version != 2 {
+        if !(1..VERSION).contains(&v.version) {
             check_version(v.version, VERSION)?;
+        }
+        let linear = v.axes.is_some() && v.inverse_static_gain.is_some();
+        let backstepping = v.backstepping.is_some() && v.version >= 3;
+        if linear == backstepping || v.axes.is_some() != v.inverse_static_gain.is_some() {
+            return Err(
+                "a controller file holds either `axes` and `inverse_static_gain` (the linear \
+                 law) or `backstepping` (version 3), not both and not neither"
+                    .to_string(),
+            );
         }
         Ok(v)
     }
