@@ -682,7 +682,7 @@ pub(crate) const FIELD_DOCS: &[(&str, &str)] = &[
     ),
     (
         "twin.min_modes",
-        "At least this many fixed-interface modes, in [1, 40]. Default 40 (the 50 µs step of the twin's validity within 2 % of range: 0.8 % on the quick design; 24 left it at 2.2 %, 6 at 8.6 %: the modes between f_s and 5 f1 converge slowly).",
+        "At least this many fixed-interface modes, in [1, 160]. Default 40 (the 50 µs step of the twin's validity within 2 % of range: 0.8 % on the quick design; 24 left it at 2.2 %, 6 at 8.6 %: the modes between f_s and 5 f1 converge slowly).",
     ),
     (
         "twin.damping_ratio",

@@ -230,7 +230,7 @@ impl Twin {
     /// Checks every field.
     pub fn validate(&self) -> Result<()> {
         within("twin.coverage", self.coverage, 1.0, 20.0)?;
-        crate::error::count("twin.min_modes", self.min_modes, 1, 40)?;
+        crate::error::count("twin.min_modes", self.min_modes, 1, 160)?;
         check(
             "twin.damping_ratio",
             self.damping_ratio,

@@ -18,7 +18,7 @@ use crate::structure::StageFe;
 pub struct TwinParams {
     /// The fixed-interface modes cover this multiple of the first resonance, in [1, 20].
     pub coverage: f64,
-    /// At least this many fixed-interface modes, in [1, 40].
+    /// At least this many fixed-interface modes, in [1, 160].
     pub min_modes: usize,
     /// Damping ratio ζ at the first resonance and at max(coverage, 2)× it (Rayleigh), in
     /// [0, 0.5).
@@ -66,8 +66,8 @@ impl TwinParams {
         check(
             "twin.min_modes",
             self.min_modes as f64,
-            (1..=40).contains(&self.min_modes),
-            "an integer in [1, 40]",
+            (1..=MAX_MODES).contains(&self.min_modes),
+            "an integer in [1, 160]",
         )?;
         check(
             "twin.damping_ratio",
@@ -112,7 +112,7 @@ pub struct Twin {
 }
 
 /// Most fixed-interface modes the builder will add to reach the coverage.
-const MAX_MODES: usize = 40;
+const MAX_MODES: usize = 160;
 
 /// The fixed-interface modes reach this multiple of the covered band (Craig–Bampton practice:
 /// retain fixed-interface modes to about twice the highest frequency of interest, so that the
@@ -122,7 +122,7 @@ pub const FIXED_INTERFACE_FACTOR: f64 = 2.0;
 impl Twin {
     /// Builds the twin of `fe`: Craig–Bampton with at least `min_modes` fixed-interface modes,
     /// doubled until they reach [`FIXED_INTERFACE_FACTOR`] × the twin's reach (the larger of
-    /// `coverage` × the first resonance and f_s + [`SCAN_REACH`] × it; at most 40), Rayleigh
+    /// `coverage` × the first resonance and f_s + [`SCAN_REACH`] × it; at most 160), Rayleigh
     /// damping, the nonlinear fit.
     pub fn build(fe: StageFe, params: &TwinParams) -> Result<Twin> {
         params.validate()?;
