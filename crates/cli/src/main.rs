@@ -191,7 +191,7 @@ or into a firmware tree: <DIR>/<controller>.c and .h, C99 with <math.h> only, fu
 reference's first three derivatives, and _reference_time says when). \
 docs/controller-export.md says how to call them at 10 kHz.
 
-With --response or --log it designs the linear controllers (PI + notch, PID, PPF) from a measured loop alone, no design or twin (not the backstepping: its gains are sized by margins measured on the running loop, which a response alone does not give): a measured response or a time log of your stage at the controller's sample time (formats in docs/formats.md). The actuator settings (the PEAs' hysteresis model for the inverse compensation, the stroke) come from --scenario FILE, or from --preset (default: paper). It writes <controller>.json, .c and .h of each.
+With --response or --log it designs every controller (PI + notch, PID, PPF, the backstepping sized on the measured loop model) from a measured loop alone, no design or twin: a measured response or a time log of your stage at the controller's sample time (formats in docs/formats.md). The actuator settings (the PEAs' hysteresis model for the inverse compensation, the stroke) come from --scenario FILE, or from --preset (default: paper). It writes <controller>.json, .c and .h of each.
 
 Examples:
   flexstage controller runs/quick/track/controllers/pi-notch-ff.json

@@ -418,13 +418,17 @@ pub enum Measurement<'a> {
     Log(&'a Path),
 }
 
-/// The coefficients files of the linear controllers of the registry designed from
-/// `response` alone (no design, no twin): its loop model
+/// The coefficients files of every controller of the registry designed from `response`
+/// alone (no design, no twin), as `track` designs them: its loop model
 /// (`flexstage_assess::lab::LabMeasurement::loop_model`: the z-domain fit with the static
-/// gain read off the lowest lines) to tune the PI + notch and the PID on (to the margins raised by the default allowance for the
-/// measurement's uncertainty, `flexstage_assess::lab::LabParams::allowing`, as `track`), the model's response fit for the feed-forward, and the
-/// scenario's settings for the actuator stage (inverse compensation). A response read back
-/// from its file gives the same files, bitwise.
+/// gain read off the lowest lines) to tune the PI + notch and the PID on (to the margins
+/// raised by the default allowance for the measurement's uncertainty,
+/// `flexstage_assess::lab::LabParams::allowing`), the model's response fit for the
+/// feed-forward and the backstepping's model, the backstepping's gains sized by their margins
+/// on the measured loop model run in the time domain (`flexstage_assess::bench::MeasuredLoop`)
+/// and its prediction over the delay the fit measured, and the scenario's settings for the
+/// actuator stage (inverse compensation). A response read back from its file gives the same
+/// files, bitwise.
 pub fn measured_controller_files(
     response: &MeasuredResponse,
     scenario: &Scenario,
@@ -439,9 +443,14 @@ pub fn measured_controller_files(
     setup.rig.sample_time = response.sample_time();
     // The same allowance for the measurement's uncertainty as `track`'s designs.
     let tuning = flexstage_assess::lab::LabParams::default().allowing(&TuningParams::default())?;
-    let stage = Stage::new(&setup, Some(&model), Some(fit), None, tuning);
+    let probe = flexstage_assess::bench::MeasuredLoop {
+        model: &measured.model,
+        setup: &setup,
+    };
+    let stage = Stage::new(&setup, Some(&model), Some(fit), Some(&probe), tuning);
     let designs = Designs::for_stage(&stage)?;
     let actuator = setup.actuator(Compensation::Inverse);
+    let delay = measured.model.delay();
     let mut files = Vec::new();
     for &c in &CONTROLLERS {
         let Some(design) = designs.get(c) else {
@@ -449,12 +458,14 @@ pub fn measured_controller_files(
         };
         if let Some(law) = TargetLaw::of_design(&**design, actuator)? {
             files.push(controller_file(c, &law));
+        } else if let Some(law) = design.backstepping(actuator, delay)? {
+            files.push(backstepping_file(c, &law));
         }
     }
     Ok(files)
 }
 
-/// Designs the linear controllers from a measured response or a time log alone
+/// Designs every controller from a measured response or a time log alone
 /// ([`measured_controller_files`], the actuator settings of `scenario`: its PEAs' hysteresis
 /// model for the inverse compensation and its stage's stroke) and writes each one's
 /// coefficients file, C source and header (`<controller>.json`, `.c`, `.h`) into `dir`
@@ -852,9 +863,10 @@ mod tests {
         MeasuredResponse::from_multisine([&a, &b], &plan).unwrap()
     }
 
-    /// Goal: the PI + notch and the PID are designed from a measured response alone, and a
-    /// response written to its file and read back designs the same controllers, bitwise
-    /// (every coefficient of their files).
+    /// Goal: every controller (the PI + notch, the PID, the PPF and both backstepping
+    /// controllers) is designed from a measured response alone, and a response written to
+    /// its file and read back designs the same controllers, bitwise (every coefficient of
+    /// their files).
     #[test]
     fn controllers_from_a_response_read_back_are_bitwise_the_same() {
         let r = measured();
@@ -864,10 +876,14 @@ mod tests {
             MeasuredResponse::from_csv(r.to_csv().as_bytes(), "the written response").unwrap();
         let again = measured_controller_files(&back, &scenario).unwrap();
         let names: Vec<&str> = direct.iter().map(|f| f.controller.as_str()).collect();
-        assert!(
-            names.contains(&"pi-notch-ff") && names.contains(&"pid-ff"),
-            "{names:?}"
-        );
+        for want in ["pi-notch-ff", "pid-ff", "ppf-pi-ff", "robust", "nonrobust"] {
+            assert!(names.contains(&want), "{want} missing: {names:?}");
+        }
+        let robust = direct.iter().find(|f| f.controller == "robust").unwrap();
+        assert!(matches!(
+            file_law(robust).unwrap(),
+            FileLaw::Backstepping(_)
+        ));
         assert_eq!(direct.len(), again.len());
         for (a, b) in direct.iter().zip(&again) {
             assert_eq!(a.encode().unwrap(), b.encode().unwrap(), "{}", a.controller);
