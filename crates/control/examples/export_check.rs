@@ -25,12 +25,10 @@ use std::path::Path;
 use flexstage_control::actuator::Compensation;
 use flexstage_control::experiment::Setup;
 use flexstage_control::feedforward::FirFeedForward;
-use flexstage_control::registry::{CONTROLLERS, DEFAULT, Design, Designs, Stage};
+use flexstage_control::registry::{CONTROLLERS, DEFAULT, Design};
 use flexstage_control::target::{TargetLaw, c_prefix, recorded_sequence};
 use flexstage_control::target_backstepping::{self as bs, BacksteppingLaw};
-use flexstage_control::tuning::TuningParams;
 use flexstage_control_core::Biquad;
-use flexstage_identify::response::ResponseFit;
 
 fn write(
     dir: &Path,
@@ -165,17 +163,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let dir = Path::new(&dir);
     std::fs::create_dir_all(dir)?;
     let setup = Setup::from_scenario(&flexstage_scenario::Scenario::paper());
-    let modes = flexstage_sim::samples::decoupled_modes();
-    let fit = ResponseFit::from_modes(&modes, 5000.0, 0.1);
-    let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1)?;
-    let stage = Stage::new(
-        &setup,
-        Some(&plant),
-        Some(fit),
-        None,
-        TuningParams::default(),
-    );
-    let designs = Designs::for_stage(&stage)?;
+    let designs = flexstage_control::samples::decoupled_designs(&setup)?;
     let inverse = setup.actuator(Compensation::Inverse);
     let scale = 1.0 + 1e-9;
     for c in CONTROLLERS {

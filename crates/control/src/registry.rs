@@ -308,17 +308,7 @@ mod tests {
         assert!(designs.not_designed.contains(&DEFAULT));
         // With one (two decoupled 1 %-damped modes, one sample of delay), every controller
         // is designed.
-        let modes = flexstage_sim::samples::decoupled_modes();
-        let fit = ResponseFit::from_modes(&modes, 5000.0, 0.1);
-        let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
-        let stage = Stage::new(
-            &setup,
-            Some(&plant),
-            Some(fit),
-            None,
-            TuningParams::default(),
-        );
-        let designs = Designs::for_stage(&stage).unwrap();
+        let designs = crate::samples::decoupled_designs(&setup).unwrap();
         assert!(
             designs.not_designed.is_empty(),
             "{:?}",

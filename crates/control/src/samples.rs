@@ -16,3 +16,23 @@ pub fn ideal_actuator() -> crate::actuator::ActuatorParams {
         max_voltage_step: 0.0,
     }
 }
+
+/// Every registry controller designed on the sampled loop of two decoupled 1 %-damped modes
+/// (`flexstage_sim::samples::decoupled_modes`, 10 kHz, one sample of delay) with their
+/// response fit, the settings of `setup` and the default tuning: a stage on which every
+/// controller of the registry is designed.
+pub fn decoupled_designs(
+    setup: &crate::experiment::Setup,
+) -> crate::error::Result<crate::registry::Designs> {
+    let modes = flexstage_sim::samples::decoupled_modes();
+    let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
+    let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1)?;
+    let stage = crate::registry::Stage::new(
+        setup,
+        Some(&plant),
+        Some(fit),
+        None,
+        crate::tuning::TuningParams::default(),
+    );
+    crate::registry::Designs::for_stage(&stage)
+}

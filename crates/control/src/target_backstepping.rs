@@ -524,26 +524,14 @@ pub fn recorded_sequence(law: &BacksteppingLaw, seed: u64) -> Result<RecordedSeq
 mod tests {
     use super::*;
     use crate::actuator::Compensation;
-    use crate::registry::{Designs, Stage};
     use crate::target::largest_relative_difference;
-    use crate::tuning::TuningParams;
 
     /// The `robust` (or `nonrobust`) design of the registry on the paper scenario over two
     /// decoupled 1 %-damped modes with one sample of delay (the model fitted to the
     /// response, the PI + notch's notches on the reading), with inverse compensation.
     fn design(robust: bool) -> (std::sync::Arc<dyn crate::registry::Design>, ActuatorParams) {
         let setup = crate::experiment::Setup::from_scenario(&flexstage_scenario::Scenario::paper());
-        let modes = flexstage_sim::samples::decoupled_modes();
-        let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
-        let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
-        let stage = Stage::new(
-            &setup,
-            Some(&plant),
-            Some(fit),
-            None,
-            TuningParams::default(),
-        );
-        let designs = Designs::for_stage(&stage).unwrap();
+        let designs = crate::samples::decoupled_designs(&setup).unwrap();
         let c = if robust {
             &crate::controller::ROBUST
         } else {
@@ -712,17 +700,7 @@ mod tests {
     fn every_registry_controller_has_a_target_law() {
         let (_, actuator) = design(true);
         let setup = crate::experiment::Setup::from_scenario(&flexstage_scenario::Scenario::paper());
-        let modes = flexstage_sim::samples::decoupled_modes();
-        let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
-        let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
-        let stage = Stage::new(
-            &setup,
-            Some(&plant),
-            Some(fit),
-            None,
-            TuningParams::default(),
-        );
-        let designs = Designs::for_stage(&stage).unwrap();
+        let designs = crate::samples::decoupled_designs(&setup).unwrap();
         for c in crate::registry::CONTROLLERS {
             let d = designs.get(c).unwrap();
             let linear = crate::target::TargetLaw::of_design(&**d, actuator).unwrap();

@@ -8,25 +8,13 @@ use std::process::Command;
 use flexstage_control::actuator::Compensation;
 use flexstage_control::controller::ROBUST;
 use flexstage_control::experiment::Setup;
-use flexstage_control::registry::{Designs, Stage};
 use flexstage_control::target_backstepping::{BacksteppingLaw, recorded_sequence};
-use flexstage_control::tuning::TuningParams;
 
 /// The `robust` design on the paper scenario over two decoupled 1 %-damped modes with one
 /// sample of delay, inverse compensation, predicting over one sample.
 fn law() -> BacksteppingLaw {
     let setup = Setup::from_scenario(&flexstage_scenario::Scenario::paper());
-    let modes = flexstage_sim::samples::decoupled_modes();
-    let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
-    let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
-    let stage = Stage::new(
-        &setup,
-        Some(&plant),
-        Some(fit),
-        None,
-        TuningParams::default(),
-    );
-    let designs = Designs::for_stage(&stage).unwrap();
+    let designs = flexstage_control::samples::decoupled_designs(&setup).unwrap();
     designs
         .get(&ROBUST)
         .unwrap()

@@ -589,17 +589,7 @@ mod tests {
             (DEFAULT, law(Compensation::Ideal)),
             (pid, scenario_pid),
         ];
-        let modes = flexstage_sim::samples::decoupled_modes();
-        let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
-        let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
-        let stage = Stage::new(
-            &setup,
-            Some(&plant),
-            Some(fit),
-            None,
-            TuningParams::default(),
-        );
-        let sampled = Designs::for_stage(&stage).unwrap();
+        let sampled = flexstage_control::samples::decoupled_designs(&setup).unwrap();
         for c in [
             DEFAULT,
             &flexstage_control::pid::PID_FF,
@@ -638,17 +628,7 @@ mod tests {
         use flexstage_control::target_backstepping::recorded_sequence;
         let setup = Setup::from_scenario(&flexstage_scenario::Scenario::paper());
         let inverse = setup.actuator(Compensation::Inverse);
-        let modes = flexstage_sim::samples::decoupled_modes();
-        let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
-        let plant = flexstage_sim::modal::ModalPlant::new(modes, 1e-4, 1).unwrap();
-        let stage = Stage::new(
-            &setup,
-            Some(&plant),
-            Some(fit),
-            None,
-            TuningParams::default(),
-        );
-        let designs = Designs::for_stage(&stage).unwrap();
+        let designs = flexstage_control::samples::decoupled_designs(&setup).unwrap();
         let of = |c, delay| {
             designs
                 .get(c)
