@@ -15,6 +15,7 @@ use flexstage_identify::measured::{
 };
 use flexstage_identify::response::{RESPONSE_SHARE, ResponseFit};
 use flexstage_sim::modal::LoopPlant;
+use flexstage_sim::rig::RigParams;
 use flexstage_twin::Twin;
 
 use flexstage_control::tuning::TuningParams;
@@ -79,9 +80,10 @@ pub struct LabMeasurement {
     pub model: ZFit,
 }
 
-/// The two multisine logs of `twin` in the rig of `setup` (one experiment per PEA, each
-/// from rest, with noise seeds of their own).
-pub fn lab_logs(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<([LabLog; 2], MultisinePlan)> {
+/// The lab's rig for its experiments (the noise off when `p.noise` is) and its multisine
+/// plan, the same for the sampled ([`lab_logs`]) and the lifted ([`measure_lifted`])
+/// measurement.
+fn experiment(setup: &Setup, p: &LabParams) -> (RigParams, MultisinePlan) {
     let mut rig = setup.rig.clone();
     if !p.noise {
         rig.noise_std = [0.0; 2];
@@ -93,16 +95,34 @@ pub fn lab_logs(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<([LabLog; 2
         .plan
         .clone()
         .unwrap_or_else(|| MultisinePlan::new(rig.sample_time));
+    (rig, plan)
+}
+
+/// The rig of the experiment that drives PEA `input`, from rest with a noise seed of its own.
+fn experiment_rig(rig: &RigParams, input: usize) -> RigParams {
+    let mut r = rig.clone();
+    r.seed = rig.seed.wrapping_add(101 * (input as u64 + 1));
+    r
+}
+
+/// The actuator stage that drives the experiments. The excitation is open loop: the
+/// controllers' rate limit (their anti-windup) is not part of the lab's drive, which meets
+/// the amplifier's own limits in the rig.
+fn drive(setup: &Setup, p: &LabParams) -> Result<Actuator> {
+    Ok(Actuator::new(ActuatorParams {
+        max_voltage_step: 0.0,
+        ..setup.actuator(p.compensation)
+    })?)
+}
+
+/// The two multisine logs of `twin` in the rig of `setup` (one experiment per PEA, each
+/// from rest, with noise seeds of their own).
+pub fn lab_logs(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<([LabLog; 2], MultisinePlan)> {
+    let (rig, plan) = experiment(setup, p);
     let log = |input: usize| -> Result<LabLog> {
-        let mut r = rig.clone();
-        r.seed = rig.seed.wrapping_add(101 * (input as u64 + 1));
+        let r = experiment_rig(&rig, input);
         let mut plant = twin.plant(&r)?;
-        // The excitation is open loop: the controllers' rate limit (their anti-windup) is
-        // not part of the lab's drive, which meets the amplifier's own limits in the rig.
-        let mut actuator = Actuator::new(ActuatorParams {
-            max_voltage_step: 0.0,
-            ..setup.actuator(p.compensation)
-        })?;
+        let mut actuator = drive(setup, p)?;
         let t = r.sample_time;
         Ok(run_log(&mut plant, t, &plan.commands(input)?, |x| {
             actuator.command(x, t).voltage
@@ -122,27 +142,16 @@ pub fn measure_lifted(
     p: &LabParams,
     ratio: usize,
 ) -> Result<LiftedResponse> {
-    let mut rig = setup.rig.clone();
-    if !p.noise {
-        rig.noise_std = [0.0; 2];
-        rig.resolution = [0.0; 2];
-        rig.sensor.flicker_corner = 0.0;
-        rig.floor.velocity_rms = 0.0;
-    }
-    let plan = p
-        .plan
-        .clone()
-        .unwrap_or_else(|| MultisinePlan::new(rig.sample_time));
+    let (rig, plan) = experiment(setup, p);
     let log = |input: usize| -> Result<FastLog> {
-        let mut r = rig.clone();
-        r.seed = rig.seed.wrapping_add(101 * (input as u64 + 1));
+        let r = experiment_rig(&rig, input);
         let adc = FastAdc {
             ratio,
             noise_std: r.noise_std,
             seed: r.seed.wrapping_mul(17).wrapping_add(3),
         };
         let mut plant = twin.plant(&r)?;
-        let mut actuator = Actuator::new(setup.actuator(p.compensation))?;
+        let mut actuator = drive(setup, p)?;
         let t = r.sample_time;
         Ok(run_fast_log(
             &mut plant,
