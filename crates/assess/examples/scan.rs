@@ -4,12 +4,15 @@
 //! feedback, on the twin in the full rig.
 //!
 //! ```text
-//! cargo run --release -p flexstage-assess --example scan -- quick RUN/design/design.json RUN/track/measured_response.csv|measure static|lead|inverse|lifted|lifted0[:CUTOFF_HZ[:PREVIEW[:TAPS[:RHO]]]] [FRACTION ...]
+//! cargo run --release -p flexstage-assess --example scan -- quick RUN/design/design.json RUN/track/measured_response.csv|measure static|lead|inverse|lifted|lifted0|lifted0r[:CUTOFF_HZ[:PREVIEW[:TAPS[:RHO]]]] [FRACTION ...]
 //! ```
 //!
 //! `measure` measures the twin here as `track` does; the lifted response (a fast ADC on the
 //! sensor, `FAST_ADC_RATIO` samples per controller sample, default 10) is always measured:
-//! for `lifted` and for the intersample bound printed per point.
+//! for `lifted` and for the intersample bound printed per point. `lifted0` fits the lifted
+//! feed-forward to phase 0 alone (the output at the samples); `lifted0r` adds the feedback's
+//! reference the measured loop predicts the reading to be when the output follows
+//! (`FirFeedForward::fit_reading`).
 
 use flexstage_assess::Bench;
 use flexstage_assess::lab::{LabMeasurement, LabParams};
@@ -29,7 +32,7 @@ fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
     Ok(match parts.next() {
         Some("static") => FeedForward::Static,
         Some("lead") => FeedForward::StaticLead(1),
-        Some(name @ ("inverse" | "lifted" | "lifted0")) => {
+        Some(name @ ("inverse" | "lifted" | "lifted0" | "lifted0r")) => {
             let mut p = FeedForwardParams::default();
             if let Some(c) = parts.next() {
                 p.cutoff = c.parse()?;
@@ -44,6 +47,8 @@ fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
             if let Some(v) = parts.next() {
                 p.regularization = v.parse()?;
             }
+            // `lifted0r`: the feedback's reference the predicted reading.
+            p.reading = name == "lifted0r";
             if name.starts_with("lifted") {
                 FeedForward::Lifted(p)
             } else {
@@ -52,7 +57,7 @@ fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
         }
         _ => {
             return Err(
-                "feed-forward: static, lead, inverse or lifted[:CUTOFF[:PREVIEW[:TAPS[:RHO]]]]"
+                "feed-forward: static, lead, inverse, lifted, lifted0 or lifted0r[:CUTOFF[:PREVIEW[:TAPS[:RHO]]]]"
                     .into(),
             );
         }
@@ -204,7 +209,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         t0.elapsed().as_secs_f64()
     );
     // `lifted0`: the lifted fit on phase 0 alone (the output at the samples).
-    let fitted = if args[4].starts_with("lifted0") {
+    // `lifted0r` takes every phase: the design fits the filter to phase 0 and the
+    // reading's prediction to all of them.
+    let fitted = if args[4].starts_with("lifted0") && !args[4].starts_with("lifted0r") {
         lifted.at_samples()
     } else {
         lifted.clone()
@@ -251,6 +258,35 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             FeedForward::Lifted(p) => Some(FeedForwardParams { lag: ff.lag(), ..p }),
             _ => None,
         };
+        if let Some(c) = ff.reading() {
+            // The reading correction: |C(f)| per entry (the predicted reading less the lag).
+            let c = flexstage_control::feedforward::FirFeedForward::from_taps(
+                ff.preview(),
+                c.to_vec(),
+                ff.lag(),
+            )?;
+            for f in [33.0, 99.0, 329.0, 657.0, 986.0, 1500.0] {
+                let h = c.response(f, 1e-4);
+                println!(
+                    "reading correction |C| at {f:.0} Hz: {:.4} {:.4} {:.4} {:.4}",
+                    h[0][0].norm(),
+                    h[0][1].norm(),
+                    h[1][0].norm(),
+                    h[1][1].norm()
+                );
+            }
+        }
+        // Scoring only: the twin's reading over its output at the samples, less the lag.
+        for f in [33.0, 99.0, 329.0, 657.0, 986.0, 1500.0] {
+            let (g, o) = (truth.response(f), output.response(f));
+            let e =
+                nalgebra::Complex::from_polar(1.0, -std::f64::consts::TAU * f * ff.lag() * 1e-4);
+            let c = [0, 1].map(|i| (g[i][i] / o[i][i] - e).norm());
+            println!(
+                "twin reading/output − lag at {f:.0} Hz (diagonal): {:.4} {:.4}",
+                c[0], c[1]
+            );
+        }
         println!("f Hz   |GF - D| (loop model) q1 q2   (twin) q1 q2   |T|");
         for f in [32.0, 97.0, 322.0, 500.0, 965.0, 1010.0, 1500.0, 3000.0] {
             let h = ff.response(f, 1e-4);

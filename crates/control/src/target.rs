@@ -166,7 +166,10 @@ impl TargetLaw {
             }
         }
         if let Some(ff) = &self.feedforward {
-            FirFeedForward::from_taps(ff.preview(), ff.taps().to_vec(), ff.lag())?;
+            let checked = FirFeedForward::from_taps(ff.preview(), ff.taps().to_vec(), ff.lag())?;
+            if let Some(c) = ff.reading() {
+                checked.with_reading(c.to_vec())?;
+            }
         }
         positive("target.sample_time", self.sample_time)?;
         let law = PidLaw::new(
@@ -286,7 +289,8 @@ impl TargetController {
             Some(f) => {
                 f.push(input.ahead);
                 let x_ff = f.output();
-                self.law.command_with_feedforward(y, input.reference, x_ff)
+                let r = f.reference(input.reference);
+                self.law.command_with_feedforward(y, r, x_ff)
             }
             None => self.law.command(y, input.reference),
         };

@@ -285,6 +285,14 @@ pub fn c_source(law: &TargetLaw, prefix: &str, header_file: &str) -> Result<CSou
     check_names(prefix, header_file)?;
     law.controller()?;
     let ff = law.feedforward.as_ref();
+    if ff.is_some_and(|f| f.reading().is_some()) {
+        return Err(flexstage_numerics::RangeError::new(
+            "controller.feedforward.reading",
+            "a reading correction".to_string(),
+            "none: the C export runs the feedback's reference q_d((k - tau) T) alone",
+        )
+        .into());
+    }
     let fill = |t: &str| {
         t.replace("COEFFICIENTS", &coefficients(law))
             .replace("SAMPLE_TIME_LITERAL", &lit(law.sample_time))
