@@ -205,6 +205,37 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let ff = law.feedforward.as_ref().ok_or("the default has its FIR")?;
         let m = law.clone().with_feedforward(mutated_tap(ff, scale)?);
         write(dir, &format!("{prefix}_mutated_tap"), &m, &law)?;
+        // The reading correction of the feedback's reference: a lead-lag of a few per cent
+        // on the window, coupled.
+        let correction: Vec<[[f64; 2]; 2]> = (0..ff.taps().len())
+            .map(|u| {
+                let v = match u as i64 - ff.preview() as i64 {
+                    0 => 0.04,
+                    1 => -0.03,
+                    2 => -0.01,
+                    _ => 0.0,
+                };
+                [[v, 0.002 * v], [-0.001 * v, 0.5 * v]]
+            })
+            .collect();
+        let reading = law
+            .clone()
+            .with_feedforward(ff.clone().with_reading(correction.clone())?);
+        write(dir, &format!("{prefix}_reading"), &reading, &reading)?;
+        let mutated: Vec<[[f64; 2]; 2]> = correction
+            .iter()
+            .map(|t| {
+                if t[0][0] == 0.04 {
+                    [[0.04 * scale, t[0][1]], t[1]]
+                } else {
+                    *t
+                }
+            })
+            .collect();
+        let m = law
+            .clone()
+            .with_feedforward(ff.clone().with_reading(mutated)?);
+        write(dir, &format!("{prefix}_mutated_reading"), &m, &reading)?;
         let learning = law.clone().with_learned(learned_table());
         write(dir, &format!("{prefix}_learning"), &learning, &learning)?;
         let table = learned_table()

@@ -517,7 +517,8 @@ mod tests {
     }
 
     /// The law of `law(Compensation::Inverse)` with a FIR feed-forward of 3 preview and 5
-    /// causal taps (a lead of about one sample, coupled), a lag of 0.3 samples, PPF filters
+    /// causal taps (a lead of about one sample, coupled), a lag of 0.3 samples, a reading
+    /// correction of the feedback's reference (a few per cent, coupled), PPF filters
     /// on both axes and a learned table of 500 samples.
     fn full_law() -> TargetLaw {
         let taps = (0..8)
@@ -526,7 +527,16 @@ mod tests {
                 [[v, 0.01], [-0.02, 1.1 * v]]
             })
             .collect();
-        let ff = FirFeedForward::from_taps(3, taps, 0.3).unwrap();
+        let reading = (0..8)
+            .map(|n| {
+                let v = [0.0, 0.0, 0.0, 0.04, -0.03, -0.01, 0.0, 0.0][n];
+                [[v, 0.002], [-0.001, 0.5 * v]]
+            })
+            .collect();
+        let ff = FirFeedForward::from_taps(3, taps, 0.3)
+            .unwrap()
+            .with_reading(reading)
+            .unwrap();
         let ppf = |f: f64| {
             crate::damping::DampingFilter::new(
                 (f, 0.01),
@@ -629,7 +639,7 @@ mod tests {
 
     /// The check can fail: a coefficient changed by one part in 10⁹ (a gain, a notch
     /// coefficient, the inverse static gain, a Bouc–Wen parameter of the compensator, a FIR
-    /// tap, a PPF filter coefficient, the rate limit, the learned table) moves some command of the recorded
+    /// tap, a reading correction tap, a PPF filter coefficient, the rate limit, the learned table) moves some command of the recorded
     /// sequence by more than the 1e-12 the C check accepts.
     #[test]
     fn a_mutated_coefficient_fails_the_check() {
@@ -657,10 +667,18 @@ mod tests {
         let ff = l.feedforward.clone().unwrap();
         let mut taps = ff.taps().to_vec();
         taps[4][1][0] *= scale;
+        let m = l.clone().with_feedforward(
+            FirFeedForward::from_taps(ff.preview(), taps, ff.lag())
+                .and_then(|f| f.with_reading(ff.reading().unwrap().to_vec()))
+                .unwrap(),
+        );
+        mutants.push(("FIR tap", m));
+        let mut c = ff.reading().unwrap().to_vec();
+        c[4][0][0] *= scale;
         let m = l
             .clone()
-            .with_feedforward(FirFeedForward::from_taps(ff.preview(), taps, ff.lag()).unwrap());
-        mutants.push(("FIR tap", m));
+            .with_feedforward(ff.clone().with_reading(c).unwrap());
+        mutants.push(("reading tap", m));
         let mut m = l.clone();
         let mut d = m.damping.unwrap();
         let (b, a) = (d[0].numerator(), d[0].denominator());

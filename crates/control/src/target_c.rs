@@ -204,6 +204,28 @@ fn extensions(law: &TargetLaw, s: &mut String) {
         let _ = writeln!(s, "    {{{}, {}}},", list(&t[0]), list(&t[1]));
     }
     let _ = writeln!(s, "}};");
+    let reading = law.feedforward.as_ref().and_then(|f| f.reading());
+    let _ = writeln!(
+        s,
+        "/* Reading correction of the feedback's reference: C_n as F_n (a single zero entry \
+         where there is none, unused then). */"
+    );
+    let _ = writeln!(
+        s,
+        "static const int READING = {};",
+        u8::from(reading.is_some())
+    );
+    let reading = reading.unwrap_or(&zero_tap[..]);
+    let _ = writeln!(s, "static const int READING_LENGTH = {};", reading.len());
+    let _ = writeln!(
+        s,
+        "static const double READING_TAPS[{}][2][2] = {{",
+        reading.len()
+    );
+    for t in reading {
+        let _ = writeln!(s, "    {{{}, {}}},", list(&t[0]), list(&t[1]));
+    }
+    let _ = writeln!(s, "}};");
     let zero = Biquad::new([0.0; 3], [0.0; 2]);
     let damping = law.damping.unwrap_or([zero; 2]);
     let _ = writeln!(
@@ -285,14 +307,6 @@ pub fn c_source(law: &TargetLaw, prefix: &str, header_file: &str) -> Result<CSou
     check_names(prefix, header_file)?;
     law.controller()?;
     let ff = law.feedforward.as_ref();
-    if ff.is_some_and(|f| f.reading().is_some()) {
-        return Err(flexstage_numerics::RangeError::new(
-            "controller.feedforward.reading",
-            "a reading correction".to_string(),
-            "none: the C export runs the feedback's reference q_d((k - tau) T) alone",
-        )
-        .into());
-    }
     let fill = |t: &str| {
         t.replace("COEFFICIENTS", &coefficients(law))
             .replace("SAMPLE_TIME_LITERAL", &lit(law.sample_time))
@@ -306,6 +320,14 @@ pub fn c_source(law: &TargetLaw, prefix: &str, header_file: &str) -> Result<CSou
                 &ff.map_or(1, |f| f.taps().len()).to_string(),
             )
             .replace("FIR_FLAG", if ff.is_some() { "1" } else { "0" })
+            .replace(
+                "READING_FLAG",
+                if ff.is_some_and(|f| f.reading().is_some()) {
+                    "1"
+                } else {
+                    "0"
+                },
+            )
             .replace(
                 "LEARNING_PERIOD_LITERAL",
                 &law.learned.as_ref().map_or(0, Vec::len).to_string(),

@@ -74,6 +74,7 @@ pub fn controller_file(c: &Controller, law: &TargetLaw) -> ControllerFile {
             preview_samples: f.preview(),
             lag_samples: f.lag(),
             taps: f.taps().to_vec(),
+            reading_taps: f.reading().map(<[_]>::to_vec),
         }),
         learned_m: law.learned.clone(),
         backstepping: None,
@@ -202,7 +203,14 @@ fn target_law(f: &ControllerFile, axes: &[AxisFile; 2], g: [[f64; 2]; 2]) -> Res
         feedforward: f
             .feedforward
             .as_ref()
-            .map(|x| FirFeedForward::from_taps(x.preview_samples, x.taps.clone(), x.lag_samples))
+            .map(|x| {
+                let ff =
+                    FirFeedForward::from_taps(x.preview_samples, x.taps.clone(), x.lag_samples)?;
+                match &x.reading_taps {
+                    Some(c) => ff.with_reading(c.clone()),
+                    None => Ok(ff),
+                }
+            })
             .transpose()?,
         learned: f.learned_m.clone(),
     };

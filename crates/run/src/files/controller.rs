@@ -7,8 +7,9 @@
 //! rig's delay, the robust law of Appendix D, the input transformation of Eq. 44, the notches
 //! on the reading) with the same actuator stage and learned table. Version 2 added
 //! `damping`, `feedforward` and `learned_m`, version 3 `backstepping` (with which `axes` and
-//! `inverse_static_gain` are absent) and the actuator's rate limit `max_voltage_step_v`;
-//! version 1 and 2 files (no rate limit) still read.
+//! `inverse_static_gain` are absent) and the actuator's rate limit `max_voltage_step_v`,
+//! version 4 the feed-forward's `reading_taps`; version 1 and 2 files (no rate limit) and
+//! version 3 files still read.
 //! `flexstage-control`'s `TargetLaw` and `BacksteppingLaw` are the same laws in memory; the C
 //! source and header next to the file are generated from them.
 
@@ -17,7 +18,7 @@ use serde::{Deserialize, Serialize};
 use crate::format::{Format, check_version, from_json, json};
 
 /// The format version of a controller file.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 
 /// One second-order section y = (b₀ + b₁ z⁻¹ + b₂ z⁻²)/(1 + a₁ z⁻¹ + a₂ z⁻²) u.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -166,6 +167,11 @@ pub struct FeedForwardFile {
     pub lag_samples: f64,
     /// The taps F_n (2 × 2, row-major) for n = −p, …, L − p − 1.
     pub taps: Vec<[[f64; 2]; 2]>,
+    /// The reading correction C_n on the same window (version 4), added to the feedback's
+    /// reference: q_d((k − τ) T) + Σ_n C_n q_d,k−n, the reading the measured loop predicts
+    /// when the output follows; absent: q_d((k − τ) T) alone.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reading_taps: Option<Vec<[[f64; 2]; 2]>>,
 }
 
 impl Format for ControllerFile {
