@@ -581,7 +581,8 @@ mod tests {
     /// bitwise: the same coefficients, and the same commands on the recorded sequence (every
     /// compensation mode, two notches per axis, the scenario's PID; the PI + notch and the
     /// PID with their FIR feed-forward and the PPF controller designed on a sampled two-mode
-    /// stage, and the default with a learned table).
+    /// stage, the default with a learned table and with a reading correction); a version 3
+    /// file still reads.
     #[test]
     fn controller_file_reads_back_the_same_controller_bitwise() {
         let setup = Setup::from_scenario(&flexstage_scenario::Scenario::paper());
@@ -614,6 +615,26 @@ mod tests {
             .collect();
         let learned = laws[4].1.clone().with_learned(table);
         laws.push((DEFAULT, learned));
+        let ff = laws[4].1.feedforward.clone().unwrap();
+        let correction = (0..ff.taps().len())
+            .map(|u| {
+                let v = [0.03, -0.02, -0.01]
+                    .get(u.wrapping_sub(ff.preview()))
+                    .copied();
+                let v = v.unwrap_or(0.0);
+                [[v, 1e-3 * v], [0.0, 0.5 * v]]
+            })
+            .collect();
+        let reading = laws[4]
+            .1
+            .clone()
+            .with_feedforward(ff.with_reading(correction).unwrap());
+        laws.push((DEFAULT, reading));
+        // A version 3 file (no reading correction) still reads.
+        let mut v3 = controller_file(DEFAULT, &laws[4].1);
+        v3.version = 3;
+        let back = linear(&ControllerFile::decode(&v3.encode().unwrap()).unwrap());
+        assert_eq!(back, laws[4].1);
         for (c, l) in laws {
             let bytes = controller_file(c, &l).encode().unwrap();
             let back = linear(&ControllerFile::decode(&bytes).unwrap());
