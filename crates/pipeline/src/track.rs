@@ -412,18 +412,19 @@ type Designed = (
 /// perturbed twin measured and every controller designed from its measurement; on the
 /// scenario's first trajectory),
 /// whose pass rates go into the margin rows, and the error against scan frequency
-/// ([`crate::scan`]). On the lumped plant the controllers are designed from the scenario's
+/// ([`crate::scan`]; with `--learning` the sweep learns too). On the lumped plant the controllers are designed from the scenario's
 /// settings alone: one that needs the twin's response is skipped with a warning, and
 /// `pid-ff` runs the scenario's gains.
 fn tune_and_margins(
     setup: &mut Setup,
     sim: &Simulated,
-    controllers: &[&'static Controller],
-    montecarlo_plants: usize,
+    options: &TrackOptions,
     scenario: &flexstage_scenario::Scenario,
     progress: &dyn Progress,
     warnings: &mut Vec<String>,
 ) -> Result<Designed> {
+    let controllers: &[&'static Controller] = &options.controllers;
+    let montecarlo_plants = options.montecarlo_plants;
     let Simulated::Twin(twin) = sim else {
         let designs = Designs::for_stage(&Stage::scenario(setup))?;
         for c in controllers.iter().filter(|c| designs.get(c).is_none()) {
@@ -475,7 +476,7 @@ fn tune_and_margins(
         r.montecarlo_pass = Some(mc.pass_rate(j));
     }
     let t0 = std::time::Instant::now();
-    let scan = scan_frequency(&bench, scenario, controllers)?;
+    let scan = scan_frequency(&bench, scenario, controllers, options.learning)?;
     if let Some(sc) = &scan {
         progress.note(&format!(
             "error against scan frequency: {} frequencies × {} controller(s) in {:.1} s",
@@ -794,8 +795,7 @@ pub fn track_on(
     let (designs, margins, montecarlo, scan, measured) = tune_and_margins(
         &mut setup,
         &sim,
-        &options.controllers,
-        options.montecarlo_plants,
+        options,
         &plant.scenario,
         progress,
         &mut warnings,
