@@ -25,8 +25,9 @@
 //! With [`SweepParams::learning`] every candidate of every point also runs with the
 //! learning layer of `flexstage_control::learning`, as `track --learning` runs it on the
 //! slow trajectories: the learning plant measured at every harmonic of the point's period
-//! from the readings of fresh loops (never the true output), the layer designed from it
-//! (ρ ≤ 0.95 for every plant within the measured uncertainty) and told the sensor chain's
+//! from the readings of fresh loops (never the true output), the law chosen and designed
+//! from it (phase lead or model inverse, the smaller ρ ≤ 0.95 for every plant within the
+//! measured uncertainty) and told the sensor chain's
 //! datasheet lag, [`SweepLearning::trials`] periods (at most [`MAX_SWEEP_TRIALS`]) of
 //! learning, then the point's run scored with learning on ([`SweepPoint::learning`]), at
 //! the samples and between them.
@@ -35,7 +36,7 @@ use flexstage_control::ControlError;
 use flexstage_control::actuator::Compensation;
 use flexstage_control::feasibility::{Feasibility, Limit};
 use flexstage_control::learning::{
-    self, DesignParams, Learning, LearningParams, Readings, SensorLag, measure_learning_plant,
+    self, DesignParams, Learning, Readings, SensorLag, measure_learning_plant,
 };
 use flexstage_figures::plot::{Figure, Series};
 use flexstage_sim::experiment::{Record, StageControl, run};
@@ -87,8 +88,9 @@ pub struct SweepLearning {
 /// How a candidate learned at a point of the sweep.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Learned {
-    /// The learning layer's settings, designed from the readings.
-    pub params: LearningParams,
+    /// The learning law chosen by measurement (`phase-lead` or `inverse`,
+    /// `flexstage_control::learning::design_law`).
+    pub law: &'static str,
     /// Its monotone-convergence factor ρ on the measured learning plant.
     pub rho: f64,
     /// Learning trials (periods) before the scored run.
@@ -348,13 +350,13 @@ fn run_learning(
         Ok((ctrl, Readings::new(plant)))
     };
     let measured = measure_learning_plant(&mut factory, period, 3, l.amplitude)?;
-    let (params, rho) = match learning::design(&measured, &DesignParams::default()) {
+    let (law, rho) = match learning::design_law(&measured, &DesignParams::default()) {
         Ok(d) => d,
         Err(e @ ControlError::Unstable { .. }) => return Ok(Err(e.to_string())),
         Err(e) => return Err(e.into()),
     };
     let inner = bench.controller(c, Compensation::Inverse, r)?;
-    let mut ctrl = Learning::new(inner, params)?.with_sensor_lag(l.lag)?;
+    let mut ctrl = Learning::with_law(inner, &law)?.with_sensor_lag(l.lag)?;
     let mut plant = bench.twin.plant(&bench.setup.rig)?;
     plant.record_substeps();
     let mut sub = Substeps {
@@ -367,7 +369,7 @@ fn run_learning(
     let rec = run(&mut ctrl, &mut sub, duration, t, |_| {});
     let between = between(&sub.out, r, bench.setup.rig.substep(), learned);
     let learned = Learned {
-        params,
+        law: law.name(),
         rho,
         periods: l.trials,
     };

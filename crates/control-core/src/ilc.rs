@@ -213,6 +213,25 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
         c
     }
 
+    /// Stores a correction c_{j+1}\[k\] \[m\] computed outside this kernel (another
+    /// learning law, from [`Ilc::learned`] and [`Ilc::last_errors`]) for the current sample
+    /// k and returns what is applied: `c` while learning, the replayed c_j\[k\] when frozen,
+    /// 0 in the first period (as [`Ilc::correction`]). Call once per sample instead of
+    /// [`Ilc::correction`], before [`Ilc::record`].
+    #[inline]
+    pub fn set_correction(&mut self, c: [f64; 2]) -> [f64; 2] {
+        let k = self.k;
+        let c = if self.periods == 0 {
+            [0.0; 2]
+        } else if !self.learning {
+            self.buf.learned.as_ref()[k]
+        } else {
+            c
+        };
+        self.buf.applied.as_mut()[k] = c;
+        c
+    }
+
     /// Records the measurement y \[m\] and the reference q_d \[m\] of the current sample and
     /// moves to the next (a new period after N samples).
     #[inline]

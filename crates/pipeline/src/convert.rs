@@ -245,6 +245,7 @@ pub(crate) fn scan_rows(points: &[SweepPoint]) -> Vec<ScanRow> {
                 dominant_hz: r.dominant,
                 learning_periods: r.learned.map_or(0, |l| l.periods),
                 learning_rho: r.learned.map_or(f64::NAN, |l| l.rho),
+                learning_law: r.learned.map_or(String::new(), |l| l.law.to_string()),
             })
         })
         .collect()

@@ -484,6 +484,14 @@ fn tune_and_margins(
             controllers.len(),
             t0.elapsed().as_secs_f64()
         ));
+        for p in &sc.points {
+            for (name, why) in &p.refused {
+                warnings.push(format!(
+                    "no learning for {name} at {:.0} % of f1 on the sweep: {why}",
+                    100.0 * p.fraction
+                ));
+            }
+        }
     }
     Ok((bench.designs, rows, Some(mc), scan, Some(measured)))
 }
@@ -980,20 +988,17 @@ fn run_learning(
         Ok((c, Readings::boxed(plant)))
     };
     let measured = measure_learning_plant(&mut factory, learn.period, 3, LEARNING_AMPLITUDE)?;
-    let (params, rho) = learning::design(&measured, &DesignParams::default())?;
+    let (law, rho) = learning::design_law(&measured, &DesignParams::default())?;
     progress.note(&format!(
-        "{} on {}: learning γ = {}, lead {} samples, Q half-width {}, ρ = {rho:.3}, datasheet \
-         lag {:.3} samples",
+        "{} on {}: learning {}, ρ = {rho:.3}, datasheet lag {:.3} samples",
         j.controller.name,
         j.trajectory,
-        params.gain,
-        params.lead,
-        params.q_half_width,
+        law.describe(),
         learn.lag.samples()[0]
     ));
     let (mut plant, delay) = readings(setup, sim)?;
     let inner = design.build(actuator, delay, j.reference)?;
-    let mut c = Learning::new(inner, params)?.with_sensor_lag(learn.lag)?;
+    let mut c = Learning::with_law(inner, &law)?.with_sensor_lag(learn.lag)?;
     let watch = watch(&j.reference, j.duration, dt);
     let advance = |n: usize| progress.advance(n as u64);
     // The trials a period at a time, so that only one period is ever recorded.

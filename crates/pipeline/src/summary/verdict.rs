@@ -758,6 +758,7 @@ mod tests {
             rms2_between_pct_range: f64::NAN,
             learning_periods: 0,
             learning_rho: f64::NAN,
+            learning_law: String::new(),
         }
     }
 

@@ -352,6 +352,10 @@ pub struct ScanRow {
     /// 4 decimals; NaN for the controller alone.
     #[serde(default = "not_recorded", serialize_with = "num::fixed4")]
     pub learning_rho: f64,
+    /// The learning law chosen by measurement, `phase-lead` or `inverse`; empty for the
+    /// controller alone.
+    #[serde(default)]
+    pub learning_law: String,
 }
 
 /// The value of a column a file written before it existed lacks.
@@ -382,6 +386,7 @@ impl Row for ScanRow {
         "rms2_between_pct_range",
         "learning_periods",
         "learning_rho",
+        "learning_law",
     ];
     const EXACT: bool = false;
 }
