@@ -144,6 +144,9 @@ pub struct SweepResult {
     pub peak_between: [f64; 2],
     /// `rms_between` in % of the range.
     pub rms_between_pct: [f64; 2],
+    /// RMS per axis over the second half of the error the loop reads (the ADC reading
+    /// against the reference) in % of the range: what learning drives to zero.
+    pub rms_read_pct: [f64; 2],
     /// What limits the error.
     pub cause: Cause,
     /// Frequency of the largest error line over both axes \[Hz\] (0 when there is none).
@@ -494,6 +497,7 @@ fn score(c: &'static Controller, rec: &Record, half: [f64; 2], base: f64, t: f64
     let mut peak = [0.0; 2];
     let mut growth = false;
     let mut unseen = false;
+    let mut rms_read = [0.0; 2];
     for i in 0..2 {
         let e = &rec.error[i][steady..];
         let ms = |s: &[f64]| s.iter().map(|x| x * x).sum::<f64>() / s.len().max(1) as f64;
@@ -509,6 +513,7 @@ fn score(c: &'static Controller, rec: &Record, half: [f64; 2], base: f64, t: f64
             .map(|(y, r)| (y - r) * (y - r))
             .sum::<f64>()
             / e.len().max(1) as f64;
+        rms_read[i] = read.sqrt();
         unseen |= rms[i] > 2.0 * read.sqrt() && rms[i] > 1e-3 * half[i];
     }
     let finite = rms.iter().chain(&peak).all(|v| v.is_finite()) && rec.stopped.is_none();
@@ -536,6 +541,7 @@ fn score(c: &'static Controller, rec: &Record, half: [f64; 2], base: f64, t: f64
         rms_between: [f64::NAN; 2],
         peak_between: [f64::NAN; 2],
         rms_between_pct: [f64::NAN; 2],
+        rms_read_pct: pct(rms_read),
         cause,
         dominant,
         learned: None,

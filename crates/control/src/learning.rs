@@ -756,8 +756,9 @@ pub fn inverse_convergence_factor(plant: &LearningPlant, law: &InverseLaw) -> f6
 
 /// The model-inverse law on the measured `plant` (module docs, "Two laws"): for each gain
 /// of `settings`, the passband is every harmonic where |T̂_k| ≥ [`INVERSE_MIN_RESPONSE`]
-/// and |1 − γ| + γ δ_k/|T̂_k| ≤ `max_factor`; the gain kept is the one that learns the most
-/// harmonics (ties: the smaller ρ). An error when no gain learns any harmonic.
+/// and |1 − γ| + γ δ_k/|T̂_k| ≤ `max_factor`; the gain kept is the smallest of those that
+/// learn the most harmonics (`settings.gains` ascending). An error when no gain learns any
+/// harmonic.
 pub fn design_inverse(plant: &LearningPlant, settings: &DesignParams) -> Result<(InverseLaw, f64)> {
     let mut best: Option<(InverseLaw, f64, usize)> = None;
     for &gain in &settings.gains {
@@ -776,9 +777,9 @@ pub fn design_inverse(plant: &LearningPlant, settings: &DesignParams) -> Result<
         let law = InverseLaw::new(plant, gain, passband)?;
         let rho = inverse_convergence_factor(plant, &law);
         let count = law.learned_harmonics().iter().sum::<usize>();
-        let better = best
-            .as_ref()
-            .is_none_or(|(_, r, c)| count > *c || (count == *c && rho < *r));
+        // The gains ascend: among those that learn the most harmonics, the smallest (the
+        // least of the sensor noise learned into the correction).
+        let better = best.as_ref().is_none_or(|(_, _, c)| count > *c);
         if count > 0 && better {
             best = Some((law, rho, count));
         }
