@@ -68,6 +68,19 @@
 //! learning loop has, not a sample of them. The axes are treated loop at a time (T_ii): the
 //! cross terms of the designed stage are a few percent of the diagonal and are learned as
 //! part of each axis's error.
+//!
+//! # Two laws
+//! Because every harmonic of the period is measured, the model-inverse ("plant inversion")
+//! law of Bristow et al. 2006 needs nothing beyond the measurement ([`InverseLaw`]):
+//!
+//! ```text
+//! c_{j+1,k} = Q_k (c_{j,k} + γ e_{j,k} / T̂_k),   ρ = max_k Q_k (|1 − γ| + γ δ_k / |T̂_k|)
+//! ```
+//!
+//! with Q_k = 1 where that contraction is ≤ 0.95 and |T̂_k| ≥ [`INVERSE_MIN_RESPONSE`],
+//! else 0 ([`design_inverse`]). [`design_law`] designs both laws and keeps the one with the
+//! smaller ρ; [`Learning::with_law`] runs either on the same period buffers (the learned
+//! table, what is exported, has the same form).
 
 use flexstage_control_core::{Ilc, IlcBuffers};
 use flexstage_numerics::RangeError;
