@@ -251,3 +251,44 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reference: the rules of [`Ilc::correction`] (nothing in the first period, the last
+    /// period's correction replayed when frozen). Goal: a correction set from outside is
+    /// applied while learning, replaced by 0 in the first period and by c_j when frozen,
+    /// and becomes the learned table at the period's end.
+    #[test]
+    fn a_correction_set_from_outside_follows_the_kernels_rules() {
+        let n = 4;
+        let params = IlcParams {
+            period: n,
+            gain: 0.5,
+            lead: 0,
+            q_half_width: 0,
+        };
+        let buffers = IlcBuffers {
+            learned: [[0.0; 2]; 4],
+            applied: [[0.0; 2]; 4],
+            error: [[0.0; 2]; 4],
+            error_now: [[0.0; 2]; 4],
+        };
+        let mut ilc = Ilc::new(params, buffers).unwrap();
+        for _ in 0..n {
+            assert_eq!(ilc.set_correction([1.0, 2.0]), [0.0; 2]);
+            ilc.record([0.0; 2], [0.0; 2]);
+        }
+        for k in 0..n {
+            let c = [k as f64, -(k as f64)];
+            assert_eq!(ilc.set_correction(c), c);
+            ilc.record([0.0; 2], [0.0; 2]);
+        }
+        assert_eq!(ilc.learned()[3], [3.0, -3.0]);
+        ilc.set_learning(false);
+        assert_eq!(ilc.set_correction([9.0, 9.0]), [0.0, 0.0]);
+        ilc.record([0.0; 2], [0.0; 2]);
+        assert_eq!(ilc.set_correction([9.0, 9.0]), [1.0, -1.0]);
+    }
+}
