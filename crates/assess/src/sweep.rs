@@ -283,8 +283,11 @@ pub fn sweep(
         }
         let mut learning = Vec::new();
         let mut refused = Vec::new();
-        for &c in p.learning.iter().flat_map(|_| candidates) {
-            let l = p.learning.as_ref().expect("iterated only with learning");
+        for (&c, l) in p
+            .learning
+            .iter()
+            .flat_map(|l| candidates.iter().zip(std::iter::repeat(l)))
+        {
             match run_learning(bench, c, r, period, duration, l)? {
                 Ok((rec, between, learned)) => {
                     let mut res = scored(c, &rec, &between, half, base, t);
