@@ -7,6 +7,9 @@
 //! cargo run --release -p flexstage-assess --example scan -- quick RUN/design/design.json RUN/track/measured_response.csv|measure static|lead|inverse|lifted|lifted0|lifted0r[:CUTOFF_HZ[:PREVIEW[:TAPS[:RHO]]]] [FRACTION ...]
 //! ```
 //!
+//! `SCAN_LEARNING=TRIALS` (1..=30) also runs every candidate with the learning layer at every
+//! point and prints its rows instead of the intersample analysis.
+//!
 //! `measure` measures the twin here as `track` does; the lifted response (a fast ADC on the
 //! sensor, `FAST_ADC_RATIO` samples per controller sample, default 10) is always measured:
 //! for `lifted` and for the intersample bound printed per point. `lifted0` fits the lifted
@@ -396,6 +399,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if !fractions.is_empty() {
         p.fractions = fractions;
     }
+    // `SCAN_LEARNING=TRIALS`: every candidate also learns at every point (≤ 30 trials).
+    if let Ok(v) = std::env::var("SCAN_LEARNING") {
+        let lag = flexstage_control::learning::SensorDatasheet::from_scenario(&s)
+            .lag(bench.setup.rig.sample_time)?;
+        p.learning = Some(flexstage_assess::sweep::SweepLearning {
+            trials: v.parse()?,
+            amplitude: 20e-9,
+            lag,
+        });
+    }
     let amplitude = match s.trajectories.first() {
         Some(flexstage_scenario::Trajectory::Lissajous { amplitude, .. }) => *amplitude,
         Some(flexstage_scenario::Trajectory::Circle { radius, .. }) => [*radius; 2],
@@ -427,6 +440,34 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 r.dominant
             );
         }
+    }
+    for pt in &points {
+        for r in &pt.learning {
+            let l = r.learned.expect("learning rows carry their law");
+            println!(
+                "{:.3}  {:7.1}  {:<12}+learning ({} ρ {:.3}, {} periods): RMS % q1/q2 at the samples {:.3} {:.3}, between {:.3} {:.3}, read {:.3} {:.3}; peak % {:.3} {:.3}",
+                pt.fraction,
+                pt.frequency,
+                r.controller.name,
+                l.law,
+                l.rho,
+                l.periods,
+                r.rms_pct[0],
+                r.rms_pct[1],
+                r.rms_between_pct[0],
+                r.rms_between_pct[1],
+                r.rms_read_pct[0],
+                r.rms_read_pct[1],
+                r.peak_pct[0],
+                r.peak_pct[1],
+            );
+        }
+        for (name, why) in &pt.refused {
+            println!("{:.3}  {name}: no learning ({why})", pt.fraction);
+        }
+    }
+    if std::env::var("SCAN_LEARNING").is_ok() {
+        return Ok(());
     }
     between(&bench, &cands, &points, &lifted)?;
     Ok(())

@@ -20,11 +20,26 @@
 //! between them is scored too ([`SweepResult::rms_between`], on every substep of the
 //! simulation, [`run_between`]): the held command's images at f_s ∓ f drive the modes above
 //! Nyquist, which ring between the samples where no sampled reading sees them.
+//!
+//! # Learning
+//! With [`SweepParams::learning`] every candidate of every point also runs with the
+//! learning layer of `flexstage_control::learning`, as `track --learning` runs it on the
+//! slow trajectories: the learning plant measured at every harmonic of the point's period
+//! from the readings of fresh loops (never the true output), the law chosen and designed
+//! from it (phase lead or model inverse, the smaller ρ ≤ 0.95 for every plant within the
+//! measured uncertainty) and told the sensor chain's
+//! datasheet lag, [`SweepLearning::trials`] periods (at most [`MAX_SWEEP_TRIALS`]) of
+//! learning, then the point's run scored with learning on ([`SweepPoint::learning`]), at
+//! the samples and between them.
 
+use flexstage_control::ControlError;
 use flexstage_control::actuator::Compensation;
 use flexstage_control::feasibility::{Feasibility, Limit};
+use flexstage_control::learning::{
+    self, DesignParams, Learning, Readings, SensorLag, measure_learning_plant,
+};
 use flexstage_figures::plot::{Figure, Series};
-use flexstage_sim::experiment::{Record, run};
+use flexstage_sim::experiment::{Record, StageControl, run};
 use flexstage_sim::rig::StagePlant;
 use flexstage_sim::trajectory::{Reference, Shape};
 
@@ -40,6 +55,8 @@ pub struct SweepParams {
     pub fractions: Vec<f64>,
     /// Base periods simulated per point, ≥ 1 (the run is at least 50 ms).
     pub periods: f64,
+    /// Learning on the sweep ([`SweepLearning`]); `None`: off, the default.
+    pub learning: Option<SweepLearning>,
 }
 
 impl Default for SweepParams {
@@ -47,8 +64,37 @@ impl Default for SweepParams {
         SweepParams {
             fractions: vec![0.01, 0.02, 0.03, 0.05, 0.08, 0.1, 0.12, 0.2, 0.3],
             periods: 2.0,
+            learning: None,
         }
     }
+}
+
+/// The most learning trials (periods) per point and candidate (bounded work).
+pub const MAX_SWEEP_TRIALS: usize = 30;
+
+/// Learning on the sweep (module docs, "Learning"): every candidate of every point also runs
+/// with the learning layer, designed from the loop's readings, for `trials` periods, then
+/// the point's run is scored with learning on.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SweepLearning {
+    /// Learning trials (periods) before the scored run, 1..=[`MAX_SWEEP_TRIALS`].
+    pub trials: usize,
+    /// RMS per axis \[m\] of the multisine that measures the learning plant (> 0).
+    pub amplitude: f64,
+    /// The sensor chain's lag from its datasheet.
+    pub lag: SensorLag,
+}
+
+/// How a candidate learned at a point of the sweep.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Learned {
+    /// The learning law chosen by measurement (`phase-lead` or `inverse`,
+    /// `flexstage_control::learning::design_law`).
+    pub law: &'static str,
+    /// Its monotone-convergence factor ρ on the measured learning plant.
+    pub rho: f64,
+    /// Learning trials (periods) before the scored run.
+    pub periods: usize,
 }
 
 /// What limits a candidate's error at a point of the sweep (module docs).
@@ -98,10 +144,15 @@ pub struct SweepResult {
     pub peak_between: [f64; 2],
     /// `rms_between` in % of the range.
     pub rms_between_pct: [f64; 2],
+    /// RMS per axis over the second half of the error the loop reads (the ADC reading
+    /// against the reference) in % of the range: what learning drives to zero.
+    pub rms_read_pct: [f64; 2],
     /// What limits the error.
     pub cause: Cause,
     /// Frequency of the largest error line over both axes \[Hz\] (0 when there is none).
     pub dominant: f64,
+    /// With the learning layer: how it learned (`None`: the controller alone).
+    pub learned: Option<Learned>,
 }
 
 /// One point of the sweep.
@@ -118,6 +169,12 @@ pub struct SweepPoint {
     pub reduced: Option<(Limit, f64)>,
     /// One result per candidate, in the candidates' order.
     pub results: Vec<SweepResult>,
+    /// With [`SweepParams::learning`]: one result per candidate with the learning layer, in
+    /// the candidates' order; a candidate whose learning design finds no ρ ≤ 0.95 on the
+    /// measured learning plant is left out and named in `refused` with the reason.
+    pub learning: Vec<SweepResult>,
+    /// The candidates whose learning layer could not be designed here, with the reason.
+    pub refused: Vec<(&'static str, String)>,
 }
 
 /// The limit that reduced a point's amplitude and the factor, if one did.
@@ -180,7 +237,9 @@ fn lissajous(amplitude: [f64; 2], frequency: f64) -> Reference {
 }
 
 /// Runs the sweep for `candidates`, starting from the Lissajous amplitudes `amplitude`.
-/// A point no amplitude makes feasible is left out.
+/// A point no amplitude makes feasible is left out. Each point's base period is a whole
+/// number of samples (the learning layer's period; the fast line within 2 % of its fraction
+/// at 30 % of f1 on the quick design, closer below).
 pub fn sweep(
     bench: &Bench,
     candidates: &[&'static Controller],
@@ -188,13 +247,28 @@ pub fn sweep(
     p: &SweepParams,
 ) -> Result<Vec<SweepPoint>> {
     check("sweep.periods", p.periods, p.periods >= 1.0, "≥ 1")?;
+    if let Some(l) = &p.learning {
+        let trials = l.trials as f64;
+        check(
+            "sweep.learning.trials",
+            trials,
+            (1..=MAX_SWEEP_TRIALS).contains(&l.trials),
+            "an integer in 1..=30",
+        )?;
+        check(
+            "sweep.learning.amplitude",
+            l.amplitude,
+            l.amplitude > 0.0 && l.amplitude.is_finite(),
+            "> 0 [m]",
+        )?;
+    }
     let f1 = bench.twin.first_resonance();
     let t = bench.setup.rig.sample_time;
     let mut out = Vec::new();
     for &frac in &p.fractions {
         check("sweep.fractions", frac, frac > 0.0 && frac < 0.45, "0–0.45")?;
-        let fast = frac * f1;
-        let base = fast / 3.0;
+        let period = (3.0 / (frac * f1 * t)).round().max(4.0) as usize;
+        let base = 1.0 / (period as f64 * t);
         let duration = (p.periods / base).max(0.05);
         let Some((amp, reduced)) = fitting_amplitude(bench, candidates, amplitude, base, duration)?
         else {
@@ -205,20 +279,107 @@ pub fn sweep(
         let mut results = Vec::new();
         for &c in candidates {
             let (rec, between) = run_between(bench, c, r, duration)?;
-            let mut res = score(c, &rec, half, base, t);
-            (res.rms_between, res.peak_between) = between.steady_rms_peak();
-            res.rms_between_pct = [0, 1].map(|i| 100.0 * res.rms_between[i] / (2.0 * half[i]));
-            results.push(res);
+            results.push(scored(c, &rec, &between, half, base, t));
+        }
+        let mut learning = Vec::new();
+        let mut refused = Vec::new();
+        for (&c, l) in p
+            .learning
+            .iter()
+            .flat_map(|l| candidates.iter().zip(std::iter::repeat(l)))
+        {
+            match run_learning(bench, c, r, period, duration, l)? {
+                Ok((rec, between, learned)) => {
+                    let mut res = scored(c, &rec, &between, half, base, t);
+                    res.learned = Some(learned);
+                    learning.push(res);
+                }
+                Err(why) => refused.push((c.name, why)),
+            }
         }
         out.push(SweepPoint {
             fraction: frac,
-            frequency: fast,
+            frequency: 3.0 * base,
             amplitude: amp,
             reduced,
             results,
+            learning,
+            refused,
         });
     }
     Ok(out)
+}
+
+/// The score of one run ([`score`]) with its error between the samples.
+fn scored(
+    c: &'static Controller,
+    rec: &Record,
+    between: &Between,
+    half: [f64; 2],
+    base: f64,
+    t: f64,
+) -> SweepResult {
+    let mut res = score(c, rec, half, base, t);
+    (res.rms_between, res.peak_between) = between.steady_rms_peak();
+    res.rms_between_pct = [0, 1].map(|i| 100.0 * res.rms_between[i] / (2.0 * half[i]));
+    res
+}
+
+/// A run with the learning layer, or why its layer could not be designed.
+type LearningRun = std::result::Result<(Record, Between, Learned), String>;
+
+/// `c` with the learning layer on `r` (module docs, "Learning"): the learning plant measured
+/// from the readings of fresh loops (the twin in its rig, three periods a run), the layer
+/// designed from it and told the datasheet lag, `trials` periods of learning, then the
+/// scored run of `duration` with learning on, with its error between the samples.
+fn run_learning(
+    bench: &Bench,
+    c: &'static Controller,
+    r: Reference,
+    period: usize,
+    duration: f64,
+    l: &SweepLearning,
+) -> Result<LearningRun> {
+    let t = bench.setup.rig.sample_time;
+    let infeasible = |e: crate::error::AssessError| ControlError::Infeasible {
+        what: "learning loop on the sweep".into(),
+        detail: e.to_string(),
+    };
+    let mut factory = || -> flexstage_control::Result<(Box<dyn StageControl>, Readings)> {
+        let ctrl = bench
+            .controller(c, Compensation::Inverse, r)
+            .map_err(infeasible)?;
+        let plant = bench
+            .twin
+            .plant(&bench.setup.rig)
+            .map_err(|e| infeasible(e.into()))?;
+        Ok((ctrl, Readings::new(plant)))
+    };
+    let measured = measure_learning_plant(&mut factory, period, 3, l.amplitude)?;
+    let (law, rho) = match learning::design_law(&measured, &DesignParams::default()) {
+        Ok(d) => d,
+        Err(e @ ControlError::Unstable { .. }) => return Ok(Err(e.to_string())),
+        Err(e) => return Err(e.into()),
+    };
+    let inner = bench.controller(c, Compensation::Inverse, r)?;
+    let mut ctrl = Learning::with_law(inner, &law)?.with_sensor_lag(l.lag)?;
+    let mut plant = bench.twin.plant(&bench.setup.rig)?;
+    plant.record_substeps();
+    let mut sub = Substeps {
+        plant,
+        out: Vec::new(),
+    };
+    let learned = l.trials as f64 * period as f64 * t;
+    run(&mut ctrl, &mut sub, learned, t, |_| {});
+    sub.out.clear();
+    let rec = run(&mut ctrl, &mut sub, duration, t, |_| {});
+    let between = between(&sub.out, r, bench.setup.rig.substep(), learned);
+    let learned = Learned {
+        law: law.name(),
+        rho,
+        periods: l.trials,
+    };
+    Ok(Ok((rec, between, learned)))
 }
 
 /// The true error between the samples of one run: per axis, on every substep h of the run
@@ -313,18 +474,20 @@ pub fn run_between(
         out: Vec::with_capacity(n * substeps),
     };
     let rec = run(ctrl.as_mut(), &mut sub, duration, t, |_| {});
-    let mut error = [
-        Vec::with_capacity(sub.out.len()),
-        Vec::with_capacity(sub.out.len()),
-    ];
-    for (j, q) in sub.out.iter().enumerate() {
-        let time = (j + 1) as f64 * h;
-        let q_d = r.sample(time).q;
+    Ok((rec, between(&sub.out, r, h, 0.0)))
+}
+
+/// The true error on every substep `h` of a run that started at `start` \[s\]: output j
+/// at start + (j + 1) h against the reference there.
+fn between(out: &[[f64; 2]], r: Reference, h: f64, start: f64) -> Between {
+    let mut error = [Vec::with_capacity(out.len()), Vec::with_capacity(out.len())];
+    for (j, q) in out.iter().enumerate() {
+        let q_d = r.sample(start + (j + 1) as f64 * h).q;
         for i in 0..2 {
             error[i].push(q[i] - q_d[i]);
         }
     }
-    Ok((rec, Between { substep: h, error }))
+    Between { substep: h, error }
 }
 
 /// The result of one run (module docs): steady RMS and peak, the largest error line, the
@@ -337,6 +500,7 @@ fn score(c: &'static Controller, rec: &Record, half: [f64; 2], base: f64, t: f64
     let mut peak = [0.0; 2];
     let mut growth = false;
     let mut unseen = false;
+    let mut rms_read = [0.0; 2];
     for i in 0..2 {
         let e = &rec.error[i][steady..];
         let ms = |s: &[f64]| s.iter().map(|x| x * x).sum::<f64>() / s.len().max(1) as f64;
@@ -352,6 +516,7 @@ fn score(c: &'static Controller, rec: &Record, half: [f64; 2], base: f64, t: f64
             .map(|(y, r)| (y - r) * (y - r))
             .sum::<f64>()
             / e.len().max(1) as f64;
+        rms_read[i] = read.sqrt();
         unseen |= rms[i] > 2.0 * read.sqrt() && rms[i] > 1e-3 * half[i];
     }
     let finite = rms.iter().chain(&peak).all(|v| v.is_finite()) && rec.stopped.is_none();
@@ -379,8 +544,10 @@ fn score(c: &'static Controller, rec: &Record, half: [f64; 2], base: f64, t: f64
         rms_between: [f64::NAN; 2],
         peak_between: [f64::NAN; 2],
         rms_between_pct: [f64::NAN; 2],
+        rms_read_pct: pct(rms_read),
         cause,
         dominant,
+        learned: None,
     }
 }
 
@@ -430,7 +597,8 @@ fn lines(rec: &Record, steady: usize, base: f64, t: f64) -> (f64, f64) {
 }
 
 /// The figure: RMS error (mean of both axes, % of range, on a log axis) against the fast
-/// component's frequency in % of the first resonance, one line per candidate.
+/// component's frequency in % of the first resonance, one line per candidate, and one per
+/// candidate with the learning layer (`<name>+learning`) where the sweep learned.
 pub fn figure(points: &[SweepPoint], candidates: &[&Controller]) -> Result<String> {
     let mut fig = Figure::new(
         "Lissajous 3:1 on the twin: error against scan frequency",
@@ -448,6 +616,19 @@ pub fn figure(points: &[SweepPoint], candidates: &[&Controller]) -> Result<Strin
             })
             .collect();
         fig = fig.with(Series::line(c.name, pts));
+    }
+    for c in candidates {
+        let pts: Vec<(f64, f64)> = points
+            .iter()
+            .filter_map(|p| {
+                let r = p.learning.iter().find(|r| r.controller.name == c.name)?;
+                let v = 0.5 * (r.rms_pct[0] + r.rms_pct[1]);
+                (v.is_finite() && v > 0.0).then(|| (100.0 * p.fraction, v.log10()))
+            })
+            .collect();
+        if !pts.is_empty() {
+            fig = fig.with(Series::line(format!("{}+learning", c.name), pts));
+        }
     }
     Ok(fig.to_svg()?)
 }

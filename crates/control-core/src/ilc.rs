@@ -213,6 +213,25 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
         c
     }
 
+    /// Stores a correction c_{j+1}\[k\] \[m\] computed outside this kernel (another
+    /// learning law, from [`Ilc::learned`] and [`Ilc::last_errors`]) for the current sample
+    /// k and returns what is applied: `c` while learning, the replayed c_j\[k\] when frozen,
+    /// 0 in the first period (as [`Ilc::correction`]). Call once per sample instead of
+    /// [`Ilc::correction`], before [`Ilc::record`].
+    #[inline]
+    pub fn set_correction(&mut self, c: [f64; 2]) -> [f64; 2] {
+        let k = self.k;
+        let c = if self.periods == 0 {
+            [0.0; 2]
+        } else if !self.learning {
+            self.buf.learned.as_ref()[k]
+        } else {
+            c
+        };
+        self.buf.applied.as_mut()[k] = c;
+        c
+    }
+
     /// Records the measurement y \[m\] and the reference q_d \[m\] of the current sample and
     /// moves to the next (a new period after N samples).
     #[inline]
@@ -230,5 +249,46 @@ impl<S: AsMut<[[f64; 2]]> + AsRef<[[f64; 2]]>> Ilc<S> {
             core::mem::swap(&mut self.buf.learned, &mut self.buf.applied);
             core::mem::swap(&mut self.buf.error, &mut self.buf.error_now);
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Reference: the rules of [`Ilc::correction`] (nothing in the first period, the last
+    /// period's correction replayed when frozen). Goal: a correction set from outside is
+    /// applied while learning, replaced by 0 in the first period and by c_j when frozen,
+    /// and becomes the learned table at the period's end.
+    #[test]
+    fn a_correction_set_from_outside_follows_the_kernels_rules() {
+        let n = 4;
+        let params = IlcParams {
+            period: n,
+            gain: 0.5,
+            lead: 0,
+            q_half_width: 0,
+        };
+        let buffers = IlcBuffers {
+            learned: [[0.0; 2]; 4],
+            applied: [[0.0; 2]; 4],
+            error: [[0.0; 2]; 4],
+            error_now: [[0.0; 2]; 4],
+        };
+        let mut ilc = Ilc::new(params, buffers).unwrap();
+        for _ in 0..n {
+            assert_eq!(ilc.set_correction([1.0, 2.0]), [0.0; 2]);
+            ilc.record([0.0; 2], [0.0; 2]);
+        }
+        for k in 0..n {
+            let c = [k as f64, -(k as f64)];
+            assert_eq!(ilc.set_correction(c), c);
+            ilc.record([0.0; 2], [0.0; 2]);
+        }
+        assert_eq!(ilc.learned()[3], [3.0, -3.0]);
+        ilc.set_learning(false);
+        assert_eq!(ilc.set_correction([9.0, 9.0]), [0.0, 0.0]);
+        ilc.record([0.0; 2], [0.0; 2]);
+        assert_eq!(ilc.set_correction([9.0, 9.0]), [1.0, -1.0]);
     }
 }

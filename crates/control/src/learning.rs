@@ -68,6 +68,19 @@
 //! learning loop has, not a sample of them. The axes are treated loop at a time (T_ii): the
 //! cross terms of the designed stage are a few percent of the diagonal and are learned as
 //! part of each axis's error.
+//!
+//! # Two laws
+//! Because every harmonic of the period is measured, the model-inverse ("plant inversion")
+//! law of Bristow et al. 2006 needs nothing beyond the measurement ([`InverseLaw`]):
+//!
+//! ```text
+//! c_{j+1,k} = Q_k (c_{j,k} + γ e_{j,k} / T̂_k),   ρ = max_k Q_k (|1 − γ| + γ δ_k / |T̂_k|)
+//! ```
+//!
+//! with Q_k = 1 where that contraction is ≤ 0.95 and |T̂_k| ≥ [`INVERSE_MIN_RESPONSE`],
+//! else 0 ([`design_inverse`]). [`design_law`] designs both laws and keeps the one with the
+//! smaller ρ; [`Learning::with_law`] runs either on the same period buffers (the learned
+//! table, what is exported, has the same form).
 
 use flexstage_control_core::{Ilc, IlcBuffers};
 use flexstage_numerics::RangeError;
@@ -95,6 +108,8 @@ pub struct Learning<C> {
     lag: [f64; 2],
     /// The references of the last N samples (index: the sample's index in its period).
     references: Vec<[f64; 2]>,
+    /// The model-inverse law when it is the one learning (`None`: the kernel's phase lead).
+    inverse: Option<Box<InverseLaw>>,
 }
 
 impl<C: StageControl> Learning<C> {
@@ -112,7 +127,27 @@ impl<C: StageControl> Learning<C> {
             ilc: Ilc::new(params, buffers).map_err(core_error)?,
             lag: [0.0; 2],
             references: vec![[0.0; 2]; n],
+            inverse: None,
         })
+    }
+
+    /// Wraps `inner` with the learning `law` ([`design_law`]): the phase-lead law as
+    /// [`Learning::new`], or the model-inverse law on the same period buffers.
+    pub fn with_law(inner: C, law: &Law) -> Result<Self> {
+        match law {
+            Law::PhaseLead(p) => Learning::new(inner, *p),
+            Law::Inverse(l) => {
+                let params = LearningParams {
+                    period: l.period(),
+                    gain: l.gain(),
+                    lead: 0,
+                    q_half_width: 0,
+                };
+                let mut learning = Learning::new(inner, params)?;
+                learning.inverse = Some(Box::new(l.clone()));
+                Ok(learning)
+            }
+        }
     }
 
     /// Learns the error against the reference delayed by the measurement's lag τ
@@ -169,7 +204,17 @@ impl<C: StageControl> Learning<C> {
 impl<C: StageControl> StageControl for Learning<C> {
     #[inline]
     fn step(&mut self, y: [f64; 2]) -> Command {
-        let c = self.ilc.correction();
+        let c = match &self.inverse {
+            None => self.ilc.correction(),
+            Some(law) => {
+                let c = law.correction(
+                    self.ilc.learned(),
+                    self.ilc.last_errors(),
+                    self.ilc.sample(),
+                );
+                self.ilc.set_correction(c)
+            }
+        };
         let cmd = self.inner.step([y[0] - c[0], y[1] - c[1]]);
         self.references[self.ilc.sample()] = cmd.reference;
         let r = self.lagged_reference(cmd.reference);
@@ -550,4 +595,274 @@ pub fn rms_per_period(error: &[Vec<f64>; 2], period: usize) -> Vec<[f64; 2]> {
             })
         })
         .collect()
+}
+
+/// The least |T̂_k| the model-inverse law learns at: below it the harmonic is left out of
+/// its passband (Q_k = 0), so that no harmonic's learning gain γ/|T̂_k| exceeds 2 γ. The
+/// per-axis measurement does not see the cross-axis terms T_12, T_21 at a harmonic, and
+/// where the loop no longer follows they are no longer small against T_ii: with a floor of
+/// 0.05 the law learned to 4/6 nm on the lumped rig with the PID + feed-forward and then
+/// diverged after three periods (`tests/learning_inverse.rs`).
+pub const INVERSE_MIN_RESPONSE: f64 = 0.5;
+
+/// The model-inverse learning law in the harmonic domain (Bristow, Tharayil & Alleyne 2006,
+/// "plant inversion"; module docs, "Two laws"): per harmonic k of the period and axis,
+///
+/// ```text
+/// c_{j+1,k} = Q_k (c_{j,k} + γ e_{j,k} / T̂_k),   Q_k ∈ {0, 1}
+/// ```
+///
+/// applied in the time domain as two circular convolutions over the period with the
+/// kernels q = IDFT(Q) and l = IDFT(Q γ / T̂) (2 N multiply-adds per axis and sample).
+/// For every plant T within the measured uncertainty |T − T̂_k| ≤ δ_k the harmonic
+/// contracts by Q_k (|1 − γ| + γ δ_k/|T̂_k|) per period.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InverseLaw {
+    period: usize,
+    gain: f64,
+    /// Q_k per axis, k = 0..=N/2.
+    passband: [Vec<f64>; 2],
+    /// L_k = Q_k γ / T̂_k per axis, k = 0..=N/2.
+    learning: [Vec<Complex>; 2],
+    /// q\[m\], m = 0..N, per axis.
+    q_kernel: [Vec<f64>; 2],
+    /// l\[m\], m = 0..N, per axis.
+    l_kernel: [Vec<f64>; 2],
+}
+
+/// The real N-periodic sequence whose DFT is `h` at k = 0..=N/2 (Hermitian beyond):
+/// x\[m\] = (1/N) Σ_{k=0}^{N−1} H_k e^{j2πkm/N}; the imaginary parts of H_0 and, for even
+/// N, of H_{N/2} are dropped (a real sequence has none).
+fn real_idft(h: &[Complex], n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|m| {
+            let mut x = h[0].0;
+            for (k, hk) in h.iter().enumerate().skip(1) {
+                let a = std::f64::consts::TAU * (k * m) as f64 / n as f64;
+                let (s, c) = a.sin_cos();
+                let re = hk.0 * c - hk.1 * s;
+                x += if 2 * k == n { re } else { 2.0 * re };
+            }
+            x / n as f64
+        })
+        .collect()
+}
+
+impl InverseLaw {
+    /// The law of gain γ ∈ (0, 2) on the measured `plant` with the passband `passband`
+    /// (Q_k per axis for k = 1..=N/2, each 0 or 1; index k − 1). DC, which the measurement
+    /// does not cover, takes the first harmonic's Q and learns with 1/|T̂_1| (a loop with
+    /// integral action has T(0) = 1 and no error there to learn).
+    pub fn new(plant: &LearningPlant, gain: f64, passband: [Vec<f64>; 2]) -> Result<Self> {
+        let n = plant.period;
+        let half = n / 2;
+        let ok = gain > 0.0
+            && gain < 2.0
+            && n >= 4
+            && (0..2).all(|a| {
+                passband[a].len() == half
+                    && plant.response[a].len() == half
+                    && passband[a].iter().all(|q| *q == 0.0 || *q == 1.0)
+            });
+        if !ok {
+            return Err(RangeError::new(
+                "inverse_law",
+                format!("gain {gain}, period {n}"),
+                "gain in (0, 2), period ≥ 4, N/2 responses and passband values 0 or 1 per axis",
+            )
+            .into());
+        }
+        let mut q_full: [Vec<f64>; 2] = Default::default();
+        let mut l_full: [Vec<Complex>; 2] = Default::default();
+        for a in 0..2 {
+            let t1 = plant.response[a][0];
+            q_full[a].push(passband[a][0]);
+            l_full[a].push((passband[a][0] * gain / t1.0.hypot(t1.1), 0.0));
+            for (q, t) in passband[a].iter().zip(&plant.response[a]) {
+                let d = t.0 * t.0 + t.1 * t.1;
+                q_full[a].push(*q);
+                // Q γ / T = Q γ conj(T) / |T|².
+                l_full[a].push(if *q > 0.0 {
+                    (q * gain * t.0 / d, -q * gain * t.1 / d)
+                } else {
+                    (0.0, 0.0)
+                });
+            }
+        }
+        let q_kernel = core::array::from_fn(|a| {
+            let h: Vec<Complex> = q_full[a].iter().map(|q| (*q, 0.0)).collect();
+            real_idft(&h, n)
+        });
+        let l_kernel = core::array::from_fn(|a| real_idft(&l_full[a], n));
+        Ok(InverseLaw {
+            period: n,
+            gain,
+            passband: q_full,
+            learning: l_full,
+            q_kernel,
+            l_kernel,
+        })
+    }
+
+    /// Samples per period N.
+    pub fn period(&self) -> usize {
+        self.period
+    }
+
+    /// The learning gain γ.
+    pub fn gain(&self) -> f64 {
+        self.gain
+    }
+
+    /// Q_k of `axis` at harmonic k = 0..=N/2.
+    pub fn passband(&self, axis: usize) -> &[f64] {
+        &self.passband[axis]
+    }
+
+    /// L_k = Q_k γ / T̂_k of `axis` at harmonic k = 0..=N/2.
+    pub fn learning_gain(&self, axis: usize) -> &[Complex] {
+        &self.learning[axis]
+    }
+
+    /// The circular kernels (q, l) of `axis` over one period (m = 0..N).
+    pub fn kernels(&self, axis: usize) -> (&[f64], &[f64]) {
+        (&self.q_kernel[axis], &self.l_kernel[axis])
+    }
+
+    /// The harmonics learned (Q_k = 1, k ≥ 1) per axis.
+    pub fn learned_harmonics(&self) -> [usize; 2] {
+        core::array::from_fn(|a| self.passband[a][1..].iter().filter(|q| **q > 0.0).count())
+    }
+
+    /// c_{j+1}\[k\] = Σ_m q\[m\] c_j\[k − m\] + l\[m\] e_j\[k − m\] (indices mod N) from the
+    /// last period's correction `learned` and errors `error` (each N long).
+    pub fn correction(&self, learned: &[[f64; 2]], error: &[[f64; 2]], k: usize) -> [f64; 2] {
+        let n = self.period;
+        let mut c = [0.0; 2];
+        for a in 0..2 {
+            let (q, l) = (&self.q_kernel[a], &self.l_kernel[a]);
+            let mut acc = 0.0;
+            for m in 0..n {
+                let i = (k + n - m) % n;
+                acc += q[m] * learned[i][a] + l[m] * error[i][a];
+            }
+            c[a] = acc;
+        }
+        c
+    }
+}
+
+/// The monotone-convergence factor of the model-inverse law on `plant`: the largest over
+/// axes and harmonics k = 1..=N/2 of Q_k (|1 − γ| + γ δ_k/|T̂_k|) ([`InverseLaw`]).
+pub fn inverse_convergence_factor(plant: &LearningPlant, law: &InverseLaw) -> f64 {
+    let mut rho = 0.0f64;
+    for a in 0..2 {
+        for (i, t) in plant.response[a].iter().enumerate() {
+            let d = plant.uncertainty[a].get(i).copied().unwrap_or(0.0);
+            let f =
+                law.passband[a][i + 1] * ((1.0 - law.gain).abs() + law.gain * d / t.0.hypot(t.1));
+            rho = rho.max(f);
+        }
+    }
+    rho
+}
+
+/// The model-inverse law on the measured `plant` (module docs, "Two laws"): for each gain
+/// of `settings`, the passband is every harmonic where |T̂_k| ≥ [`INVERSE_MIN_RESPONSE`]
+/// and |1 − γ| + γ δ_k/|T̂_k| ≤ `max_factor`; the gain kept is the smallest of those that
+/// learn the most harmonics (`settings.gains` ascending). An error when no gain learns any
+/// harmonic.
+pub fn design_inverse(plant: &LearningPlant, settings: &DesignParams) -> Result<(InverseLaw, f64)> {
+    let mut best: Option<(InverseLaw, f64, usize)> = None;
+    for &gain in &settings.gains {
+        let passband = core::array::from_fn(|a| {
+            plant.response[a]
+                .iter()
+                .enumerate()
+                .map(|(i, t)| {
+                    let m = t.0.hypot(t.1);
+                    let d = plant.uncertainty[a].get(i).copied().unwrap_or(0.0);
+                    let f = (1.0 - gain).abs() + gain * d / m;
+                    f64::from(m >= INVERSE_MIN_RESPONSE && f <= settings.max_factor)
+                })
+                .collect()
+        });
+        let law = InverseLaw::new(plant, gain, passband)?;
+        let rho = inverse_convergence_factor(plant, &law);
+        let count = law.learned_harmonics().iter().sum::<usize>();
+        // The gains ascend: among those that learn the most harmonics, the smallest (the
+        // least of the sensor noise learned into the correction).
+        let better = best.as_ref().is_none_or(|(_, _, c)| count > *c);
+        if count > 0 && better {
+            best = Some((law, rho, count));
+        }
+    }
+    best.map(|(l, r, _)| (l, r))
+        .ok_or_else(|| crate::ControlError::Unstable {
+            what: "model-inverse learning design".into(),
+            detail: format!(
+                "no harmonic with |T| ≥ {INVERSE_MIN_RESPONSE} and a contraction ≤ {} on the \
+                 measured learning plant",
+                settings.max_factor
+            ),
+        })
+}
+
+/// A learning law as designed ([`design_law`]).
+#[derive(Debug, Clone, PartialEq)]
+pub enum Law {
+    /// The phase-lead law with the Bartlett Q ([`design`]).
+    PhaseLead(LearningParams),
+    /// The model-inverse law in the harmonic domain ([`design_inverse`]).
+    Inverse(InverseLaw),
+}
+
+impl Law {
+    /// Its name in files and notes: `phase-lead` or `inverse`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Law::PhaseLead(_) => "phase-lead",
+            Law::Inverse(_) => "inverse",
+        }
+    }
+
+    /// A one-line description of its settings.
+    pub fn describe(&self) -> String {
+        match self {
+            Law::PhaseLead(p) => format!(
+                "phase-lead γ = {}, lead {} samples, Q half-width {}",
+                p.gain, p.lead, p.q_half_width
+            ),
+            Law::Inverse(l) => {
+                let h = l.learned_harmonics();
+                format!(
+                    "inverse γ = {}, harmonics learned {}/{} of {}",
+                    l.gain,
+                    h[0],
+                    h[1],
+                    l.period / 2
+                )
+            }
+        }
+    }
+}
+
+/// The learning law for the measured `plant`, chosen by measurement (module docs, "Two
+/// laws"): the phase-lead law ([`design`]) and the model-inverse law ([`design_inverse`]),
+/// each with its convergence factor ρ for every plant within the uncertainty; the one with
+/// the smaller ρ (the faster guaranteed contraction per period). An error when neither has
+/// one.
+pub fn design_law(plant: &LearningPlant, settings: &DesignParams) -> Result<(Law, f64)> {
+    let lead = design(plant, settings);
+    let inverse = design_inverse(plant, settings);
+    match (lead, inverse) {
+        (Ok((p, r)), Ok((l, ri))) => Ok(if ri < r {
+            (Law::Inverse(l), ri)
+        } else {
+            (Law::PhaseLead(p), r)
+        }),
+        (Ok((p, r)), Err(_)) => Ok((Law::PhaseLead(p), r)),
+        (Err(_), Ok((l, ri))) => Ok((Law::Inverse(l), ri)),
+        (Err(e), Err(_)) => Err(e),
+    }
 }

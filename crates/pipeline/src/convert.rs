@@ -197,7 +197,8 @@ pub(crate) fn montecarlo_rows(mc: &MonteCarlo) -> Vec<MonteCarloRow> {
         .collect()
 }
 
-/// The sweep as `scan_frequency.csv` rows: one per point and controller.
+/// The sweep as `scan_frequency.csv` rows: one per point and controller, then one per point
+/// and controller with the learning layer (`<controller>+learning`) where the sweep learned.
 pub(crate) fn scan_rows(points: &[SweepPoint]) -> Vec<ScanRow> {
     use flexstage_assess::sweep::Cause;
     use flexstage_control::feasibility::Limit;
@@ -217,14 +218,14 @@ pub(crate) fn scan_rows(points: &[SweepPoint]) -> Vec<ScanRow> {
                     f,
                 ),
             };
-            p.results.iter().map(move |r| ScanRow {
+            p.results.iter().chain(&p.learning).map(move |r| ScanRow {
                 fraction_of_f1: p.fraction,
                 fast_frequency_hz: p.frequency,
                 amplitude1_m: p.amplitude[0],
                 amplitude2_m: p.amplitude[1],
                 amplitude_limit: limit,
                 amplitude_factor: factor,
-                controller: r.controller.name.to_string(),
+                controller: crate::track::variant_name(r.controller, r.learned.is_some()),
                 rms1_nm: r.rms[0] * 1e9,
                 rms2_nm: r.rms[1] * 1e9,
                 rms1_pct_range: r.rms_pct[0],
@@ -242,6 +243,9 @@ pub(crate) fn scan_rows(points: &[SweepPoint]) -> Vec<ScanRow> {
                     Cause::Unstable => ScanCause::Unstable,
                 },
                 dominant_hz: r.dominant,
+                learning_periods: r.learned.map_or(0, |l| l.periods),
+                learning_rho: r.learned.map_or(f64::NAN, |l| l.rho),
+                learning_law: r.learned.map_or(String::new(), |l| l.law.to_string()),
             })
         })
         .collect()

@@ -412,18 +412,19 @@ type Designed = (
 /// perturbed twin measured and every controller designed from its measurement; on the
 /// scenario's first trajectory),
 /// whose pass rates go into the margin rows, and the error against scan frequency
-/// ([`crate::scan`]). On the lumped plant the controllers are designed from the scenario's
+/// ([`crate::scan`]; with `--learning` the sweep learns too). On the lumped plant the controllers are designed from the scenario's
 /// settings alone: one that needs the twin's response is skipped with a warning, and
 /// `pid-ff` runs the scenario's gains.
 fn tune_and_margins(
     setup: &mut Setup,
     sim: &Simulated,
-    controllers: &[&'static Controller],
-    montecarlo_plants: usize,
+    options: &TrackOptions,
     scenario: &flexstage_scenario::Scenario,
     progress: &dyn Progress,
     warnings: &mut Vec<String>,
 ) -> Result<Designed> {
+    let controllers: &[&'static Controller] = &options.controllers;
+    let montecarlo_plants = options.montecarlo_plants;
     let Simulated::Twin(twin) = sim else {
         let designs = Designs::for_stage(&Stage::scenario(setup))?;
         for c in controllers.iter().filter(|c| designs.get(c).is_none()) {
@@ -475,7 +476,7 @@ fn tune_and_margins(
         r.montecarlo_pass = Some(mc.pass_rate(j));
     }
     let t0 = std::time::Instant::now();
-    let scan = scan_frequency(&bench, scenario, controllers)?;
+    let scan = scan_frequency(&bench, scenario, controllers, options.learning)?;
     if let Some(sc) = &scan {
         progress.note(&format!(
             "error against scan frequency: {} frequencies × {} controller(s) in {:.1} s",
@@ -483,6 +484,14 @@ fn tune_and_margins(
             controllers.len(),
             t0.elapsed().as_secs_f64()
         ));
+        for p in &sc.points {
+            for (name, why) in &p.refused {
+                warnings.push(format!(
+                    "no learning for {name} at {:.0} % of f1 on the sweep: {why}",
+                    100.0 * p.fraction
+                ));
+            }
+        }
     }
     Ok((bench.designs, rows, Some(mc), scan, Some(measured)))
 }
@@ -794,8 +803,7 @@ pub fn track_on(
     let (designs, margins, montecarlo, scan, measured) = tune_and_margins(
         &mut setup,
         &sim,
-        &options.controllers,
-        options.montecarlo_plants,
+        options,
         &plant.scenario,
         progress,
         &mut warnings,
@@ -980,20 +988,17 @@ fn run_learning(
         Ok((c, Readings::boxed(plant)))
     };
     let measured = measure_learning_plant(&mut factory, learn.period, 3, LEARNING_AMPLITUDE)?;
-    let (params, rho) = learning::design(&measured, &DesignParams::default())?;
+    let (law, rho) = learning::design_law(&measured, &DesignParams::default())?;
     progress.note(&format!(
-        "{} on {}: learning γ = {}, lead {} samples, Q half-width {}, ρ = {rho:.3}, datasheet \
-         lag {:.3} samples",
+        "{} on {}: learning {}, ρ = {rho:.3}, datasheet lag {:.3} samples",
         j.controller.name,
         j.trajectory,
-        params.gain,
-        params.lead,
-        params.q_half_width,
+        law.describe(),
         learn.lag.samples()[0]
     ));
     let (mut plant, delay) = readings(setup, sim)?;
     let inner = design.build(actuator, delay, j.reference)?;
-    let mut c = Learning::new(inner, params)?.with_sensor_lag(learn.lag)?;
+    let mut c = Learning::with_law(inner, &law)?.with_sensor_lag(learn.lag)?;
     let watch = watch(&j.reference, j.duration, dt);
     let advance = |n: usize| progress.advance(n as u64);
     // The trials a period at a time, so that only one period is ever recorded.

@@ -756,6 +756,9 @@ mod tests {
             dominant_hz: hz,
             rms1_between_pct_range: f64::NAN,
             rms2_between_pct_range: f64::NAN,
+            learning_periods: 0,
+            learning_rho: f64::NAN,
+            learning_law: String::new(),
         }
     }
 

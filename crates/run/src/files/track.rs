@@ -343,6 +343,19 @@ pub struct ScanRow {
     /// RMS error of q2 on every substep \[% of range\], 5 decimals.
     #[serde(default = "not_recorded", serialize_with = "num::fixed5")]
     pub rms2_between_pct_range: f64,
+    /// Learning trials (periods) before the scored run of a `<controller>+learning` row
+    /// ([`LEARNING_SUFFIX`]); 0 for the controller alone (and in a file written before the
+    /// column existed).
+    #[serde(default)]
+    pub learning_periods: usize,
+    /// The learning layer's monotone-convergence factor ρ on the measured learning plant,
+    /// 4 decimals; NaN for the controller alone.
+    #[serde(default = "not_recorded", serialize_with = "num::fixed4")]
+    pub learning_rho: f64,
+    /// The learning law chosen by measurement, `phase-lead` or `inverse`; empty for the
+    /// controller alone.
+    #[serde(default)]
+    pub learning_law: String,
 }
 
 /// The value of a column a file written before it existed lacks.
@@ -371,6 +384,9 @@ impl Row for ScanRow {
         "dominant_Hz",
         "rms1_between_pct_range",
         "rms2_between_pct_range",
+        "learning_periods",
+        "learning_rho",
+        "learning_law",
     ];
     const EXACT: bool = false;
 }
