@@ -774,6 +774,12 @@ impl FirBuffer {
         self.apply(&self.taps)
     }
 
+    /// Whether the feedback's reference carries a reading correction.
+    #[inline]
+    pub fn has_reading(&self) -> bool {
+        self.reading.is_some()
+    }
+
     /// The feedback's reference \[m\]: `delayed` (q_d((k − τ) T)) plus the reading
     /// correction Σ_u C_{u−p} q_d((k + p − u) T) on the stored samples; `delayed` itself
     /// without a correction.

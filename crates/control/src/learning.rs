@@ -155,7 +155,11 @@ impl<C: StageControl> Learning<C> {
     /// q_d(k − τ) − y(k), linear between samples (earlier period's samples for a lead; the
     /// reference is periodic). The learning drives the *measurement* to its reference; when
     /// the measurement lags the true output by τ, q_d(k − τ) = y(k) means q(k − τ) =
-    /// q_d(k − τ), where without the shift the true output would end τ ahead.
+    /// q_d(k − τ), where without the shift the true output would end τ ahead. Where the
+    /// inner controller's feedback expects the reading a measured model predicts
+    /// (`StageControl::expected_reading`: the linear laws with a reading correction fitted
+    /// to the fast ADC's lifted response), the layer learns against that reading instead,
+    /// so that the output at the samples, not the reading, follows.
     pub fn with_sensor_lag(mut self, lag: SensorLag) -> Result<Self> {
         let half = (self.references.len() / 2) as f64;
         for (a, l) in lag.0.iter().enumerate() {
@@ -217,13 +221,22 @@ impl<C: StageControl> StageControl for Learning<C> {
         };
         let cmd = self.inner.step([y[0] - c[0], y[1] - c[1]]);
         self.references[self.ilc.sample()] = cmd.reference;
-        let r = self.lagged_reference(cmd.reference);
+        // The reading the feedback expects where the controller predicts it from a
+        // measured model (a reading correction), else the reference delayed by the lag.
+        let r = match self.inner.expected_reading() {
+            Some(r) => r,
+            None => self.lagged_reference(cmd.reference),
+        };
         self.ilc.record(y, r);
         cmd
     }
 
     fn estimate(&self) -> [f64; 10] {
         self.inner.estimate()
+    }
+
+    fn expected_reading(&self) -> Option<[f64; 2]> {
+        self.inner.expected_reading()
     }
 }
 

@@ -326,6 +326,10 @@ impl StageControl for PiNotchController {
     fn estimate(&self) -> [f64; 10] {
         [0.0; 10]
     }
+
+    fn expected_reading(&self) -> Option<[f64; 2]> {
+        self.target.expected_reading()
+    }
 }
 
 #[cfg(test)]

@@ -188,6 +188,7 @@ impl TargetLaw {
             last_y: [0.0; 2],
             fir: self.feedforward.as_ref().map(FirBuffer::new),
             learned: self.learned.clone(),
+            expected: None,
         })
     }
 
@@ -262,9 +263,17 @@ pub struct TargetController {
     last_y: [f64; 2],
     fir: Option<FirBuffer>,
     learned: Option<Vec<[f64; 2]>>,
+    /// The feedback's reference of the last step when the FIR has a reading correction.
+    expected: Option<[f64; 2]>,
 }
 
 impl TargetController {
+    /// The reading the last step's feedback expected, when the FIR feed-forward carries a
+    /// reading correction ([`FirFeedForward::fit_reading`]); `None` otherwise.
+    pub fn expected_reading(&self) -> Option<[f64; 2]> {
+        self.expected
+    }
+
     /// Stores `ahead` \[m\] in the FIR's buffer without a sample: before the first step,
     /// the reference at the times [`FirFeedForward::prime_times`] gives, oldest first (no
     /// effect with the static feed-forward).
@@ -290,6 +299,9 @@ impl TargetController {
                 f.push(input.ahead);
                 let x_ff = f.output();
                 let r = f.reference(input.reference);
+                if f.has_reading() {
+                    self.expected = Some(r);
+                }
                 self.law.command_with_feedforward(y, r, x_ff)
             }
             None => self.law.command(y, input.reference),

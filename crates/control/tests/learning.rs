@@ -301,3 +301,68 @@ fn learning_told_the_datasheet_lag_tracks_the_true_output() {
     assert!(told[0] < 0.7 * not_told[0], "{told:?} vs {not_told:?}");
     assert!(told[1] < not_told[1], "{told:?} vs {not_told:?}");
 }
+
+/// A controller whose feedback expects a reading other than its reference (as the linear laws
+/// with a reading correction do): the reference is k nm, the expected reading 3 k nm + 1 nm.
+struct ExpectsReading {
+    k: usize,
+    expected: [f64; 2],
+}
+
+impl StageControl for ExpectsReading {
+    fn step(&mut self, _y: [f64; 2]) -> flexstage_sim::experiment::Command {
+        let r = self.k as f64 * 1e-9;
+        self.expected = [3.0 * r + 1e-9, -3.0 * r];
+        self.k += 1;
+        flexstage_sim::experiment::Command {
+            voltage: [0.0; 2],
+            x_nom: [0.0; 2],
+            reference: [r, r],
+            saturated: false,
+            dropout: false,
+        }
+    }
+    fn estimate(&self) -> [f64; 10] {
+        [0.0; 10]
+    }
+    fn expected_reading(&self) -> Option<[f64; 2]> {
+        Some(self.expected)
+    }
+}
+
+/// Goal: where the inner controller's feedback expects a predicted reading
+/// (`StageControl::expected_reading`), the learning layer's error is that reading less the
+/// measurement, e = r̂ − y, not the reference delayed by the datasheet lag (which is ignored
+/// then); known answer with y = 0: the errors of the period are the expected readings.
+#[test]
+fn learning_learns_against_the_reading_the_feedback_expects() {
+    let n = 8;
+    let params = LearningParams {
+        period: n,
+        gain: 0.5,
+        lead: 0,
+        q_half_width: 0,
+    };
+    let inner = ExpectsReading {
+        k: 0,
+        expected: [0.0; 2],
+    };
+    let lag = SensorDatasheet {
+        bandwidth: 15e3,
+        anti_alias: 0.0,
+    }
+    .lag(1e-4)
+    .unwrap();
+    let mut c = Learning::new(inner, params)
+        .unwrap()
+        .with_sensor_lag(lag)
+        .unwrap();
+    for _ in 0..n {
+        c.step([0.0; 2]);
+    }
+    let errors = c.ilc().last_errors().to_vec();
+    for (k, e) in errors.iter().enumerate() {
+        let r = k as f64 * 1e-9;
+        assert_eq!(*e, [3.0 * r + 1e-9, -3.0 * r], "sample {k}");
+    }
+}

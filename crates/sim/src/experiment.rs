@@ -31,6 +31,12 @@ pub trait StageControl {
     fn step(&mut self, y: [f64; 2]) -> Command;
     /// The state estimate [ẑ, d̂] \[SI\] (zeros for controllers without an observer).
     fn estimate(&self) -> [f64; 10];
+    /// The reading \[m\] the last step's feedback compared the measurement with, where it is
+    /// not the reference delayed by the sensor's lag (a controller whose feedback expects
+    /// the reading a measured model predicts); `None` otherwise.
+    fn expected_reading(&self) -> Option<[f64; 2]> {
+        None
+    }
 }
 
 /// A boxed controller is a controller (so a wrapper such as `flexstage-control`'s learning
@@ -42,6 +48,9 @@ impl<T: StageControl + ?Sized> StageControl for Box<T> {
     }
     fn estimate(&self) -> [f64; 10] {
         (**self).estimate()
+    }
+    fn expected_reading(&self) -> Option<[f64; 2]> {
+        (**self).expected_reading()
     }
 }
 
