@@ -1,13 +1,52 @@
 //! The lab measurement of the twin (`flexstage_assess::lab`) against its known answer, on the
 //! twin of the rhombus sample design (`flexstage_twin::samples::quick_rhombus`).
 
+use std::sync::OnceLock;
+
 use flexstage_assess::Bench;
 use flexstage_assess::bench::{LinearLoop, modal_plant};
 use flexstage_assess::lab::LabParams;
 use flexstage_control::experiment::Setup;
 use flexstage_control::pi_notch::PI_NOTCH_FF;
 use flexstage_control::pid::PID_FF;
+use flexstage_scenario::Scenario;
 use flexstage_sim::modal::LoopPlant;
+use flexstage_twin::Twin;
+
+/// The twin of the rhombus sample design on the quick preset with its scenario, built once
+/// per test binary (every test here measures this twin).
+fn quick_twin() -> &'static (Scenario, Twin) {
+    static TWIN: OnceLock<(Scenario, Twin)> = OnceLock::new();
+    TWIN.get_or_init(|| {
+        let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
+        let twin = Twin::from_scenario(&s, &rho).unwrap();
+        (s, twin)
+    })
+}
+
+/// The scenario's settings with the rig `linear`: the twin's linear rig (ideal amplifier
+/// of the scenario's bandwidth, no PEA, no noise) at 80 substeps, since the rig interpolates
+/// its sensor chain within a substep at O(h³); otherwise the scenario's full rig.
+fn setup(s: &Scenario, twin: &Twin, linear: bool) -> Setup {
+    let mut setup = Setup::from_scenario(s);
+    if linear {
+        setup.rig = LinearLoop {
+            twin,
+            setup: &setup,
+        }
+        .linear_rig(setup.rig.delay);
+        setup.rig.substeps = 80;
+    }
+    setup
+}
+
+/// The lab's default measurement without the sensor noise.
+fn noise_free() -> LabParams {
+    LabParams {
+        noise: false,
+        ..LabParams::default()
+    }
+}
 
 /// Reference: the twin's exact sampled loop (`modal_plant`: every mode discretized exactly,
 /// the rig's delay and sensor chain), the loop the margins are scored on. Goal: measured by
@@ -19,20 +58,10 @@ use flexstage_sim::modal::LoopPlant;
 /// alone are stable on the exact loop (their margins printed).
 #[test]
 fn lab_measurement_of_the_linear_loop_is_the_exact_sampled_loop() {
-    let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
-    let twin = flexstage_twin::Twin::from_scenario(&s, &rho).unwrap();
-    let mut setup = Setup::from_scenario(&s);
-    setup.rig = LinearLoop {
-        twin: &twin,
-        setup: &setup,
-    }
-    .linear_rig(setup.rig.delay);
-    setup.rig.substeps = 80;
-    let lab = LabParams {
-        noise: false,
-        ..LabParams::default()
-    };
-    let (bench, m) = Bench::measured(setup, twin, Default::default(), &lab).unwrap();
+    let (s, twin) = quick_twin();
+    let setup = setup(s, twin, true);
+    let (bench, m) =
+        Bench::measured(setup, twin.clone(), Default::default(), &noise_free()).unwrap();
     let rig = &bench.setup.rig;
     let exact = modal_plant(
         &bench.twin,
@@ -97,15 +126,11 @@ fn worst_gap(m: &flexstage_identify::measured::MeasuredResponse, model: &dyn Loo
 /// measurement meet 6 dB / 40° on the scoring loop.
 #[test]
 fn full_rig_measurement_agrees_with_the_scoring_loop_only_with_the_amplifier() {
-    let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
-    let twin = flexstage_twin::Twin::from_scenario(&s, &rho).unwrap();
-    let setup = Setup::from_scenario(&s);
+    let (s, twin) = quick_twin();
+    let setup = setup(s, twin, false);
     assert!(setup.rig.amplifier.bandwidth > 0.0);
-    let lab = LabParams {
-        noise: false,
-        ..LabParams::default()
-    };
-    let (bench, m) = Bench::measured(setup, twin, Default::default(), &lab).unwrap();
+    let (bench, m) =
+        Bench::measured(setup, twin.clone(), Default::default(), &noise_free()).unwrap();
     let rig = &bench.setup.rig;
     let exact = modal_plant(
         &bench.twin,
@@ -145,24 +170,14 @@ fn full_rig_measurement_agrees_with_the_scoring_loop_only_with_the_amplifier() {
 /// measured 8.1e-5 and 0.37).
 #[test]
 fn lifted_response_at_phase_zero_is_the_output_at_the_samples() {
-    let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
-    let twin = flexstage_twin::Twin::from_scenario(&s, &rho).unwrap();
-    let mut setup = Setup::from_scenario(&s);
-    setup.rig = LinearLoop {
-        twin: &twin,
-        setup: &setup,
-    }
-    .linear_rig(setup.rig.delay);
-    setup.rig.substeps = 80;
-    let lab = LabParams {
-        noise: false,
-        ..LabParams::default()
-    };
-    let lifted = flexstage_assess::lab::measure_lifted(&twin, &setup, &lab, 10).unwrap();
-    let m = flexstage_assess::lab::measure(&twin, &setup, &lab).unwrap();
+    let (s, twin) = quick_twin();
+    let setup = setup(s, twin, true);
+    let lab = noise_free();
+    let lifted = flexstage_assess::lab::measure_lifted(twin, &setup, &lab, 10).unwrap();
+    let m = flexstage_assess::lab::measure(twin, &setup, &lab).unwrap();
     let rig = &setup.rig;
     let ideal = flexstage_sim::rig::SensorParams::ideal();
-    let output = modal_plant(&twin, rig.sample_time, rig.delay, &rig.amplifier, &ideal).unwrap();
+    let output = modal_plant(twin, rig.sample_time, rig.delay, &rig.amplifier, &ideal).unwrap();
     let top = lifted
         .lines()
         .iter()

@@ -11,7 +11,7 @@ use crate::controller::{Inner, Velocity};
 use crate::error::Result;
 use crate::target::CSource;
 use crate::target_backstepping::{BacksteppingLaw, rows};
-use crate::target_c::{actuator_lines, learned_lines, list, lit};
+use crate::target_c::{actuator_lines, learned_lines, list, lit, prelude_lines};
 
 const HEADER: &str = include_str!("../c/backstepping.h.in");
 const SOURCE: &str = include_str!("../c/backstepping.c.in");
@@ -152,18 +152,7 @@ fn law_lines(law: &BacksteppingLaw) -> Vec<String> {
 
 fn coefficients(law: &BacksteppingLaw) -> String {
     let mut s = String::new();
-    let mut lines = vec![
-        "#define COMPENSATION_INVERSE 0".to_string(),
-        "#define COMPENSATION_OFF 1".to_string(),
-        "#define COMPENSATION_IDEAL 2".to_string(),
-        "/* One micrometre in metres (the Bouc-Wen model works in um, V, s). */".to_string(),
-        "static const double MICROMETRE = 1e-6;".to_string(),
-        "/* Sample time T [s]. */".to_string(),
-        format!(
-            "static const double SAMPLE_TIME = {};",
-            lit(law.sample_time)
-        ),
-    ];
+    let mut lines = prelude_lines(law.sample_time);
     lines.extend(model_lines(law));
     lines.extend(law_lines(law));
     lines.extend(actuator_lines(&law.actuator));

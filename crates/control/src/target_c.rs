@@ -43,6 +43,21 @@ pub(crate) fn list(v: &[f64]) -> String {
     format!("{{{}}}", items.join(", "))
 }
 
+/// The first constants of every exported controller, linear or backstepping: the
+/// compensation modes the actuator functions switch on, the micrometre and the sample time
+/// `sample_time` [s].
+pub(crate) fn prelude_lines(sample_time: f64) -> Vec<String> {
+    vec![
+        "#define COMPENSATION_INVERSE 0".to_string(),
+        "#define COMPENSATION_OFF 1".to_string(),
+        "#define COMPENSATION_IDEAL 2".to_string(),
+        "/* One micrometre in metres (the Bouc-Wen model works in um, V, s). */".to_string(),
+        "static const double MICROMETRE = 1e-6;".to_string(),
+        "/* Sample time T [s]. */".to_string(),
+        format!("static const double SAMPLE_TIME = {};", lit(sample_time)),
+    ]
+}
+
 fn coefficients(law: &TargetLaw) -> String {
     let mut s = String::new();
     let gains: Vec<String> = law
@@ -73,17 +88,8 @@ fn coefficients(law: &TargetLaw) -> String {
         })
         .collect();
     let g = law.inverse_gain;
-    let mut lines = vec![
-        "#define COMPENSATION_INVERSE 0".to_string(),
-        "#define COMPENSATION_OFF 1".to_string(),
-        "#define COMPENSATION_IDEAL 2".to_string(),
-        "/* One micrometre in metres (the Bouc-Wen model works in um, V, s). */".to_string(),
-        "static const double MICROMETRE = 1e-6;".to_string(),
-        "/* Sample time T [s]. */".to_string(),
-        format!(
-            "static const double SAMPLE_TIME = {};",
-            lit(law.sample_time)
-        ),
+    let mut lines = prelude_lines(law.sample_time);
+    lines.extend([
         "/* Per axis: k_p [-], k_i [1/s], k_d [s] on e = q_d - y [m]. */".to_string(),
         format!(
             "static const double GAINS[2][3] = {{{}}};",
@@ -105,7 +111,7 @@ fn coefficients(law: &TargetLaw) -> String {
             list(&g[0]),
             list(&g[1])
         ),
-    ];
+    ]);
     lines.extend(actuator_lines(&law.actuator));
     lines.extend([
         "/* Largest change of a voltage per sample [V] (the amplifier's current and slew); 0: no \

@@ -6,6 +6,10 @@
 //! ```text
 //! cargo run --release -p flexstage-twin --example validate -- paper runs/paper/design/design.json
 //! ```
+//!
+//! An optional third argument shortens each comparison run (milliseconds, default 20, the
+//! duration of `ValidationParams::default`); CI runs 5 ms, the same check at a quarter of the
+//! cost, since `flexstage run` already checks the same design over 20 ms.
 
 use flexstage_run::Format;
 use flexstage_run::files::design::DesignFile;
@@ -16,7 +20,7 @@ use flexstage_twin::{Twin, ValidationParams, validate};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: validate quick|paper DESIGN.json";
+    let usage = "usage: validate quick|paper DESIGN.json [DURATION_MS]";
     let preset = args
         .get(1)
         .and_then(|p| Preset::from_name(p))
@@ -36,7 +40,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         build_seconds
     );
     let t0 = std::time::Instant::now();
-    let v = validate(&twin, &ValidationParams::default())?;
+    let mut params = ValidationParams::default();
+    if let Some(ms) = args.get(3) {
+        params.duration = ms.parse::<f64>().map_err(|_| usage)? * 1e-3;
+    }
+    let v = validate(&twin, &params)?;
     for m in &v.modes {
         println!(
             "mode {}: twin {:.2} Hz, FE {:.2} Hz ({:+.4} %), ζ = {:.4}",

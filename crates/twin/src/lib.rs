@@ -69,12 +69,15 @@
 //! ## Speed
 //!
 //! The twin runs inside the rig at the scenario's 20 substeps per 10 kHz sample; one simulated
-//! second of the 16-mode quick or paper twin in the full rig costs ≈ 15 ms of CPU time and
-//! 28–57 ms wall (median of `cargo bench -p flexstage-twin`, which depends strongly on the
-//! machine's load; docs/performance.md), against the issue's ≤ 50 ms. The modes take ≈ 70 % of
-//! it ([`TwinStage`]: four modes per AVX2 register, output sums fused into the update, one
-//! dispatched loop per sample through `Mechanics::advance_sample`), the amplifier, Bouc–Wen
-//! and creep ≈ 20 %, the sensor filter and noise the rest.
+//! second of the rhombus sample's twin in the full rig (46 modes on the quick and on the paper
+//! mesh, with the default `twin.min_modes` of 40) takes 16.6 ms (quick) and 27.5 ms (paper),
+//! medians of one run of `cargo bench -p flexstage-twin -- twin_plant_one_second` at load 2.3
+//! on 2 cores (wall time, which depends strongly on the machine's load; docs/performance.md),
+//! against the ≤ 50 ms target. With 16 modes (instruction counts, `benches/twin.rs`; not
+//! re-counted at 46) the modes took ≈ 70 % of it ([`TwinStage`]: four modes per AVX2 register,
+//! output sums fused into the update, one dispatched loop per sample through
+//! `Mechanics::advance_sample`), the amplifier, Bouc–Wen and creep ≈ 20 %, the sensor filter
+//! and noise the rest.
 //!
 //! On the designs of `flexstage design` (docs/performance.md) the same checks give, for the
 //! quick preset, modes within 0.005 % and 0.07 % / 0.02 % of range (step / sine), and for the
