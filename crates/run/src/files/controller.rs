@@ -166,6 +166,12 @@ pub struct FeedForwardFile {
     pub lag_samples: f64,
     /// The taps F_n (2 × 2, row-major) for n = −p, …, L − p − 1.
     pub taps: Vec<[[f64; 2]; 2]>,
+    /// What the taps were fitted to: `lifted` (the lifted response of a fast ADC at the
+    /// samples: the output, the sensor's datasheet filter divided out), `sampled` (the
+    /// sampled response, command → reading) or `static-lead` (the static inverse ahead);
+    /// absent in files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fitted_to: Option<String>,
 }
 
 impl Format for ControllerFile {
