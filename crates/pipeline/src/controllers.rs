@@ -919,7 +919,7 @@ mod tests {
             crate::track::measured_bench(&setup, &twin, &crate::progress::Silent).unwrap();
         let dir = std::env::temp_dir().join(format!("flexstage-lifted-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
-        let (response, lifted) = (dir.join("response.csv"), dir.join("lifted.csv"));
+        let (response, lifted) = (dir.join("h.csv"), dir.join("g.csv"));
         std::fs::write(&response, files.response.encode().unwrap()).unwrap();
         std::fs::write(&lifted, files.lifted.unwrap().encode().unwrap()).unwrap();
         let with = dir.join("with");

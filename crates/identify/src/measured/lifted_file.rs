@@ -176,8 +176,8 @@ mod tests {
     }
 
     /// Goal: a file whose phases are out of order, whose lines hold different numbers of
-    /// phases, whose frequency changes within a line or whose coherence is out of range is
-    /// refused naming the column; a missing column is refused.
+    /// phases, whose frequencies descend or whose coherence is out of range is refused
+    /// naming the column; a missing column is refused.
     #[test]
     fn a_damaged_lifted_response_file_is_refused_naming_the_column() {
         let text = sample(4).to_csv();
@@ -186,9 +186,13 @@ mod tests {
             .iter()
             .chain(&rows[3..])
             .copied()
-            .collect::<Vec<_>>()
-            .join("\n");
-        let short = [&rows[..4], &rows[5..]].concat().join("\n");
+            .map(|r| format!("{r}\n"))
+            .collect::<String>();
+        let short: String = [&rows[..4], &rows[5..]]
+            .concat()
+            .iter()
+            .map(|r| format!("{r}\n"))
+            .collect();
         let other_f = text.replacen(&rows[2][..rows[2].find(',').unwrap()], "7e0", 1);
         let coherence = {
             let mut cells: Vec<String> = rows[1].split(',').map(str::to_string).collect();
@@ -196,13 +200,13 @@ mod tests {
             [rows[0].to_string(), cells.join(",")]
                 .into_iter()
                 .chain(rows[2..].iter().map(|s| s.to_string()))
-                .collect::<Vec<_>>()
-                .join("\n")
+                .map(|r| r + "\n")
+                .collect::<String>()
         };
         for (bad, column) in [
             (swapped, "phase"),
             (short, "phase"),
-            (other_f, "phase"),
+            (other_f, "f is not ascending"),
             (coherence, "coh11"),
         ] {
             let e = LiftedResponse::from_csv(bad.as_bytes(), "damaged")
