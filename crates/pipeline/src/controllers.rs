@@ -335,6 +335,7 @@ impl LearnedTable {
 /// `<controller>+learning-<trajectory>`), with the actuator stage `actuator`, into `out`'s
 /// `controllers/` folder, each feed-forward with what it was fitted to (`fit`). A design
 /// with neither law is an error.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn write_controllers(
     run: &RunDir,
     out: &Tracking,
