@@ -21,7 +21,10 @@
 //!   parameters (`identify/stage/params.toml`) if the run has them; else the guess. On the
 //!   twin the controllers are designed from its loop measured in its rig at the
 //!   controller's sample time (multisine with the scenario's noise, stored as
-//!   `measured_response.csv` of the result folder); the twin's truth only scores them.
+//!   `measured_response.csv` of the result folder; the same experiments recorded by a fast
+//!   ADC on the sensor's analog output, stored as `lifted_response.csv`, which the linear
+//!   controllers' feed-forward is fitted to at the samples); the twin's truth only scores
+//!   them.
 //! * **Folder**: `track/` for the default conditions (inverse compensation, the default
 //!   model, each trajectory's own duration); other conditions get their own folder
 //!   ([`TrackOptions::conditions`]), e.g. `track/compensation-off/` or
