@@ -13,7 +13,7 @@ use flexstage_control::feasibility::{Feasibility, feasibility_of, static_inverse
 use flexstage_control::margins::{MarginParams, Margins};
 use flexstage_control::pi_notch::PiNotchParams;
 use flexstage_control::registry::{Controller, Design, Designs, MarginProbe, Stage};
-use flexstage_control::tuning::{TuningParams, loop_margins};
+use flexstage_control::tuning::{FeedForwardFit, TuningParams, loop_margins};
 use flexstage_identify::measured::{LiftedResponse, ZFilter, ZFit};
 use flexstage_identify::response::{RESPONSE_SHARE, ResponseFit};
 use flexstage_sim::experiment::StageControl;
@@ -43,6 +43,8 @@ pub struct Bench {
     pub identified: Option<ResponseFit>,
     /// Every controller of the registry, designed for the twin.
     pub designs: Designs,
+    /// What the linear designs' feed-forward is fitted to ([`FeedForwardFit::of`]).
+    pub feedforward: FeedForwardFit,
 }
 
 /// The twin's modes as a [`ModalPlant`] sampled at `t` with `delay` samples of delay, the
@@ -107,13 +109,17 @@ impl Bench {
     /// response, `Stage::scenario`): the nominal stage of a Monte-Carlo study that measures
     /// each perturbed twin and designs on it ([`crate::montecarlo::PlantDesign::Identified`]).
     pub fn scenario(setup: Setup, twin: Twin) -> Result<Bench> {
-        let designs = Designs::for_stage(&Stage::scenario(&setup))?;
+        let stage = Stage::scenario(&setup);
+        let designs = Designs::for_stage(&stage)?;
+        let feedforward = FeedForwardFit::of(&stage);
+        drop(stage);
         Ok(Bench {
             setup,
             twin,
             tuning: TuningParams::default(),
             identified: None,
             designs,
+            feedforward,
         })
     }
 
@@ -127,7 +133,9 @@ impl Bench {
     /// the measured loop model run in the time domain ([`MeasuredLoop`]). The designs
     /// allow for the measurement's
     /// uncertainty: `tuning`'s margin targets are raised by [`crate::lab::LabParams::allowing`]
-    /// (the bench keeps the raised tuning). The twin stays on the bench to score the designs.
+    /// (the bench keeps the raised tuning). With a fast ADC (`lab.fast_adc`, on by default)
+    /// the linear designs' feed-forward is fitted to the lifted response at the samples
+    /// ([`Bench::from_measurement`]). The twin stays on the bench to score the designs.
     pub fn measured(
         setup: Setup,
         twin: Twin,
@@ -140,7 +148,11 @@ impl Bench {
     }
 
     /// [`Bench::measured`] from a measurement already made (`measured`, e.g. read back from
-    /// its file): the same designs, from `measured` and `lab`'s allowance alone.
+    /// its files): the same designs, from `measured` and `lab`'s allowance alone. With the
+    /// measurement's lifted response (a fast ADC's, [`crate::lab::LabMeasurement::lifted`])
+    /// the linear designs' feed-forward is fitted to its phase 0
+    /// ([`LiftedResponse::at_samples`]: the output at the samples, the sensor's datasheet
+    /// filter divided out) under the default tuning; without it to the sampled response.
     pub fn from_measurement(
         setup: Setup,
         twin: Twin,
@@ -148,11 +160,13 @@ impl Bench {
         lab: &crate::lab::LabParams,
         measured: &crate::lab::LabMeasurement,
     ) -> Result<Bench> {
-        Bench::from_measurements(setup, twin, tuning, lab, measured, None)
+        let at_samples = measured.lifted.as_ref().map(LiftedResponse::at_samples);
+        Bench::from_measurements(setup, twin, tuning, lab, measured, at_samples.as_ref())
     }
 
     /// [`Bench::from_measurement`] with the lifted response of the output measured by a
-    /// fast ADC (`lifted`, [`crate::lab::measure_lifted`]), which a
+    /// fast ADC (`lifted`, [`crate::lab::measure_lifted`], all its phases as given; the
+    /// measurement's own is not used), which a
     /// `flexstage_control::feedforward::FeedForward::Lifted` tuning fits its feed-forward to.
     pub fn from_measurements(
         setup: Setup,
@@ -216,6 +230,7 @@ impl Bench {
         );
         stage.lifted = lifted;
         let designs = Designs::for_stage(&stage)?;
+        let feedforward = FeedForwardFit::of(&stage);
         let (model, coupling) = stage.controller_model();
         drop(stage);
         (setup.controller.model, setup.controller.coupling) = (model, coupling);
@@ -225,6 +240,7 @@ impl Bench {
             tuning,
             identified,
             designs,
+            feedforward,
         })
     }
 

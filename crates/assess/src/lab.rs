@@ -44,7 +44,18 @@ pub struct LabParams {
     /// gain under the inverse compensation) and the noise (std ≤ 1e-4 of |H| near the
     /// crossovers).
     pub uncertainty: f64,
+    /// The lab's fast ADC on the sensor's analog output during the same experiments: its
+    /// samples per controller sample L (a divisor of the rig's substeps), `None` without
+    /// one. Default `Some(`[`FAST_ADC_RATIO`]`)`. With it the measurement carries the lifted
+    /// response ([`LabMeasurement::lifted`]) the linear designs' feed-forward is fitted to.
+    pub fast_adc: Option<usize>,
 }
+
+/// The fast ADC's samples per controller sample by default: L = 10 (100 kHz at a 10 kHz
+/// loop). Measured on the quick design (the sweep's best q1 at the samples, % of range, at
+/// 3 % / 10 % of f1): L = 10 0.41 / 2.08, L = 4 0.52 / 2.07 (the sensor's filter divided
+/// out of fewer harmonics); the estimate's cost grows with L (`docs/verification.md`).
+pub const FAST_ADC_RATIO: usize = 10;
 
 impl LabParams {
     /// The tuning `tuning` with its margin targets raised by the allowance for the
@@ -67,17 +78,23 @@ impl Default for LabParams {
             noise: true,
             compensation: Compensation::Inverse,
             uncertainty: 0.03,
+            fast_adc: Some(FAST_ADC_RATIO),
         }
     }
 }
 
-/// What the lab measured: the two logs' response and its loop model.
+/// What the lab measured: the two logs' response and its loop model, and the lifted
+/// response of a fast ADC when the lab had one.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LabMeasurement {
     /// The measured response.
     pub response: MeasuredResponse,
     /// Its z-domain fit, the loop model the designs tune on.
     pub model: ZFit,
+    /// The lifted response of the output from the fast ADC on the sensor's analog output
+    /// during the same experiments, the sensor's datasheet filter divided out
+    /// ([`measure_lifted`]); `None` without a fast ADC.
+    pub lifted: Option<LiftedResponse>,
 }
 
 /// The lab's rig for its experiments (the noise off when `p.noise` is) and its multisine
@@ -131,17 +148,16 @@ pub fn lab_logs(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<([LabLog; 2
     Ok(([log(0)?, log(1)?], plan))
 }
 
-/// The lifted response of `twin`'s output in the rig of `setup`: the experiments of
-/// [`lab_logs`] (the same plan, commands, seeds) with a fast ADC of `ratio` samples per
-/// controller sample on the sensor's analog output, its white noise the rig's
-/// (`noise_std`, none when `p.noise` is off), and the sensor's datasheet filter (the rig's
-/// sensor chain) divided out ([`LiftedResponse::from_multisine`]).
-pub fn measure_lifted(
+/// The two experiments of [`lab_logs`] (the same plan, commands, seeds) with a fast ADC of
+/// `ratio` samples per controller sample on the sensor's analog output, its white noise the
+/// rig's (`noise_std`, none when `p.noise` is off). Each [`FastLog`]'s log at the
+/// controller's rate is [`lab_logs`]' (the fast ADC has noise of its own).
+pub fn fast_logs(
     twin: &Twin,
     setup: &Setup,
     p: &LabParams,
     ratio: usize,
-) -> Result<LiftedResponse> {
+) -> Result<([FastLog; 2], MultisinePlan)> {
     let (rig, plan) = experiment(setup, p);
     let log = |input: usize| -> Result<FastLog> {
         let r = experiment_rig(&rig, input);
@@ -161,7 +177,19 @@ pub fn measure_lifted(
             &adc,
         )?)
     };
-    let (a, b) = (log(0)?, log(1)?);
+    Ok(([log(0)?, log(1)?], plan))
+}
+
+/// The lifted response of `twin`'s output in the rig of `setup`: the experiments of
+/// [`fast_logs`] with the sensor's datasheet filter (the rig's sensor chain) divided out
+/// ([`LiftedResponse::from_multisine`]).
+pub fn measure_lifted(
+    twin: &Twin,
+    setup: &Setup,
+    p: &LabParams,
+    ratio: usize,
+) -> Result<LiftedResponse> {
+    let ([a, b], plan) = fast_logs(twin, setup, p, ratio)?;
     Ok(LiftedResponse::from_multisine(
         [&a, &b],
         &plan,
@@ -170,17 +198,40 @@ pub fn measure_lifted(
 }
 
 /// Measures `twin` in the rig of `setup` (module docs).
+/// With a fast ADC (`p.fast_adc`) the two experiments are recorded by it too
+/// ([`fast_logs`]: the response from their logs at the controller's rate is the one without
+/// it, bitwise) and the measurement carries their lifted response.
 pub fn measure(twin: &Twin, setup: &Setup, p: &LabParams) -> Result<LabMeasurement> {
-    let ([a, b], plan) = lab_logs(twin, setup, p)?;
-    let response = MeasuredResponse::from_multisine([&a, &b], &plan)?;
-    LabMeasurement::from_response(response, &p.fit)
+    let Some(ratio) = p.fast_adc else {
+        let ([a, b], plan) = lab_logs(twin, setup, p)?;
+        let response = MeasuredResponse::from_multisine([&a, &b], &plan)?;
+        return LabMeasurement::from_response(response, &p.fit);
+    };
+    let ([a, b], plan) = fast_logs(twin, setup, p, ratio)?;
+    let response = MeasuredResponse::from_multisine([&a.log, &b.log], &plan)?;
+    let lifted = LiftedResponse::from_multisine([&a, &b], &plan, &setup.rig.sensor)?;
+    Ok(LabMeasurement::from_response(response, &p.fit)?.with_lifted(lifted))
 }
 
 impl LabMeasurement {
     /// A measured `response` (from the rig or its file) with its loop model fitted by `fit`.
+    /// No lifted response ([`LabMeasurement::with_lifted`] adds one).
     pub fn from_response(response: MeasuredResponse, fit: &FitParams) -> Result<LabMeasurement> {
         let model = ZFit::fit(&response, fit)?;
-        Ok(LabMeasurement { response, model })
+        Ok(LabMeasurement {
+            response,
+            model,
+            lifted: None,
+        })
+    }
+
+    /// The measurement with the lifted response `lifted` of the same experiments (a fast
+    /// ADC's, [`measure_lifted`], or read from its file).
+    pub fn with_lifted(self, lifted: LiftedResponse) -> LabMeasurement {
+        LabMeasurement {
+            lifted: Some(lifted),
+            ..self
+        }
     }
 
     /// The static gain read off the measurement: per entry, the real part of the
@@ -282,6 +333,31 @@ impl LoopPlant for MeasuredLoopModel<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Reference: the measurement without a fast ADC ([`lab_logs`]) and the lifted response
+    /// of [`measure_lifted`], each from experiments of their own. Goal: recording the same
+    /// experiments with the fast ADC ([`measure`] with `fast_adc`) leaves the sampled
+    /// response and its loop model bitwise as they were (the fast ADC reads the sensor's
+    /// analog output with noise of its own) and gives that lifted response bitwise, on the
+    /// rhombus fixture's twin.
+    #[test]
+    fn the_fast_adc_records_the_same_experiments_without_changing_them() {
+        let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
+        let twin = Twin::from_scenario(&s, &rho).unwrap();
+        let setup = Setup::from_scenario(&s);
+        let without = LabParams {
+            fast_adc: None,
+            ..LabParams::default()
+        };
+        let plain = measure(&twin, &setup, &without).unwrap();
+        assert_eq!(plain.lifted, None);
+        let with = measure(&twin, &setup, &LabParams::default()).unwrap();
+        assert_eq!(with.response, plain.response);
+        assert_eq!(with.model, plain.model);
+        let lifted = measure_lifted(&twin, &setup, &without, FAST_ADC_RATIO).unwrap();
+        assert_eq!(lifted.ratio(), FAST_ADC_RATIO);
+        assert_eq!(with.lifted, Some(lifted));
+    }
 
     /// Reference: a response known in closed form, G z⁻¹/(1 + j f/2 kHz) with G the 2 × 2
     /// gain of the quick stage's sign pattern, on the default multisine's lines (5 Hz to

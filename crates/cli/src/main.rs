@@ -191,12 +191,13 @@ or into a firmware tree: <DIR>/<controller>.c and .h, C99 with <math.h> only, fu
 reference's first three derivatives, and _reference_time says when). \
 docs/controller-export.md says how to call them at 10 kHz.
 
-With --response or --log it designs every controller (PI + notch, PID, PPF, the backstepping sized on the measured loop model) from a measured loop alone, no design or twin: a measured response or a time log of your stage at the controller's sample time (formats in docs/formats.md). The actuator settings (the PEAs' hysteresis model for the inverse compensation, the stroke) come from --scenario FILE, or from --preset (default: paper). It writes <controller>.json, .c and .h of each.
+With --response or --log it designs every controller (PI + notch, PID, PPF, the backstepping sized on the measured loop model) from a measured loop alone, no design or twin: a measured response or a time log of your stage at the controller's sample time (formats in docs/formats.md). With --lifted, the lifted response a fast ADC on the sensor's analog output recorded during the same experiments (as track writes lifted_response.csv), the feed-forward of the linear controllers is fitted to the output at the samples, as track fits it; without it to the sampled response (each JSON says which: feedforward.fitted_to). The actuator settings (the PEAs' hysteresis model for the inverse compensation, the stroke) come from --scenario FILE, or from --preset (default: paper). It writes <controller>.json, .c and .h of each.
 
 Examples:
   flexstage controller runs/quick/track/controllers/pi-notch-ff.json
   flexstage controller runs/quick/track/controllers/pid-ff.json --to firmware/control
   flexstage controller --response measured.csv --to firmware/control
+  flexstage controller --response measured_response.csv --lifted lifted_response.csv
   flexstage controller --log lab_log.csv --scenario my_stage.toml"
     )]
     Controller {
@@ -209,6 +210,11 @@ Examples:
         /// Design from a time log (CSV: t, command1, command2, reading1, reading2), by H1.
         #[arg(long, group = "measurement")]
         log: Option<PathBuf>,
+        /// With --response or --log: the lifted response of a fast ADC during the same
+        /// experiments (CSV: f, phase, re/im per entry, coherence, sample_time, std), which
+        /// the linear controllers' feed-forward is fitted to at the samples.
+        #[arg(long, requires = "measurement")]
+        lifted: Option<PathBuf>,
         /// Folder for the files (default: the folder of the input file).
         #[arg(long)]
         to: Option<PathBuf>,
@@ -313,6 +319,7 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
             json,
             response,
             log,
+            lifted,
             to,
             scenario,
             preset,
@@ -335,7 +342,17 @@ fn dispatch(command: Command) -> anyhow::Result<()> {
                 Some(m) => {
                     let scenario = flexstage_pipeline::load_scenario(scenario.as_deref(), &preset)
                         .context("invalid scenario")?;
-                    flexstage_pipeline::export_measured(m, &scenario, &dir)?
+                    let written =
+                        flexstage_pipeline::export_measured(m, lifted.as_deref(), &scenario, &dir)?;
+                    outln!(
+                        "feed-forward of the linear controllers fitted to {}",
+                        match &lifted {
+                            Some(l) =>
+                                format!("the lifted response at the samples ({})", l.display()),
+                            None => "the sampled response (no --lifted)".to_string(),
+                        }
+                    );
+                    written
                 }
                 None => vec![flexstage_pipeline::export_controller(&input, &dir)?],
             };

@@ -53,8 +53,11 @@ pub struct TuningParams {
     pub margins: MarginParams,
     /// Bisection steps on the gain scale (default 30).
     pub steps: usize,
-    /// The feed-forward of the tuned PI + notch and PID (default: the fitted inverse of the
-    /// sampled response with preview, [`crate::feedforward`]).
+    /// The feed-forward of the tuned PI + notch and PID (default: the inverse fitted to the
+    /// stage's lifted response with preview, [`FeedForward::Lifted`], where the stage has one
+    /// (a fast ADC's measurement, the designs given its output at the samples); else the
+    /// inverse fitted to its sampled response, [`crate::feedforward`]; [`FeedForwardFit`]
+    /// says which).
     pub feedforward: FeedForward,
 }
 
@@ -72,12 +75,49 @@ impl Default for TuningParams {
                 ..MarginParams::default()
             },
             steps: 30,
-            feedforward: FeedForward::default(),
+            feedforward: FeedForward::Lifted(FeedForwardParams::default()),
         }
     }
 }
 
-pub use crate::feedforward::FeedForward;
+pub use crate::feedforward::{FeedForward, FeedForwardParams};
+
+/// What the tuned linear designs' feed-forward is on a stage: the tuning's
+/// [`FeedForward`] with what the stage offers to fit ([`crate::feedforward::design_with`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FeedForwardFit {
+    /// The static inverse at the current sample (no response to fit, or asked for).
+    Static,
+    /// The static inverse some samples ahead.
+    StaticLead,
+    /// The inverse fitted to the sampled response (command → reading at the samples).
+    Sampled,
+    /// The inverse fitted to the lifted response of a fast ADC (the output, the sensor's
+    /// datasheet filter divided out).
+    Lifted,
+}
+
+impl FeedForwardFit {
+    /// The feed-forward the linear designs on `stage` get.
+    pub fn of(stage: &Stage<'_>) -> FeedForwardFit {
+        match (stage.tuning.feedforward, stage.response, stage.lifted) {
+            (FeedForward::StaticLead(_), ..) => FeedForwardFit::StaticLead,
+            (FeedForward::Static, ..) | (_, None, _) => FeedForwardFit::Static,
+            (FeedForward::Lifted(_), Some(_), Some(_)) => FeedForwardFit::Lifted,
+            _ => FeedForwardFit::Sampled,
+        }
+    }
+
+    /// Its name in files and summaries: `static`, `static-lead`, `sampled`, `lifted`.
+    pub fn name(self) -> &'static str {
+        match self {
+            FeedForwardFit::Static => "static",
+            FeedForwardFit::StaticLead => "static-lead",
+            FeedForwardFit::Sampled => "sampled",
+            FeedForwardFit::Lifted => "lifted",
+        }
+    }
+}
 
 impl TuningParams {
     /// Checks the fields.

@@ -183,7 +183,27 @@ impl<R: Read> NumericCsv<R> {
     /// Reads the columns at `cols` (called `names` in messages), one vector per column. Every
     /// cell must be a finite number, and the first column is the time axis: it must strictly
     /// increase.
-    pub fn read(mut self, cols: &[usize], names: &[&str]) -> Result<Vec<Vec<f64>>, RecordError> {
+    pub fn read(self, cols: &[usize], names: &[&str]) -> Result<Vec<Vec<f64>>, RecordError> {
+        self.read_ordered(cols, names, true)
+    }
+
+    /// [`NumericCsv::read`] for a table whose rows come in groups that share the first
+    /// column (e.g. the phases of one frequency line): it must not decrease.
+    pub fn read_grouped(
+        self,
+        cols: &[usize],
+        names: &[&str],
+    ) -> Result<Vec<Vec<f64>>, RecordError> {
+        self.read_ordered(cols, names, false)
+    }
+
+    /// The columns, the first strictly increasing (`strict`) or not decreasing.
+    fn read_ordered(
+        mut self,
+        cols: &[usize],
+        names: &[&str],
+        strict: bool,
+    ) -> Result<Vec<Vec<f64>>, RecordError> {
         let mut data = vec![Vec::new(); cols.len()];
         let mut prev_t: Option<(f64, u64)> = None;
         let width = self.headers.len();
@@ -228,11 +248,16 @@ impl<R: Read> NumericCsv<R> {
             }
             let tk = data[0][data[0].len() - 1];
             if let Some((tp, lp)) = prev_t
-                && tk <= tp
+                && (tk < tp || (strict && tk == tp))
             {
-                return Err(bad(format!(
-                    "time is not increasing: t = {tk} after t = {tp} on line {lp}"
-                )));
+                return Err(bad(if strict {
+                    format!("time is not increasing: t = {tk} after t = {tp} on line {lp}")
+                } else {
+                    format!(
+                        "{} is not ascending: {tk} after {tp} on line {lp}",
+                        names[0]
+                    )
+                }));
             }
             prev_t = Some((tk, line));
         }

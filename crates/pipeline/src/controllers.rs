@@ -19,9 +19,11 @@ use flexstage_control::feedforward::FirFeedForward;
 use flexstage_control::registry::{CONTROLLERS, Controller, Designs, Stage};
 use flexstage_control::target::{CSource, TargetLaw, c_prefix, compensation_name, compensation_of};
 use flexstage_control::target_backstepping::{BacksteppingLaw, matrix, rows};
-use flexstage_control::tuning::TuningParams;
+use flexstage_control::tuning::{FeedForwardFit, TuningParams};
 use flexstage_control_core::{Biquad, PidGains};
-use flexstage_identify::measured::{FitParams, LabLog, MeasuredResponse, WelchParams};
+use flexstage_identify::measured::{
+    FitParams, LabLog, LiftedResponse, MeasuredResponse, WelchParams,
+};
 use flexstage_piezo::{BoucWenParams, CompensatorParams};
 use flexstage_run::files::controller::{
     ActuatorFile, AxisFile, BacksteppingFile, ControllerFile, FeedForwardFile, SectionFile, VERSION,
@@ -75,10 +77,20 @@ pub fn controller_file(c: &Controller, law: &TargetLaw) -> ControllerFile {
             lag_samples: f.lag(),
             taps: f.taps().to_vec(),
             reading_taps: f.reading().map(<[_]>::to_vec),
+            fitted_to: None,
         }),
         learned_m: law.learned.clone(),
         backstepping: None,
     }
+}
+
+/// `file` with what its feed-forward was fitted to recorded (`fit`, the designs' on their
+/// stage).
+fn fitted(mut file: ControllerFile, fit: FeedForwardFit) -> ControllerFile {
+    if let Some(ff) = &mut file.feedforward {
+        ff.fitted_to = Some(fit.name().to_string());
+    }
+    file
 }
 
 /// The coefficients file of the backstepping law `law` of the registry controller `c`.
@@ -329,7 +341,9 @@ impl LearnedTable {
 /// `controllers` that `designs` holds (its linear target law, or its backstepping law
 /// predicting over `delay` samples), and of each of them with a table of `learned` (as
 /// `<controller>+learning-<trajectory>`), with the actuator stage `actuator`, into `out`'s
-/// `controllers/` folder. A design with neither law is an error.
+/// `controllers/` folder, each feed-forward with what it was fitted to (`fit`). A design
+/// with neither law is an error.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn write_controllers(
     run: &RunDir,
     out: &Tracking,
@@ -338,6 +352,7 @@ pub(crate) fn write_controllers(
     learned: &[LearnedTable],
     actuator: ActuatorParams,
     delay: usize,
+    fit: FeedForwardFit,
 ) -> Result<Exported> {
     let mut done = Exported::default();
     for &c in controllers {
@@ -356,8 +371,10 @@ pub(crate) fn write_controllers(
             }
         };
         let file_of = |table: Option<Vec<[f64; 2]>>| match (&law, table) {
-            (FileLaw::Linear(l), None) => controller_file(c, l),
-            (FileLaw::Linear(l), Some(t)) => controller_file(c, &(**l).clone().with_learned(t)),
+            (FileLaw::Linear(l), None) => fitted(controller_file(c, l), fit),
+            (FileLaw::Linear(l), Some(t)) => {
+                fitted(controller_file(c, &(**l).clone().with_learned(t)), fit)
+            }
             (FileLaw::Backstepping(l), None) => backstepping_file(c, l),
             (FileLaw::Backstepping(l), Some(t)) => {
                 backstepping_file(c, &(**l).clone().with_learned(t))
@@ -435,10 +452,14 @@ pub enum Measurement<'a> {
 /// feed-forward and the backstepping's model, the backstepping's gains sized by their margins
 /// on the measured loop model run in the time domain (`flexstage_assess::bench::MeasuredLoop`)
 /// and its prediction over the delay the fit measured, and the scenario's settings for the
-/// actuator stage (inverse compensation). A response read back from its file gives the same
-/// files, bitwise.
+/// actuator stage (inverse compensation). With the `lifted` response of a fast ADC during the
+/// same experiments (the output between the samples, the sensor's datasheet filter divided
+/// out) the linear controllers' feed-forward is fitted to it at the samples (its phase 0), as
+/// `track` fits it; without one to the sampled response; each file says which. A response
+/// read back from its file gives the same files, bitwise.
 pub fn measured_controller_files(
     response: &MeasuredResponse,
+    lifted: Option<&LiftedResponse>,
     scenario: &Scenario,
 ) -> Result<Vec<ControllerFile>> {
     let measured = flexstage_assess::lab::LabMeasurement::from_response(
@@ -455,8 +476,11 @@ pub fn measured_controller_files(
         model: &measured.model,
         setup: &setup,
     };
-    let stage = Stage::new(&setup, Some(&model), Some(fit), Some(&probe), tuning);
+    let at_samples = lifted.map(LiftedResponse::at_samples);
+    let mut stage = Stage::new(&setup, Some(&model), Some(fit), Some(&probe), tuning);
+    stage.lifted = at_samples.as_ref();
     let designs = Designs::for_stage(&stage)?;
+    let feedforward = FeedForwardFit::of(&stage);
     let actuator = setup.actuator(Compensation::Inverse);
     let delay = measured.model.delay();
     let mut files = Vec::new();
@@ -465,7 +489,7 @@ pub fn measured_controller_files(
             continue;
         };
         if let Some(law) = TargetLaw::of_design(&**design, actuator)? {
-            files.push(controller_file(c, &law));
+            files.push(fitted(controller_file(c, &law), feedforward));
         } else if let Some(law) = design.backstepping(actuator, delay)? {
             files.push(backstepping_file(c, &law));
         }
@@ -473,13 +497,14 @@ pub fn measured_controller_files(
     Ok(files)
 }
 
-/// Designs every controller from a measured response or a time log alone
-/// ([`measured_controller_files`], the actuator settings of `scenario`: its PEAs' hysteresis
-/// model for the inverse compensation and its stage's stroke) and writes each one's
-/// coefficients file, C source and header (`<controller>.json`, `.c`, `.h`) into `dir`
-/// (created if missing), each atomically.
+/// Designs every controller from a measured response or a time log alone, with the lifted
+/// response file `lifted` of a fast ADC when given ([`measured_controller_files`], the
+/// actuator settings of `scenario`: its PEAs' hysteresis model for the inverse compensation
+/// and its stage's stroke) and writes each one's coefficients file, C source and header
+/// (`<controller>.json`, `.c`, `.h`) into `dir` (created if missing), each atomically.
 pub fn export_measured(
     source: Measurement<'_>,
+    lifted: Option<&Path>,
     scenario: &Scenario,
     dir: &Path,
 ) -> Result<Vec<ExportedController>> {
@@ -498,8 +523,18 @@ pub fn export_measured(
             MeasuredResponse::from_log(&log, &WelchParams::default())?
         }
     };
+    let lifted = match lifted {
+        Some(p) => {
+            let file = std::fs::File::open(p).map_err(|source| PipelineError::Read {
+                path: p.to_path_buf(),
+                source,
+            })?;
+            Some(LiftedResponse::from_csv(file, &p.display().to_string())?)
+        }
+        None => None,
+    };
     let mut out = Vec::new();
-    for f in measured_controller_files(&response, scenario)? {
+    for f in measured_controller_files(&response, lifted.as_ref(), scenario)? {
         let name = f.controller.clone();
         let src = c_files(&f)?;
         let json = f.encode().map_err(|reason| PipelineError::Format {
@@ -880,10 +915,10 @@ mod tests {
     fn controllers_from_a_response_read_back_are_bitwise_the_same() {
         let r = measured();
         let scenario = Scenario::paper();
-        let direct = measured_controller_files(&r, &scenario).unwrap();
+        let direct = measured_controller_files(&r, None, &scenario).unwrap();
         let back =
             MeasuredResponse::from_csv(r.to_csv().as_bytes(), "the written response").unwrap();
-        let again = measured_controller_files(&back, &scenario).unwrap();
+        let again = measured_controller_files(&back, None, &scenario).unwrap();
         let names: Vec<&str> = direct.iter().map(|f| f.controller.as_str()).collect();
         for want in ["pi-notch-ff", "pid-ff", "ppf-pi-ff", "robust", "nonrobust"] {
             assert!(names.contains(&want), "{want} missing: {names:?}");
@@ -899,6 +934,53 @@ mod tests {
         }
     }
 
+    /// Reference: `track`'s designs on the rhombus fixture's twin, from its measurement's
+    /// run files (`crate::track::measured_bench`: the measured and the lifted response).
+    /// Goal: `flexstage controller --response FILE --lifted FILE` on those two files writes
+    /// the same coefficients files, bitwise, for every linear controller (the feed-forward
+    /// fitted to the lifted response, and saying so); without `--lifted` the feed-forward is
+    /// fitted to the sampled response and says that.
+    #[test]
+    fn controllers_from_the_response_and_lifted_files_are_tracks_designs() {
+        let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
+        let twin = flexstage_twin::Twin::from_scenario(&s, &rho).unwrap();
+        let setup = Setup::from_scenario(&s);
+        let (bench, files) =
+            crate::track::measured_bench(&setup, &twin, &crate::progress::Silent).unwrap();
+        let dir = std::env::temp_dir().join(format!("flexstage-lifted-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (response, lifted) = (dir.join("h.csv"), dir.join("g.csv"));
+        std::fs::write(&response, files.response.encode().unwrap()).unwrap();
+        std::fs::write(&lifted, files.lifted.unwrap().encode().unwrap()).unwrap();
+        let with = dir.join("with");
+        export_measured(Measurement::Response(&response), Some(&lifted), &s, &with).unwrap();
+        let without = dir.join("without");
+        export_measured(Measurement::Response(&response), None, &s, &without).unwrap();
+        let actuator = setup.actuator(Compensation::Inverse);
+        let mut linear = 0;
+        for &c in &CONTROLLERS {
+            let Some(design) = bench.designs.get(c) else {
+                continue;
+            };
+            let Some(law) = TargetLaw::of_design(&**design, actuator).unwrap() else {
+                continue;
+            };
+            let want = fitted(controller_file(c, &law), bench.feedforward);
+            let read = |d: &Path| std::fs::read(d.join(format!("{}.json", c.name))).unwrap();
+            assert_eq!(read(&with), want.encode().unwrap(), "{c}");
+            let other = ControllerFile::decode(&read(&without)).unwrap();
+            if let Some(ff) = &want.feedforward {
+                assert_eq!(ff.fitted_to.as_deref(), Some("lifted"), "{c}");
+                let o = other.feedforward.unwrap();
+                assert_eq!(o.fitted_to.as_deref(), Some("sampled"), "{c}");
+                assert_ne!(o.taps, ff.taps, "{c}");
+            }
+            linear += 1;
+        }
+        assert!(linear >= 3, "{linear} linear controllers");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
     /// Goal: `export_measured` takes the actuator settings from the scenario it is given: the
     /// paper scenario writes what `measured_controller_files` designs with it, and a scenario
     /// whose PEA1 hysteresis differs writes a different inverse compensation.
@@ -911,8 +993,8 @@ mod tests {
         std::fs::write(&file, r.to_csv()).unwrap();
         let read = |name: &str, to: &Path| std::fs::read(to.join(format!("{name}.json"))).unwrap();
         let paper = Scenario::paper();
-        let written = export_measured(Measurement::Response(&file), &paper, &dir).unwrap();
-        for (f, e) in measured_controller_files(&r, &paper)
+        let written = export_measured(Measurement::Response(&file), None, &paper, &dir).unwrap();
+        for (f, e) in measured_controller_files(&r, None, &paper)
             .unwrap()
             .iter()
             .zip(&written)
@@ -922,7 +1004,7 @@ mod tests {
         let mut other = Scenario::paper();
         other.hysteresis.pea1.d_p *= 1.5;
         let to = dir.join("other");
-        export_measured(Measurement::Response(&file), &other, &to).unwrap();
+        export_measured(Measurement::Response(&file), None, &other, &to).unwrap();
         for e in &written {
             assert_ne!(
                 read(&e.controller, &dir),

@@ -283,6 +283,44 @@ pub fn measured_rows(
     )
 }
 
+/// The typed rows of a lifted response's file (`docs/formats.md`), value for value: the
+/// phases of each line together, lines by frequency.
+pub fn lifted_rows(
+    r: &flexstage_identify::measured::LiftedResponse,
+) -> flexstage_run::format::Rows<flexstage_run::files::lifted::LiftedLineRow> {
+    let ts = r.sample_time();
+    flexstage_run::format::Rows(
+        r.lines()
+            .iter()
+            .flat_map(|line| {
+                line.phase.iter().enumerate().map(move |(phase, l)| {
+                    flexstage_run::files::lifted::LiftedLineRow {
+                        f: line.f,
+                        phase,
+                        re11: l.h[0][0].re,
+                        im11: l.h[0][0].im,
+                        re12: l.h[0][1].re,
+                        im12: l.h[0][1].im,
+                        re21: l.h[1][0].re,
+                        im21: l.h[1][0].im,
+                        re22: l.h[1][1].re,
+                        im22: l.h[1][1].im,
+                        coh11: l.coherence[0][0],
+                        coh12: l.coherence[0][1],
+                        coh21: l.coherence[1][0],
+                        coh22: l.coherence[1][1],
+                        sample_time: ts,
+                        std11: l.std[0][0],
+                        std12: l.std[0][1],
+                        std21: l.std[1][0],
+                        std22: l.std[1][1],
+                    }
+                })
+            })
+            .collect(),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -17,6 +17,7 @@ use flexstage_assess::montecarlo::{
 };
 use flexstage_control::experiment::Setup;
 use flexstage_control::registry::Controller;
+use flexstage_run::files::lifted::LiftedLineRow;
 use flexstage_run::files::measured::MeasuredLineRow;
 use flexstage_run::format::Rows;
 use flexstage_run::layout::{self, PeaIdentification, Tracking};
@@ -83,8 +84,8 @@ impl MonteCarloStudy {
     }
 
     /// The run-folder files [`MonteCarloStudy::of_run`] reads with the default options
-    /// (relative paths; the measured response only when `track` stored one, and read only
-    /// for [`PlantDesign::Nominal`]): a folder
+    /// (relative paths; the measured and the lifted response only when `track` stored them,
+    /// and read only for [`PlantDesign::Nominal`]): a folder
     /// holding these and the scenario sets up the same study.
     pub fn inputs() -> Vec<String> {
         let mut files = vec![
@@ -92,6 +93,7 @@ impl MonteCarloStudy {
             layout::design::DESIGN.to_string(),
             layout::stage::PARAMS.to_string(),
             Tracking::main().measured_response(),
+            Tracking::main().lifted_response(),
         ];
         files.extend([1, 2].map(|pea| PeaIdentification { pea }.estimates()));
         files
@@ -142,8 +144,9 @@ impl MonteCarloStudy {
 }
 
 /// The bench with every controller designed from the nominal twin's measurement, as `track`
-/// designs it: the run's own measurement when `track` stored one under these conditions (the
-/// designs from it are bitwise those from measuring again), else a new one.
+/// designs it: the run's own measurement when `track` stored one under these conditions
+/// (with its lifted response when stored; the designs from them are bitwise those from
+/// measuring again), else a new one.
 fn nominal_bench(
     folder: &RunFolder,
     options: &TrackOptions,
@@ -151,12 +154,20 @@ fn nominal_bench(
     twin: &flexstage_twin::Twin,
     progress: &dyn Progress,
 ) -> Result<Bench> {
-    let stored = Tracking::variant(&options.conditions(folder)).measured_response();
+    let out = Tracking::variant(&options.conditions(folder));
+    let stored = out.measured_response();
     Ok(match folder.dir().load::<Rows<MeasuredLineRow>>(&stored)? {
-        Some(rows) => {
+        Some(response) => {
+            let lifted = folder
+                .dir()
+                .load::<Rows<LiftedLineRow>>(&out.lifted_response())?;
             progress.note(&format!("designing the controllers from {stored}"));
             let t0 = std::time::Instant::now();
-            crate::track::bench_from_rows(setup, twin, &rows, progress, t0)?
+            let files = crate::track::MeasuredFiles {
+                response: (*response).clone(),
+                lifted: lifted.map(|l| (*l).clone()),
+            };
+            crate::track::bench_from_rows(setup, twin, &files, progress, t0)?
         }
         None => {
             progress.note("designing the controllers from the twin measured in its rig");

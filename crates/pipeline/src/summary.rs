@@ -6,6 +6,7 @@
 
 pub mod verdict;
 
+use flexstage_control::tuning::FeedForwardFit;
 use std::fmt;
 use std::path::Path;
 
@@ -534,8 +535,15 @@ impl fmt::Display for TrackSummary {
         }
         writeln!(
             f,
-            "(hysteresis compensation: {}; errors against the true output)",
-            crate::names::compensation(self.compensation)
+            "(hysteresis compensation: {}; feed-forward of the linear controllers: {}; errors \
+             against the true output)",
+            crate::names::compensation(self.compensation),
+            match self.feedforward {
+                FeedForwardFit::Lifted => "fitted to the lifted response at the samples",
+                FeedForwardFit::Sampled => "fitted to the sampled response",
+                FeedForwardFit::StaticLead => "the static inverse ahead",
+                FeedForwardFit::Static => "the static inverse",
+            }
         )?;
         let e = &self.exported;
         if !e.written.is_empty() {

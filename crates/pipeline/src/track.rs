@@ -21,7 +21,10 @@
 //!   parameters (`identify/stage/params.toml`) if the run has them; else the guess. On the
 //!   twin the controllers are designed from its loop measured in its rig at the
 //!   controller's sample time (multisine with the scenario's noise, stored as
-//!   `measured_response.csv` of the result folder); the twin's truth only scores them.
+//!   `measured_response.csv` of the result folder; the same experiments recorded by a fast
+//!   ADC on the sensor's analog output, stored as `lifted_response.csv`, which the linear
+//!   controllers' feed-forward is fitted to at the samples); the twin's truth only scores
+//!   them.
 //! * **Folder**: `track/` for the default conditions (inverse compensation, the default
 //!   model, each trajectory's own duration); other conditions get their own folder
 //!   ([`TrackOptions::conditions`]), e.g. `track/compensation-off/` or
@@ -55,10 +58,11 @@ use flexstage_control::learning::{
     self, DesignParams, Learning, Readings, SensorDatasheet, SensorLag, measure_learning_plant,
 };
 use flexstage_control::registry::{Controller, Design, Designs, Stage};
-use flexstage_control::tuning::TuningParams;
+use flexstage_control::tuning::{FeedForwardFit, TuningParams};
 use flexstage_figures::plot::{Figure, Series};
-use flexstage_identify::measured::MeasuredResponse;
+use flexstage_identify::measured::{LiftedResponse, MeasuredResponse};
 use flexstage_piezo::BoucWenParams;
+use flexstage_run::files::lifted::LiftedLineRow;
 use flexstage_run::files::measured::MeasuredLineRow;
 use flexstage_run::files::pea::PeaEstimates;
 use flexstage_run::files::stage::StageParamsFile;
@@ -358,6 +362,10 @@ pub struct TrackSummary {
     /// The controllers written for a real-time target (`controllers/` of the result
     /// folder: coefficients JSON, C99 source and header).
     pub exported: crate::controllers::Exported,
+    /// What the linear controllers' feed-forward is fitted to: the lifted response at the
+    /// samples on the twin (its fast ADC's `lifted_response.csv`), the static inverse on
+    /// the lumped plant.
+    pub feedforward: FeedForwardFit,
 }
 
 impl TrackSummary {
@@ -395,11 +403,23 @@ impl TrackSummary {
 /// The controllers designed for the simulated stage, their margins and robustness.
 type Designed = (
     Designs,
+    FeedForwardFit,
     Vec<MarginRow>,
     Option<MonteCarlo>,
     Option<ScanFrequency>,
-    Option<Rows<MeasuredLineRow>>,
+    Option<MeasuredFiles>,
 );
+
+/// The run files of the lab measurement `track` designs from: the measured response
+/// (`measured_response.csv`) and, from a fast ADC during the same experiments, the lifted
+/// response (`lifted_response.csv`).
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct MeasuredFiles {
+    /// The measured response's rows.
+    pub response: Rows<MeasuredLineRow>,
+    /// The lifted response's rows; `None` without a fast ADC.
+    pub lifted: Option<Rows<LiftedLineRow>>,
+}
 
 /// On the twin: measures its loop in its rig at the controller's sample time and designs
 /// every controller of the registry from that measurement alone ([`measured_bench`]:
@@ -426,7 +446,9 @@ fn tune_and_margins(
     let controllers: &[&'static Controller] = &options.controllers;
     let montecarlo_plants = options.montecarlo_plants;
     let Simulated::Twin(twin) = sim else {
-        let designs = Designs::for_stage(&Stage::scenario(setup))?;
+        let stage = Stage::scenario(setup);
+        let designs = Designs::for_stage(&stage)?;
+        let feedforward = FeedForwardFit::of(&stage);
         for c in controllers.iter().filter(|c| designs.get(c).is_none()) {
             warnings.push(format!(
                 "{} is tuned on the twin's frequency response and is not run on the lumped \
@@ -434,7 +456,7 @@ fn tune_and_margins(
                 c.name
             ));
         }
-        return Ok((designs, Vec::new(), None, None, None));
+        return Ok((designs, feedforward, Vec::new(), None, None, None));
     };
     let (bench, measured) = measured_bench(setup, twin, progress)?;
     let scenario_setup = setup.clone();
@@ -447,7 +469,14 @@ fn tune_and_margins(
         &InjectionParams::default(),
     )?;
     let Some(first) = scenario.trajectories.first() else {
-        return Ok((bench.designs, rows, None, None, Some(measured)));
+        return Ok((
+            bench.designs,
+            bench.feedforward,
+            rows,
+            None,
+            None,
+            Some(measured),
+        ));
     };
     let (reference, _) = Reference::from_scenario(first);
     let t0 = std::time::Instant::now();
@@ -493,43 +522,75 @@ fn tune_and_margins(
             }
         }
     }
-    Ok((bench.designs, rows, Some(mc), scan, Some(measured)))
+    Ok((
+        bench.designs,
+        bench.feedforward,
+        rows,
+        Some(mc),
+        scan,
+        Some(measured),
+    ))
 }
 
 /// The bench of the twin with every controller designed from its loop measured in its rig
 /// at the controller's sample time (`flexstage_assess::lab`, default settings: the
-/// multisine with the scenario's noise, commands through the inverse compensation) and from
-/// nothing of its truth: the measurement goes through the typed rows of its run file and
-/// the designs come from what the file holds. The twin stays on the bench to score.
+/// multisine with the scenario's noise, commands through the inverse compensation, a fast
+/// ADC of `lab::FAST_ADC_RATIO` samples per sample on the sensor's analog output during the
+/// same experiments) and from nothing of its truth: the measurement goes through the typed
+/// rows of its run files and the designs come from what the files hold. The twin stays on
+/// the bench to score.
 pub(crate) fn measured_bench(
     setup: &Setup,
     twin: &flexstage_twin::Twin,
     progress: &dyn Progress,
-) -> Result<(Bench, Rows<MeasuredLineRow>)> {
+) -> Result<(Bench, MeasuredFiles)> {
     let t0 = std::time::Instant::now();
     let lab = LabParams::default();
     let measured = flexstage_assess::lab::measure(twin, setup, &lab)?;
-    let rows = crate::convert::measured_rows(&measured.response);
-    let bench = bench_from_rows(setup, twin, &rows, progress, t0)?;
-    Ok((bench, rows))
+    progress.note(&format!(
+        "the twin measured in its rig ({}) in {:.1} s",
+        match &measured.lifted {
+            Some(l) => format!("with a fast ADC at {} samples per sample", l.ratio()),
+            None => "no fast ADC".into(),
+        },
+        t0.elapsed().as_secs_f64()
+    ));
+    let files = MeasuredFiles {
+        response: crate::convert::measured_rows(&measured.response),
+        lifted: measured.lifted.as_ref().map(crate::convert::lifted_rows),
+    };
+    let bench = bench_from_rows(setup, twin, &files, progress, t0)?;
+    Ok((bench, files))
 }
 
-/// The bench of the twin with every controller designed from the measured response `rows`
-/// (what [`measured_bench`] measures and stores, or the run's stored file read back).
+/// The bench of the twin with every controller designed from the measurement's run files
+/// `files` (what [`measured_bench`] measures and stores, or the run's stored files read
+/// back): the linear designs' feed-forward fitted to the lifted response at the samples
+/// when there is one (`Bench::from_measurement`).
 pub(crate) fn bench_from_rows(
     setup: &Setup,
     twin: &flexstage_twin::Twin,
-    rows: &Rows<MeasuredLineRow>,
+    files: &MeasuredFiles,
     progress: &dyn Progress,
     t0: std::time::Instant,
 ) -> Result<Bench> {
     let lab = LabParams::default();
-    let bytes = rows.encode().map_err(|reason| PipelineError::Format {
-        path: "the measured response".into(),
-        reason,
-    })?;
-    let response = MeasuredResponse::from_csv(&bytes[..], "the measured response")?;
-    let measured = LabMeasurement::from_response(response, &lab.fit)?;
+    let bytes = |what: &str, r: std::result::Result<Vec<u8>, String>| {
+        r.map_err(|reason| PipelineError::Format {
+            path: what.into(),
+            reason,
+        })
+    };
+    let response = bytes("the measured response", files.response.encode())?;
+    let response = MeasuredResponse::from_csv(&response[..], "the measured response")?;
+    let mut measured = LabMeasurement::from_response(response, &lab.fit)?;
+    if let Some(rows) = &files.lifted {
+        let lifted = bytes("the lifted response", rows.encode())?;
+        measured = measured.with_lifted(LiftedResponse::from_csv(
+            &lifted[..],
+            "the lifted response",
+        )?);
+    }
     let bench = Bench::from_measurement(
         setup.clone(),
         twin.clone(),
@@ -539,11 +600,12 @@ pub(crate) fn bench_from_rows(
     )?;
     progress.note(&format!(
         "the controllers designed from the twin measured in its rig ({} lines at {} Hz, loop \
-         model order {}, delay {}) in {:.1} s",
+         model order {}, delay {}; feed-forward fitted to the {} response) in {:.1} s",
         measured.response.lines().len(),
         1.0 / setup.rig.sample_time,
         measured.model.order(),
         measured.model.delay(),
+        bench.feedforward.name(),
         t0.elapsed().as_secs_f64()
     ));
     Ok(bench)
@@ -800,7 +862,7 @@ pub fn track_on(
         Simulated::Twin(_) => PlantKind::Twin,
         Simulated::Lumped => PlantKind::Lumped,
     };
-    let (designs, margins, montecarlo, scan, measured) = tune_and_margins(
+    let (designs, feedforward, margins, montecarlo, scan, measured) = tune_and_margins(
         &mut setup,
         &sim,
         options,
@@ -861,7 +923,10 @@ pub fn track_on(
         folder.dir().store(&out.margins(), Rows(rows))?;
     }
     if let Some(m) = measured {
-        folder.dir().store(&out.measured_response(), m)?;
+        folder.dir().store(&out.measured_response(), m.response)?;
+        if let Some(lifted) = m.lifted {
+            folder.dir().store(&out.lifted_response(), lifted)?;
+        }
     }
     if let Some(mc) = &montecarlo {
         let rows = crate::convert::montecarlo_rows(mc);
@@ -893,6 +958,7 @@ pub fn track_on(
             Simulated::Twin(_) => setup.controller.delay,
             Simulated::Lumped => 0,
         },
+        feedforward,
     )?;
     crate::error::require_converged_tracking(&rows)?;
     Ok(TrackSummary {
@@ -908,6 +974,7 @@ pub fn track_on(
         margins,
         sample_time: dt,
         exported,
+        feedforward,
     })
 }
 
@@ -1395,28 +1462,42 @@ mod tests {
     }
 
     /// Reference: the designs of `Bench::measured` from the same measurement in memory
-    /// (same twin, rig, seeds and lab settings). Goal: `track`'s designs, made from the
-    /// measurement after it went through its run file's typed rows and was read back as a
-    /// measured response file, are the same bitwise (the file loses nothing a design uses),
-    /// on the rhombus fixture.
+    /// (same twin, rig, seeds and lab settings: the fast ADC's lifted response included).
+    /// Goal: `track`'s designs, made from the measurement after it went through its run
+    /// files' typed rows (`measured_response.csv`, `lifted_response.csv`) and was read back,
+    /// are the same bitwise, feedback and feed-forward (the files lose nothing a design
+    /// uses), the feed-forward fitted to the lifted response; on the rhombus fixture.
     #[test]
     fn track_designs_from_its_measured_response_file_as_from_the_measurement() {
         let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
         let twin = flexstage_twin::Twin::from_scenario(&s, &rho).unwrap();
         let setup = Setup::from_scenario(&s);
-        let (bench, rows) = measured_bench(&setup, &twin, &crate::progress::Silent).unwrap();
-        assert_eq!(rows.0.len(), 999);
+        let (bench, files) = measured_bench(&setup, &twin, &crate::progress::Silent).unwrap();
+        assert_eq!(files.response.0.len(), 999);
+        let lifted = files.lifted.clone().unwrap();
+        assert_eq!(lifted.0.len(), 999 * flexstage_assess::lab::FAST_ADC_RATIO);
         // The rows stored in a run folder and loaded by a fresh session (what the
         // Monte-Carlo study reads when `track` stored them).
         let dir = std::env::temp_dir().join(format!("flexstage-measured-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
-        let rel = Tracking::main().measured_response();
-        RunDir::create(&dir).unwrap().store(&rel, rows).unwrap();
-        let loaded = RunDir::create(&dir)
-            .unwrap()
-            .load::<Rows<MeasuredLineRow>>(&rel)
-            .unwrap()
+        let out = Tracking::main();
+        let run = RunDir::create(&dir).unwrap();
+        run.store(&out.measured_response(), files.response.clone())
             .unwrap();
+        run.store(&out.lifted_response(), lifted).unwrap();
+        let fresh = RunDir::create(&dir).unwrap();
+        let loaded = MeasuredFiles {
+            response: (*fresh
+                .load::<Rows<MeasuredLineRow>>(&out.measured_response())
+                .unwrap()
+                .unwrap())
+            .clone(),
+            lifted: fresh
+                .load::<Rows<LiftedLineRow>>(&out.lifted_response())
+                .unwrap()
+                .map(|l| (*l).clone()),
+        };
+        assert_eq!(loaded, files);
         let stored = bench_from_rows(
             &setup,
             &twin,
@@ -1428,17 +1509,27 @@ mod tests {
         std::fs::remove_dir_all(&dir).unwrap();
         let (direct, _) =
             Bench::measured(setup, twin, TuningParams::default(), &LabParams::default()).unwrap();
+        for b in [&bench, &stored, &direct] {
+            assert_eq!(b.feedforward, FeedForwardFit::Lifted);
+        }
         for c in [
             &flexstage_control::pi_notch::PI_NOTCH_FF,
             &flexstage_control::pid::PID_FF,
         ] {
-            let b = format!("{:?}", direct.linear_params(c).unwrap().unwrap());
+            let of = |b: &Bench| {
+                let d = b.design(c).unwrap();
+                let ff = d.feedforward().unwrap();
+                format!(
+                    "{:?} {} {} {:?}",
+                    b.linear_params(c).unwrap().unwrap(),
+                    ff.preview(),
+                    ff.lag(),
+                    ff.taps()
+                )
+            };
+            let want = of(&direct);
             for from in [&bench, &stored] {
-                assert_eq!(
-                    format!("{:?}", from.linear_params(c).unwrap().unwrap()),
-                    b,
-                    "{c}"
-                );
+                assert_eq!(of(from), want, "{c}");
             }
         }
         assert_eq!(bench.identified, direct.identified);

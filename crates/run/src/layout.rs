@@ -373,6 +373,12 @@ impl Tracking {
     pub fn measured_response(&self) -> String {
         format!("{}/measured_response.csv", self.dir)
     }
+    /// The twin's output between the samples as a fast ADC on the sensor measured it during
+    /// the same experiments, the lifted response the linear controllers' feed-forward is
+    /// fitted to (`files::lifted`).
+    pub fn lifted_response(&self) -> String {
+        format!("{}/lifted_response.csv", self.dir)
+    }
     /// RMS error against scan frequency (Lissajous 3:1), data.
     pub fn scan_frequency_csv(&self) -> String {
         format!("{}/scan_frequency.csv", self.dir)

@@ -133,7 +133,8 @@ pub struct LiftedLine {
     pub phase: Vec<MeasuredLine>,
 }
 
-/// The lifted response of the output (module docs). Built only from two [`FastLog`]s.
+/// The lifted response of the output (module docs). Built only from two [`FastLog`]s or
+/// read from its file ([`LiftedResponse::from_csv`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct LiftedResponse {
     sample_time: f64,
@@ -249,6 +250,15 @@ impl LiftedResponse {
             ratio: l,
             lines,
         })
+    }
+
+    /// The lines as estimated or read from a file (checked by the caller).
+    pub(crate) fn from_parts(sample_time: f64, ratio: usize, lines: Vec<LiftedLine>) -> Self {
+        LiftedResponse {
+            sample_time,
+            ratio,
+            lines,
+        }
     }
 
     /// The controller's sample time T \[s\].

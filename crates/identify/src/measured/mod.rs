@@ -48,6 +48,7 @@
 mod experiment;
 mod fit;
 mod lifted;
+mod lifted_file;
 mod log;
 mod multisine;
 mod welch;
@@ -64,6 +65,7 @@ pub use lifted::{
     FastAdc, FastLog, LiftedLine, LiftedResponse, from_harmonics, harmonic_frequency, image_bound,
     intersample_bound, run_fast_log, to_harmonics,
 };
+pub use lifted_file::lifted_columns;
 pub use log::{LOG_COLUMNS, LabLog};
 pub use welch::WelchParams;
 

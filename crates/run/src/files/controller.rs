@@ -172,6 +172,12 @@ pub struct FeedForwardFile {
     /// when the output follows; absent: q_d((k − τ) T) alone.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reading_taps: Option<Vec<[[f64; 2]; 2]>>,
+    /// What the taps were fitted to: `lifted` (the lifted response of a fast ADC at the
+    /// samples: the output, the sensor's datasheet filter divided out), `sampled` (the
+    /// sampled response, command → reading) or `static-lead` (the static inverse ahead);
+    /// absent in files written before it was recorded.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fitted_to: Option<String>,
 }
 
 impl Format for ControllerFile {

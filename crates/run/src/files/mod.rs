@@ -11,6 +11,7 @@ pub mod controller;
 pub mod design;
 pub mod export;
 pub mod front;
+pub mod lifted;
 pub mod measured;
 pub mod pea;
 pub mod reduce;
