@@ -152,7 +152,9 @@ impl Bench {
     /// measurement's lifted response (a fast ADC's, [`crate::lab::LabMeasurement::lifted`])
     /// the linear designs' feed-forward is fitted to its phase 0
     /// ([`LiftedResponse::at_samples`]: the output at the samples, the sensor's datasheet
-    /// filter divided out) under the default tuning; without it to the sampled response.
+    /// filter divided out) and their feedback's reference to the reading its phases predict
+    /// (`FeedForwardParams::reading`) under the default tuning; without it to the sampled
+    /// response.
     pub fn from_measurement(
         setup: Setup,
         twin: Twin,
@@ -160,8 +162,7 @@ impl Bench {
         lab: &crate::lab::LabParams,
         measured: &crate::lab::LabMeasurement,
     ) -> Result<Bench> {
-        let at_samples = measured.lifted.as_ref().map(LiftedResponse::at_samples);
-        Bench::from_measurements(setup, twin, tuning, lab, measured, at_samples.as_ref())
+        Bench::from_measurements(setup, twin, tuning, lab, measured, measured.lifted.as_ref())
     }
 
     /// [`Bench::from_measurement`] with the lifted response of the output measured by a

@@ -109,7 +109,7 @@ pub fn design_with(stage: &Stage<'_>, params: PiNotchParams) -> Result<Arc<dyn D
             match (stage.tuning.feedforward, stage.lifted) {
                 (FeedForward::Lifted(_), Some(lifted)) => {
                     stage.shared("feedforward.lifted", || {
-                        if p.reading {
+                        if p.reading && lifted.ratio() >= 2 {
                             FirFeedForward::fit_lifted(&lifted.at_samples(), &p)?
                                 .fit_reading(lifted, sensor, &p)
                         } else {
@@ -144,10 +144,11 @@ pub struct FeedForwardParams {
     pub regularization: f64,
     /// Frequencies of the fit, ≥ 4 (p + m).
     pub grid: usize,
-    /// With the lifted fit: the filter fitted to the output at the samples (the lifted
-    /// response's phase 0) and the feedback's reference the reading the measured loop
-    /// predicts when it follows ([`FirFeedForward::fit_reading`] on every phase), not q_d
-    /// delayed by the lag alone.
+    /// With the lifted fit (default on): the filter fitted to the output at the samples (the
+    /// lifted response's phase 0) and the feedback's reference the reading the measured
+    /// loop predicts when it follows ([`FirFeedForward::fit_reading`] on every phase), not
+    /// q_d delayed by the lag alone. Off, or with a lifted response of one phase: the
+    /// filter fitted to every phase given, the reference delayed by the lag.
     pub reading: bool,
 }
 
@@ -163,7 +164,7 @@ impl Default for FeedForwardParams {
             lag: 0.0,
             regularization: 1e-6,
             grid: 2000,
-            reading: false,
+            reading: true,
         }
     }
 }

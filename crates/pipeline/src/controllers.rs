@@ -476,9 +476,8 @@ pub fn measured_controller_files(
         model: &measured.model,
         setup: &setup,
     };
-    let at_samples = lifted.map(LiftedResponse::at_samples);
     let mut stage = Stage::new(&setup, Some(&model), Some(fit), Some(&probe), tuning);
-    stage.lifted = at_samples.as_ref();
+    stage.lifted = lifted;
     let designs = Designs::for_stage(&stage)?;
     let feedforward = FeedForwardFit::of(&stage);
     let actuator = setup.actuator(Compensation::Inverse);
