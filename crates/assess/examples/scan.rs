@@ -8,7 +8,9 @@
 //! ```
 //!
 //! `SCAN_LEARNING=TRIALS` (1..=30) also runs every candidate with the learning layer at every
-//! point and prints its rows instead of the intersample analysis.
+//! point and prints its rows instead of the intersample analysis. `SCAN_MARGINS=GM_DB,PM_DEG`
+//! tunes the linear designs to other margin targets (the learning layer's designs are those
+//! widened by `TuningParams::learning_widening`).
 //!
 //! `measure` measures the twin here as `track` does; the lifted response (a fast ADC on the
 //! sensor, `FAST_ADC_RATIO` samples per controller sample, default 10) is always measured:
@@ -199,10 +201,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let response = MeasuredResponse::from_csv(&measured[..], "measured response")?;
         LabMeasurement::from_response(response, &lab.fit)?
     };
-    let tuning = TuningParams {
+    let mut tuning = TuningParams {
         feedforward: mode,
         ..TuningParams::default()
     };
+    // `SCAN_MARGINS=GM_DB,PM_DEG`: the linear designs tuned to other margins.
+    if let Ok(v) = std::env::var("SCAN_MARGINS") {
+        let mut it = v.split(',');
+        tuning.gain_margin_db = it.next().ok_or("SCAN_MARGINS")?.parse()?;
+        tuning.phase_margin_deg = it.next().ok_or("SCAN_MARGINS")?.parse()?;
+    }
     let t0 = std::time::Instant::now();
     let setup = Setup::from_scenario(&s);
     let ratio: usize = std::env::var("FAST_ADC_RATIO").map_or(Ok(10), |v| v.parse())?;

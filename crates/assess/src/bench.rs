@@ -286,6 +286,25 @@ impl Bench {
         self.controller_with(&self.setup, c, compensation, reference)
     }
 
+    /// `c` as it runs under the learning layer (`Designs::for_learning`: tuned to the
+    /// widened margin targets of `TuningParams::learning_widening`) following `reference`,
+    /// with the bench's actuator stage under `compensation`.
+    pub fn learning_controller(
+        &self,
+        c: &Controller,
+        compensation: Compensation,
+        reference: Reference,
+    ) -> Result<Box<dyn StageControl>> {
+        let design = self.designs.for_learning(c).ok_or_else(|| {
+            AssessError::from(ControlError::Infeasible {
+                what: format!("controller {}", c.name),
+                detail: "not designed on this bench".into(),
+            })
+        })?;
+        let actuator = self.setup.actuator(compensation);
+        Ok(design.build(actuator, self.setup.controller.delay, reference)?)
+    }
+
     /// What following `reference` over `duration` seconds takes from the rig with `c`'s
     /// feed-forward command: its own filter when it has one (the dynamic inverse with
     /// preview), else the static inverse through the measured static gain (the identified

@@ -347,7 +347,7 @@ fn run_learning(
     };
     let mut factory = || -> flexstage_control::Result<(Box<dyn StageControl>, Readings)> {
         let ctrl = bench
-            .controller(c, Compensation::Inverse, r)
+            .learning_controller(c, Compensation::Inverse, r)
             .map_err(infeasible)?;
         let plant = bench
             .twin
@@ -355,13 +355,21 @@ fn run_learning(
             .map_err(|e| infeasible(e.into()))?;
         Ok((ctrl, Readings::new(plant)))
     };
-    let measured = measure_learning_plant(&mut factory, period, 3, l.amplitude)?;
-    let (law, rho) = match learning::design_law(&measured, &DesignParams::default()) {
+    let measured =
+        measure_learning_plant(&mut factory, period, learning::MEASURE_PERIODS, l.amplitude)?;
+    let designed = learning::choose_law(
+        &mut factory,
+        &measured,
+        &DesignParams::default(),
+        l.lag,
+        l.trials,
+    );
+    let (law, rho) = match designed {
         Ok(d) => d,
         Err(e @ ControlError::Unstable { .. }) => return Ok(Err(e.to_string())),
         Err(e) => return Err(e.into()),
     };
-    let inner = bench.controller(c, Compensation::Inverse, r)?;
+    let inner = bench.learning_controller(c, Compensation::Inverse, r)?;
     let mut ctrl = Learning::with_law(inner, &law)?.with_sensor_lag(l.lag)?;
     let mut plant = bench.twin.plant(&bench.setup.rig)?;
     plant.record_substeps();

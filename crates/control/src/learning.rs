@@ -381,24 +381,111 @@ impl SensorLag {
     }
 }
 
-/// Runs the loop `periods` periods and returns the readings of the last period.
+/// The learning law for the measured `plant`, chosen on the loop itself: each law that
+/// [`design`] and [`design_inverse`] find (ρ ≤ `settings.max_factor`) learns `trials`
+/// periods on a fresh loop of `factory` (same seeds: the same sensor noise), told the
+/// datasheet `lag`; the one whose learning error (the reading against the reading the
+/// feedback expects, what the layer drives to zero) is the smaller over the last third of
+/// the trials, averaged per sample over those periods and relative to the first period's
+/// per axis, is kept, with its ρ. What a lab would do: try both on the rig, from the
+/// readings. The convergence factor alone does not rank the laws: the model-inverse law's
+/// ρ is taken over its passband only, and what it leaves out of it (harmonics with
+/// |T̂| < [`INVERSE_MIN_RESPONSE`]) is never learned. An error when neither law has a
+/// design.
+pub fn choose_law(
+    factory: &mut LoopFactory<'_>,
+    plant: &LearningPlant,
+    settings: &DesignParams,
+    lag: SensorLag,
+    trials: usize,
+) -> Result<(Law, f64)> {
+    let lead = design(plant, settings).map(|(p, r)| (Law::PhaseLead(p), r));
+    let inverse = design_inverse(plant, settings).map(|(l, r)| (Law::Inverse(l), r));
+    let (a, b) = match (lead, inverse) {
+        (Ok(a), Ok(b)) => (a, b),
+        (Ok(a), Err(_)) | (Err(_), Ok(a)) => return Ok(a),
+        (Err(e), Err(_)) => return Err(e),
+    };
+    let (sa, sb) = (
+        trial_error(factory, &a.0, lag, trials)?,
+        trial_error(factory, &b.0, lag, trials)?,
+    );
+    Ok(if sb < sa { b } else { a })
+}
+
+/// The learning error of `law` after `trials` periods on a fresh loop ([`choose_law`]):
+/// Σ over the axes of the mean square of the error averaged per sample over the last third
+/// of the periods, over the mean square of the first period's.
+fn trial_error(
+    factory: &mut LoopFactory<'_>,
+    law: &Law,
+    lag: SensorLag,
+    trials: usize,
+) -> Result<f64> {
+    let (inner, mut rig) = factory()?;
+    let mut c = Learning::with_law(inner, law)?.with_sensor_lag(lag)?;
+    let n = c.references.len();
+    let trials = trials.max(2);
+    let last = (trials / 3).max(1);
+    let mut first = [0.0; 2];
+    let mut mean = vec![[0.0; 2]; n];
+    for j in 0..trials {
+        for _ in 0..n {
+            let y = rig.reading();
+            let cmd = c.step(y);
+            rig.apply(&cmd);
+        }
+        let e = c.ilc.last_errors();
+        if j == 0 {
+            first = core::array::from_fn(|a| e.iter().map(|x| x[a] * x[a]).sum::<f64>());
+        }
+        if j >= trials - last {
+            for (m, x) in mean.iter_mut().zip(e) {
+                m[0] += x[0] / last as f64;
+                m[1] += x[1] / last as f64;
+            }
+        }
+    }
+    Ok((0..2)
+        .map(|a| mean.iter().map(|x| x[a] * x[a]).sum::<f64>() / first[a].max(f64::MIN_POSITIVE))
+        .sum())
+}
+
+/// Runs the loop `periods` periods and returns the readings of one period: those of the
+/// last, or where `periods` > 3 their mean over every period after the first two (which
+/// averages the part of the sensor's noise that does not cancel between runs).
 fn last_period(
     controller: &mut dyn StageControl,
     rig: &mut Readings,
     n: usize,
     periods: usize,
 ) -> Vec<[f64; 2]> {
-    let mut measured = Vec::with_capacity(n);
+    // The first two periods settle (one when there are only two); the rest are averaged.
+    let settle = if periods > 2 { 2 } else { periods - 1 };
+    let analysed = (periods - settle) as f64;
+    let mut measured = vec![[0.0; 2]; n];
     for k in 0..n * periods {
         let y = rig.reading();
         let cmd = controller.step(y);
-        if k >= n * (periods - 1) {
-            measured.push(y);
+        if k >= n * settle {
+            let m = &mut measured[k % n];
+            for a in 0..2 {
+                m[a] += y[a] / analysed;
+            }
         }
         rig.apply(&cmd);
     }
     measured
 }
+
+/// The periods per run with which the pipeline measures the learning plant
+/// ([`measure_learning_plant`]): two to settle and eight averaged. The runs of a measurement
+/// share the sensor's noise sequence, which cancels in their difference where the loop is
+/// linear; the quantizer (one resolution step, as large as the multisine's line) and the
+/// hysteresis are not, and over one period what they leave of the noise inflates the
+/// uncertainty δ and so slows the design's learning. Averaging eight periods cuts that part
+/// of δ by about √8.
+pub const MEASURE_PERIODS: usize = 10;
 
 /// The DFT bin k of a real N-sample record, Σ x_n e^{−j2πkn/N}.
 fn dft_bin(x: impl Iterator<Item = f64>, k: usize, n: usize) -> Complex {
@@ -410,9 +497,10 @@ fn dft_bin(x: impl Iterator<Item = f64>, k: usize, n: usize) -> Complex {
 }
 
 /// Measures T_ii of the learning plant at every harmonic of the period from the readings
-/// (module docs): `periods` periods per run (the last one is analysed, the others let the
-/// transient of the smooth start and the injection settle), multisine of `amplitude` \[m\]
-/// RMS per axis, and again at half of it for the uncertainty; five runs in all.
+/// (module docs): `periods` periods per run (the first two let the transient of the smooth
+/// start and the injection settle, the rest are averaged; [`MEASURE_PERIODS`] is what the
+/// pipeline uses), multisine of `amplitude` \[m\] RMS per axis, and again at half of it for
+/// the uncertainty; five runs in all.
 pub fn measure_learning_plant(
     factory: &mut LoopFactory<'_>,
     period: usize,

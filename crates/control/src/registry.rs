@@ -212,6 +212,28 @@ impl<'a> Stage<'a> {
         }
     }
 
+    /// This stage tuned with `tuning` instead: the results its designs share that do not
+    /// depend on the margin targets (the feed-forward fits, the backstepping's sizing by
+    /// sine injection) are carried over, the loop-shaping tunings (`tuning::*`) are not.
+    pub fn with_tuning(&self, tuning: TuningParams) -> Stage<'a> {
+        let shared = self
+            .shared
+            .borrow()
+            .iter()
+            .filter(|(k, _)| !k.starts_with("tuning::"))
+            .map(|(k, v)| (*k, Rc::clone(v)))
+            .collect();
+        Stage {
+            setup: self.setup,
+            response: self.response,
+            fit: self.fit.clone(),
+            probe: self.probe,
+            tuning,
+            lifted: self.lifted,
+            shared: RefCell::new(shared),
+        }
+    }
+
     /// The controllers' lumped model on this stage and its coupling k_c: the scenario's
     /// controller model (Table 4's guess, or identified parameters) fitted to the stage's
     /// response fit when there is one ([`crate::fit::fitted_model`]).
@@ -244,6 +266,9 @@ impl<'a> Stage<'a> {
 #[derive(Debug, Clone)]
 pub struct Designs {
     designs: Vec<(&'static Controller, Arc<dyn Design>)>,
+    /// The designs that run under the learning layer where they differ
+    /// ([`Designs::for_learning`]).
+    learning: Vec<(&'static Controller, Arc<dyn Design>)>,
     /// The controllers whose design needs what the stage does not offer.
     pub not_designed: Vec<&'static Controller>,
 }
@@ -253,6 +278,7 @@ impl Designs {
     pub fn for_stage(stage: &Stage<'_>) -> Result<Designs> {
         let mut d = Designs {
             designs: Vec::new(),
+            learning: Vec::new(),
             not_designed: Vec::new(),
         };
         for &c in &CONTROLLERS {
@@ -261,12 +287,33 @@ impl Designs {
                 None => d.not_designed.push(c),
             }
         }
+        // The designs under learning: the tuned ones again with the widened margin
+        // targets, on a stage with a response to tune on.
+        if let (Some(tuning), Some(_)) = (stage.tuning.for_learning(), stage.response) {
+            let widened = stage.with_tuning(tuning);
+            for (c, _) in &d.designs {
+                if let Some(design) = (c.design)(&widened)? {
+                    d.learning.push((*c, design));
+                }
+            }
+        }
         Ok(d)
     }
 
     /// The design of `c`, if it was designed for this stage.
     pub fn get(&self, c: &Controller) -> Option<&Arc<dyn Design>> {
         self.designs.iter().find(|(k, _)| *k == c).map(|(_, d)| d)
+    }
+
+    /// The design of `c` that runs under the learning layer: tuned to the margin targets
+    /// widened by `TuningParams::learning_widening` where the stage offers a response to
+    /// tune on, else [`Designs::get`]'s.
+    pub fn for_learning(&self, c: &Controller) -> Option<&Arc<dyn Design>> {
+        self.learning
+            .iter()
+            .find(|(k, _)| *k == c)
+            .map(|(_, d)| d)
+            .or_else(|| self.get(c))
     }
 }
 
@@ -315,5 +362,67 @@ mod tests {
             designs.not_designed
         );
         assert!(designs.get(DEFAULT).unwrap().linear().is_some());
+    }
+
+    /// Goal: the designs under learning ([`Designs::for_learning`]) are the tuned ones again
+    /// with the margin targets widened by `TuningParams::learning_widening`: on the sampled
+    /// loop of two decoupled modes the PI + notch and the PID under learning meet 12 dB / 60°
+    /// (the defaults 6 dB / 40° widened by 6 dB / 20°); the PI + notch's own design does
+    /// not, and under learning its crossover falls below 60 % of its own; a design that is not tuned to margins (the scenario PID) is the
+    /// same under learning; without a widening there are no separate designs.
+    #[test]
+    fn designs_under_learning_meet_the_widened_margins() {
+        use crate::tuning::{TuningParams, loop_margins};
+        let setup = crate::experiment::Setup::from_scenario(&flexstage_scenario::Scenario::paper());
+        let designs = crate::samples::decoupled_designs(&setup).unwrap();
+        let plant = flexstage_sim::modal::ModalPlant::new(
+            flexstage_sim::samples::decoupled_modes(),
+            1e-4,
+            1,
+        )
+        .unwrap();
+        let m = TuningParams::default().margins;
+        for c in [&crate::pi_notch::PI_NOTCH_FF, &crate::pid::PID_FF] {
+            let own = designs.get(c).unwrap().linear().copied().unwrap();
+            let learning = designs.for_learning(c).unwrap().linear().copied().unwrap();
+            let (mo, ml) = (
+                loop_margins(&plant, &own, &m).unwrap(),
+                loop_margins(&plant, &learning, &m).unwrap(),
+            );
+            assert!(ml.iter().all(|x| x.meets(12.0, 60.0)), "{c}: {ml:?}");
+            // The PI + notch's own design sits on its targets, so under learning its
+            // bandwidth halves; the PID's own already meets the widened ones here.
+            let pi = std::ptr::eq(c, &crate::pi_notch::PI_NOTCH_FF);
+            assert_eq!(!mo.iter().all(|x| x.meets(12.0, 60.0)), pi, "{c}: {mo:?}");
+            for a in 0..2 {
+                let (ko, kl) = (own.axes[a].ki, learning.axes[a].ki);
+                let (wo, wl) = (mo[a].gain_crossover, ml[a].gain_crossover);
+                assert!(
+                    kl <= ko && wl <= wo,
+                    "{c} axis {a}: ki {ko} → {kl}, {wo} → {wl} Hz"
+                );
+                assert!(!pi || wl < 0.6 * wo, "{c} axis {a}: {wo} → {wl} Hz");
+            }
+        }
+        let scenario_pid = &crate::pid::PID_FF_SCENARIO;
+        assert_eq!(
+            format!("{:?}", designs.get(scenario_pid)),
+            format!("{:?}", designs.for_learning(scenario_pid))
+        );
+        // No widening: the learning layer runs on the designs themselves.
+        let modes = flexstage_sim::samples::decoupled_modes();
+        let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
+        let tuning = TuningParams {
+            learning_widening: [0.0; 2],
+            ..TuningParams::default()
+        };
+        let stage = Stage::new(&setup, Some(&plant), Some(fit), None, tuning);
+        let plain = Designs::for_stage(&stage).unwrap();
+        assert!(plain.learning.is_empty());
+        let c = &crate::pi_notch::PI_NOTCH_FF;
+        assert!(std::ptr::eq(
+            &**plain.for_learning(c).unwrap(),
+            &**plain.get(c).unwrap()
+        ));
     }
 }

@@ -59,6 +59,31 @@ pub struct TuningParams {
     /// inverse fitted to its sampled response, [`crate::feedforward`]; [`FeedForwardFit`]
     /// says which).
     pub feedforward: FeedForward,
+    /// How much wider \[dB, deg\] the margin targets of the designs that run under the
+    /// learning layer are ([`TuningParams::for_learning`]), each ≥ 0 (default 6 dB, 20°;
+    /// 0, 0: the same designs). Under learning the feedback no longer has to follow the
+    /// periodic reference, only to hold the loop and reject what does not repeat, and the
+    /// sensor's noise it feeds to the output (T n) becomes the floor of the error: a
+    /// lower-bandwidth feedback lowers it (docs/DECISIONS.md, "The feedback under learning").
+    pub learning_widening: [f64; 2],
+}
+
+impl TuningParams {
+    /// The tuning of the designs that run under the learning layer: the margin targets
+    /// widened by [`TuningParams::learning_widening`] (the phase margin at most 89°); `None`
+    /// when the widening is zero (the learning layer runs on the same designs).
+    pub fn for_learning(&self) -> Option<TuningParams> {
+        let [gm, pm] = self.learning_widening;
+        if gm == 0.0 && pm == 0.0 {
+            return None;
+        }
+        Some(TuningParams {
+            gain_margin_db: self.gain_margin_db + gm,
+            phase_margin_deg: (self.phase_margin_deg + pm).min(89.0),
+            learning_widening: [0.0; 2],
+            ..self.clone()
+        })
+    }
 }
 
 impl Default for TuningParams {
@@ -76,6 +101,7 @@ impl Default for TuningParams {
             },
             steps: 30,
             feedforward: FeedForward::Lifted(FeedForwardParams::default()),
+            learning_widening: [6.0, 20.0],
         }
     }
 }

@@ -16,7 +16,7 @@ use flexstage_control::actuator::{ActuatorParams, Compensation};
 use flexstage_control::controller::{Inner, Velocity};
 use flexstage_control::experiment::Setup;
 use flexstage_control::feedforward::FirFeedForward;
-use flexstage_control::registry::{CONTROLLERS, Controller, Designs, Stage};
+use flexstage_control::registry::{CONTROLLERS, Controller, Design, Designs, Stage};
 use flexstage_control::target::{CSource, TargetLaw, c_prefix, compensation_name, compensation_of};
 use flexstage_control::target_backstepping::{BacksteppingLaw, matrix, rows};
 use flexstage_control::tuning::{FeedForwardFit, TuningParams};
@@ -359,30 +359,15 @@ pub(crate) fn write_controllers(
         let Some(design) = designs.get(c) else {
             continue;
         };
-        let law = match TargetLaw::of_design(&**design, actuator)? {
-            Some(l) => FileLaw::Linear(Box::new(l)),
-            None => {
-                let law = design.backstepping(actuator, delay)?;
-                FileLaw::Backstepping(Box::new(law.ok_or_else(|| PipelineError::Option {
-                    option: "controller",
-                    value: c.name.to_string(),
-                    expected: "a controller with a target law (linear or backstepping)".into(),
-                })?))
-            }
-        };
-        let file_of = |table: Option<Vec<[f64; 2]>>| match (&law, table) {
-            (FileLaw::Linear(l), None) => fitted(controller_file(c, l), fit),
-            (FileLaw::Linear(l), Some(t)) => {
-                fitted(controller_file(c, &(**l).clone().with_learned(t)), fit)
-            }
-            (FileLaw::Backstepping(l), None) => backstepping_file(c, l),
-            (FileLaw::Backstepping(l), Some(t)) => {
-                backstepping_file(c, &(**l).clone().with_learned(t))
-            }
-        };
-        let mut files = vec![(c.name.to_string(), file_of(None))];
+        let mut files = vec![(
+            c.name.to_string(),
+            design_file(c, &**design, None, actuator, delay, fit)?,
+        )];
+        // A learned table goes with the design that learned it (the learning layer's).
+        let under_learning = designs.for_learning(c).unwrap_or(design);
         for l in learned.iter().filter(|l| l.controller == c) {
-            let mut file = file_of(Some(l.table.clone()));
+            let table = Some(l.table.clone());
+            let mut file = design_file(c, &**under_learning, table, actuator, delay, fit)?;
             file.controller = l.name();
             file.label = format!("{}, with the table learned on {}", c.label, l.trajectory);
             files.push((l.name(), file));
@@ -396,6 +381,36 @@ pub(crate) fn write_controllers(
         }
     }
     Ok(done)
+}
+
+/// The coefficients file of `design` (controller `c`): its linear target law, or its
+/// backstepping law predicting over `delay` samples, with the learned `table` when given.
+fn design_file(
+    c: &'static Controller,
+    design: &dyn Design,
+    table: Option<Vec<[f64; 2]>>,
+    actuator: ActuatorParams,
+    delay: usize,
+    fit: FeedForwardFit,
+) -> Result<ControllerFile> {
+    Ok(match TargetLaw::of_design(design, actuator)? {
+        Some(l) => match table {
+            None => fitted(controller_file(c, &l), fit),
+            Some(t) => fitted(controller_file(c, &l.with_learned(t)), fit),
+        },
+        None => {
+            let law = design.backstepping(actuator, delay)?;
+            let law = law.ok_or_else(|| PipelineError::Option {
+                option: "controller",
+                value: c.name.to_string(),
+                expected: "a controller with a target law (linear or backstepping)".into(),
+            })?;
+            match table {
+                None => backstepping_file(c, &law),
+                Some(t) => backstepping_file(c, &law.with_learned(t)),
+            }
+        }
+    })
 }
 
 /// What [`export_controller`] wrote.

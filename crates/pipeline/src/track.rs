@@ -992,9 +992,12 @@ fn run_job(
     progress: &dyn Progress,
 ) -> Result<(Record, Option<Learned>)> {
     let advance = |n: usize| progress.advance(n as u64);
-    let design = &**designs
-        .get(j.controller)
-        .expect("planned jobs are designed");
+    // Under learning, the design tuned for it (`Designs::for_learning`).
+    let design = match j.learning {
+        Some(_) => designs.for_learning(j.controller),
+        None => designs.get(j.controller),
+    };
+    let design = &**design.expect("planned jobs are designed");
     let dt = setup.controller.observer.sample_time;
     let watch = watch(&j.reference, j.duration, dt);
     let actuator = setup.actuator(compensation);
@@ -1054,8 +1057,19 @@ fn run_learning(
         let c = design.build(actuator, delay, j.reference)?;
         Ok((c, Readings::boxed(plant)))
     };
-    let measured = measure_learning_plant(&mut factory, learn.period, 3, LEARNING_AMPLITUDE)?;
-    let (law, rho) = learning::design_law(&measured, &DesignParams::default())?;
+    let measured = measure_learning_plant(
+        &mut factory,
+        learn.period,
+        learning::MEASURE_PERIODS,
+        LEARNING_AMPLITUDE,
+    )?;
+    let (law, rho) = learning::choose_law(
+        &mut factory,
+        &measured,
+        &DesignParams::default(),
+        learn.lag,
+        learn.trials,
+    )?;
     progress.note(&format!(
         "{} on {}: learning {}, ρ = {rho:.3}, datasheet lag {:.3} samples",
         j.controller.name,
