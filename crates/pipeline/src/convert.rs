@@ -179,15 +179,16 @@ pub(crate) fn montecarlo_rows(mc: &MonteCarlo) -> Vec<MonteCarloRow> {
     mc.plants
         .iter()
         .flat_map(|p| {
-            p.results.iter().map(|(c, rms, pass)| MonteCarloRow {
+            let q = &p.perturbation;
+            p.results.iter().map(move |(c, rms, pass)| MonteCarloRow {
                 plant: p.index,
-                stiffness: p.stiffness,
-                mass: p.mass,
-                alpha: p.alpha,
-                damping: p.damping,
-                coupling1: p.coupling[0],
-                coupling2: p.coupling[1],
-                delay: p.delay,
+                stiffness: q.stiffness,
+                mass: q.mass,
+                alpha: q.alpha,
+                damping: q.damping,
+                coupling1: q.coupling[0],
+                coupling2: q.coupling[1],
+                delay: q.delay,
                 controller: c.name.to_string(),
                 rms1_nm: rms[0] * 1e9,
                 rms2_nm: rms[1] * 1e9,
