@@ -77,13 +77,14 @@ fn plant_dict<'py>(
     p: &flexstage_assess::montecarlo::PlantResult,
 ) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
+    let q = &p.perturbation;
     d.set_item("index", p.index)?;
-    d.set_item("stiffness", p.stiffness)?;
-    d.set_item("mass", p.mass)?;
-    d.set_item("alpha", p.alpha)?;
-    d.set_item("damping", p.damping)?;
-    d.set_item("coupling", p.coupling)?;
-    d.set_item("delay", p.delay)?;
+    d.set_item("stiffness", q.stiffness)?;
+    d.set_item("mass", q.mass)?;
+    d.set_item("alpha", q.alpha)?;
+    d.set_item("damping", q.damping)?;
+    d.set_item("coupling", q.coupling)?;
+    d.set_item("delay", q.delay)?;
     let rms: Vec<[f64; 2]> = p.results.iter().map(|r| r.1).collect();
     let passed: Vec<bool> = p.results.iter().map(|r| r.2).collect();
     d.set_item("rms", rms)?;

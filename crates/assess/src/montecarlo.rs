@@ -178,18 +178,8 @@ impl MonteCarloParams {
 pub struct PlantResult {
     /// Plant index.
     pub index: usize,
-    /// Factors (K, M, α), damping, couplings (c₁, c₂), delay.
-    pub stiffness: f64,
-    /// Mass factor.
-    pub mass: f64,
-    /// Amplification factor.
-    pub alpha: f64,
-    /// Damping ratio of every mode.
-    pub damping: f64,
-    /// Couplings.
-    pub coupling: [f64; 2],
-    /// Delay \[samples\].
-    pub delay: usize,
+    /// The plant's perturbation.
+    pub perturbation: Perturbation,
     /// Per candidate: RMS error per axis \[m\] and pass.
     pub results: Vec<(&'static Controller, [f64; 2], bool)>,
 }
@@ -291,12 +281,7 @@ impl Perturbation {
     ) -> PlantResult {
         PlantResult {
             index: i,
-            stiffness: self.stiffness,
-            mass: self.mass,
-            alpha: self.alpha,
-            damping: self.damping,
-            coupling: self.coupling,
-            delay: self.delay,
+            perturbation: *self,
             results,
         }
     }

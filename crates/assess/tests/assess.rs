@@ -103,7 +103,7 @@ fn zero_perturbation_reproduces_the_nominal_run() {
     };
     for seed in 0..40 {
         let mc = monte_carlo(&b1, &[&PI_NOTCH_FF], r, &MonteCarloParams { seed, ..p }).unwrap();
-        if mc.plants[0].delay != d {
+        if mc.plants[0].perturbation.delay != d {
             continue;
         }
         let m = flexstage_assess::track::track_on(

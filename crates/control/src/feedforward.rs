@@ -587,19 +587,7 @@ fn fit_points<'a>(
     t: f64,
     p: &FeedForwardParams,
 ) -> Result<Vec<[[f64; 2]; 2]>> {
-    let len = p.preview + p.taps;
-    let n0 = -(p.preview as i64);
-    // Block-Toeplitz normal matrix: c[i][i'][d + len − 1] = Σ_k Σ_o Re(conj(G_oi) G_oi'
-    // e^{jω d T}), d = n_u − n_v.
-    let lags = 2 * len - 1;
-    let mut c = [
-        [vec![0.0; lags], vec![0.0; lags]],
-        [vec![0.0; lags], vec![0.0; lags]],
-    ];
-    let mut b = [
-        [vec![0.0; len], vec![0.0; len]],
-        [vec![0.0; len], vec![0.0; len]],
-    ];
+    let mut normal = NormalEquations::new(p.preview, p.preview + p.taps);
     let norm2 = |g: &[[Complex<f64>; 2]; 2]| g.iter().flatten().map(|v| v.norm_sqr()).sum::<f64>();
     for (f, phases, d0) in points {
         let w = std::f64::consts::TAU * f * t;
@@ -617,57 +605,15 @@ fn fit_points<'a>(
             } else {
                 d0 * Complex::from_polar(1.0, w * ph as f64 / l as f64)
             };
-            for i in 0..2 {
-                for i2 in 0..2 {
-                    let gg = weight * (g[0][i].conj() * g[0][i2] + g[1][i].conj() * g[1][i2]);
-                    for (lag, v) in c[i][i2].iter_mut().enumerate() {
-                        let dl = lag as f64 - (len as f64 - 1.0);
-                        *v += (gg * Complex::from_polar(1.0, w * dl)).re;
-                    }
-                }
-                // b[i][j][u] = Σ Re(conj(G_oi e^{−jω n_u T}) D δ_oj) = Re(conj(G_ji) D e^{jω n_u T}).
-                for j in 0..2 {
-                    let gd = weight * g[j][i].conj() * d;
-                    for (u, v) in b[i][j].iter_mut().enumerate() {
-                        let n = (n0 + u as i64) as f64;
-                        *v += (gd * Complex::from_polar(1.0, w * n)).re;
-                    }
-                }
-            }
+            // Σ_o conj(G_oi) D δ_oj = conj(G_ji) D.
+            normal.add(w, weight, g, |i, j| weight * g[j][i].conj() * d);
         }
     }
-    let mut a = DMatrix::<f64>::zeros(2 * len, 2 * len);
-    for i in 0..2 {
-        for i2 in 0..2 {
-            for u in 0..len {
-                for v in 0..len {
-                    a[(i * len + u, i2 * len + v)] = c[i][i2][u + len - 1 - v];
-                }
-            }
-        }
-    }
-    let lambda = p.regularization * a.trace() / (2 * len) as f64;
-    for k in 0..2 * len {
-        a[(k, k)] += lambda;
-    }
-    let chol = a.cholesky().ok_or_else(|| ControlError::Singular {
-        what: "feed-forward normal matrix (the loop's response vanishes: set feedforward.regularization > 0)".into(),
-    })?;
-    let mut taps = vec![[[0.0; 2]; 2]; len];
-    for j in 0..2 {
-        let rhs = DVector::from_iterator(2 * len, b[0][j].iter().chain(&b[1][j]).copied());
-        let x = chol.solve(&rhs);
-        for (u, tap) in taps.iter_mut().enumerate() {
-            tap[0][j] = x[u];
-            tap[1][j] = x[len + u];
-        }
-    }
-    if taps.iter().flatten().flatten().any(|v| !v.is_finite()) {
-        return Err(ControlError::Singular {
-            what: "feed-forward fit".into(),
-        });
-    }
-    Ok(taps)
+    normal.solve(
+        p.regularization,
+        "feed-forward",
+        "the loop's response vanishes: set feedforward.regularization > 0",
+    )
 }
 
 /// The taps C_n, n = −`preview`, …, `len` − `preview` − 1, minimizing
@@ -681,70 +627,121 @@ fn fit_matrix_points(
     regularization: f64,
     t: f64,
 ) -> Result<Vec<[[f64; 2]; 2]>> {
-    let n0 = -(preview as i64);
-    let lags = 2 * len - 1;
-    let mut c = [
-        [vec![0.0; lags], vec![0.0; lags]],
-        [vec![0.0; lags], vec![0.0; lags]],
-    ];
-    let mut b = [
-        [vec![0.0; len], vec![0.0; len]],
-        [vec![0.0; len], vec![0.0; len]],
-    ];
-    for (f, g, d, weight) in points {
+    let mut normal = NormalEquations::new(preview, len);
+    for &(f, g, d, weight) in points {
         let w = std::f64::consts::TAU * f * t;
-        let rot_lag: Vec<Complex<f64>> = (0..lags)
-            .map(|l| Complex::from_polar(1.0, w * (l as f64 - (len as f64 - 1.0))))
-            .collect();
+        normal.add(w, weight, &g, |i, j| {
+            weight * (g[0][i].conj() * d[0][j] + g[1][i].conj() * d[1][j])
+        });
+    }
+    normal.solve(
+        regularization,
+        "reading correction",
+        "set feedforward.regularization > 0",
+    )
+}
+
+/// The normal equations of a weighted least-squares fit of a 2 × 2 FIR of `len` taps X_n,
+/// n = −`preview`, …, `len` − `preview` − 1, to equations G X(ω) ≈ D (the fits of
+/// [`fit_points`] and [`fit_matrix_points`]). The normal matrix is block-Toeplitz in the tap
+/// lags: c\[i\]\[i'\]\[d + len − 1\] = Σ Re(w conj(G_oi) G_oi' e^{jω d T}), d = n_u − n_v;
+/// the right-hand sides b\[i\]\[j\]\[u\] = Σ Re(w conj(G_oi) D_oj e^{jω n_u T}).
+struct NormalEquations {
+    len: usize,
+    n0: i64,
+    c: [[Vec<f64>; 2]; 2],
+    b: [[Vec<f64>; 2]; 2],
+    /// e^{jω d T} for d = 1 − len, …, len − 1 at the equation being added.
+    rot_lag: Vec<Complex<f64>>,
+}
+
+impl NormalEquations {
+    /// Zero sums for `len` taps from n = −`preview`.
+    fn new(preview: usize, len: usize) -> NormalEquations {
+        let lags = 2 * len - 1;
+        NormalEquations {
+            len,
+            n0: -(preview as i64),
+            c: [
+                [vec![0.0; lags], vec![0.0; lags]],
+                [vec![0.0; lags], vec![0.0; lags]],
+            ],
+            b: [
+                [vec![0.0; len], vec![0.0; len]],
+                [vec![0.0; len], vec![0.0; len]],
+            ],
+            rot_lag: vec![Complex::new(0.0, 0.0); lags],
+        }
+    }
+
+    /// Adds the equation G X(ω) ≈ D at ωT = `w` with weight `weight` (`g`: G; `gd(i, j)`:
+    /// `weight` × Σ_o conj(G_oi) D_oj, the caller's form of it).
+    fn add(
+        &mut self,
+        w: f64,
+        weight: f64,
+        g: &Response,
+        gd: impl Fn(usize, usize) -> Complex<f64>,
+    ) {
+        let len = self.len;
+        for (l, r) in self.rot_lag.iter_mut().enumerate() {
+            *r = Complex::from_polar(1.0, w * (l as f64 - (len as f64 - 1.0)));
+        }
         for i in 0..2 {
             for i2 in 0..2 {
                 let gg = weight * (g[0][i].conj() * g[0][i2] + g[1][i].conj() * g[1][i2]);
-                for (v, r) in c[i][i2].iter_mut().zip(&rot_lag) {
+                for (v, r) in self.c[i][i2].iter_mut().zip(&self.rot_lag) {
                     *v += (gg * r).re;
                 }
             }
-            // b[i][j][u] = Σ_o Re(conj(G_oi) D_oj e^{jω n_u T}).
             for j in 0..2 {
-                let gd = weight * (g[0][i].conj() * d[0][j] + g[1][i].conj() * d[1][j]);
-                for (u, v) in b[i][j].iter_mut().enumerate() {
-                    let n = (n0 + u as i64) as f64;
+                let gd = gd(i, j);
+                for (u, v) in self.b[i][j].iter_mut().enumerate() {
+                    let n = (self.n0 + u as i64) as f64;
                     *v += (gd * Complex::from_polar(1.0, w * n)).re;
                 }
             }
         }
     }
-    let mut a = DMatrix::<f64>::zeros(2 * len, 2 * len);
-    for i in 0..2 {
-        for i2 in 0..2 {
-            for u in 0..len {
-                for v in 0..len {
-                    a[(i * len + u, i2 * len + v)] = c[i][i2][u + len - 1 - v];
+
+    /// The taps X_n of the normal equations with λ = `regularization` × the normal matrix's
+    /// mean diagonal added to its diagonal; the errors name the fit (`name`) and, for a
+    /// singular normal matrix, the remedy (`hint`).
+    fn solve(self, regularization: f64, name: &str, hint: &str) -> Result<Vec<[[f64; 2]; 2]>> {
+        let (len, c, b) = (self.len, self.c, self.b);
+        let mut a = DMatrix::<f64>::zeros(2 * len, 2 * len);
+        for i in 0..2 {
+            for i2 in 0..2 {
+                for u in 0..len {
+                    for v in 0..len {
+                        a[(i * len + u, i2 * len + v)] = c[i][i2][u + len - 1 - v];
+                    }
                 }
             }
         }
-    }
-    let lambda = regularization * a.trace() / (2 * len) as f64;
-    for k in 0..2 * len {
-        a[(k, k)] += lambda;
-    }
-    let chol = a.cholesky().ok_or_else(|| ControlError::Singular {
-        what: "reading correction normal matrix (set feedforward.regularization > 0)".into(),
-    })?;
-    let mut taps = vec![[[0.0; 2]; 2]; len];
-    for j in 0..2 {
-        let rhs = DVector::from_iterator(2 * len, b[0][j].iter().chain(&b[1][j]).copied());
-        let x = chol.solve(&rhs);
-        for (u, tap) in taps.iter_mut().enumerate() {
-            tap[0][j] = x[u];
-            tap[1][j] = x[len + u];
+        let lambda = regularization * a.trace() / (2 * len) as f64;
+        for k in 0..2 * len {
+            a[(k, k)] += lambda;
         }
+        let chol = a.cholesky().ok_or_else(|| ControlError::Singular {
+            what: format!("{name} normal matrix ({hint})"),
+        })?;
+        let mut taps = vec![[[0.0; 2]; 2]; len];
+        for j in 0..2 {
+            let rhs = DVector::from_iterator(2 * len, b[0][j].iter().chain(&b[1][j]).copied());
+            let x = chol.solve(&rhs);
+            for (u, tap) in taps.iter_mut().enumerate() {
+                tap[0][j] = x[u];
+                tap[1][j] = x[len + u];
+            }
+        }
+        if taps.iter().flatten().flatten().any(|v| !v.is_finite()) {
+            return Err(ControlError::Singular {
+                what: format!("{name} fit"),
+            });
+        }
+        Ok(taps)
     }
-    if taps.iter().flatten().flatten().any(|v| !v.is_finite()) {
-        return Err(ControlError::Singular {
-            what: "reading correction fit".into(),
-        });
-    }
-    Ok(taps)
 }
 
 /// The running state of a [`FirFeedForward`]: its taps and the last L reference samples in a

@@ -8,16 +8,14 @@
 // the lag learning corrects for comes from the sensor's datasheet and matches the chain's
 // own phase; a rig whose sensor is 20 % off its datasheet still converges.
 
-use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::Setup;
+mod common;
+
+use common::LumpedRig;
 use flexstage_control::learning::{
-    DesignParams, Learning, LearningParams, LearningPlant, Readings, SensorDatasheet, SensorLag,
-    convergence_factor, design, measure_learning_plant, q_response, rms_per_period,
+    DesignParams, Learning, LearningParams, LearningPlant, SensorDatasheet, SensorLag,
+    convergence_factor, design, q_response,
 };
-use flexstage_control::pid::PID_FF;
 use flexstage_sim::experiment::StageControl;
-use flexstage_sim::experiment::run;
-use flexstage_sim::trajectory::Reference;
 
 #[test]
 fn bartlett_q_response_is_the_fejer_kernel() {
@@ -80,45 +78,15 @@ fn convergence_factor_of_a_pure_delay_is_one_minus_gain() {
 
 #[test]
 fn learning_on_pid_converges_monotonically_on_the_lumped_rig() {
-    let scenario = flexstage_scenario::Scenario::paper();
-    let setup = Setup::from_scenario(&scenario);
-    let (reference, _) = Reference::from_scenario(&scenario.trajectories[0]);
-    let t = setup.controller.observer.sample_time;
-    let period = (0.5 / t).round() as usize; // the 3:1 Lissajous at 2 Hz
-    let make = |s: &Setup, r: Reference| {
-        let c = s.controller(&PID_FF, Compensation::Inverse, r)?;
-        Ok((c, Readings::new(s.lumped_plant()?)))
-    };
-    let plant = measure_learning_plant(&mut || make(&setup, reference), period, 3, 20e-9).unwrap();
+    let rig = LumpedRig::paper();
+    let plant = rig.learning_plant();
     let (params, rho) = design(&plant, &DesignParams::default()).unwrap();
     assert!(rho < 1.0 && (rho - convergence_factor(&plant, &params)).abs() < 1e-15);
 
     let periods = 10;
-    let base = setup
-        .controller(&PID_FF, Compensation::Inverse, reference)
-        .unwrap();
-    let mut p = setup.lumped_plant().unwrap();
-    let mut learning = Learning::new(base, params).unwrap();
-    let rec = run(
-        &mut learning as &mut dyn StageControl,
-        &mut p,
-        periods as f64 * period as f64 * t,
-        t,
-        |_| {},
-    );
-    let rms = rms_per_period(&rec.error, period);
-    let mut c0 = setup
-        .controller(&PID_FF, Compensation::Inverse, reference)
-        .unwrap();
-    let mut p0 = setup.lumped_plant().unwrap();
-    let rec0 = run(
-        c0.as_mut(),
-        &mut p0,
-        periods as f64 * period as f64 * t,
-        t,
-        |_| {},
-    );
-    let rms0 = rms_per_period(&rec0.error, period);
+    let mut learning = Learning::new(rig.baseline(), params).unwrap();
+    let rms = rig.rms(&mut learning, periods);
+    let rms0 = rig.rms(rig.baseline().as_mut(), periods);
     eprintln!("design {params:?}, ρ = {rho:.3}");
     for (j, (a, b)) in rms.iter().zip(&rms0).enumerate() {
         eprintln!(
@@ -197,47 +165,19 @@ fn datasheet_lag_is_the_sensor_chains_phase_delay() {
 fn learning_converges_with_the_sensor_20_percent_off_its_datasheet() {
     let scenario = flexstage_scenario::Scenario::paper();
     let sheet = SensorDatasheet::from_scenario(&scenario);
-    let (reference, _) = Reference::from_scenario(&scenario.trajectories[0]);
     for factor in [0.8, 1.2] {
-        let mut setup = Setup::from_scenario(&scenario);
-        setup.rig.sensor.bandwidth = factor * sheet.bandwidth;
-        let t = setup.controller.observer.sample_time;
-        let period = (0.5 / t).round() as usize;
-        let make = || {
-            let c = setup.controller(&PID_FF, Compensation::Inverse, reference)?;
-            Ok((c, Readings::new(setup.lumped_plant()?)))
-        };
-        let plant = measure_learning_plant(&mut || make(), period, 3, 20e-9).unwrap();
+        let mut rig = LumpedRig::paper();
+        rig.setup.rig.sensor.bandwidth = factor * sheet.bandwidth;
+        let plant = rig.learning_plant();
         let (params, rho) = design(&plant, &DesignParams::default()).unwrap();
         assert!(rho < 1.0, "×{factor}: ρ = {rho}");
         let periods = 8;
-        let duration = periods as f64 * period as f64 * t;
-        let c = setup
-            .controller(&PID_FF, Compensation::Inverse, reference)
-            .unwrap();
-        let mut l = Learning::new(c, params)
+        let mut l = Learning::new(rig.baseline(), params)
             .unwrap()
-            .with_sensor_lag(sheet.lag(t).unwrap())
+            .with_sensor_lag(sheet.lag(rig.t).unwrap())
             .unwrap();
-        let rec = run(
-            &mut l,
-            &mut setup.lumped_plant().unwrap(),
-            duration,
-            t,
-            |_| {},
-        );
-        let rms = rms_per_period(&rec.error, period);
-        let mut c0 = setup
-            .controller(&PID_FF, Compensation::Inverse, reference)
-            .unwrap();
-        let rec0 = run(
-            c0.as_mut(),
-            &mut setup.lumped_plant().unwrap(),
-            duration,
-            t,
-            |_| {},
-        );
-        let rms0 = rms_per_period(&rec0.error, period);
+        let rms = rig.rms(&mut l, periods);
+        let rms0 = rig.rms(rig.baseline().as_mut(), periods);
         eprintln!("×{factor}: ρ = {rho:.3}, {params:?}, {rms:?}");
         for a in 0..2 {
             for j in 3..periods {
@@ -264,34 +204,19 @@ fn learning_converges_with_the_sensor_20_percent_off_its_datasheet() {
 #[test]
 fn learning_told_the_datasheet_lag_tracks_the_true_output() {
     let scenario = flexstage_scenario::Scenario::paper();
-    let setup = Setup::from_scenario(&scenario);
-    let (reference, _) = Reference::from_scenario(&scenario.trajectories[0]);
-    let t = setup.controller.observer.sample_time;
-    let period = (0.5 / t).round() as usize;
-    let make = || {
-        let c = setup.controller(&PID_FF, Compensation::Inverse, reference)?;
-        Ok((c, Readings::new(setup.lumped_plant()?)))
-    };
-    let plant = measure_learning_plant(&mut || make(), period, 3, 20e-9).unwrap();
+    let rig = LumpedRig::paper();
+    let plant = rig.learning_plant();
     let (params, _) = design(&plant, &DesignParams::default()).unwrap();
-    let lag = SensorDatasheet::from_scenario(&scenario).lag(t).unwrap();
+    let lag = SensorDatasheet::from_scenario(&scenario)
+        .lag(rig.t)
+        .unwrap();
     let periods = 8;
     let last = |lag: SensorLag| {
-        let c = setup
-            .controller(&PID_FF, Compensation::Inverse, reference)
-            .unwrap();
-        let mut l = Learning::new(c, params)
+        let mut l = Learning::new(rig.baseline(), params)
             .unwrap()
             .with_sensor_lag(lag)
             .unwrap();
-        let rec = run(
-            &mut l,
-            &mut setup.lumped_plant().unwrap(),
-            periods as f64 * period as f64 * t,
-            t,
-            |_| {},
-        );
-        rms_per_period(&rec.error, period)[periods - 1]
+        rig.rms(&mut l, periods)[periods - 1]
     };
     let (told, not_told) = (last(lag), last(SensorLag::NONE));
     eprintln!(

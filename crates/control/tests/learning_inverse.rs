@@ -9,15 +9,13 @@
 // feed-forward baseline, the law designed from the readings alone learns the true output's
 // error well below the baseline's.
 
-use flexstage_control::actuator::Compensation;
-use flexstage_control::experiment::Setup;
+mod common;
+
+use common::LumpedRig;
 use flexstage_control::learning::{
-    Complex, DesignParams, InverseLaw, Law, Learning, LearningPlant, Readings, design_inverse,
-    design_law, inverse_convergence_factor, measure_learning_plant, rms_per_period,
+    Complex, DesignParams, InverseLaw, Law, Learning, LearningPlant, design_inverse, design_law,
+    inverse_convergence_factor,
 };
-use flexstage_control::pid::PID_FF;
-use flexstage_sim::experiment::{StageControl, run};
-use flexstage_sim::trajectory::Reference;
 
 use std::f64::consts::TAU;
 
@@ -191,44 +189,17 @@ fn inverse_law_contracts_by_its_rho_for_a_plant_within_the_uncertainty() {
 
 #[test]
 fn inverse_law_from_the_readings_learns_on_the_lumped_rig() {
-    let scenario = flexstage_scenario::Scenario::paper();
-    let setup = Setup::from_scenario(&scenario);
-    let (reference, _) = Reference::from_scenario(&scenario.trajectories[0]);
-    let t = setup.controller.observer.sample_time;
-    let period = (0.5 / t).round() as usize; // the 3:1 Lissajous at 2 Hz
-    let make = |s: &Setup, r: Reference| {
-        let c = s.controller(&PID_FF, Compensation::Inverse, r)?;
-        Ok((c, Readings::new(s.lumped_plant()?)))
-    };
-    let plant = measure_learning_plant(&mut || make(&setup, reference), period, 3, 20e-9).unwrap();
+    let rig = LumpedRig::paper();
+    let plant = rig.learning_plant();
     let (law, rho) = design_inverse(&plant, &DesignParams::default()).unwrap();
     assert!(rho < 0.95);
     let (chosen, chosen_rho) = design_law(&plant, &DesignParams::default()).unwrap();
     assert!(chosen_rho <= rho);
     assert_eq!(chosen.name() == "inverse", chosen_rho == rho);
     let periods = 8;
-    let duration = periods as f64 * period as f64 * t;
-    let base = setup
-        .controller(&PID_FF, Compensation::Inverse, reference)
-        .unwrap();
-    let mut learning = Learning::with_law(base, &Law::Inverse(law)).unwrap();
-    let mut p = setup.lumped_plant().unwrap();
-    let rec = run(
-        &mut learning as &mut dyn StageControl,
-        &mut p,
-        duration,
-        t,
-        |_| {},
-    );
-    let rms = rms_per_period(&rec.error, period);
-    let mut c0 = setup
-        .controller(&PID_FF, Compensation::Inverse, reference)
-        .unwrap();
-    let mut p0 = setup.lumped_plant().unwrap();
-    let rms0 = rms_per_period(
-        &run(c0.as_mut(), &mut p0, duration, t, |_| {}).error,
-        period,
-    );
+    let mut learning = Learning::with_law(rig.baseline(), &Law::Inverse(law)).unwrap();
+    let rms = rig.rms(&mut learning, periods);
+    let rms0 = rig.rms(rig.baseline().as_mut(), periods);
     for a in 0..2 {
         // Learned, and it stays learned: no growth after the first periods (a passband
         // reaching |T| = 0.05 diverged here after three periods).

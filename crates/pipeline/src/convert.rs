@@ -179,15 +179,16 @@ pub(crate) fn montecarlo_rows(mc: &MonteCarlo) -> Vec<MonteCarloRow> {
     mc.plants
         .iter()
         .flat_map(|p| {
-            p.results.iter().map(|(c, rms, pass)| MonteCarloRow {
+            let q = &p.perturbation;
+            p.results.iter().map(move |(c, rms, pass)| MonteCarloRow {
                 plant: p.index,
-                stiffness: p.stiffness,
-                mass: p.mass,
-                alpha: p.alpha,
-                damping: p.damping,
-                coupling1: p.coupling[0],
-                coupling2: p.coupling[1],
-                delay: p.delay,
+                stiffness: q.stiffness,
+                mass: q.mass,
+                alpha: q.alpha,
+                damping: q.damping,
+                coupling1: q.coupling[0],
+                coupling2: q.coupling[1],
+                delay: q.delay,
                 controller: c.name.to_string(),
                 rms1_nm: rms[0] * 1e9,
                 rms2_nm: rms[1] * 1e9,
@@ -261,23 +262,7 @@ pub fn measured_rows(
             .iter()
             .map(|l| flexstage_run::files::measured::MeasuredLineRow {
                 f: l.f,
-                re11: l.h[0][0].re,
-                im11: l.h[0][0].im,
-                re12: l.h[0][1].re,
-                im12: l.h[0][1].im,
-                re21: l.h[1][0].re,
-                im21: l.h[1][0].im,
-                re22: l.h[1][1].re,
-                im22: l.h[1][1].im,
-                coh11: l.coherence[0][0],
-                coh12: l.coherence[0][1],
-                coh21: l.coherence[1][0],
-                coh22: l.coherence[1][1],
-                sample_time: ts,
-                std11: l.std[0][0],
-                std12: l.std[0][1],
-                std21: l.std[1][0],
-                std22: l.std[1][1],
+                line: line_cells(l, ts),
             })
             .collect(),
     )
@@ -297,28 +282,39 @@ pub fn lifted_rows(
                     flexstage_run::files::lifted::LiftedLineRow {
                         f: line.f,
                         phase,
-                        re11: l.h[0][0].re,
-                        im11: l.h[0][0].im,
-                        re12: l.h[0][1].re,
-                        im12: l.h[0][1].im,
-                        re21: l.h[1][0].re,
-                        im21: l.h[1][0].im,
-                        re22: l.h[1][1].re,
-                        im22: l.h[1][1].im,
-                        coh11: l.coherence[0][0],
-                        coh12: l.coherence[0][1],
-                        coh21: l.coherence[1][0],
-                        coh22: l.coherence[1][1],
-                        sample_time: ts,
-                        std11: l.std[0][0],
-                        std12: l.std[0][1],
-                        std21: l.std[1][0],
-                        std22: l.std[1][1],
+                        line: line_cells(l, ts),
                     }
                 })
             })
             .collect(),
     )
+}
+
+/// The cells of a response file's row after `f` (and `phase`) for the line `l` of a
+/// response at sample time `ts`, value for value.
+fn line_cells(
+    l: &flexstage_identify::measured::MeasuredLine,
+    ts: f64,
+) -> flexstage_run::files::measured::LineCells {
+    flexstage_run::files::measured::LineCells {
+        re11: l.h[0][0].re,
+        im11: l.h[0][0].im,
+        re12: l.h[0][1].re,
+        im12: l.h[0][1].im,
+        re21: l.h[1][0].re,
+        im21: l.h[1][0].im,
+        re22: l.h[1][1].re,
+        im22: l.h[1][1].im,
+        coh11: l.coherence[0][0],
+        coh12: l.coherence[0][1],
+        coh21: l.coherence[1][0],
+        coh22: l.coherence[1][1],
+        sample_time: ts,
+        std11: l.std[0][0],
+        std12: l.std[0][1],
+        std21: l.std[1][0],
+        std22: l.std[1][1],
+    }
 }
 
 #[cfg(test)]

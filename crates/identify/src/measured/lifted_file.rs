@@ -10,9 +10,10 @@ use flexstage_numerics::DataError;
 use flexstage_numerics::records::{NumericCsv, RecordError};
 
 use crate::error::Result;
-use crate::frequency::C64;
 use crate::measured::lifted::{LiftedLine, LiftedResponse};
-use crate::measured::{MeasuredLine, MeasuredResponse, RESPONSE_COLUMNS, STD_COLUMNS};
+use crate::measured::{
+    MeasuredLine, MeasuredResponse, RESPONSE_COLUMNS, STD_COLUMNS, line_from_cells, write_cells,
+};
 
 /// The columns of a lifted response file, in file order: `f`, `phase` (p = 0..L−1, the
 /// output at kT + pT/L), then those of a measured response file after `f`.
@@ -33,16 +34,7 @@ impl LiftedResponse {
         for line in self.lines() {
             for (p, l) in line.phase.iter().enumerate() {
                 let _ = write!(s, "{:e},{p}", line.f);
-                for v in l.h.iter().flatten() {
-                    let _ = write!(s, ",{:e},{:e}", v.re, v.im);
-                }
-                for v in l.coherence.iter().flatten() {
-                    let _ = write!(s, ",{v:e}");
-                }
-                let _ = write!(s, ",{:e}", self.sample_time());
-                for v in l.std.iter().flatten() {
-                    let _ = write!(s, ",{v:e}");
-                }
+                write_cells(&mut s, l, self.sample_time());
                 s.push('\n');
             }
         }
@@ -105,16 +97,7 @@ impl LiftedResponse {
                     ),
                 ));
             }
-            let c = |col: usize| d[col][k];
-            phases[want].push(MeasuredLine {
-                f,
-                h: [
-                    [C64::new(c(2), c(3)), C64::new(c(4), c(5))],
-                    [C64::new(c(6), c(7)), C64::new(c(8), c(9))],
-                ],
-                coherence: [[c(10), c(11)], [c(12), c(13)]],
-                std: [[c(15), c(16)], [c(17), c(18)]],
-            });
+            phases[want].push(line_from_cells(f, |col| d[col + 2][k]));
         }
         // Each phase checked as a measured response (the same ranges and their messages).
         let phases: Vec<Vec<MeasuredLine>> = phases
@@ -134,6 +117,7 @@ impl LiftedResponse {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::frequency::C64;
 
     /// A lifted response of three lines and `l` phases with values that have no short
     /// decimal form.

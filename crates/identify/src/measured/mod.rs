@@ -183,18 +183,7 @@ impl MeasuredResponse {
         s.push('\n');
         for l in &self.lines {
             let _ = write!(s, "{:e}", l.f);
-            for i in 0..2 {
-                for j in 0..2 {
-                    let _ = write!(s, ",{:e},{:e}", l.h[i][j].re, l.h[i][j].im);
-                }
-            }
-            for v in l.coherence.iter().flatten() {
-                let _ = write!(s, ",{v:e}");
-            }
-            let _ = write!(s, ",{:e}", self.sample_time);
-            for v in l.std.iter().flatten() {
-                let _ = write!(s, ",{v:e}");
-            }
+            write_cells(&mut s, l, self.sample_time);
             s.push('\n');
         }
         s
@@ -229,20 +218,40 @@ impl MeasuredResponse {
             .into());
         }
         let lines = (0..d[0].len())
-            .map(|k| {
-                let c = |col: usize| d[col][k];
-                MeasuredLine {
-                    f: c(0),
-                    h: [
-                        [C64::new(c(1), c(2)), C64::new(c(3), c(4))],
-                        [C64::new(c(5), c(6)), C64::new(c(7), c(8))],
-                    ],
-                    coherence: [[c(9), c(10)], [c(11), c(12)]],
-                    std: [[c(14), c(15)], [c(16), c(17)]],
-                }
-            })
+            .map(|k| line_from_cells(d[0][k], |col| d[col + 1][k]))
             .collect();
         MeasuredResponse::new(ts, lines)
+    }
+}
+
+/// Writes the cells of a response file's row after `f` (in a lifted response file, after
+/// `phase`) for the line `l`: `,re11,im11,…,im22,coh11,…,coh22,sample_time,std11,…,std22`
+/// (`ts` the sample time), numbers in Rust's shortest round-trip form.
+pub(crate) fn write_cells(s: &mut String, l: &MeasuredLine, ts: f64) {
+    for v in l.h.iter().flatten() {
+        let _ = write!(s, ",{:e},{:e}", v.re, v.im);
+    }
+    for v in l.coherence.iter().flatten() {
+        let _ = write!(s, ",{v:e}");
+    }
+    let _ = write!(s, ",{ts:e}");
+    for v in l.std.iter().flatten() {
+        let _ = write!(s, ",{v:e}");
+    }
+}
+
+/// The line at `f` of a response file's row whose cells after `f` (in a lifted response
+/// file, after `phase`) are `c(0)` (re11) … `c(16)` (std22), in [`write_cells`]'s order
+/// (`c(12)`, the sample time, is checked by the caller).
+pub(crate) fn line_from_cells(f: f64, c: impl Fn(usize) -> f64) -> MeasuredLine {
+    MeasuredLine {
+        f,
+        h: [
+            [C64::new(c(0), c(1)), C64::new(c(2), c(3))],
+            [C64::new(c(4), c(5)), C64::new(c(6), c(7))],
+        ],
+        coherence: [[c(8), c(9)], [c(10), c(11)]],
+        std: [[c(13), c(14)], [c(15), c(16)]],
     }
 }
 

@@ -6,69 +6,29 @@
 //! columns are those of a lifted response file (`docs/formats.md`), so the file is also a
 //! user's input to `flexstage controller --response FILE --lifted FILE`.
 
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize};
 
+use crate::files::measured::LineCells;
 use crate::format::{Row, num};
 
 /// One line and phase of a lifted response (`docs/formats.md`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct LiftedLineRow {
     /// Line frequency \[Hz\].
     #[serde(serialize_with = "num::exp")]
     pub f: f64,
     /// Phase p: the output at kT + pT/L, 0..L−1.
     pub phase: usize,
-    /// Re G_p,11 (output 1 per held command 1, m/m).
-    #[serde(serialize_with = "num::exp")]
-    pub re11: f64,
-    /// Im G_p,11.
-    #[serde(serialize_with = "num::exp")]
-    pub im11: f64,
-    /// Re G_p,12 (output 1 per held command 2, m/m).
-    #[serde(serialize_with = "num::exp")]
-    pub re12: f64,
-    /// Im G_p,12.
-    #[serde(serialize_with = "num::exp")]
-    pub im12: f64,
-    /// Re G_p,21 (output 2 per held command 1, m/m).
-    #[serde(serialize_with = "num::exp")]
-    pub re21: f64,
-    /// Im G_p,21.
-    #[serde(serialize_with = "num::exp")]
-    pub im21: f64,
-    /// Re G_p,22 (output 2 per held command 2, m/m).
-    #[serde(serialize_with = "num::exp")]
-    pub re22: f64,
-    /// Im G_p,22.
-    #[serde(serialize_with = "num::exp")]
-    pub im22: f64,
-    /// Coherence of G_p,11, 0–1.
-    #[serde(serialize_with = "num::exp")]
-    pub coh11: f64,
-    /// Coherence of G_p,12, 0–1.
-    #[serde(serialize_with = "num::exp")]
-    pub coh12: f64,
-    /// Coherence of G_p,21, 0–1.
-    #[serde(serialize_with = "num::exp")]
-    pub coh21: f64,
-    /// Coherence of G_p,22, 0–1.
-    #[serde(serialize_with = "num::exp")]
-    pub coh22: f64,
-    /// The controller's sample time T \[s\] (the same on every row).
-    #[serde(serialize_with = "num::exp")]
-    pub sample_time: f64,
-    /// Standard deviation of G_p,11 (absolute).
-    #[serde(serialize_with = "num::exp")]
-    pub std11: f64,
-    /// Standard deviation of G_p,12 (absolute).
-    #[serde(serialize_with = "num::exp")]
-    pub std12: f64,
-    /// Standard deviation of G_p,21 (absolute).
-    #[serde(serialize_with = "num::exp")]
-    pub std21: f64,
-    /// Standard deviation of G_p,22 (absolute).
-    #[serde(serialize_with = "num::exp")]
-    pub std22: f64,
+    /// The columns after `phase`: those of a measured response file after `f`, for G_p
+    /// (output i per held command j).
+    pub line: LineCells,
+}
+
+impl<'de> Deserialize<'de> for LiftedLineRow {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let (f, phase, line) = Deserialize::deserialize(d)?;
+        Ok(LiftedLineRow { f, phase, line })
+    }
 }
 
 impl Row for LiftedLineRow {
@@ -112,23 +72,7 @@ mod tests {
         let row = |v: [f64; 18], phase: usize| LiftedLineRow {
             f: v[0],
             phase,
-            re11: v[1],
-            im11: v[2],
-            re12: v[3],
-            im12: v[4],
-            re21: v[5],
-            im21: v[6],
-            re22: v[7],
-            im22: v[8],
-            coh11: v[9],
-            coh12: v[10],
-            coh21: v[11],
-            coh22: v[12],
-            sample_time: v[13],
-            std11: v[14],
-            std12: v[15],
-            std21: v[16],
-            std22: v[17],
+            line: LineCells::from(core::array::from_fn(|k| v[k + 1])),
         };
         let rows = Rows(vec![row(v, 0), row(v.map(|x| -x / 3.0), 1)]);
         let bytes = rows.encode().unwrap();

@@ -4,16 +4,35 @@
 //! columns are those of a measured response file (`docs/formats.md`), so the file is also a
 //! user's input to `flexstage controller --response`.
 
-use serde::{Deserialize, Serialize};
+use serde::{Deserialize, Deserializer, Serialize};
 
 use crate::format::{Row, num};
 
 /// One line of a measured response (`docs/formats.md`).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct MeasuredLineRow {
     /// Line frequency \[Hz\].
     #[serde(serialize_with = "num::exp")]
     pub f: f64,
+    /// The columns after `f`.
+    pub line: LineCells,
+}
+
+impl<'de> Deserialize<'de> for MeasuredLineRow {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let (f, line) = Deserialize::deserialize(d)?;
+        Ok(MeasuredLineRow { f, line })
+    }
+}
+
+/// The columns of a response file's row after `f` (and, in a lifted response file, after
+/// `phase`): one line's 2 × 2 response H (or a lifted response's G_p), its coherence, the
+/// sample time and its standard deviations (`docs/formats.md`). A row type writes them
+/// after its own columns and reads them back by position (the `csv` crate reads a nested
+/// struct by the header's names, which would start at the row's first column; the row
+/// types' headers are checked whole before).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct LineCells {
     /// Re H11 (output 1 per input 1, m/m).
     #[serde(serialize_with = "num::exp")]
     pub re11: f64,
@@ -50,7 +69,7 @@ pub struct MeasuredLineRow {
     /// Coherence of H22, 0–1.
     #[serde(serialize_with = "num::exp")]
     pub coh22: f64,
-    /// The controller's sample time T \[s\] (the same on every line).
+    /// The controller's sample time T \[s\] (the same on every row).
     #[serde(serialize_with = "num::exp")]
     pub sample_time: f64,
     /// Standard deviation of H11 (absolute).
@@ -65,6 +84,37 @@ pub struct MeasuredLineRow {
     /// Standard deviation of H22 (absolute).
     #[serde(serialize_with = "num::exp")]
     pub std22: f64,
+}
+
+impl From<[f64; 17]> for LineCells {
+    /// The cells in column order.
+    fn from(v: [f64; 17]) -> LineCells {
+        LineCells {
+            re11: v[0],
+            im11: v[1],
+            re12: v[2],
+            im12: v[3],
+            re21: v[4],
+            im21: v[5],
+            re22: v[6],
+            im22: v[7],
+            coh11: v[8],
+            coh12: v[9],
+            coh21: v[10],
+            coh22: v[11],
+            sample_time: v[12],
+            std11: v[13],
+            std12: v[14],
+            std21: v[15],
+            std22: v[16],
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for LineCells {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        <[f64; 17]>::deserialize(d).map(LineCells::from)
+    }
 }
 
 impl Row for MeasuredLineRow {
@@ -106,23 +156,7 @@ mod tests {
         }
         let row = |v: [f64; 18]| MeasuredLineRow {
             f: v[0],
-            re11: v[1],
-            im11: v[2],
-            re12: v[3],
-            im12: v[4],
-            re21: v[5],
-            im21: v[6],
-            re22: v[7],
-            im22: v[8],
-            coh11: v[9],
-            coh12: v[10],
-            coh21: v[11],
-            coh22: v[12],
-            sample_time: v[13],
-            std11: v[14],
-            std12: v[15],
-            std21: v[16],
-            std22: v[17],
+            line: LineCells::from(core::array::from_fn(|k| v[k + 1])),
         };
         let rows = Rows(vec![row(v), row(v.map(|x| -x / 3.0))]);
         let bytes = rows.encode().unwrap();
