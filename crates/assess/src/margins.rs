@@ -41,6 +41,9 @@ pub struct MarginRow {
     pub meets: bool,
     /// Monte-Carlo pass rate \[0–1\] when the study was run ([`crate::montecarlo`]).
     pub montecarlo_pass: Option<f64>,
+    /// Whether the design is the one that runs under the learning layer
+    /// (`Designs::for_learning`, [`learning_margins_table`]).
+    pub learning: bool,
 }
 
 impl MarginRow {
@@ -97,7 +100,35 @@ pub fn margins_table(
             margins: m,
             meets,
             montecarlo_pass: None,
+            learning: false,
         });
+    }
+    Ok(rows)
+}
+
+/// [`margins_table`] of the designs that run under the learning layer
+/// (`Designs::for_learning`: tuned to the widened margin targets of
+/// `TuningParams::learning_widening`), each row marked [`MarginRow::learning`]; only the
+/// candidates whose design differs there (the others' rows are their own).
+pub fn learning_margins_table(
+    bench: &Bench,
+    candidates: &[&'static Controller],
+    delay: usize,
+    targets: MarginTargets,
+    injection: &InjectionParams,
+) -> Result<Vec<MarginRow>> {
+    let learning = Bench {
+        designs: bench.designs.under_learning(),
+        ..bench.clone()
+    };
+    let differ: Vec<&'static Controller> = candidates
+        .iter()
+        .copied()
+        .filter(|c| bench.designs.differs_under_learning(c))
+        .collect();
+    let mut rows = margins_table(&learning, &differ, delay, targets, injection)?;
+    for r in &mut rows {
+        r.learning = true;
     }
     Ok(rows)
 }

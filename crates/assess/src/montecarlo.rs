@@ -345,7 +345,12 @@ pub fn one_plant(
         PlantDesign::Nominal => (bench, &setup, &twin),
         PlantDesign::Identified => {
             setup.rig = rig.clone();
-            match Bench::measured(setup, twin, TuningParams::default(), &LabParams::default()) {
+            // The study runs the controllers without learning: no designs for it.
+            let tuning = TuningParams {
+                learning_widening: [0.0; 2],
+                ..TuningParams::default()
+            };
+            match Bench::measured(setup, twin, tuning, &LabParams::default()) {
                 Ok((b, _)) => own = b,
                 // The procedure gives no controller for this stage: every candidate fails.
                 Err(e) if no_design(&e) => {

@@ -25,10 +25,11 @@
 //! With [`SweepParams::learning`] every candidate of every point also runs with the
 //! learning layer of `flexstage_control::learning`, as `track --learning` runs it on the
 //! slow trajectories: the learning plant measured at every harmonic of the point's period
-//! from the readings of fresh loops (never the true output), the law chosen and designed
-//! from it (phase lead or model inverse, the smaller ρ ≤ 0.95 for every plant within the
-//! measured uncertainty) and told the sensor chain's
-//! datasheet lag, [`SweepLearning::trials`] periods (at most [`MAX_SWEEP_TRIALS`]) of
+//! from the readings of fresh loops (never the true output) of the design that runs under
+//! learning (`Bench::learning_controller`: tuned to wider margins), both laws designed from
+//! it (phase lead and model inverse, ρ ≤ 0.95 for every plant within the measured
+//! uncertainty) and the one that learns better on a trial kept
+//! (`flexstage_control::learning::choose_law`), told the sensor chain's datasheet lag, [`SweepLearning::trials`] periods (at most [`MAX_SWEEP_TRIALS`]) of
 //! learning, then the point's run scored with learning on ([`SweepPoint::learning`]), at
 //! the samples and between them.
 
@@ -88,8 +89,8 @@ pub struct SweepLearning {
 /// How a candidate learned at a point of the sweep.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Learned {
-    /// The learning law chosen by measurement (`phase-lead` or `inverse`,
-    /// `flexstage_control::learning::design_law`).
+    /// The learning law chosen by trial (`phase-lead` or `inverse`,
+    /// `flexstage_control::learning::choose_law`).
     pub law: &'static str,
     /// Its monotone-convergence factor ρ on the measured learning plant.
     pub rho: f64,
@@ -329,8 +330,8 @@ fn scored(
 type LearningRun = std::result::Result<(Record, Between, Learned), String>;
 
 /// `c` with the learning layer on `r` (module docs, "Learning"): the learning plant measured
-/// from the readings of fresh loops (the twin in its rig, three periods a run), the layer
-/// designed from it and told the datasheet lag, `trials` periods of learning, then the
+/// from the readings of fresh loops (the twin in its rig, ten periods a run), the law
+/// chosen by trial and told the datasheet lag, `trials` periods of learning, then the
 /// scored run of `duration` with learning on, with its error between the samples.
 fn run_learning(
     bench: &Bench,

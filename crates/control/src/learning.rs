@@ -78,9 +78,18 @@
 //! ```
 //!
 //! with Q_k = 1 where that contraction is ≤ 0.95 and |T̂_k| ≥ [`INVERSE_MIN_RESPONSE`],
-//! else 0 ([`design_inverse`]). [`design_law`] designs both laws and keeps the one with the
-//! smaller ρ; [`Learning::with_law`] runs either on the same period buffers (the learned
-//! table, what is exported, has the same form).
+//! else 0 ([`design_inverse`]). [`choose_law`] designs both and keeps the one that learns
+//! better on the loop itself: each runs the trials on a fresh loop, and the smaller learning
+//! error read over the last third wins ([`design_law`], the smaller ρ, is the choice without
+//! a loop to try on). [`Learning::with_law`] runs either on the same period buffers (the
+//! learned table, what is exported, has the same form).
+//!
+//! # The feedback under learning
+//! The sensor's noise enters the loop like the correction (y ← y − n) and reaches the output
+//! through T: with learning doing the tracking, that is the error's floor. The pipeline runs
+//! the learning layer on designs tuned to wider margins
+//! (`flexstage_control::registry::Designs::for_learning`,
+//! `flexstage_control::tuning::TuningParams::learning_widening`).
 
 use flexstage_control_core::{Ilc, IlcBuffers};
 use flexstage_numerics::RangeError;
@@ -131,7 +140,7 @@ impl<C: StageControl> Learning<C> {
         })
     }
 
-    /// Wraps `inner` with the learning `law` ([`design_law`]): the phase-lead law as
+    /// Wraps `inner` with the learning `law` ([`choose_law`]): the phase-lead law as
     /// [`Learning::new`], or the model-inverse law on the same period buffers.
     pub fn with_law(inner: C, law: &Law) -> Result<Self> {
         match law {
@@ -909,7 +918,7 @@ pub fn design_inverse(plant: &LearningPlant, settings: &DesignParams) -> Result<
         })
 }
 
-/// A learning law as designed ([`design_law`]).
+/// A learning law as designed ([`design_law`], [`choose_law`]).
 #[derive(Debug, Clone, PartialEq)]
 pub enum Law {
     /// The phase-lead law with the Bartlett Q ([`design`]).

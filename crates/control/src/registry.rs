@@ -226,7 +226,7 @@ impl<'a> Stage<'a> {
         Stage {
             setup: self.setup,
             response: self.response,
-            fit: self.fit.clone(),
+            fit: self.fit,
             probe: self.probe,
             tuning,
             lifted: self.lifted,
@@ -291,8 +291,11 @@ impl Designs {
         // targets, on a stage with a response to tune on.
         if let (Some(tuning), Some(_)) = (stage.tuning.for_learning(), stage.response) {
             let widened = stage.with_tuning(tuning);
-            for (c, _) in &d.designs {
-                if let Some(design) = (c.design)(&widened)? {
+            for (c, own) in &d.designs {
+                // Kept where it differs (the backstepping's sizing is carried over).
+                if let Some(design) = (c.design)(&widened)?
+                    && format!("{design:?}") != format!("{own:?}")
+                {
                     d.learning.push((*c, design));
                 }
             }
@@ -303,6 +306,26 @@ impl Designs {
     /// The design of `c`, if it was designed for this stage.
     pub fn get(&self, c: &Controller) -> Option<&Arc<dyn Design>> {
         self.designs.iter().find(|(k, _)| *k == c).map(|(_, d)| d)
+    }
+
+    /// Whether `c` runs under the learning layer with a design of its own (one that differs
+    /// from [`Designs::get`]'s).
+    pub fn differs_under_learning(&self, c: &Controller) -> bool {
+        self.learning.iter().any(|(k, _)| *k == c)
+    }
+
+    /// The designs as they run under the learning layer ([`Designs::for_learning`] for
+    /// every controller).
+    pub fn under_learning(&self) -> Designs {
+        Designs {
+            designs: self
+                .designs
+                .iter()
+                .map(|(c, d)| (*c, Arc::clone(self.for_learning(c).unwrap_or(d))))
+                .collect(),
+            learning: Vec::new(),
+            not_designed: self.not_designed.clone(),
+        }
     }
 
     /// The design of `c` that runs under the learning layer: tuned to the margin targets

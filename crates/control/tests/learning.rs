@@ -79,7 +79,7 @@ fn convergence_factor_of_a_pure_delay_is_one_minus_gain() {
 #[test]
 fn learning_on_pid_converges_monotonically_on_the_lumped_rig() {
     let rig = LumpedRig::paper();
-    let plant = rig.learning_plant();
+    let plant = rig.learning_plant(3);
     let (params, rho) = design(&plant, &DesignParams::default()).unwrap();
     assert!(rho < 1.0 && (rho - convergence_factor(&plant, &params)).abs() < 1e-15);
 
@@ -168,7 +168,7 @@ fn learning_converges_with_the_sensor_20_percent_off_its_datasheet() {
     for factor in [0.8, 1.2] {
         let mut rig = LumpedRig::paper();
         rig.setup.rig.sensor.bandwidth = factor * sheet.bandwidth;
-        let plant = rig.learning_plant();
+        let plant = rig.learning_plant(3);
         let (params, rho) = design(&plant, &DesignParams::default()).unwrap();
         assert!(rho < 1.0, "×{factor}: ρ = {rho}");
         let periods = 8;
@@ -205,7 +205,7 @@ fn learning_converges_with_the_sensor_20_percent_off_its_datasheet() {
 fn learning_told_the_datasheet_lag_tracks_the_true_output() {
     let scenario = flexstage_scenario::Scenario::paper();
     let rig = LumpedRig::paper();
-    let plant = rig.learning_plant();
+    let plant = rig.learning_plant(3);
     let (params, _) = design(&plant, &DesignParams::default()).unwrap();
     let lag = SensorDatasheet::from_scenario(&scenario)
         .lag(rig.t)

@@ -190,7 +190,7 @@ fn inverse_law_contracts_by_its_rho_for_a_plant_within_the_uncertainty() {
 #[test]
 fn inverse_law_from_the_readings_learns_on_the_lumped_rig() {
     let rig = LumpedRig::paper();
-    let plant = rig.learning_plant();
+    let plant = rig.learning_plant(3);
     let (law, rho) = design_inverse(&plant, &DesignParams::default()).unwrap();
     assert!(rho < 0.95);
     let (chosen, chosen_rho) = design_law(&plant, &DesignParams::default()).unwrap();

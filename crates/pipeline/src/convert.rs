@@ -157,7 +157,7 @@ pub(crate) fn margin_rows(rows: &[Margins], sample_time: f64) -> Vec<MarginRow> 
         for l in 0..2 {
             let m = r.margins.map(|m| m[l]);
             out.push(MarginRow {
-                controller: r.candidate.name.to_string(),
+                controller: crate::track::variant_name(r.candidate, r.learning),
                 delay_samples: r.delay,
                 axis: format!("q{}", l + 1),
                 gain_margin_db: m.map(|m| m.gain_db),

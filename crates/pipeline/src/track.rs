@@ -33,11 +33,13 @@
 //!
 //! * **Learning** ([`TrackOptions::learning`], `--learning`): every selected controller
 //!   also runs with the iterative-learning layer (`flexstage_control::learning`) on every
-//!   trajectory, which must be periodic. Per pair: the learning plant is measured from the
-//!   ADC readings of the loop, the layer designed from it (monotone-convergence factor
-//!   ρ < 1 with the measurement's uncertainty) and told the sensor's datasheet lag; it
-//!   learns for the given number of trials (periods), then the trajectory's run is scored
-//!   with learning still on. Its row is `<controller>+learning`.
+//!   trajectory, which must be periodic. Per pair: the controller's design under learning
+//!   (`Designs::for_learning`, tuned to wider margins), the learning plant measured from the
+//!   ADC readings of its loop, both laws designed from it (monotone-convergence factor
+//!   ρ < 1 with the measurement's uncertainty) and the one that learns better on a trial
+//!   kept, told the sensor's datasheet lag; it learns for the given number of trials
+//!   (periods), then the trajectory's run is scored with learning still on. Its row is
+//!   `<controller>+learning`; its design's margins are in `margins.csv` under that name.
 //!
 //! Every (trajectory, controller) pair is independent and runs in parallel (rayon).
 
@@ -48,7 +50,7 @@ use crate::scan::{ScanFrequency, scan_frequency};
 use flexstage_assess::Bench;
 use flexstage_assess::inject::InjectionParams;
 use flexstage_assess::lab::{LabMeasurement, LabParams};
-use flexstage_assess::margins::{MarginRow, MarginTargets, margins_table};
+use flexstage_assess::margins::{MarginRow, MarginTargets, learning_margins_table, margins_table};
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, PlantDesign, monte_carlo};
 use flexstage_control::ControlError;
 use flexstage_control::actuator::ActuatorParams;
@@ -391,7 +393,7 @@ impl TrackSummary {
                 };
                 s.push_str(&format!(
                     "{:<16} q{}   {m}{mc}{flag}\n",
-                    r.candidate.name,
+                    variant_name(r.candidate, r.learning),
                     l + 1
                 ));
             }
@@ -503,6 +505,16 @@ fn tune_and_margins(
     ));
     for (j, r) in rows.iter_mut().enumerate() {
         r.montecarlo_pass = Some(mc.pass_rate(j));
+    }
+    if options.learning.is_some() {
+        // The designs learning runs on, where they differ: their own margins on the twin.
+        rows.extend(learning_margins_table(
+            &bench,
+            controllers,
+            setup.rig.delay,
+            MarginTargets::default(),
+            &InjectionParams::default(),
+        )?);
     }
     let t0 = std::time::Instant::now();
     let scan = scan_frequency(&bench, scenario, controllers, options.learning)?;

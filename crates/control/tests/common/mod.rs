@@ -43,16 +43,23 @@ impl LumpedRig {
             .unwrap()
     }
 
-    /// The learning plant measured from the baseline loop's readings alone (3 periods of a
-    /// 20 nm excitation).
-    pub fn learning_plant(&self) -> LearningPlant {
-        let make = || {
+    /// Fresh baseline loops as the learning layer's measurement and trials see them: the
+    /// controller and the rig's readings.
+    pub fn loops(
+        &self,
+    ) -> impl FnMut() -> flexstage_control::Result<(Box<dyn StageControl>, Readings)> + '_ {
+        move || {
             let c = self
                 .setup
                 .controller(&PID_FF, Compensation::Inverse, self.reference)?;
             Ok((c, Readings::new(self.setup.lumped_plant()?)))
-        };
-        measure_learning_plant(&mut || make(), self.period, 3, 20e-9).unwrap()
+        }
+    }
+
+    /// The learning plant measured from the baseline loop's readings alone (`periods`
+    /// periods per run of a 20 nm excitation).
+    pub fn learning_plant(&self, periods: usize) -> LearningPlant {
+        measure_learning_plant(&mut self.loops(), self.period, periods, 20e-9).unwrap()
     }
 
     /// The true output's RMS error per period, per axis, of `controller` run for `periods`

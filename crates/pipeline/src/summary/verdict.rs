@@ -322,9 +322,13 @@ fn comparisons(
 
 /// The controllers' results on each trajectory, the default and the best.
 fn advice(metrics: &[MetricsRow], margins: &[MarginRow], scan: &[ScanRow]) -> ControlAdvice {
-    // A controller with the learning layer has the margins of its feedback loop: learning
-    // shifts the reference, outside the loop.
+    // A controller with the learning layer has the margins of its feedback loop (learning
+    // shifts the reference, outside the loop): the rows of the design it learns on where
+    // that differs (`<controller>+learning`), else the controller's own.
     let base = |name: &str| -> String {
+        if margins.iter().any(|m| m.controller == name) {
+            return name.to_string();
+        }
         name.strip_suffix(LEARNING_SUFFIX)
             .unwrap_or(name)
             .to_string()
