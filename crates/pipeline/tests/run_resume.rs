@@ -45,11 +45,9 @@ impl Recorder {
 
 /// Every stage, made short ([`common::short`]): 4 design iterations (a checkpoint every 2), no modes or validity
 /// map, no full-transient twin check, 0.2 s of identification, 0.05 s of tracking, one
-/// Monte-Carlo plant (what these tests check is the stages' bookkeeping, not the study).
+/// Monte-Carlo plant.
 fn short() -> RunOptions {
-    let mut o = common::short(4, 2, false);
-    o.track.montecarlo_plants = 1;
-    o
+    common::short(4, 2, false)
 }
 
 /// The first run of [`common::tiny`] with [`short`] options, done once for every test of this
