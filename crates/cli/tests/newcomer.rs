@@ -93,14 +93,14 @@ fn the_subcommands_share_one_run_folder_and_never_overwrite_silently() {
     );
 
     // track: compensation off in its own folder, the default folder kept.
-    // (3 Monte-Carlo plants: the study's rates are not what this test checks.)
+    // (one Monte-Carlo plant: the study's rates are not what this test checks.)
     let quick = [
         "--trajectory",
         "circle",
         "--variant",
         "robust",
         "--montecarlo-plants",
-        "3",
+        "1",
     ];
     let out = ok(&dir, &[&["track"][..], &quick].concat());
     assert!(
