@@ -380,7 +380,7 @@ impl TrackSummary {
         }
         let mut s = format!(
             "margins with {} sample(s) of delay (loop at a time, the other loop closed):\n\
-             controller       loop  GM [dB]  PM [deg]  f_c [Hz]  DM [samples]  MC pass\n",
+             controller           loop  GM [dB]  PM [deg]  f_c [Hz]  DM [samples]  MC pass\n",
             self.margins[0].delay
         );
         for r in &self.margins {
@@ -392,7 +392,7 @@ impl TrackSummary {
                     _ => String::new(),
                 };
                 s.push_str(&format!(
-                    "{:<16} q{}   {m}{mc}{flag}\n",
+                    "{:<20} q{}   {m}{mc}{flag}\n",
                     variant_name(r.candidate, r.learning),
                     l + 1
                 ));
