@@ -463,7 +463,7 @@ fn trial_error(
 /// Runs the loop `periods` periods and returns the readings of one period: those of the
 /// last, or where `periods` > 3 their mean over every period after the first two (which
 /// averages the part of the sensor's noise that does not cancel between runs).
-fn last_period(
+fn period_readings(
     controller: &mut dyn StageControl,
     rig: &mut Readings,
     n: usize,
@@ -526,7 +526,7 @@ pub fn measure_learning_plant(
     }
     let base = {
         let (mut c, mut rig) = factory()?;
-        last_period(c.as_mut(), &mut rig, period, periods)
+        period_readings(c.as_mut(), &mut rig, period, periods)
     };
     let full = injected_response(factory, &base, period, periods, amplitude)?;
     let half = injected_response(factory, &base, period, periods, 0.5 * amplitude)?;
@@ -574,7 +574,7 @@ fn injected_response(
             signal: &signal,
             k: 0,
         };
-        let out = last_period(&mut inj, &mut rig, n, periods);
+        let out = period_readings(&mut inj, &mut rig, n, periods);
         for k in 1..=half {
             let axis = (k + parity) % 2;
             let dc = dft_bin(signal.iter().map(|s| s[axis]), k, n);
