@@ -391,8 +391,9 @@ mod tests {
     /// with the margin targets widened by `TuningParams::learning_widening`: on the sampled
     /// loop of two decoupled modes the PI + notch and the PID under learning meet 12 dB / 60°
     /// (the defaults 6 dB / 40° widened by 6 dB / 20°); the PI + notch's own design does
-    /// not, and under learning its crossover falls below 60 % of its own; a design that is not tuned to margins (the scenario PID) is the
-    /// same under learning; without a widening there are no separate designs.
+    /// not, and under learning its crossover falls below 60 % of its own; a design that is
+    /// not tuned to margins (the scenario PID) is the same under learning; without a
+    /// widening there are no separate designs.
     #[test]
     fn designs_under_learning_meet_the_widened_margins() {
         use crate::tuning::{TuningParams, loop_margins};

@@ -182,6 +182,19 @@ impl TuningParams {
             self.notch_width > 0.0 && self.notch_width <= 2.0,
             "0 < ζ_p ≤ 2",
         )?;
+        let [gm, pm] = self.learning_widening;
+        check(
+            "tuning.learning_widening[0]",
+            gm,
+            (0.0..=40.0).contains(&gm),
+            "0–40 dB",
+        )?;
+        check(
+            "tuning.learning_widening[1]",
+            pm,
+            (0.0..=90.0).contains(&pm),
+            "0–90°",
+        )?;
         self.margins.validate()
     }
 }
@@ -650,6 +663,34 @@ mod tests {
         }
         // Both verdicts occur often enough for the comparison to mean something.
         assert!(checked[0] > 20 && checked[1] > 20, "{checked:?}");
+    }
+
+    /// Goal: the tuning under learning is the tuning with its margin targets widened (the
+    /// phase margin at most 89°), none without a widening, and a widening out of range is
+    /// refused naming the field.
+    #[test]
+    fn the_learning_tuning_widens_the_margin_targets() {
+        let t = TuningParams::default();
+        let l = t.for_learning().unwrap();
+        assert_eq!((l.gain_margin_db, l.phase_margin_deg), (12.0, 60.0));
+        assert_eq!(l.learning_widening, [0.0; 2]);
+        assert!(l.for_learning().is_none());
+        let steep = TuningParams {
+            phase_margin_deg: 80.0,
+            ..TuningParams::default()
+        };
+        assert_eq!(steep.for_learning().unwrap().phase_margin_deg, 89.0);
+        for (w, field) in [([-1.0, 0.0], "[0]"), ([0.0, f64::NAN], "[1]")] {
+            let bad = TuningParams {
+                learning_widening: w,
+                ..TuningParams::default()
+            };
+            let e = bad.validate().unwrap_err().to_string();
+            assert!(
+                e.contains(&format!("tuning.learning_widening{field}")),
+                "{e}"
+            );
+        }
     }
 
     /// Goal: the procedure returns gains whose margins meet the targets, and each axis's gain

@@ -960,7 +960,7 @@ mod tests {
         let twin = flexstage_twin::Twin::from_scenario(&s, &rho).unwrap();
         let setup = Setup::from_scenario(&s);
         let (bench, files) =
-            crate::track::measured_bench(&setup, &twin, &crate::progress::Silent).unwrap();
+            crate::track::measured_bench(&setup, &twin, false, &crate::progress::Silent).unwrap();
         let dir = std::env::temp_dir().join(format!("flexstage-lifted-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let (response, lifted) = (dir.join("h.csv"), dir.join("g.csv"));

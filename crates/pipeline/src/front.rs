@@ -377,7 +377,8 @@ fn assess_one(
     )?;
     let plant = crate::plant::designed(s, reduced.params)?;
     // The controllers designed from the twin measured in its rig, as `track` designs them.
-    let (bench, _) = crate::track::measured_bench(&Setup::from_scenario(&plant), &twin, progress)?;
+    let (bench, _) =
+        crate::track::measured_bench(&Setup::from_scenario(&plant), &twin, false, progress)?;
     let Some(amplitude) = crate::scan::start_amplitude(s) else {
         return Ok(());
     };

@@ -167,11 +167,11 @@ fn nominal_bench(
                 response: (*response).clone(),
                 lifted: lifted.map(|l| (*l).clone()),
             };
-            crate::track::bench_from_rows(setup, twin, &files, progress, t0)?
+            crate::track::bench_from_rows(setup, twin, &files, false, progress, t0)?
         }
         None => {
             progress.note("designing the controllers from the twin measured in its rig");
-            crate::track::measured_bench(setup, twin, progress)?.0
+            crate::track::measured_bench(setup, twin, false, progress)?.0
         }
     })
 }

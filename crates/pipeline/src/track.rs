@@ -460,7 +460,7 @@ fn tune_and_margins(
         }
         return Ok((designs, feedforward, Vec::new(), None, None, None));
     };
-    let (bench, measured) = measured_bench(setup, twin, progress)?;
+    let (bench, measured) = measured_bench(setup, twin, options.learning.is_some(), progress)?;
     let scenario_setup = setup.clone();
     setup.controller = bench.setup.controller.clone();
     let mut rows = margins_table(
@@ -554,6 +554,7 @@ fn tune_and_margins(
 pub(crate) fn measured_bench(
     setup: &Setup,
     twin: &flexstage_twin::Twin,
+    learning: bool,
     progress: &dyn Progress,
 ) -> Result<(Bench, MeasuredFiles)> {
     let t0 = std::time::Instant::now();
@@ -571,18 +572,20 @@ pub(crate) fn measured_bench(
         response: crate::convert::measured_rows(&measured.response),
         lifted: measured.lifted.as_ref().map(crate::convert::lifted_rows),
     };
-    let bench = bench_from_rows(setup, twin, &files, progress, t0)?;
+    let bench = bench_from_rows(setup, twin, &files, learning, progress, t0)?;
     Ok((bench, files))
 }
 
 /// The bench of the twin with every controller designed from the measurement's run files
 /// `files` (what [`measured_bench`] measures and stores, or the run's stored files read
 /// back): the linear designs' feed-forward fitted to the lifted response at the samples
-/// when there is one (`Bench::from_measurement`).
+/// when there is one (`Bench::from_measurement`). With `learning` also the designs that run
+/// under the learning layer (`Designs::for_learning`); without, none are made.
 pub(crate) fn bench_from_rows(
     setup: &Setup,
     twin: &flexstage_twin::Twin,
     files: &MeasuredFiles,
+    learning: bool,
     progress: &dyn Progress,
     t0: std::time::Instant,
 ) -> Result<Bench> {
@@ -603,13 +606,15 @@ pub(crate) fn bench_from_rows(
             "the lifted response",
         )?);
     }
-    let bench = Bench::from_measurement(
-        setup.clone(),
-        twin.clone(),
-        TuningParams::default(),
-        &lab,
-        &measured,
-    )?;
+    let tuning = TuningParams {
+        learning_widening: if learning {
+            TuningParams::default().learning_widening
+        } else {
+            [0.0; 2]
+        },
+        ..TuningParams::default()
+    };
+    let bench = Bench::from_measurement(setup.clone(), twin.clone(), tuning, &lab, &measured)?;
     progress.note(&format!(
         "the controllers designed from the twin measured in its rig ({} lines at {} Hz, loop \
          model order {}, delay {}; feed-forward fitted to the {} response) in {:.1} s",
@@ -1498,7 +1503,8 @@ mod tests {
         let (s, rho) = flexstage_twin::samples::quick_rhombus().unwrap();
         let twin = flexstage_twin::Twin::from_scenario(&s, &rho).unwrap();
         let setup = Setup::from_scenario(&s);
-        let (bench, files) = measured_bench(&setup, &twin, &crate::progress::Silent).unwrap();
+        let (bench, files) =
+            measured_bench(&setup, &twin, false, &crate::progress::Silent).unwrap();
         assert_eq!(files.response.0.len(), 999);
         let lifted = files.lifted.clone().unwrap();
         assert_eq!(lifted.0.len(), 999 * flexstage_assess::lab::FAST_ADC_RATIO);
@@ -1528,6 +1534,7 @@ mod tests {
             &setup,
             &twin,
             &loaded,
+            false,
             &crate::progress::Silent,
             std::time::Instant::now(),
         )
