@@ -415,6 +415,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             trials: v.parse()?,
             amplitude: 20e-9,
             lag,
+            // `SCAN_NO_FAST`: learning toward the predicted reading alone.
+            fast_adc: std::env::var("SCAN_NO_FAST")
+                .is_err()
+                .then(|| flexstage_assess::lab::operating_fast_adc(&bench.setup.rig, ratio)),
         });
     }
     let amplitude = match s.trajectories.first() {

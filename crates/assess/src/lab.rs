@@ -122,6 +122,18 @@ fn experiment_rig(rig: &RigParams, input: usize) -> RigParams {
     r
 }
 
+/// The lab's fast ADC while the loop runs (a learning layer's trials,
+/// `flexstage_control::learning::Learning::retarget`): `ratio` samples per controller sample
+/// on the sensor's analog output, its white noise the rig's sensor noise (as in
+/// [`fast_logs`]), its own seed.
+pub fn operating_fast_adc(rig: &RigParams, ratio: usize) -> FastAdc {
+    FastAdc {
+        ratio,
+        noise_std: rig.noise_std,
+        seed: rig.seed.wrapping_mul(31).wrapping_add(7),
+    }
+}
+
 /// The actuator stage that drives the experiments. The excitation is open loop: the
 /// controllers' rate limit (their anti-windup) is not part of the lab's drive, which meets
 /// the amplifier's own limits in the rig.

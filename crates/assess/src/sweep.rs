@@ -31,7 +31,10 @@
 //! uncertainty) and the one that learns better on a trial kept
 //! (`flexstage_control::learning::choose_law`), told the sensor chain's datasheet lag, [`SweepLearning::trials`] periods (at most [`MAX_SWEEP_TRIALS`]) of
 //! learning, then the point's run scored with learning on ([`SweepPoint::learning`]), at
-//! the samples and between them.
+//! the samples and between them. With the lab's fast ADC on the sensor's analog output
+//! ([`SweepLearning::fast_adc`]) the reading learned toward is corrected after every trial
+//! by what that record shows the reading to exceed the output by at the samples
+//! (`flexstage_control::learning::Learning::retarget`).
 
 use flexstage_control::ControlError;
 use flexstage_control::actuator::Compensation;
@@ -40,6 +43,7 @@ use flexstage_control::learning::{
     self, DesignParams, Learning, Readings, SensorLag, measure_learning_plant,
 };
 use flexstage_figures::plot::{Figure, Series};
+use flexstage_identify::measured::{FastAdc, FastChannel};
 use flexstage_sim::experiment::{Record, StageControl, run};
 use flexstage_sim::rig::StagePlant;
 use flexstage_sim::trajectory::{Reference, Shape};
@@ -84,6 +88,11 @@ pub struct SweepLearning {
     pub amplitude: f64,
     /// The sensor chain's lag from its datasheet.
     pub lag: SensorLag,
+    /// The lab's fast ADC on the sensor's analog output during the trials: with it, the
+    /// reading learned toward is moved after every trial by the output's error at the
+    /// samples it measured (`flexstage_control::learning::Learning::retarget`); `None`:
+    /// learning toward the reading the feedback expects alone.
+    pub fast_adc: Option<FastAdc>,
 }
 
 /// How a candidate learned at a point of the sweep.
@@ -379,7 +388,26 @@ fn run_learning(
         out: Vec::new(),
     };
     let learned = l.trials as f64 * period as f64 * t;
-    run(&mut ctrl, &mut sub, learned, t, |_| {});
+    let mut fast = l
+        .fast_adc
+        .map(|adc| FastChannel::attach(&adc, &mut sub.plant))
+        .transpose()?;
+    for _ in 0..l.trials {
+        match &mut fast {
+            None => {
+                run(&mut ctrl, &mut sub, period as f64 * t, t, |_| {});
+            }
+            Some(fast) => {
+                let mut recorded = WithFast {
+                    inner: &mut sub,
+                    fast,
+                };
+                run(&mut ctrl, &mut recorded, period as f64 * t, t, |_| {});
+                let record = fast.take_period(period, t)?;
+                ctrl.retarget(&record.output_at_samples(&bench.setup.rig.sensor)?)?;
+            }
+        }
+    }
     sub.out.clear();
     let rec = run(&mut ctrl, &mut sub, duration, t, |_| {});
     let between = between(&sub.out, r, bench.setup.rig.substep(), learned);
@@ -435,6 +463,31 @@ impl Between {
             wsum += w;
         }
         2.0 * (re * re + im * im).sqrt() / wsum
+    }
+}
+
+/// A [`Substeps`] with the lab's fast ADC recording its sensor's analog output.
+struct WithFast<'a> {
+    inner: &'a mut Substeps,
+    fast: &'a mut FastChannel,
+}
+
+impl StagePlant for WithFast<'_> {
+    fn measure(&mut self) -> [f64; 2] {
+        self.inner.measure()
+    }
+    fn output(&self) -> [f64; 2] {
+        self.inner.output()
+    }
+    fn apply(&mut self, cmd: &flexstage_sim::experiment::Command) {
+        self.inner.apply(cmd);
+        self.fast.record(&self.inner.plant);
+    }
+    fn voltage(&self) -> [f64; 2] {
+        self.inner.voltage()
+    }
+    fn x_nom(&self) -> [f64; 2] {
+        self.inner.x_nom()
     }
 }
 

@@ -92,6 +92,7 @@
 //! `flexstage_control::tuning::TuningParams::learning_widening`).
 
 use flexstage_control_core::{Ilc, IlcBuffers};
+use flexstage_identify::measured::SampledOutput;
 use flexstage_numerics::RangeError;
 
 use crate::error::Result;
@@ -119,6 +120,13 @@ pub struct Learning<C> {
     references: Vec<[f64; 2]>,
     /// The model-inverse law when it is the one learning (`None`: the kernel's phase lead).
     inverse: Option<Box<InverseLaw>>,
+    /// The shift of the reading learned toward, per sample of the period, from the output
+    /// at the samples a fast ADC measured ([`Learning::retarget`]); zero until then.
+    target: Vec<[f64; 2]>,
+    /// The reading learned toward in the last N samples, before the shift.
+    expected: Vec<[f64; 2]>,
+    /// The periods averaged into `target`.
+    retargets: usize,
 }
 
 impl<C: StageControl> Learning<C> {
@@ -137,6 +145,9 @@ impl<C: StageControl> Learning<C> {
             lag: [0.0; 2],
             references: vec![[0.0; 2]; n],
             inverse: None,
+            target: vec![[0.0; 2]; n],
+            expected: vec![[0.0; 2]; n],
+            retargets: 0,
         })
     }
 
@@ -208,6 +219,38 @@ impl<C: StageControl> Learning<C> {
         })
     }
 
+    /// Corrects the reading the layer learns toward by what a fast ADC on the sensor's
+    /// analog output measured in the period just run (`output`, [`SampledOutput`]): the
+    /// reading exceeds the output at the samples by b_k = s(kT) − q̂(kT), where the
+    /// learning's reading r_k assumed r_k − q_d(kT); the shift d_k is the mean of b_k − (r_k −
+    /// q_d(kT)) over the periods so far, and the layer learns toward r_k + d_k, so that the
+    /// output at the samples, not the predicted reading, follows (module docs, "The output at
+    /// the samples"). Call at a period's end.
+    pub fn retarget(&mut self, output: &SampledOutput) -> Result<()> {
+        let n = self.references.len();
+        crate::error::check(
+            "learning.retarget samples",
+            output.at().len() as f64,
+            output.at().len() == n && self.ilc.sample() == 0 && self.ilc.periods() > 0,
+            &format!("the period's {n} samples, at a period's end"),
+        )?;
+        self.retargets += 1;
+        let w = 1.0 / self.retargets as f64;
+        for (((d, b), r), q_d) in self
+            .target
+            .iter_mut()
+            .zip(output.sensor_excess())
+            .zip(&self.expected)
+            .zip(&self.references)
+        {
+            for a in 0..2 {
+                let shift = b[a] - (r[a] - q_d[a]);
+                d[a] += w * (shift - d[a]);
+            }
+        }
+        Ok(())
+    }
+
     /// The learning kernel (periods done, learned correction, freeze).
     pub fn ilc(&mut self) -> &mut Ilc<Vec<[f64; 2]>> {
         &mut self.ilc
@@ -236,7 +279,10 @@ impl<C: StageControl> StageControl for Learning<C> {
             Some(r) => r,
             None => self.lagged_reference(cmd.reference),
         };
-        self.ilc.record(y, r);
+        let k = self.ilc.sample();
+        self.expected[k] = r;
+        let d = self.target[k];
+        self.ilc.record(y, [r[0] + d[0], r[1] + d[1]]);
         cmd
     }
 

@@ -6,6 +6,7 @@
 //! frequencies are fractions of the twin's first resonance.
 
 use flexstage_assess::Bench;
+use flexstage_assess::lab::{LabParams, operating_fast_adc};
 use flexstage_assess::sweep::{self, MAX_SWEEP_TRIALS, SweepLearning, SweepParams, SweepPoint};
 use flexstage_control::learning::SensorDatasheet;
 use flexstage_control::registry::Controller;
@@ -53,6 +54,9 @@ pub fn scan_frequency(
             trials: trials.clamp(1, MAX_SWEEP_TRIALS),
             amplitude: crate::track::LEARNING_AMPLITUDE,
             lag: SensorDatasheet::from_scenario(scenario).lag(bench.setup.rig.sample_time)?,
+            fast_adc: LabParams::default()
+                .fast_adc
+                .map(|ratio| operating_fast_adc(&bench.setup.rig, ratio)),
         }),
         None => None,
     };

@@ -46,6 +46,7 @@
 //! ```
 
 mod experiment;
+mod fast_period;
 mod fit;
 mod lifted;
 mod lifted_file;
@@ -60,6 +61,7 @@ use flexstage_numerics::DataError;
 use flexstage_numerics::records::{NumericCsv, RecordError};
 
 pub use experiment::{Drive, MultisinePlan, run_log};
+pub use fast_period::{FastChannel, FastPeriod, SampledOutput};
 pub use fit::{FitParams, ZFilter, ZFit};
 pub use lifted::{
     FastAdc, FastLog, LiftedLine, LiftedResponse, from_harmonics, harmonic_frequency, image_bound,
