@@ -43,7 +43,7 @@ use flexstage_control::learning::{
     self, DesignParams, Learning, Readings, SensorLag, measure_learning_plant,
 };
 use flexstage_figures::plot::{Figure, Series};
-use flexstage_identify::measured::{FastAdc, FastChannel};
+use flexstage_identify::measured::{FastAdc, FastChannel, FastRecorded};
 use flexstage_sim::experiment::{Record, StageControl, run};
 use flexstage_sim::rig::StagePlant;
 use flexstage_sim::trajectory::{Reference, Shape};
@@ -398,8 +398,8 @@ fn run_learning(
                 run(&mut ctrl, &mut sub, period as f64 * t, t, |_| {});
             }
             Some(fast) => {
-                let mut recorded = WithFast {
-                    inner: &mut sub,
+                let mut recorded = FastRecorded {
+                    plant: &mut sub.plant,
                     fast,
                 };
                 run(&mut ctrl, &mut recorded, period as f64 * t, t, |_| {});
@@ -463,31 +463,6 @@ impl Between {
             wsum += w;
         }
         2.0 * (re * re + im * im).sqrt() / wsum
-    }
-}
-
-/// A [`Substeps`] with the lab's fast ADC recording its sensor's analog output.
-struct WithFast<'a> {
-    inner: &'a mut Substeps,
-    fast: &'a mut FastChannel,
-}
-
-impl StagePlant for WithFast<'_> {
-    fn measure(&mut self) -> [f64; 2] {
-        self.inner.measure()
-    }
-    fn output(&self) -> [f64; 2] {
-        self.inner.output()
-    }
-    fn apply(&mut self, cmd: &flexstage_sim::experiment::Command) {
-        self.inner.apply(cmd);
-        self.fast.record(&self.inner.plant);
-    }
-    fn voltage(&self) -> [f64; 2] {
-        self.inner.voltage()
-    }
-    fn x_nom(&self) -> [f64; 2] {
-        self.inner.x_nom()
     }
 }
 

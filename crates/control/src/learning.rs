@@ -84,6 +84,20 @@
 //! a loop to try on). [`Learning::with_law`] runs either on the same period buffers (the
 //! learned table, what is exported, has the same form).
 //!
+//! # The output at the samples
+//! Learning drives the reading to the reading it expects, r_k (the reference delayed by the
+//! datasheet lag, or the reading a measured model predicts); the output at the samples
+//! then misses q_d by whatever that expectation misses the sensor's real excess over the
+//! output, the ringing above Nyquist its filter sees included. A lab with a fast ADC on
+//! the sensor's analog output (an oscilloscope or DAQ, L samples per controller sample)
+//! measures that excess while the scan runs: one period of its record, the datasheet's
+//! sensor filter divided out of every harmonic, gives the output at the samples q̂_k and the
+//! analog output s_k there (`flexstage_identify::measured::FastPeriod`). After every trial
+//! [`Learning::retarget`] moves the reading learned toward by the mean over the periods so
+//! far of (s_k − q̂_k) − (r_k − q_d,k): then y = r + d means q = q_d at the samples. The
+//! excess s − q̂ = (1 − S⁻¹) s carries the fast ADC's noise with the gain |1 − 1/S(f)|,
+//! about f/15 kHz in the band the layer learns in, so the correction adds almost no noise.
+//!
 //! # The feedback under learning
 //! The sensor's noise enters the loop like the correction (y ← y − n) and reaches the output
 //! through T: with learning doing the tracking, that is the error's floor. The pipeline runs

@@ -12,35 +12,8 @@ use flexstage_control::learning::{
     DesignParams, Learning, LearningParams, MEASURE_PERIODS, SensorDatasheet, SensorLag, design,
     rms_per_period,
 };
-use flexstage_identify::measured::{FastAdc, FastChannel};
-use flexstage_sim::experiment::{Command, run};
-use flexstage_sim::plant::LumpedStage;
-use flexstage_sim::rig::{RigPlant, StagePlant};
-
-/// A rig whose fast ADC records every sample interval.
-struct Recorded<'a> {
-    plant: &'a mut RigPlant<LumpedStage>,
-    fast: &'a mut FastChannel,
-}
-
-impl StagePlant for Recorded<'_> {
-    fn measure(&mut self) -> [f64; 2] {
-        self.plant.measure()
-    }
-    fn output(&self) -> [f64; 2] {
-        self.plant.output()
-    }
-    fn apply(&mut self, cmd: &Command) {
-        self.plant.apply(cmd);
-        self.fast.record(self.plant);
-    }
-    fn voltage(&self) -> [f64; 2] {
-        self.plant.voltage()
-    }
-    fn x_nom(&self) -> [f64; 2] {
-        self.plant.x_nom()
-    }
-}
+use flexstage_identify::measured::{FastAdc, FastChannel, FastRecorded};
+use flexstage_sim::experiment::run;
 
 /// The true output's RMS error per axis over the last of `trials` periods of the phase-lead
 /// law told `lag`, retargeted after every period or not.
@@ -66,7 +39,7 @@ fn last_rms(
     let period = rig.period as f64 * rig.t;
     let mut last = Vec::new();
     for _ in 0..trials {
-        let mut recorded = Recorded {
+        let mut recorded = FastRecorded {
             plant: &mut stage,
             fast: &mut fast,
         };

@@ -65,3 +65,35 @@ fn response_16s(bencher: divan::Bencher) {
     let p = ResponseParams::new(1e-4, SensorParams::ideal());
     bencher.bench_local(|| identify_response(divan::black_box(&record), &e, &p).unwrap());
 }
+
+/// The output at the samples from one period of a fast ADC's record (both axes): the 2 Hz
+/// Lissajous' period at 10 kHz with L = 10 (N L = 50 000 points), what `track --learning`
+/// does after every trial of a slow scan.
+#[divan::bench(sample_count = 20)]
+fn fast_period_output(bencher: divan::Bencher) {
+    use flexstage_identify::measured::{FastAdc, FastChannel};
+    use flexstage_sim::plant::{LumpedStage, PlantParams};
+    use flexstage_sim::rig::{RigPlant, StagePlant};
+    let params = PlantParams::from_scenario(&flexstage_scenario::Scenario::paper());
+    let mut rig = params.rig();
+    rig.sensor.bandwidth = 15e3;
+    let mech = LumpedStage::new(&params.truth, params.coupling, rig.substep()).unwrap();
+    let mut plant = RigPlant::new(rig.clone(), mech).unwrap();
+    let adc = FastAdc {
+        ratio: 10,
+        noise_std: [1e-8; 2],
+        seed: 1,
+    };
+    let mut channel = FastChannel::attach(&adc, &mut plant).unwrap();
+    let n = 5000;
+    for k in 0..n {
+        let w = std::f64::consts::TAU * k as f64 / n as f64;
+        plant.apply(&flexstage_sim::experiment::Command {
+            voltage: [50.0 + 20.0 * (3.0 * w).sin(), 50.0 + 20.0 * w.cos()],
+            ..Default::default()
+        });
+        channel.record(&plant);
+    }
+    let period = channel.take_period(n, rig.sample_time).unwrap();
+    bencher.bench_local(|| divan::black_box(&period).output_at_samples(&rig.sensor));
+}

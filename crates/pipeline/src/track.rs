@@ -38,7 +38,9 @@
 //!   ADC readings of its loop, both laws designed from it (monotone-convergence factor
 //!   ρ < 1 with the measurement's uncertainty) and the one that learns better on a trial
 //!   kept, told the sensor's datasheet lag; it learns for the given number of trials
-//!   (periods), then the trajectory's run is scored with learning still on. Its row is
+//!   (periods), on the twin with the lab's fast ADC correcting the reading it learns
+//!   toward after every trial (`Learning::retarget`), then the trajectory's run is scored
+//!   with learning still on. Its row is
 //!   `<controller>+learning`; its design's margins are in `margins.csv` under that name.
 //!
 //! Every (trajectory, controller) pair is independent and runs in parallel (rayon).
@@ -49,7 +51,7 @@ use std::path::{Path, PathBuf};
 use crate::scan::{ScanFrequency, scan_frequency};
 use flexstage_assess::Bench;
 use flexstage_assess::inject::InjectionParams;
-use flexstage_assess::lab::{LabMeasurement, LabParams};
+use flexstage_assess::lab::{LabMeasurement, LabParams, operating_fast_adc};
 use flexstage_assess::margins::{MarginRow, MarginTargets, learning_margins_table, margins_table};
 use flexstage_assess::montecarlo::{MonteCarlo, MonteCarloParams, PlantDesign, monte_carlo};
 use flexstage_control::ControlError;
@@ -62,7 +64,9 @@ use flexstage_control::learning::{
 use flexstage_control::registry::{Controller, Design, Designs, Stage};
 use flexstage_control::tuning::{FeedForwardFit, TuningParams};
 use flexstage_figures::plot::{Figure, Series};
-use flexstage_identify::measured::{LiftedResponse, MeasuredResponse};
+use flexstage_identify::measured::{
+    FastAdc, FastChannel, FastRecorded, LiftedResponse, MeasuredResponse,
+};
 use flexstage_piezo::BoucWenParams;
 use flexstage_run::files::lifted::LiftedLineRow;
 use flexstage_run::files::measured::MeasuredLineRow;
@@ -653,6 +657,8 @@ struct Learn {
     trials: usize,
     period: usize,
     lag: SensorLag,
+    /// The lab's fast ADC on the sensor during the trials (the twin only).
+    fast_adc: Option<FastAdc>,
 }
 
 impl Job<'_> {
@@ -1099,15 +1105,43 @@ fn run_learning(
     let mut c = Learning::with_law(inner, &law)?.with_sensor_lag(learn.lag)?;
     let watch = watch(&j.reference, j.duration, dt);
     let advance = |n: usize| progress.advance(n as u64);
-    // The trials a period at a time, so that only one period is ever recorded.
+    // The trials a period at a time, so that only one period is ever recorded. On the twin
+    // with the lab's fast ADC, the reading learned toward is corrected after every trial by
+    // what the fast record shows the reading to exceed the output by (`Learning::retarget`).
     let period = learn.period as f64 * dt;
+    let mut fast = match (sim, learn.fast_adc) {
+        (Simulated::Twin(twin), Some(adc)) => {
+            let mut rig = twin.plant(&setup.rig)?;
+            let channel = FastChannel::attach(&adc, &mut rig)?;
+            Some((rig, channel))
+        }
+        _ => None,
+    };
     for _ in 0..learn.trials {
-        let trial = run_watched(&mut c, plant.as_mut(), period, dt, &watch, advance);
+        let trial = match &mut fast {
+            Some((rig, channel)) => {
+                let mut recorded = FastRecorded {
+                    plant: rig,
+                    fast: channel,
+                };
+                let trial = run_watched(&mut c, &mut recorded, period, dt, &watch, advance);
+                if trial.stopped.is_none() {
+                    let record = channel.take_period(learn.period, dt)?;
+                    c.retarget(&record.output_at_samples(&setup.rig.sensor)?)?;
+                }
+                trial
+            }
+            None => run_watched(&mut c, plant.as_mut(), period, dt, &watch, advance),
+        };
         if trial.stopped.is_some() {
             return Ok((trial, None));
         }
     }
-    let record = run_watched(&mut c, plant.as_mut(), j.duration, dt, &watch, advance);
+    let plant: &mut dyn StagePlant = match &mut fast {
+        Some((rig, _)) => rig,
+        None => plant.as_mut(),
+    };
+    let record = run_watched(&mut c, plant, j.duration, dt, &watch, advance);
     let table =
         (record.stopped.is_none() && c.ilc().periods() > 0).then(|| c.ilc().learned().to_vec());
     Ok((record, table))
@@ -1175,6 +1209,9 @@ fn plan<'a>(
                 trials,
                 period: learning_period(&reference, dt, t.name())?,
                 lag,
+                fast_adc: LabParams::default()
+                    .fast_adc
+                    .map(|ratio| operating_fast_adc(&setup.rig, ratio)),
             }),
             None => None,
         };

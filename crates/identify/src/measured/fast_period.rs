@@ -28,7 +28,8 @@ use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
 
 use flexstage_numerics::noise::GaussianNoise;
-use flexstage_sim::rig::{Mechanics, RigPlant, SensorParams};
+use flexstage_sim::experiment::Command;
+use flexstage_sim::rig::{Mechanics, RigPlant, SensorParams, StagePlant};
 
 use crate::error::{IdentifyError, Result, check};
 use crate::measured::FastAdc;
@@ -120,6 +121,34 @@ impl FastChannel {
     }
 }
 
+/// A stage in its rig with the lab's fast ADC recording every sample interval
+/// ([`FastChannel::record`] after each `apply`); otherwise the rig itself.
+pub struct FastRecorded<'a, M: Mechanics> {
+    /// The stage in its rig.
+    pub plant: &'a mut RigPlant<M>,
+    /// The fast ADC attached to it ([`FastChannel::attach`]).
+    pub fast: &'a mut FastChannel,
+}
+
+impl<M: Mechanics> StagePlant for FastRecorded<'_, M> {
+    fn measure(&mut self) -> [f64; 2] {
+        self.plant.measure()
+    }
+    fn output(&self) -> [f64; 2] {
+        self.plant.output()
+    }
+    fn apply(&mut self, cmd: &Command) {
+        self.plant.apply(cmd);
+        self.fast.record(self.plant);
+    }
+    fn voltage(&self) -> [f64; 2] {
+        self.plant.voltage()
+    }
+    fn x_nom(&self) -> [f64; 2] {
+        self.plant.x_nom()
+    }
+}
+
 /// One period of a fast ADC's record of the sensor's analog output: `fast[i][k L + p]` is
 /// axis i at kT + pT/L, p = 0..L; `end` the next period's first fast sample.
 #[derive(Debug, Clone, PartialEq)]
@@ -178,7 +207,14 @@ impl FastPeriod {
         let mut planner = FftPlanner::<f64>::new();
         let forward: Arc<dyn Fft<f64>> = planner.plan_fft_forward(len);
         let inverse: Arc<dyn Fft<f64>> = planner.plan_fft_inverse(len);
-        // S⁻¹ at every harmonic, negative frequencies above len/2 (S(−f) = S(f)*).
+        // S⁻¹(s) = Π(s − p)/Π(−p) ([`SensorParams::poles`]) at every harmonic, negative
+        // frequencies above len/2.
+        let poles: Vec<Complex<f64>> = datasheet
+            .poles()
+            .iter()
+            .map(|p| Complex::new(p.re, p.im))
+            .collect();
+        let dc: Complex<f64> = poles.iter().map(|p| -p).product();
         let gain: Vec<Complex<f64>> = (0..len)
             .map(|j| {
                 let f = if 2 * j <= len {
@@ -186,8 +222,8 @@ impl FastPeriod {
                 } else {
                     j as f64 - len as f64
                 } / (len as f64 * h);
-                let s = datasheet.response(f);
-                Complex::new(1.0, 0.0) / Complex::new(s.re, s.im)
+                let s = Complex::new(0.0, std::f64::consts::TAU * f);
+                poles.iter().map(|p| s - p).product::<Complex<f64>>() / dc
             })
             .collect();
         let mut q = [Vec::new(), Vec::new()];

@@ -61,7 +61,7 @@ use flexstage_numerics::DataError;
 use flexstage_numerics::records::{NumericCsv, RecordError};
 
 pub use experiment::{Drive, MultisinePlan, run_log};
-pub use fast_period::{FastChannel, FastPeriod, SampledOutput};
+pub use fast_period::{FastChannel, FastPeriod, FastRecorded, SampledOutput};
 pub use fit::{FitParams, ZFilter, ZFit};
 pub use lifted::{
     FastAdc, FastLog, LiftedLine, LiftedResponse, from_harmonics, harmonic_frequency, image_bound,
