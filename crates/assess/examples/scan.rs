@@ -110,17 +110,17 @@ fn between(
         // its noise (the higher harmonics are under the fast ADC's noise floor, about 0.02
         // of |H_0|, measured).
         let bound = [0, 1].map(|i| lifted.image_bound(nearest(axis_f[i]))[i]);
-        for (j, r) in pt.results.iter().enumerate() {
+        for r in &pt.results {
             let reference = flexstage_sim::trajectory::Reference::new(
                 flexstage_sim::trajectory::Shape::Lissajous {
                     ratio: 3.0,
-                    amplitude: pt.amplitude,
+                    amplitude: r.amplitude,
                     frequency: base,
                 },
             );
             let duration = (2.0 / base).max(0.05);
             let (rec, b) =
-                flexstage_assess::sweep::run_between(bench, cands[j], reference, duration)?;
+                flexstage_assess::sweep::run_between(bench, r.controller, reference, duration)?;
             // Check: the substep error at the sample instants is the record's error.
             let s = bench.setup.rig.substeps;
             let gap = (1..rec.t.len())
@@ -150,7 +150,7 @@ fn between(
                 [f, fs - f, fs + f].map(|x| b.amplitude(i, x) * 1e9)
             };
             let (a1, a2) = (amp(0), amp(1));
-            let range = pt.amplitude.map(|a| 2.0 * a);
+            let range = r.amplitude.map(|a| 2.0 * a);
             println!(
                 "{:.3}  {:<12} {:7.3} {:7.3}        {:7.3} {:7.3}        {:6.2} {:6.2} {:6.2}     {:6.2} {:6.2} {:6.2}     {:.2} {:.2} ({:.3} {:.3})",
                 pt.fraction,
@@ -433,15 +433,15 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         "f/f1   fast Hz  A1 [µm]  limit (factor)            controller   RMS % q1/q2       peak % q1/q2      cause (dominant Hz)"
     );
     for pt in &points {
-        let limit = pt.reduced.map_or("none".to_string(), |(l, f)| {
-            format!("{} ({f:.3})", l.name())
-        });
         for r in &pt.results {
+            let limit = r.reduced.map_or("none".to_string(), |(l, f)| {
+                format!("{} ({f:.3})", l.name())
+            });
             println!(
                 "{:.3}  {:7.1}  {:7.3}  {:<26} {:<12} {:7.3} {:7.3}   {:7.3} {:7.3}   {} ({:.0})",
                 pt.fraction,
                 pt.frequency,
-                pt.amplitude[0] * 1e6,
+                r.amplitude[0] * 1e6,
                 limit,
                 r.controller.name,
                 r.rms_pct[0],

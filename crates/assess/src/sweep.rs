@@ -2,8 +2,10 @@
 //! (q1, 3 f) runs from 1 % to 30 % of the twin's first resonance, on the twin in the full
 //! rig. Amplitudes start at the scenario's first Lissajous and are scaled down by the factor
 //! the binding limit asks for (controller stroke, amplifier range, current, slew:
-//! [`flexstage_control::feasibility::Feasibility::binding`]) until every candidate's
-//! feed-forward command fits, so each point runs as large as the amplifier allows. The
+//! [`flexstage_control::feasibility::Feasibility::binding`]) until the candidate's
+//! feed-forward command fits, so each candidate runs each point as large as the amplifier
+//! allows it (its amplitude is in its row: a controller whose command asks more of the
+//! amplifier scans a smaller range, and its error is in % of that range). The
 //! static gain the check inverts is the measured one (the bench's identified response fit),
 //! never the twin's.
 //!
@@ -138,6 +140,12 @@ impl Cause {
 pub struct SweepResult {
     /// The candidate.
     pub controller: &'static Controller,
+    /// Amplitudes used (A1, A2) \[m\]: the largest its feed-forward's commands fit the rig
+    /// with (module docs).
+    pub amplitude: [f64; 2],
+    /// The limit that reduced the amplitude from the scenario's, and the factor it was
+    /// reduced by (`None`: not reduced).
+    pub reduced: Reduced,
     /// RMS error per axis over the second half \[m\] (non-finite only for a run that was).
     pub rms: [f64; 2],
     /// Largest |error| per axis over the second half \[m\].
@@ -172,12 +180,8 @@ pub struct SweepPoint {
     pub fraction: f64,
     /// Frequency of the fast component \[Hz\].
     pub frequency: f64,
-    /// Amplitudes used (A1, A2) \[m\].
-    pub amplitude: [f64; 2],
-    /// The limit that reduced the amplitude from the scenario's, and the factor it was
-    /// reduced by (`None`: not reduced).
-    pub reduced: Option<(Limit, f64)>,
-    /// One result per candidate, in the candidates' order.
+    /// One result per candidate, in the candidates' order (a candidate no amplitude makes
+    /// feasible here is left out).
     pub results: Vec<SweepResult>,
     /// With [`SweepParams::learning`]: one result per candidate with the learning layer, in
     /// the candidates' order; a candidate whose learning design finds no ρ ≤ 0.95 on the
@@ -187,29 +191,15 @@ pub struct SweepPoint {
     pub refused: Vec<(&'static str, String)>,
 }
 
-/// The limit that reduced a point's amplitude and the factor, if one did.
-type Reduced = Option<(Limit, f64)>;
+/// The limit that reduced a candidate's amplitude and the factor, if one did.
+pub type Reduced = Option<(Limit, f64)>;
 
-/// What following `r` over `duration` takes from the rig with the feed-forward command of
-/// every candidate (the most demanding of them counts).
-fn feasibility(
-    bench: &Bench,
-    candidates: &[&'static Controller],
-    r: &Reference,
-    duration: f64,
-) -> Result<Vec<Feasibility>> {
-    candidates
-        .iter()
-        .map(|c| bench.feasibility(c, r, duration))
-        .collect()
-}
-
-/// The amplitude of one point: `amplitude` scaled until every candidate's feed-forward fits
-/// (at most 8 rounds of the binding factor, each with a 3 % allowance), with the first
-/// binding limit and the total factor.
+/// The amplitude of one candidate at one point: `amplitude` scaled until the candidate's
+/// feed-forward command fits the rig (at most 8 rounds of the binding factor, each with a
+/// 3 % allowance), with the first binding limit and the total factor.
 fn fitting_amplitude(
     bench: &Bench,
-    candidates: &[&'static Controller],
+    candidate: &'static Controller,
     amplitude: [f64; 2],
     base: f64,
     duration: f64,
@@ -218,10 +208,7 @@ fn fitting_amplitude(
     let mut first: Option<Limit> = None;
     for _ in 0..8 {
         let r = lissajous(amplitude.map(|a| a * scale), base);
-        let binding = feasibility(bench, candidates, &r, duration)?
-            .iter()
-            .filter_map(Feasibility::binding)
-            .min_by(|a, b| a.1.total_cmp(&b.1));
+        let binding = bench.feasibility(candidate, &r, duration)?.binding();
         match binding {
             None => {
                 return Ok(Some((
@@ -280,38 +267,38 @@ pub fn sweep(
         let period = (3.0 / (frac * f1 * t)).round().max(4.0) as usize;
         let base = 1.0 / (period as f64 * t);
         let duration = (p.periods / base).max(0.05);
-        let Some((amp, reduced)) = fitting_amplitude(bench, candidates, amplitude, base, duration)?
-        else {
-            continue;
-        };
-        let r = lissajous(amp, base);
-        let half = r.half_range(duration, t);
         let mut results = Vec::new();
-        for &c in candidates {
-            let (rec, between) = run_between(bench, c, r, duration)?;
-            results.push(scored(c, &rec, &between, half, base, t));
-        }
         let mut learning = Vec::new();
         let mut refused = Vec::new();
-        for (&c, l) in p
-            .learning
-            .iter()
-            .flat_map(|l| candidates.iter().zip(std::iter::repeat(l)))
-        {
+        for &c in candidates {
+            let Some((amp, reduced)) = fitting_amplitude(bench, c, amplitude, base, duration)?
+            else {
+                continue;
+            };
+            let r = lissajous(amp, base);
+            let half = r.half_range(duration, t);
+            let (rec, between) = run_between(bench, c, r, duration)?;
+            let at = |mut res: SweepResult| {
+                (res.amplitude, res.reduced) = (amp, reduced);
+                res
+            };
+            results.push(at(scored(c, &rec, &between, half, base, t)));
+            let Some(l) = &p.learning else { continue };
             match run_learning(bench, c, r, period, duration, l)? {
                 Ok((rec, between, learned)) => {
-                    let mut res = scored(c, &rec, &between, half, base, t);
+                    let mut res = at(scored(c, &rec, &between, half, base, t));
                     res.learned = Some(learned);
                     learning.push(res);
                 }
                 Err(why) => refused.push((c.name, why)),
             }
         }
+        if results.is_empty() {
+            continue;
+        }
         out.push(SweepPoint {
             fraction: frac,
             frequency: 3.0 * base,
-            amplitude: amp,
-            reduced,
             results,
             learning,
             refused,
@@ -574,6 +561,8 @@ fn score(c: &'static Controller, rec: &Record, half: [f64; 2], base: f64, t: f64
     };
     SweepResult {
         controller: c,
+        amplitude: [f64::NAN; 2],
+        reduced: None,
         rms,
         peak,
         rms_pct: pct(rms),

@@ -207,46 +207,48 @@ pub(crate) fn scan_rows(points: &[SweepPoint]) -> Vec<ScanRow> {
     points
         .iter()
         .flat_map(|p| {
-            let (limit, factor) = match p.reduced {
-                None => (ScanLimit::None, 1.0),
-                Some((l, f)) => (
-                    match l {
-                        Limit::ControllerStroke => ScanLimit::ControllerStroke,
-                        Limit::AmplifierRange => ScanLimit::AmplifierRange,
-                        Limit::AmplifierCurrent => ScanLimit::AmplifierCurrent,
-                        Limit::AmplifierSlew => ScanLimit::AmplifierSlew,
+            p.results.iter().chain(&p.learning).map(move |r| {
+                let (limit, factor) = match r.reduced {
+                    None => (ScanLimit::None, 1.0),
+                    Some((l, f)) => (
+                        match l {
+                            Limit::ControllerStroke => ScanLimit::ControllerStroke,
+                            Limit::AmplifierRange => ScanLimit::AmplifierRange,
+                            Limit::AmplifierCurrent => ScanLimit::AmplifierCurrent,
+                            Limit::AmplifierSlew => ScanLimit::AmplifierSlew,
+                        },
+                        f,
+                    ),
+                };
+                ScanRow {
+                    fraction_of_f1: p.fraction,
+                    fast_frequency_hz: p.frequency,
+                    amplitude1_m: r.amplitude[0],
+                    amplitude2_m: r.amplitude[1],
+                    amplitude_limit: limit,
+                    amplitude_factor: factor,
+                    controller: crate::track::variant_name(r.controller, r.learned.is_some()),
+                    rms1_nm: r.rms[0] * 1e9,
+                    rms2_nm: r.rms[1] * 1e9,
+                    rms1_pct_range: r.rms_pct[0],
+                    rms1_between_pct_range: r.rms_between_pct[0],
+                    rms2_between_pct_range: r.rms_between_pct[1],
+                    rms2_pct_range: r.rms_pct[1],
+                    peak1_nm: r.peak[0] * 1e9,
+                    peak2_nm: r.peak[1] * 1e9,
+                    peak1_pct_range: r.peak_pct[0],
+                    peak2_pct_range: r.peak_pct[1],
+                    cause: match r.cause {
+                        Cause::Bandwidth => ScanCause::Bandwidth,
+                        Cause::Distortion => ScanCause::Distortion,
+                        Cause::Aliasing => ScanCause::Aliasing,
+                        Cause::Unstable => ScanCause::Unstable,
                     },
-                    f,
-                ),
-            };
-            p.results.iter().chain(&p.learning).map(move |r| ScanRow {
-                fraction_of_f1: p.fraction,
-                fast_frequency_hz: p.frequency,
-                amplitude1_m: p.amplitude[0],
-                amplitude2_m: p.amplitude[1],
-                amplitude_limit: limit,
-                amplitude_factor: factor,
-                controller: crate::track::variant_name(r.controller, r.learned.is_some()),
-                rms1_nm: r.rms[0] * 1e9,
-                rms2_nm: r.rms[1] * 1e9,
-                rms1_pct_range: r.rms_pct[0],
-                rms1_between_pct_range: r.rms_between_pct[0],
-                rms2_between_pct_range: r.rms_between_pct[1],
-                rms2_pct_range: r.rms_pct[1],
-                peak1_nm: r.peak[0] * 1e9,
-                peak2_nm: r.peak[1] * 1e9,
-                peak1_pct_range: r.peak_pct[0],
-                peak2_pct_range: r.peak_pct[1],
-                cause: match r.cause {
-                    Cause::Bandwidth => ScanCause::Bandwidth,
-                    Cause::Distortion => ScanCause::Distortion,
-                    Cause::Aliasing => ScanCause::Aliasing,
-                    Cause::Unstable => ScanCause::Unstable,
-                },
-                dominant_hz: r.dominant,
-                learning_periods: r.learned.map_or(0, |l| l.periods),
-                learning_rho: r.learned.map_or(f64::NAN, |l| l.rho),
-                learning_law: r.learned.map_or(String::new(), |l| l.law.to_string()),
+                    dominant_hz: r.dominant,
+                    learning_periods: r.learned.map_or(0, |l| l.periods),
+                    learning_rho: r.learned.map_or(f64::NAN, |l| l.rho),
+                    learning_law: r.learned.map_or(String::new(), |l| l.law.to_string()),
+                }
             })
         })
         .collect()

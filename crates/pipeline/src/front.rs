@@ -407,7 +407,7 @@ fn assess_one(
                 controller: r.controller.name.into(),
                 rms: r.rms,
                 percent: r.rms_pct,
-                amplitude: p.amplitude,
+                amplitude: r.amplitude,
             })
             .collect();
     }
