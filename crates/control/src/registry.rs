@@ -440,7 +440,9 @@ mod tests {
         changed.axes[1].ki *= 1.0 + 1e-12;
         assert!(*with(changed) != **pi);
         let bare: Arc<dyn Design> = Arc::new(params);
-        assert!(*bare != **pi && **pi != *bare);
+        // Both ways: each side's type is checked against the other's.
+        assert!(*bare != **pi);
+        assert!(**pi != *bare);
         let copy: Arc<dyn Design> = Arc::new(params);
         assert!(*bare == *copy);
         let (robust, nonrobust) = (
@@ -509,7 +511,11 @@ mod tests {
         assert_eq!(differ, ["pi-notch-ff", "ppf-pi-ff"]);
         for c in CONTROLLERS {
             let (own, learning) = (designs.get(c).unwrap(), designs.for_learning(c).unwrap());
-            assert_eq!(**own != **learning, designs.differs_under_learning(c), "{c}");
+            assert_eq!(
+                **own != **learning,
+                designs.differs_under_learning(c),
+                "{c}"
+            );
         }
         // No widening: the learning layer runs on the designs themselves.
         let modes = flexstage_sim::samples::decoupled_modes();
