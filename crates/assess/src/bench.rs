@@ -247,12 +247,7 @@ impl Bench {
 
     /// The design of `c` on this bench.
     pub fn design(&self, c: &Controller) -> Result<&Arc<dyn Design>> {
-        self.designs.get(c).ok_or_else(|| {
-            AssessError::from(ControlError::Infeasible {
-                what: format!("controller {}", c.name),
-                detail: "not designed on this bench".into(),
-            })
-        })
+        design_of(&self.designs, c)
     }
 
     /// The gains of `c` when it is a linear controller (margins from its transfer
@@ -375,6 +370,16 @@ impl Bench {
         )?;
         Ok(loop_margins(&plant, p, &self.tuning.margins)?)
     }
+}
+
+/// The design of `c` in `designs`; an error naming it when it was not designed.
+pub(crate) fn design_of<'d>(designs: &'d Designs, c: &Controller) -> Result<&'d Arc<dyn Design>> {
+    designs.get(c).ok_or_else(|| {
+        AssessError::from(ControlError::Infeasible {
+            what: format!("controller {}", c.name),
+            detail: "not designed on this bench".into(),
+        })
+    })
 }
 
 /// Where the designs sized by their margins (the backstepping) are sized.

@@ -2,7 +2,7 @@
 //! twin's sampled loop with the rig's delay, flagged against the targets.
 
 use flexstage_control::margins::Margins;
-use flexstage_control::registry::Controller;
+use flexstage_control::registry::{Controller, Designs};
 
 use crate::bench::Bench;
 use crate::error::Result;
@@ -72,10 +72,23 @@ pub fn margins_table(
     targets: MarginTargets,
     injection: &InjectionParams,
 ) -> Result<Vec<MarginRow>> {
+    margins_of(bench, &bench.designs, candidates, delay, targets, injection)
+}
+
+/// [`margins_table`] of the candidates' designs in `designs` (the bench's, or those that
+/// run under the learning layer) on `bench`'s linear loop.
+fn margins_of(
+    bench: &Bench,
+    designs: &Designs,
+    candidates: &[&'static Controller],
+    delay: usize,
+    targets: MarginTargets,
+    injection: &InjectionParams,
+) -> Result<Vec<MarginRow>> {
     let mut rows = Vec::new();
     let probe = bench.probe();
     for &c in candidates {
-        let design = bench.design(c)?;
+        let design = crate::bench::design_of(designs, c)?;
         let (method, m) = if let Some(p) = design.linear() {
             let stable = crate::inject::is_stable(&probe, &**design, delay, 1.0)?;
             let m = bench.analytic_margins_of(p, delay)?;
@@ -117,16 +130,13 @@ pub fn learning_margins_table(
     targets: MarginTargets,
     injection: &InjectionParams,
 ) -> Result<Vec<MarginRow>> {
-    let learning = Bench {
-        designs: bench.designs.under_learning(),
-        ..bench.clone()
-    };
     let differ: Vec<&'static Controller> = candidates
         .iter()
         .copied()
         .filter(|c| bench.designs.differs_under_learning(c))
         .collect();
-    let mut rows = margins_table(&learning, &differ, delay, targets, injection)?;
+    let learning = bench.designs.under_learning();
+    let mut rows = margins_of(bench, &learning, &differ, delay, targets, injection)?;
     for r in &mut rows {
         r.learning = true;
     }

@@ -498,12 +498,7 @@ fn trial_error(
     let last = (trials / 3).max(1);
     let mut first = [0.0; 2];
     let mut mean = vec![[0.0; 2]; n];
-    for j in 0..trials {
-        for _ in 0..n {
-            let y = rig.reading();
-            let cmd = c.step(y);
-            rig.apply(&cmd);
-        }
+    run_periods(&mut c, &mut rig, n, trials, |j, c, _| {
         let e = c.ilc.last_errors();
         if j == 0 {
             first = core::array::from_fn(|a| e.iter().map(|x| x[a] * x[a]).sum::<f64>());
@@ -514,7 +509,7 @@ fn trial_error(
                 m[1] += x[1] / last as f64;
             }
         }
-    }
+    });
     Ok((0..2)
         .map(|a| mean.iter().map(|x| x[a] * x[a]).sum::<f64>() / first[a].max(f64::MIN_POSITIVE))
         .sum())
@@ -533,18 +528,37 @@ fn period_readings(
     let settle = if periods > 2 { 2 } else { periods - 1 };
     let analysed = (periods - settle) as f64;
     let mut measured = vec![[0.0; 2]; n];
-    for k in 0..n * periods {
-        let y = rig.reading();
-        let cmd = controller.step(y);
-        if k >= n * settle {
-            let m = &mut measured[k % n];
-            for a in 0..2 {
-                m[a] += y[a] / analysed;
+    run_periods(controller, rig, n, periods, |j, _, readings| {
+        if j >= settle {
+            for (m, y) in measured.iter_mut().zip(readings) {
+                for a in 0..2 {
+                    m[a] += y[a] / analysed;
+                }
             }
         }
-        rig.apply(&cmd);
-    }
+    });
     measured
+}
+
+/// Runs the loop of `controller` on `rig` for `periods` periods of `n` samples (each
+/// sample: the reading, the controller's step on it, its command applied) and after each
+/// period hands `per_period` the period's index, the controller and the period's readings.
+fn run_periods<C: StageControl + ?Sized>(
+    controller: &mut C,
+    rig: &mut Readings,
+    n: usize,
+    periods: usize,
+    mut per_period: impl FnMut(usize, &C, &[[f64; 2]]),
+) {
+    let mut readings = vec![[0.0; 2]; n];
+    for j in 0..periods {
+        for y in readings.iter_mut() {
+            *y = rig.reading();
+            let cmd = controller.step(*y);
+            rig.apply(&cmd);
+        }
+        per_period(j, controller, &readings);
+    }
 }
 
 /// The periods per run with which the pipeline measures the learning plant

@@ -108,8 +108,38 @@ impl std::fmt::Display for Controller {
     }
 }
 
-/// A controller designed for a stage: how it steps.
-pub trait Design: std::fmt::Debug + Send + Sync {
+/// A design compared with another of any type: [`Design`]'s supertrait, implemented for
+/// every type with `PartialEq`, so that designs compare as values
+/// (`PartialEq for dyn Design`): two designs are equal when they are of one type and equal
+/// there.
+pub trait DesignEq: Any {
+    /// Whether `other` is of this design's type and equal to it.
+    fn design_eq(&self, other: &dyn Any) -> bool;
+
+    /// This design as `Any`, to be compared with ([`DesignEq::design_eq`]).
+    fn design_any(&self) -> &dyn Any;
+}
+
+impl<T: PartialEq + Any> DesignEq for T {
+    fn design_eq(&self, other: &dyn Any) -> bool {
+        other.downcast_ref::<T>() == Some(self)
+    }
+
+    fn design_any(&self) -> &dyn Any {
+        self
+    }
+}
+
+/// Designs compare by value ([`DesignEq`]): equal when of one type with equal settings.
+impl PartialEq for dyn Design {
+    fn eq(&self, other: &dyn Design) -> bool {
+        self.design_eq(other.design_any())
+    }
+}
+
+/// A controller designed for a stage: how it steps. Designs compare by value
+/// ([`DesignEq`]: the type needs `PartialEq`).
+pub trait Design: DesignEq + std::fmt::Debug + Send + Sync {
     /// The controller following `reference`, with the actuator stage `actuator` (the
     /// compensator's Bouc–Wen model, the compensation mode, the stroke and the amplifier
     /// range) and predicting over `delay` samples of rig delay (a controller that does not
@@ -294,7 +324,7 @@ impl Designs {
             for (c, own) in &d.designs {
                 // Kept where it differs (the backstepping's sizing is carried over).
                 if let Some(design) = (c.design)(&widened)?
-                    && format!("{design:?}") != format!("{own:?}")
+                    && *design != **own
                 {
                     d.learning.push((*c, design));
                 }
@@ -387,13 +417,55 @@ mod tests {
         assert!(designs.get(DEFAULT).unwrap().linear().is_some());
     }
 
+    /// Goal: designs compare by value (`PartialEq for dyn Design`): a design equals a copy of
+    /// itself and its designing again, not the same design with one gain changed by one part
+    /// in 10¹², not a design of another type with the same gains (the PI + notch with and
+    /// without its feed-forward), and the robust backstepping not the non-robust one.
+    #[test]
+    fn designs_compare_by_value_and_type() {
+        use crate::pi_notch::{PiNotchParams, WithFeedForward};
+        let setup = Setup::from_scenario(&flexstage_scenario::Scenario::paper());
+        let designs = crate::samples::decoupled_designs(&setup).unwrap();
+        let pi = designs.get(DEFAULT).unwrap();
+        let params: PiNotchParams = *pi.linear().unwrap();
+        let feedforward = pi.feedforward().unwrap().clone();
+        let with = |params| -> Arc<dyn Design> {
+            Arc::new(WithFeedForward {
+                params,
+                feedforward: feedforward.clone(),
+            })
+        };
+        assert!(*with(params) == **pi);
+        let mut changed = params;
+        changed.axes[1].ki *= 1.0 + 1e-12;
+        assert!(*with(changed) != **pi);
+        let bare: Arc<dyn Design> = Arc::new(params);
+        // Both ways: each side's type is checked against the other's.
+        assert!(*bare != **pi);
+        assert!(**pi != *bare);
+        let copy: Arc<dyn Design> = Arc::new(params);
+        assert!(*bare == *copy);
+        let (robust, nonrobust) = (
+            designs.get(&crate::controller::ROBUST).unwrap(),
+            designs.get(&crate::controller::NONROBUST).unwrap(),
+        );
+        assert!(**robust != **nonrobust);
+        // Designed again, every design equals its first designing.
+        let again = crate::samples::decoupled_designs(&setup).unwrap();
+        for c in CONTROLLERS {
+            assert!(**designs.get(c).unwrap() == **again.get(c).unwrap(), "{c}");
+        }
+    }
+
     /// Goal: the designs under learning ([`Designs::for_learning`]) are the tuned ones again
     /// with the margin targets widened by `TuningParams::learning_widening`: on the sampled
     /// loop of two decoupled modes the PI + notch and the PID under learning meet 12 dB / 60°
     /// (the defaults 6 dB / 40° widened by 6 dB / 20°); the PI + notch's own design does
-    /// not, and under learning its crossover falls below 60 % of its own; a design that is
-    /// not tuned to margins (the scenario PID) is the same under learning; without a
-    /// widening there are no separate designs.
+    /// not, and under learning its crossover falls below 60 % of its own; exactly the
+    /// designs that sit on the margin targets (the PI + notch, the PPF) differ under learning
+    /// ([`Designs::differs_under_learning`]), not the PID (its own meets the widened targets
+    /// here), the scenario PID (not tuned) nor the backstepping (its sizing carried over);
+    /// without a widening there are no separate designs.
     #[test]
     fn designs_under_learning_meet_the_widened_margins() {
         use crate::tuning::{TuningParams, loop_margins};
@@ -428,11 +500,23 @@ mod tests {
                 assert!(!pi || wl < 0.6 * wo, "{c} axis {a}: {wo} → {wl} Hz");
             }
         }
-        let scenario_pid = &crate::pid::PID_FF_SCENARIO;
-        assert_eq!(
-            format!("{:?}", designs.get(scenario_pid)),
-            format!("{:?}", designs.for_learning(scenario_pid))
-        );
+        // The designs on their margin targets differ under learning; the PID's own already
+        // meets the widened ones here (so it tunes to the same), and those not tuned to the
+        // targets (the scenario PID) or whose sizing is carried over (the backstepping) do not.
+        let differ: Vec<&str> = CONTROLLERS
+            .iter()
+            .filter(|c| designs.differs_under_learning(c))
+            .map(|c| c.name)
+            .collect();
+        assert_eq!(differ, ["pi-notch-ff", "ppf-pi-ff"]);
+        for c in CONTROLLERS {
+            let (own, learning) = (designs.get(c).unwrap(), designs.for_learning(c).unwrap());
+            assert_eq!(
+                **own != **learning,
+                designs.differs_under_learning(c),
+                "{c}"
+            );
+        }
         // No widening: the learning layer runs on the designs themselves.
         let modes = flexstage_sim::samples::decoupled_modes();
         let fit = flexstage_identify::response::ResponseFit::from_modes(&modes, 5000.0, 0.1);
