@@ -285,3 +285,43 @@ fn a_controller_without_a_design_fails_its_plant_and_the_study_goes_on() {
         );
     }
 }
+
+/// Goal: the sweep runs each controller at the largest amplitude its own feed-forward
+/// command fits the rig with: every row's amplitude is feasible for its controller (no
+/// binding limit left), and where the controllers' commands ask different things of the
+/// amplifier their amplitudes differ (one amplitude for all, set by the most demanding,
+/// fails this); each amplitude was reduced from the scenario's and names its limit.
+#[test]
+fn the_sweep_runs_each_controller_at_its_own_largest_amplitude() {
+    use flexstage_assess::sweep::{SweepParams, sweep};
+    let b = bench();
+    let candidates: Vec<_> = ["pi-notch-ff", "pid-ff", "robust"]
+        .map(|n| flexstage_control::registry::Controller::by_name(n).unwrap())
+        .to_vec();
+    let amplitude = [8e-6, 16e-6];
+    let p = SweepParams {
+        fractions: vec![0.1],
+        ..SweepParams::default()
+    };
+    let points = sweep(&b, &candidates, amplitude, &p).unwrap();
+    let results = &points[0].results;
+    assert_eq!(results.len(), candidates.len());
+    let base = points[0].frequency / 3.0;
+    let duration = (p.periods / base).max(0.05);
+    for r in results {
+        let reference = Reference::new(flexstage_sim::trajectory::Shape::Lissajous {
+            ratio: 3.0,
+            amplitude: r.amplitude,
+            frequency: base,
+        });
+        let f = b.feasibility(r.controller, &reference, duration).unwrap();
+        assert_eq!(f.binding(), None, "{}", r.controller.name);
+        let (_, factor) = r.reduced.expect("reduced from 8 µm at 10 % of f1");
+        assert!((r.amplitude[0] / amplitude[0] - factor).abs() < 1e-12);
+        println!("{}: A1 {:.3} µm", r.controller.name, r.amplitude[0] * 1e6);
+    }
+    let (lo, hi) = results.iter().fold((f64::MAX, 0.0f64), |(lo, hi), r| {
+        (lo.min(r.amplitude[0]), hi.max(r.amplitude[0]))
+    });
+    assert!(hi > 1.05 * lo, "amplitudes {lo:e} … {hi:e}");
+}
