@@ -74,7 +74,6 @@ fn feedforward(mode: &str) -> Result<FeedForward, Box<dyn std::error::Error>> {
 /// f_s − f and f_s + f, and the intersample bound of the measured lifted response at f.
 fn between(
     bench: &Bench,
-    cands: &[&'static Controller],
     points: &[flexstage_assess::sweep::SweepPoint],
     lifted: &flexstage_identify::measured::LiftedResponse,
 ) -> Result<(), Box<dyn std::error::Error>> {
@@ -481,6 +480,6 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     if std::env::var("SCAN_LEARNING").is_ok() {
         return Ok(());
     }
-    between(&bench, &cands, &points, &lifted)?;
+    between(&bench, &points, &lifted)?;
     Ok(())
 }

@@ -40,7 +40,7 @@
 
 use flexstage_control::ControlError;
 use flexstage_control::actuator::Compensation;
-use flexstage_control::feasibility::{Feasibility, Limit};
+use flexstage_control::feasibility::Limit;
 use flexstage_control::learning::{
     self, DesignParams, Learning, Readings, SensorLag, measure_learning_plant,
 };
