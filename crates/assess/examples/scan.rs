@@ -8,7 +8,9 @@
 //! ```
 //!
 //! `SCAN_LEARNING=TRIALS` (1..=30) also runs every candidate with the learning layer at every
-//! point and prints its rows instead of the intersample analysis. `SCAN_MARGINS=GM_DB,PM_DEG`
+//! point and prints its rows instead of the intersample analysis (learning corrected after
+//! every trial by the lab's fast ADC, as `track` runs it; `SCAN_NO_FAST` learns toward the
+//! predicted reading alone). `SCAN_MARGINS=GM_DB,PM_DEG`
 //! tunes the linear designs to other margin targets (the learning layer's designs are those
 //! widened by `TuningParams::learning_widening`).
 //!

@@ -91,9 +91,10 @@ pub struct SweepLearning {
     /// The sensor chain's lag from its datasheet.
     pub lag: SensorLag,
     /// The lab's fast ADC on the sensor's analog output during the trials: with it, the
-    /// reading learned toward is moved after every trial by the output's error at the
-    /// samples it measured (`flexstage_control::learning::Learning::retarget`); `None`:
-    /// learning toward the reading the feedback expects alone.
+    /// reading learned toward is corrected after every trial by what its record shows the
+    /// reading to exceed the output by at the samples
+    /// (`flexstage_control::learning::Learning::retarget`); `None`: learning toward the
+    /// reading the feedback expects alone.
     pub fast_adc: Option<FastAdc>,
 }
 
