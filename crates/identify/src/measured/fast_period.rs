@@ -86,6 +86,15 @@ impl FastChannel {
         }
     }
 
+    /// The first `n` samples' record since the channel was attached (`n` L fast samples,
+    /// the sample instants k L from the attach on), as a [`crate::measured::FastLog`] holds it.
+    pub(crate) fn into_samples(self, n: usize) -> [Vec<f64>; 2] {
+        self.fast.map(|mut f| {
+            f.truncate(n * self.ratio);
+            f
+        })
+    }
+
     /// The record since the last [`FastChannel::clear`] (or [`FastChannel::attach`]) as one
     /// period of `n` samples at `sample_time`, from the period's first instant on; the
     /// channel then starts the next period.

@@ -15,14 +15,15 @@
 //! ([`FastAdc`]): no truth of the simulation.
 
 use flexstage_numerics::DataError;
-use flexstage_numerics::noise::GaussianNoise;
 use flexstage_sim::experiment::Command;
 use flexstage_sim::rig::{Mechanics, RigPlant, SensorParams};
 
 use crate::error::{IdentifyError, Result, check};
 use crate::frequency::C64;
 use crate::measured::multisine::period_statistics;
-use crate::measured::{LabLog, MeasuredLine, MultisinePlan, dft_with, inverse, mul, twiddles};
+use crate::measured::{
+    FastChannel, LabLog, MeasuredLine, MultisinePlan, dft_with, inverse, mul, twiddles,
+};
 
 /// The lab's fast ADC on the sensor's analog output.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,7 +70,8 @@ pub struct FastLog {
 }
 
 /// [`crate::measured::run_log`] with the fast ADC `adc` recording the sensor's analog output
-/// ([`RigPlant::sensed`]) L times per sample, each with its white noise.
+/// ([`RigPlant::sensed`]) L times per sample, each with its white noise: the same
+/// [`FastChannel`] that records a scan while the loop runs.
 pub fn run_fast_log<M: Mechanics>(
     plant: &mut RigPlant<M>,
     sample_time: f64,
@@ -77,31 +79,16 @@ pub fn run_fast_log<M: Mechanics>(
     mut voltage: impl FnMut([f64; 2]) -> [f64; 2],
     adc: &FastAdc,
 ) -> Result<FastLog> {
-    let substeps = plant.params().substeps;
-    adc.validate(substeps)?;
-    let stride = substeps / adc.ratio;
-    plant.record_substeps();
-    let mut noise = [0, 1].map(|i| {
-        GaussianNoise::new(
-            adc.noise_std[i],
-            adc.seed.wrapping_mul(2).wrapping_add(i as u64),
-        )
-    });
+    let mut channel = FastChannel::attach(adc, plant)?;
     let n = commands.len();
     let mut command = [Vec::with_capacity(n), Vec::with_capacity(n)];
     let mut reading = [Vec::with_capacity(n), Vec::with_capacity(n)];
-    let mut fast = [
-        Vec::with_capacity(n * adc.ratio),
-        Vec::with_capacity(n * adc.ratio),
-    ];
     use flexstage_sim::rig::StagePlant;
     for &x in commands {
-        let now = plant.sensed();
         let y = plant.measure();
         for i in 0..2 {
             command[i].push(x[i]);
             reading[i].push(y[i]);
-            fast[i].push(now[i] + noise[i].sample());
         }
         plant.apply(&Command {
             voltage: voltage(x),
@@ -110,17 +97,12 @@ pub fn run_fast_log<M: Mechanics>(
             saturated: false,
             dropout: false,
         });
-        for p in 1..adc.ratio {
-            let s = plant.sensed_substeps()[p * stride - 1];
-            for i in 0..2 {
-                fast[i].push(s[i] + noise[i].sample());
-            }
-        }
+        channel.record(plant);
     }
     Ok(FastLog {
         log: LabLog::new(sample_time, command, reading)?,
         ratio: adc.ratio,
-        fast,
+        fast: channel.into_samples(n),
     })
 }
 
